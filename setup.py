@@ -1,0 +1,32 @@
+"""Build the C core into the package: one shared library, loaded with ctypes by ``bldclab._core``."""
+
+from pathlib import Path
+
+from setuptools import Extension, setup
+from setuptools.command.build_ext import build_ext
+
+HERE = Path(__file__).parent
+SOURCES = sorted(str(p.relative_to(HERE)) for p in (HERE / "core" / "src").glob("*.c"))
+FLAGS = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wdouble-promotion"]
+
+
+class BuildCoreLib(build_ext):
+    """Build the core as a plain shared library (no CPython module init, no Python headers needed)."""
+
+    def get_export_symbols(self, ext):  # noqa: D102 - setuptools hook
+        return []
+
+
+setup(
+    ext_modules=[
+        Extension(
+            "bldclab._bccore",
+            sources=SOURCES,
+            include_dirs=["core/include"],
+            extra_compile_args=FLAGS,
+            libraries=["m"],
+            py_limited_api=False,
+        )
+    ],
+    cmdclass={"build_ext": BuildCoreLib},
+)
