@@ -1,0 +1,51 @@
+/*
+ * bc_bind.h - what the host binding (Python, ctypes) needs to drive the core without restating it:
+ * the layout of every struct it fills or reads (offsets from the compiler, so they cannot drift), the trace
+ * fields (from BC_TRACE_FIELDS), and the registry of controllers with their init/step functions.
+ * Host-side only: firmware does not link this file.
+ */
+#ifndef BC_BIND_H
+#define BC_BIND_H
+
+#include <stdint.h>
+
+#include "bldc/bc_types.h"
+
+typedef struct {
+    const char *strct;  /* struct name, e.g. "bc_plant_params" */
+    const char *field;  /* member name */
+    const char *type;   /* "f8", "f4", "i4", "u4", "i8", "u8", "ptr", or the name of a struct in this table */
+    uint32_t offset;    /* offsetof */
+    uint32_t size;      /* sizeof the member (arrays: whole array) */
+} bc_field_desc;
+
+typedef struct {
+    const char *name;
+    uint32_t size;
+} bc_struct_desc;
+
+typedef struct {
+    const char *name;                                /* e.g. "sixv" */
+    const char *params;                              /* struct name of its params */
+    const char *state;                               /* struct name of its state */
+    int (*init)(const void *params, void *state);    /* validate params, reset state */
+    bc_ctrl_step_fn step;
+    const char *diag[BC_DIAG_N];                     /* meaning of diag[0..7] ("" unused) */
+} bc_ctrl_info;
+
+int32_t bc_layout_count(void);
+const bc_field_desc *bc_layout_get(int32_t j);
+int32_t bc_struct_count(void);
+const bc_struct_desc *bc_struct_get(int32_t j);
+
+int32_t bc_trace_count(void);
+const char *bc_trace_name(int32_t j);
+const char *bc_trace_unit(int32_t j);
+const char *bc_trace_doc(int32_t j);
+
+int32_t bc_ctrl_count(void);
+const bc_ctrl_info *bc_ctrl_get(int32_t j);
+
+const char *bc_version(void);
+
+#endif /* BC_BIND_H */

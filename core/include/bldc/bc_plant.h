@@ -1,0 +1,198 @@
+/*
+ * bc_plant.h - switching-level model of a PM brushless motor on a two-level inverter (double precision).
+ *
+ * Motor (star, no neutral wire), x in {a, b, c}:
+ *
+ *     v_x - v_n = R i_x + L di_x/dt + e_x,    e_x = omega_m k_x(theta_e - x 2pi/3),    i_a + i_b + i_c = 0
+ *     tau_e = sum_x k_x i_x + tau_cog(theta_m),                 theta_e = p theta_m
+ *     J domega_m/dt = tau_e - tau_L - B omega_m - tau_c sign(omega_m)      (or omega_m imposed)
+ *
+ * Inverter: each leg's gate state (upper on, lower on, both off) comes from the half-period command
+ * (bc_plant_set_half), centre-aligned PWM and dead time. A connected phase has v_x = U_x - r_x i_x:
+ *
+ *     upper switch  U = v_bus,        r = R_on          lower switch  U = 0,     r = R_on
+ *     upper diode   U = v_bus + V_f,  r = r_d (i < 0)   lower diode   U = -V_f,  r = r_d (i > 0)
+ *     v_bus = V_src - R_src i_dc,     i_dc = sum of i_x over phases tied to the + rail
+ *
+ * With C the set of connected phases (|C| >= 2): v_n = mean_C (U_x - (R + r_x) i_x - e_x) and
+ * L di_x/dt = U_x - (R + r_x) i_x - e_x - v_n for x in C. A both-off phase whose current reaches zero opens
+ * (i_x = 0, terminal floating at e_x + v_n) and conducts again when that voltage leaves [-V_f, v_bus + V_f].
+ * These rules alone produce freewheeling, open phase, current dips and torque spikes: nothing is scripted.
+ *
+ * Integration: RK4 between events; lands exactly on gate edges, back-EMF corners and Hall edges (predicted),
+ * and on diode current zeros, re-conduction and speed zero crossings (root finding). Powers are integrated
+ * as extra states (acc[]) so the energy balance closes to the integration accuracy. Full description:
+ * docs/plant.md.
+ */
+#ifndef BC_PLANT_H
+#define BC_PLANT_H
+
+#include <stdint.h>
+
+#include "bldc/bc_emf.h"
+#include "bldc/bc_types.h"
+
+#define BC_MECH_IMPOSED 0 /* omega_m is an input (dynamometer) */
+#define BC_MECH_DYNAMIC 1 /* omega_m from the rotor equation */
+
+/* Gate state of a leg. */
+#define BC_GATE_O 0 /* both off */
+#define BC_GATE_U 1 /* upper on */
+#define BC_GATE_L 2 /* lower on */
+
+/* Conduction state of a phase. */
+#define BC_COND_OPEN 0
+#define BC_COND_SW_U 1
+#define BC_COND_SW_L 2
+#define BC_COND_D_U 3
+#define BC_COND_D_L 4
+
+/* Integrated quantities (acc[]): J unless stated. */
+#define BC_ACC_SRC 0    /* V_src i_dc: energy delivered by the DC source */
+#define BC_ACC_RSRC 1   /* R_src i_dc^2 */
+#define BC_ACC_CU 2     /* R sum i^2 */
+#define BC_ACC_SW 3     /* R_on i^2 in conducting switches */
+#define BC_ACC_DIODE 4  /* (V_f + r_d |i|) |i| in conducting diodes */
+#define BC_ACC_EMF 5    /* sum e_x i_x = tau_em omega_m: electrical -> mechanical */
+#define BC_ACC_COG 6    /* tau_cog omega_m */
+#define BC_ACC_FRIC 7   /* (B omega + tau_c sign omega) omega */
+#define BC_ACC_LOAD 8   /* tau_L omega */
+#define BC_ACC_TAU 9    /* integral of tau_e dt, N m s */
+#define BC_ACC_TAU2 10  /* integral of tau_e^2 dt, N^2 m^2 s */
+#define BC_ACC_I2A 11   /* integral of i_a^2 dt, A^2 s (and b, c) */
+#define BC_ACC_I2B 12
+#define BC_ACC_I2C 13
+#define BC_ACC_VA 14    /* integral of terminal voltage v_a dt, V s (and b, c) */
+#define BC_ACC_VB 15
+#define BC_ACC_VC 16
+#define BC_ACC_VN 17    /* integral of v_n dt, V s */
+#define BC_ACC_IDC 18   /* integral of i_dc dt, A s */
+#define BC_ACC_N 19
+
+#define BC_HALL_QUEUE 8
+
+/* Plant flags (bc_plant_state.flags). */
+#define BC_PLANT_BAD_DUTY 0x1u   /* a leg command had a NaN or out-of-range duty (treated as clamped / 0) */
+#define BC_PLANT_CHATTER 0x2u    /* too many events at one instant; the integrator forced progress */
+#define BC_PLANT_HALL_OVERRUN 0x4u /* delayed Hall edges overflowed the queue */
+
+typedef struct {
+    /* motor */
+    int32_t p;              /* pole pairs */
+    double R;               /* phase resistance, Ohm */
+    double L;               /* inclusive phase inductance L_self - M, H */
+    bc_emf_shape emf[3];    /* k_x of phases a, b, c in their local angles */
+    int32_t n_cog;          /* cogging harmonics (0: none) */
+    const double *cog_order;  /* harmonic orders in theta_m */
+    const double *cog_amp;    /* amplitudes, N m */
+    const double *cog_phase;  /* phases, rad: tau_cog = sum amp sin(order theta_m + phase) */
+    /* inverter */
+    double f_pwm;           /* carrier frequency, Hz (half period T/2 = 1/(2 f_pwm)) */
+    double t_dead;          /* dead time, s */
+    double R_on;            /* switch on-resistance, Ohm */
+    double V_f;             /* diode forward voltage, V */
+    double r_d;             /* diode slope resistance, Ohm */
+    double R_src;           /* DC source resistance, Ohm */
+    /* mechanics */
+    int32_t mech;           /* BC_MECH_IMPOSED or BC_MECH_DYNAMIC */
+    double J;               /* inertia, kg m^2 */
+    double B;               /* viscous friction, N m s/rad */
+    double tau_c;           /* Coulomb friction, N m */
+    /* Hall sensors */
+    double hall_error[3];   /* angle error of each sensor, rad (electrical) */
+    double hall_delay;      /* delay of the edges, s */
+    /* numerics */
+    double h_max;           /* longest RK4 step, s (<= 0: half a PWM period) */
+} bc_plant_params;
+
+typedef struct {
+    double lo, hi; /* bounds of the constant-state interval of a Hall sensor, in the plant's angle frame */
+} bc_hall_seg;
+
+typedef struct {
+    double t;               /* time, s */
+    double i[3];            /* phase currents, A */
+    double theta;           /* electrical angle, rad, [0, 2 pi) between steps */
+    uint32_t turns;         /* electrical turns modulo p: theta_m = (theta + 2 pi turns) / p */
+    double omega;           /* mechanical speed, rad/s */
+    int32_t stuck;          /* rotor held by Coulomb friction */
+    int32_t dir;            /* direction the angle pieces are set for: +1 / -1 */
+    /* inputs held over a sample */
+    double v_src;           /* DC source voltage, V */
+    double tau_load;        /* load torque, N m */
+    /* inverter */
+    double t_half;          /* start of the current half period, s */
+    int32_t rising;         /* 1 in a rising (valley -> peak) half period */
+    bc_leg_cmd cmd[3];      /* command of the current half period (sanitised) */
+    int32_t des[3];         /* desired gate state (from the carrier) */
+    int32_t gate[3];        /* actual gate state (after dead time) */
+    int32_t edge_to[3];     /* desired state after the pending edge, -1 if none */
+    double edge_t[3];       /* time of the pending desired edge, s */
+    double t_off_u[3];      /* last time the upper switch turned off, s */
+    double t_off_l[3];      /* last time the lower switch turned off, s */
+    int32_t cond[3];        /* BC_COND_* */
+    int32_t hold_open;      /* bit x: phase x stays open until time advances (a spurious diode turn-on) */
+    /* angle-dependent pieces */
+    bc_emf_piece piece[3];  /* current back-EMF piece per phase (bounds in the global angle frame) */
+    bc_hall_seg hseg[3];    /* current Hall interval per sensor */
+    int32_t hall_raw;       /* Hall code at the sensors now */
+    int32_t hall_out;       /* Hall code the controller sees (after the delay) */
+    uint32_t n_edges;       /* edges seen by the controller */
+    double t_edge;          /* time of the last edge seen, s */
+    int32_t hq_n;           /* delayed edges waiting */
+    double hq_t[BC_HALL_QUEUE];
+    int32_t hq_code[BC_HALL_QUEUE];
+    /* integrals and trackers */
+    double acc[BC_ACC_N];
+    double tau_min, tau_max; /* extreme tau_e since the last bc_plant_reset_extremes */
+    double i_peak[3];        /* largest |i_x| since then */
+    /* integrator cache */
+    int32_t k1_valid;
+    double k1[5 + BC_ACC_N];
+    double aux_tau;          /* tau_e at the current state (valid with k1) */
+    /* statistics */
+    uint32_t flags;          /* BC_PLANT_* */
+    int64_t n_steps;         /* accepted RK4 steps */
+    int64_t n_events;        /* located events (zero crossings, re-conductions) */
+} bc_plant_state;
+
+/* Instantaneous quantities at the current state (for sensors and the trace). */
+typedef struct {
+    double e[3];      /* back-EMF, V */
+    double k[3];      /* shapes, V s/rad */
+    double v[3];      /* terminal voltages, V */
+    double v_n;       /* star point, V */
+    double v_bus;     /* DC bus at the inverter, V */
+    double i_dc;      /* DC current, A */
+    double tau_e;     /* electromagnetic torque incl. cogging, N m */
+    double tau_cog;   /* cogging torque, N m */
+    double tau_shaft; /* tau_e - B omega - tau_c sign(omega): what a dynamometer holds, N m */
+    double w_l;       /* magnetic energy (L/2) sum i^2, J */
+} bc_plant_out;
+
+/* Validate params and set the initial state at time t0 (a half-period boundary), electrical angle theta0,
+ * speed omega0, currents i0 (projected to sum zero), DC source v_src, all legs off.
+ * Returns BC_OK or BC_ERR_PARAM. */
+int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double theta0, double omega0,
+                  const double i0[3], double v_src);
+
+/* Change the inputs held over the coming sample (imposed speed, load torque, DC source voltage). */
+void bc_plant_set_inputs(const bc_plant_params *p, bc_plant_state *s, double omega, double tau_load, double v_src);
+
+/* Start a half period at the current time with the three leg commands (rising = carrier valley -> peak).
+ * NaN duties are treated as 0 and out-of-range duties clamped (BC_PLANT_BAD_DUTY is set). */
+void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], int rising);
+
+/* Integrate to t_end (<= the end of the current half period), landing on every event. */
+void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end);
+
+/* Instantaneous outputs at the current state. */
+void bc_plant_output(const bc_plant_params *p, const bc_plant_state *s, bc_plant_out *out);
+
+/* Restart the tau_min/tau_max/i_peak trackers from the current state. */
+void bc_plant_reset_extremes(const bc_plant_params *p, bc_plant_state *s);
+
+/* Half PWM period, s. */
+double bc_plant_t_half(const bc_plant_params *p);
+
+#endif /* BC_PLANT_H */

@@ -1,0 +1,139 @@
+/*
+ * bc_sim.h - the closed-loop runner: plant + sensors + one controller, sample by sample.
+ *
+ * One sample k (t_k = k T/2, carrier valley for even k, peak for odd k):
+ *
+ *   1. hold the per-sample inputs (imposed speed, load torque, DC source voltage) over [t_k, t_k+1]
+ *   2. measure the plant at t_k (bc_sensor_measure), add the references, call the controller
+ *   3. apply a command for [t_k, t_k+1]: the controller's previous output (delay = 1, as on a DSP that loads the
+ *      PWM shadow registers at the next carrier extreme) or this one (delay = 0, ideal)
+ *   4. integrate to t_k+1, landing on trace points and metric-window bounds
+ *
+ * Output: an optional trace (one row per `trace_every` samples, or `trace_sub` rows per sample), each row
+ * holding the instantaneous state at its start and means/extremes over its window; and metrics over one
+ * window [metric_t0, metric_t1] given in time (not samples), so that a caller can measure exactly whole
+ * electrical periods. State is caller-owned: a long run can be done in chunks, the result is the same.
+ */
+#ifndef BC_SIM_H
+#define BC_SIM_H
+
+#include <stdint.h>
+
+#include "bldc/bc_plant.h"
+#include "bldc/bc_sensors.h"
+#include "bldc/bc_types.h"
+
+/* Trace fields, listed once: X(name, unit, description). Every field is a double. */
+#define BC_TRACE_FIELDS(X)                                                                          \
+    X(t, "s", "start of the row's window")                                                          \
+    X(theta_e, "rad", "electrical angle")                                                           \
+    X(omega_m, "rad/s", "mechanical speed")                                                         \
+    X(i_a, "A", "phase current a")                                                                  \
+    X(i_b, "A", "phase current b")                                                                  \
+    X(i_c, "A", "phase current c")                                                                  \
+    X(e_a, "V", "back-EMF a")                                                                       \
+    X(e_b, "V", "back-EMF b")                                                                       \
+    X(e_c, "V", "back-EMF c")                                                                       \
+    X(tau_e, "N m", "electromagnetic torque (with cogging)")                                        \
+    X(tau_shaft, "N m", "torque minus friction: what a dynamometer holds")                          \
+    X(v_bus, "V", "DC bus at the inverter")                                                         \
+    X(hall, "-", "Hall code seen by the controller")                                                \
+    X(tau_mean, "N m", "mean torque over the window")                                               \
+    X(tau_min, "N m", "smallest torque in the window")                                              \
+    X(tau_max, "N m", "largest torque in the window")                                               \
+    X(p_src, "W", "mean power from the DC source")                                                  \
+    X(p_cu, "W", "mean copper loss")                                                                \
+    X(p_inv, "W", "mean inverter loss (switches, diodes, source resistance)")                       \
+    X(p_emf, "W", "mean electromagnetic power sum e i")                                             \
+    X(v_a, "V", "mean terminal voltage a (from the negative rail)")                                 \
+    X(v_b, "V", "mean terminal voltage b")                                                          \
+    X(v_c, "V", "mean terminal voltage c")                                                          \
+    X(v_n, "V", "mean star-point voltage")                                                          \
+    X(i_dc, "A", "mean DC current")                                                                 \
+    X(mode_a, "-", "leg a mode applied (0 off, 1 pwm, 2 high, 3 low)")                              \
+    X(mode_b, "-", "leg b mode applied")                                                            \
+    X(mode_c, "-", "leg c mode applied")                                                            \
+    X(duty_a, "-", "leg a duty applied")                                                            \
+    X(duty_b, "-", "leg b duty applied")                                                            \
+    X(duty_c, "-", "leg c duty applied")                                                            \
+    X(d0, "-", "controller diagnostic 0")                                                           \
+    X(d1, "-", "controller diagnostic 1")                                                           \
+    X(d2, "-", "controller diagnostic 2")                                                           \
+    X(d3, "-", "controller diagnostic 3")                                                           \
+    X(d4, "-", "controller diagnostic 4")                                                           \
+    X(d5, "-", "controller diagnostic 5")                                                           \
+    X(d6, "-", "controller diagnostic 6")                                                           \
+    X(d7, "-", "controller diagnostic 7")                                                           \
+    X(flags, "-", "controller flags")
+
+typedef struct {
+#define BC_TRACE_MEMBER(name, unit, doc) double name;
+    BC_TRACE_FIELDS(BC_TRACE_MEMBER)
+#undef BC_TRACE_MEMBER
+} bc_trace_row;
+
+/* Metrics over [t0, t1]. */
+typedef struct {
+    double t0, t1;           /* window, s */
+    double E[BC_ACC_N];      /* integrals of bc_plant.h's acc[] over the window */
+    double w_l0, w_l1;       /* magnetic energy at t0, t1, J */
+    double w_kin0, w_kin1;   /* J omega^2 / 2 at t0, t1, J (dynamic mechanics) */
+    double tau_min, tau_max; /* extremes of the instantaneous torque, N m */
+    double tau_ma_min;       /* extremes of the one-PWM-period moving average of the torque, N m */
+    double tau_ma_max;
+    double i_peak[3];        /* largest |i_x|, A */
+    int32_t n_ma;            /* moving-average values seen */
+    int32_t state;           /* 0 not started, 1 running, 2 done */
+} bc_sim_metrics;
+
+typedef struct {
+    const bc_plant_params *plant;
+    const bc_sensor_params *sensors;
+    bc_ctrl ctrl;
+    int32_t delay;        /* 0 or 1 sample of computation delay */
+    int32_t trace_every;  /* >= 1: samples per trace row */
+    int32_t trace_sub;    /* >= 1: trace rows per sample (needs trace_every == 1) */
+    double metric_t0;     /* metric window, s; none if metric_t1 <= metric_t0 */
+    double metric_t1;
+} bc_sim_config;
+
+/* Per-sample inputs: arrays of the run's length, or NULL to use the constant. */
+typedef struct {
+    const double *ref;       /* controller reference (in.ref) */
+    const double *omega_ref; /* speed reference, rad/s (in.omega_ref) */
+    const double *omega;     /* imposed speed, rad/s (BC_MECH_IMPOSED) */
+    const double *tau_load;  /* load torque, N m (BC_MECH_DYNAMIC) */
+    const double *v_src;     /* DC source voltage, V */
+    double ref_c, omega_ref_c, omega_c, tau_load_c, v_src_c;
+} bc_sim_inputs;
+
+typedef struct {
+    bc_plant_state plant;
+    bc_sensor_state sensors;
+    int64_t k;                 /* next sample index */
+    bc_leg_cmd pending[3];     /* controller output waiting for the next sample (delay 1) */
+    bc_ctrl_out last;          /* last controller output */
+    bc_ctrl_in last_in;        /* last measurements */
+    bc_sim_metrics m;
+    double m_acc0[BC_ACC_N];   /* acc[] at the metric window start */
+    double ma_prev;            /* previous half-period mean torque in the window */
+    int32_t ma_have;
+    double half_tau0;          /* acc[TAU] at the start of the current half period */
+    int32_t half_in;           /* current half period started inside the window */
+    int32_t row_open;          /* a trace row is being accumulated */
+    bc_trace_row row;          /* the row being accumulated */
+    double row_acc0[BC_ACC_N];
+    double row_tmin, row_tmax;
+} bc_sim_state;
+
+/* Validate the configuration and start: plant at t = 0 with the given angle, speed, currents and source voltage;
+ * sensors seeded; all legs off; the controller state must have been initialised by its own init. */
+int bc_sim_init(const bc_sim_config *cfg, bc_sim_state *s, double theta0, double omega0, const double i0[3],
+                double v_src0);
+
+/* Run n samples. Writes complete trace rows into rows[0 .. rows_cap) and their count into *rows_written.
+ * Returns BC_OK, BC_ERR_PARAM (bad config/inputs) or BC_ERR_SIZE (rows_cap too small; rows beyond it dropped). */
+int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *in, int64_t n, bc_trace_row *rows,
+               int64_t rows_cap, int64_t *rows_written);
+
+#endif /* BC_SIM_H */

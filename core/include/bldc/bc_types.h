@@ -1,0 +1,85 @@
+/*
+ * bc_types.h - what every block of bldclab shares: constants, error codes, the leg command, and the contract
+ * between a controller and whatever drives it (the simulation runner on the host, timers and ADCs on an MCU).
+ *
+ * A controller is a pair of functions over caller-owned memory:
+ *
+ *     int  bc_X_init(const bc_X_params *p, bc_X_state *s);                  validates p, resets s
+ *     void bc_X_step(const bc_X_params *p, bc_X_state *s,
+ *                    const bc_ctrl_in *in, bc_ctrl_out *out);               one sample
+ *
+ * `in` holds measurements only (never plant state); `out` holds the three leg commands for the next half PWM
+ * period plus diagnostics. Conventions (angles, Hall codes, PWM timing): docs/conventions.md.
+ */
+#ifndef BC_TYPES_H
+#define BC_TYPES_H
+
+#include <stdint.h>
+
+#define BC_PI 3.14159265358979323846
+#define BC_PI_F 3.14159265f
+#define BC_TWO_PI (2.0 * BC_PI)
+#define BC_TWO_PI_F 6.28318531f
+
+/* Error codes returned by every init function. */
+#define BC_OK 0
+#define BC_ERR_PARAM (-1)   /* a parameter is out of range, NaN or inconsistent */
+#define BC_ERR_SIZE (-2)    /* a caller buffer is too small */
+#define BC_ERR_INPUT (-3)   /* an input array or value is invalid */
+
+/* Leg modes, one per leg and half PWM period (docs/conventions.md). */
+#define BC_LEG_OFF 0   /* both switches off: the leg's diodes carry any current */
+#define BC_LEG_PWM 1   /* complementary: upper on for duty d, lower on otherwise */
+#define BC_LEG_HIGH 2  /* upper switch chops with duty d, lower off */
+#define BC_LEG_LOW 3   /* lower switch chops with duty d, upper off */
+
+typedef struct {
+    int32_t mode; /* BC_LEG_* */
+    float duty;   /* [0, 1]: fraction of the half period the chopping switch is on */
+} bc_leg_cmd;
+
+/* Number of diagnostic values a controller may report per sample (meaning: the controller's header). */
+#define BC_DIAG_N 8
+
+/* Status flags a controller reports. */
+#define BC_FLAG_SAFE 0x1u        /* all legs off: safe state */
+#define BC_FLAG_HALL_INVALID 0x2u /* Hall code 000 or 111 */
+#define BC_FLAG_OVERCURRENT 0x4u /* a measured current exceeded the limit */
+#define BC_FLAG_BAD_INPUT 0x8u   /* a measurement was NaN/inf or out of its physical range */
+#define BC_FLAG_SATURATED 0x10u  /* the demanded voltage/duty was limited */
+
+/* Measurements presented to a controller at one sample. */
+typedef struct {
+    float i_abc[3];      /* measured phase currents, A, positive into the motor; 0 where not measured */
+    uint32_t i_mask;     /* bit x set: phase x measured (bit 0 = a) */
+    float v_dc;          /* measured DC-bus voltage, V */
+    uint32_t hall;       /* Hall code: bit 0 = H_a, bit 1 = H_b, bit 2 = H_c */
+    uint32_t n_edges;    /* Hall edges seen since start (wraps) */
+    uint32_t tick_edge;  /* capture-timer tick of the last Hall edge */
+    uint32_t tick_now;   /* capture-timer tick of this sample */
+    float theta_enc;     /* encoder electrical angle, rad in [0, 2 pi) (reference sensor) */
+    float omega_enc;     /* encoder mechanical speed, rad/s (reference sensor) */
+    float ref;           /* primary reference: torque N m, current A or duty, per controller */
+    float omega_ref;     /* speed reference, rad/s (controllers with a speed loop) */
+} bc_ctrl_in;
+
+/* What a controller returns at one sample. */
+typedef struct {
+    bc_leg_cmd leg[3];     /* legs a, b, c for the next half period */
+    float diag[BC_DIAG_N]; /* diagnostics for the trace */
+    uint32_t flags;        /* BC_FLAG_* */
+} bc_ctrl_out;
+
+/* A controller slot: the runner calls step(params, state, in, out) once per sample. */
+typedef void (*bc_ctrl_step_fn)(const void *params, void *state, const bc_ctrl_in *in, bc_ctrl_out *out);
+
+typedef struct {
+    bc_ctrl_step_fn step;
+    const void *params;
+    void *state;
+} bc_ctrl;
+
+/* All legs off (the safe state). */
+void bc_legs_off(bc_ctrl_out *out);
+
+#endif /* BC_TYPES_H */

@@ -1,0 +1,176 @@
+/* bc_bind.c - layout tables, trace fields and controller registry for the host binding (bc_bind.h). */
+#include "bldc/bc_bind.h"
+
+#include <stddef.h>
+
+#include "bldc/bc_emf.h"
+#include "bldc/bc_openloop.h"
+#include "bldc/bc_plant.h"
+#include "bldc/bc_sensors.h"
+#include "bldc/bc_sim.h"
+
+#define F(S, member, type) {#S, #member, type, (uint32_t)offsetof(S, member), (uint32_t)sizeof(((S *)0)->member)}
+
+static const bc_field_desc FIELDS[] = {
+    F(bc_leg_cmd, mode, "i4"),
+    F(bc_leg_cmd, duty, "f4"),
+
+    F(bc_emf_shape, kind, "i4"),
+    F(bc_emf_shape, n, "i4"),
+    F(bc_emf_shape, x, "ptr"),
+    F(bc_emf_shape, y, "ptr"),
+
+    F(bc_plant_params, p, "i4"),
+    F(bc_plant_params, R, "f8"),
+    F(bc_plant_params, L, "f8"),
+    F(bc_plant_params, emf, "bc_emf_shape"),
+    F(bc_plant_params, n_cog, "i4"),
+    F(bc_plant_params, cog_order, "ptr"),
+    F(bc_plant_params, cog_amp, "ptr"),
+    F(bc_plant_params, cog_phase, "ptr"),
+    F(bc_plant_params, f_pwm, "f8"),
+    F(bc_plant_params, t_dead, "f8"),
+    F(bc_plant_params, R_on, "f8"),
+    F(bc_plant_params, V_f, "f8"),
+    F(bc_plant_params, r_d, "f8"),
+    F(bc_plant_params, R_src, "f8"),
+    F(bc_plant_params, mech, "i4"),
+    F(bc_plant_params, J, "f8"),
+    F(bc_plant_params, B, "f8"),
+    F(bc_plant_params, tau_c, "f8"),
+    F(bc_plant_params, hall_error, "f8"),
+    F(bc_plant_params, hall_delay, "f8"),
+    F(bc_plant_params, h_max, "f8"),
+
+    F(bc_sensor_params, i_mask, "u4"),
+    F(bc_sensor_params, i_gain, "f8"),
+    F(bc_sensor_params, i_offset, "f8"),
+    F(bc_sensor_params, i_noise, "f8"),
+    F(bc_sensor_params, i_lsb, "f8"),
+    F(bc_sensor_params, v_gain, "f8"),
+    F(bc_sensor_params, v_offset, "f8"),
+    F(bc_sensor_params, v_noise, "f8"),
+    F(bc_sensor_params, v_lsb, "f8"),
+    F(bc_sensor_params, f_tick, "f8"),
+    F(bc_sensor_params, seed, "u8"),
+
+    F(bc_ctrl, step, "ptr"),
+    F(bc_ctrl, params, "ptr"),
+    F(bc_ctrl, state, "ptr"),
+
+    F(bc_sim_config, plant, "ptr"),
+    F(bc_sim_config, sensors, "ptr"),
+    F(bc_sim_config, ctrl, "bc_ctrl"),
+    F(bc_sim_config, delay, "i4"),
+    F(bc_sim_config, trace_every, "i4"),
+    F(bc_sim_config, trace_sub, "i4"),
+    F(bc_sim_config, metric_t0, "f8"),
+    F(bc_sim_config, metric_t1, "f8"),
+
+    F(bc_sim_inputs, ref, "ptr"),
+    F(bc_sim_inputs, omega_ref, "ptr"),
+    F(bc_sim_inputs, omega, "ptr"),
+    F(bc_sim_inputs, tau_load, "ptr"),
+    F(bc_sim_inputs, v_src, "ptr"),
+    F(bc_sim_inputs, ref_c, "f8"),
+    F(bc_sim_inputs, omega_ref_c, "f8"),
+    F(bc_sim_inputs, omega_c, "f8"),
+    F(bc_sim_inputs, tau_load_c, "f8"),
+    F(bc_sim_inputs, v_src_c, "f8"),
+
+    F(bc_sim_metrics, t0, "f8"),
+    F(bc_sim_metrics, t1, "f8"),
+    F(bc_sim_metrics, E, "f8"),
+    F(bc_sim_metrics, w_l0, "f8"),
+    F(bc_sim_metrics, w_l1, "f8"),
+    F(bc_sim_metrics, w_kin0, "f8"),
+    F(bc_sim_metrics, w_kin1, "f8"),
+    F(bc_sim_metrics, tau_min, "f8"),
+    F(bc_sim_metrics, tau_max, "f8"),
+    F(bc_sim_metrics, tau_ma_min, "f8"),
+    F(bc_sim_metrics, tau_ma_max, "f8"),
+    F(bc_sim_metrics, i_peak, "f8"),
+    F(bc_sim_metrics, n_ma, "i4"),
+    F(bc_sim_metrics, state, "i4"),
+
+    /* the part of the plant state the host reads */
+    F(bc_plant_state, t, "f8"),
+    F(bc_plant_state, i, "f8"),
+    F(bc_plant_state, theta, "f8"),
+    F(bc_plant_state, turns, "u4"),
+    F(bc_plant_state, omega, "f8"),
+    F(bc_plant_state, stuck, "i4"),
+    F(bc_plant_state, hall_out, "i4"),
+    F(bc_plant_state, n_edges, "u4"),
+    F(bc_plant_state, acc, "f8"),
+    F(bc_plant_state, flags, "u4"),
+    F(bc_plant_state, n_steps, "i8"),
+    F(bc_plant_state, n_events, "i8"),
+
+    F(bc_sim_state, plant, "bc_plant_state"),
+    F(bc_sim_state, k, "i8"),
+    F(bc_sim_state, m, "bc_sim_metrics"),
+
+    F(bc_ctrl_in, i_abc, "f4"),
+    F(bc_ctrl_in, i_mask, "u4"),
+    F(bc_ctrl_in, v_dc, "f4"),
+    F(bc_ctrl_in, hall, "u4"),
+    F(bc_ctrl_in, n_edges, "u4"),
+    F(bc_ctrl_in, tick_edge, "u4"),
+    F(bc_ctrl_in, tick_now, "u4"),
+    F(bc_ctrl_in, theta_enc, "f4"),
+    F(bc_ctrl_in, omega_enc, "f4"),
+    F(bc_ctrl_in, ref, "f4"),
+    F(bc_ctrl_in, omega_ref, "f4"),
+
+    F(bc_ctrl_out, leg, "bc_leg_cmd"),
+    F(bc_ctrl_out, diag, "f4"),
+    F(bc_ctrl_out, flags, "u4"),
+
+    F(bc_table_params, cmd, "ptr"),
+    F(bc_table_params, n, "i8"),
+    F(bc_sixv_params, chop, "i4"),
+};
+
+#define S(T) {#T, (uint32_t)sizeof(T)}
+
+static const bc_struct_desc STRUCTS[] = {
+    S(bc_leg_cmd),      S(bc_emf_shape),    S(bc_plant_params), S(bc_plant_state), S(bc_sensor_params),
+    S(bc_sensor_state), S(bc_ctrl),         S(bc_sim_config),   S(bc_sim_inputs),  S(bc_sim_metrics),
+    S(bc_sim_state),    S(bc_trace_row),    S(bc_ctrl_in),      S(bc_ctrl_out),    S(bc_table_params),
+    S(bc_table_state),  S(bc_sixv_params),  S(bc_sixv_state),
+};
+
+int32_t bc_layout_count(void) { return (int32_t)(sizeof FIELDS / sizeof FIELDS[0]); }
+const bc_field_desc *bc_layout_get(int32_t j) { return (j >= 0 && j < bc_layout_count()) ? &FIELDS[j] : 0; }
+int32_t bc_struct_count(void) { return (int32_t)(sizeof STRUCTS / sizeof STRUCTS[0]); }
+const bc_struct_desc *bc_struct_get(int32_t j) { return (j >= 0 && j < bc_struct_count()) ? &STRUCTS[j] : 0; }
+
+#define TRACE_NAME(name, unit, doc) #name,
+#define TRACE_UNIT(name, unit, doc) unit,
+#define TRACE_DOC(name, unit, doc) doc,
+static const char *const TRACE_NAMES[] = {BC_TRACE_FIELDS(TRACE_NAME)};
+static const char *const TRACE_UNITS[] = {BC_TRACE_FIELDS(TRACE_UNIT)};
+static const char *const TRACE_DOCS[] = {BC_TRACE_FIELDS(TRACE_DOC)};
+
+int32_t bc_trace_count(void) { return (int32_t)(sizeof TRACE_NAMES / sizeof TRACE_NAMES[0]); }
+const char *bc_trace_name(int32_t j) { return (j >= 0 && j < bc_trace_count()) ? TRACE_NAMES[j] : 0; }
+const char *bc_trace_unit(int32_t j) { return (j >= 0 && j < bc_trace_count()) ? TRACE_UNITS[j] : 0; }
+const char *bc_trace_doc(int32_t j) { return (j >= 0 && j < bc_trace_count()) ? TRACE_DOCS[j] : 0; }
+
+/* Adapters from the typed controller API to the generic slot. */
+static int table_init(const void *p, void *s) { return bc_table_init(p, s); }
+static void table_step(const void *p, void *s, const bc_ctrl_in *in, bc_ctrl_out *out) { bc_table_step(p, s, in, out); }
+static int sixv_init(const void *p, void *s) { return bc_sixv_init(p, s); }
+static void sixv_step(const void *p, void *s, const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sixv_step(p, s, in, out); }
+
+static const bc_ctrl_info CONTROLLERS[] = {
+    {"table", "bc_table_params", "bc_table_state", table_init, table_step, {"", "", "", "", "", "", "", ""}},
+    {"sixv", "bc_sixv_params", "bc_sixv_state", sixv_init, sixv_step,
+     {"sector", "duty", "", "", "", "", "", ""}},
+};
+
+int32_t bc_ctrl_count(void) { return (int32_t)(sizeof CONTROLLERS / sizeof CONTROLLERS[0]); }
+const bc_ctrl_info *bc_ctrl_get(int32_t j) { return (j >= 0 && j < bc_ctrl_count()) ? &CONTROLLERS[j] : 0; }
+
+const char *bc_version(void) { return "0.1.0"; }

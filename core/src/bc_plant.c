@@ -1,0 +1,1009 @@
+/* bc_plant.c - switching-level BLDC plant. Model and rules in bc_plant.h and docs/plant.md. */
+#include "bldc/bc_plant.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Layout of the integrated vector y. */
+#define Y_I 0 /* three currents */
+#define Y_TH 3
+#define Y_OM 4
+#define Y_ACC 5
+#define NY (Y_ACC + BC_ACC_N)
+
+/* Local angle offset of phase x: theta_x = theta_e - PHI[x]. */
+static const double PHI[3] = {0.0, BC_TWO_PI / 3.0, 2.0 * BC_TWO_PI / 3.0};
+static const double COS_PHI[3] = {1.0, -0.5, -0.5};
+static const double SIN_PHI[3] = {0.0, 0.86602540378443864676, -0.86602540378443864676};
+
+#define MAX_ZERO_LENGTH_EVENTS 64
+#define ROOT_MAX_ITER 80
+
+/* Instantaneous circuit quantities computed with the derivative. */
+typedef struct {
+    double k[3], e[3], v[3];
+    double vn, vbus, idc, tau, tau_cog, tau_net;
+    int n_conn;
+} aux_t;
+
+double bc_plant_t_half(const bc_plant_params *p) { return 0.5 / p->f_pwm; }
+
+static double h_max_of(const bc_plant_params *p)
+{
+    double th = bc_plant_t_half(p);
+    return (p->h_max > 0.0 && p->h_max < th) ? p->h_max : th;
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* back-EMF shapes and cogging at an angle inside the current pieces                                          */
+
+static void shapes_at(const bc_plant_params *p, const bc_plant_state *s, double th, double k[3])
+{
+    int trig = 0;
+    double c = 0.0, sn = 0.0;
+    for (int x = 0; x < 3; ++x) {
+        const bc_emf_shape *sh = &p->emf[x];
+        if (sh->kind == BC_EMF_TABLE) {
+            k[x] = s->piece[x].k0 + s->piece[x].slope * (th - s->piece[x].lo);
+            continue;
+        }
+        if (!trig) {
+            c = cos(th);
+            sn = sin(th);
+            trig = 1;
+        }
+        /* cos and sin of the local angle th - PHI[x] by rotation, then harmonics by recurrence */
+        double c1 = c * COS_PHI[x] + sn * SIN_PHI[x];
+        double s1 = sn * COS_PHI[x] - c * SIN_PHI[x];
+        double cm = 1.0, sm = 0.0, acc = 0.0;
+        for (int32_t m = 0; m < sh->n; ++m) {
+            acc += sh->x[m] * cm + sh->y[m] * sm;
+            double cn = cm * c1 - sm * s1;
+            sm = sm * c1 + cm * s1;
+            cm = cn;
+        }
+        k[x] = acc;
+    }
+}
+
+static double cogging_at(const bc_plant_params *p, const bc_plant_state *s, double th)
+{
+    if (p->n_cog <= 0) {
+        return 0.0;
+    }
+    double th_m = (th + BC_TWO_PI * (double)s->turns) / (double)p->p;
+    double tau = 0.0;
+    for (int32_t j = 0; j < p->n_cog; ++j) {
+        tau += p->cog_amp[j] * sin(p->cog_order[j] * th_m + p->cog_phase[j]);
+    }
+    return tau;
+}
+
+static double sign_of(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0); }
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* the derivative                                                                                             */
+
+static void rhs(const bc_plant_params *p, const bc_plant_state *s, const double *y, double *dy, aux_t *a)
+{
+    const double *i = &y[Y_I];
+    double th = y[Y_TH], om = y[Y_OM];
+    shapes_at(p, s, th, a->k);
+    for (int x = 0; x < 3; ++x) {
+        a->e[x] = om * a->k[x];
+    }
+    double idc = 0.0;
+    for (int x = 0; x < 3; ++x) {
+        if (s->cond[x] == BC_COND_SW_U || s->cond[x] == BC_COND_D_U) {
+            idc += i[x];
+        }
+    }
+    double vbus = s->v_src - p->R_src * idc;
+    double u[3] = {0.0, 0.0, 0.0};
+    double sum = 0.0, p_sw = 0.0, p_d = 0.0;
+    int n = 0;
+    for (int x = 0; x < 3; ++x) {
+        double U, r;
+        switch (s->cond[x]) {
+        case BC_COND_SW_U: U = vbus; r = p->R_on; p_sw += r * i[x] * i[x]; break;
+        case BC_COND_SW_L: U = 0.0; r = p->R_on; p_sw += r * i[x] * i[x]; break;
+        case BC_COND_D_U: U = vbus + p->V_f; r = p->r_d; p_d += (p->V_f + r * fabs(i[x])) * fabs(i[x]); break;
+        case BC_COND_D_L: U = -p->V_f; r = p->r_d; p_d += (p->V_f + r * fabs(i[x])) * fabs(i[x]); break;
+        default: continue;
+        }
+        a->v[x] = U - r * i[x];
+        u[x] = a->v[x] - p->R * i[x] - a->e[x];
+        sum += u[x];
+        ++n;
+    }
+    double vn = n > 0 ? sum / n : 0.5 * vbus - (a->e[0] + a->e[1] + a->e[2]) / 3.0;
+    double p_emf = 0.0, tau_em = 0.0;
+    for (int x = 0; x < 3; ++x) {
+        if (s->cond[x] == BC_COND_OPEN) {
+            a->v[x] = a->e[x] + vn;
+            dy[Y_I + x] = 0.0;
+        } else {
+            dy[Y_I + x] = n >= 2 ? (u[x] - vn) / p->L : 0.0;
+        }
+        p_emf += a->e[x] * i[x];
+        tau_em += a->k[x] * i[x];
+    }
+    double tau_cog = cogging_at(p, s, th);
+    double tau = tau_em + tau_cog;
+    double tau_net = tau - s->tau_load;
+    double sgn = sign_of(om);
+    if (sgn == 0.0 && !s->stuck) {
+        sgn = sign_of(tau_net);
+    }
+    double t_fric = s->stuck ? 0.0 : p->B * om + p->tau_c * sgn;
+    dy[Y_TH] = (double)p->p * om;
+    dy[Y_OM] = (p->mech == BC_MECH_DYNAMIC && !s->stuck) ? (tau_net - t_fric) / p->J : 0.0;
+
+    double *d = &dy[Y_ACC];
+    d[BC_ACC_SRC] = s->v_src * idc;
+    d[BC_ACC_RSRC] = p->R_src * idc * idc;
+    d[BC_ACC_CU] = p->R * (i[0] * i[0] + i[1] * i[1] + i[2] * i[2]);
+    d[BC_ACC_SW] = p_sw;
+    d[BC_ACC_DIODE] = p_d;
+    d[BC_ACC_EMF] = p_emf;
+    d[BC_ACC_COG] = tau_cog * om;
+    d[BC_ACC_FRIC] = t_fric * om;
+    d[BC_ACC_LOAD] = s->tau_load * om;
+    d[BC_ACC_TAU] = tau;
+    d[BC_ACC_TAU2] = tau * tau;
+    d[BC_ACC_I2A] = i[0] * i[0];
+    d[BC_ACC_I2B] = i[1] * i[1];
+    d[BC_ACC_I2C] = i[2] * i[2];
+    d[BC_ACC_VA] = a->v[0];
+    d[BC_ACC_VB] = a->v[1];
+    d[BC_ACC_VC] = a->v[2];
+    d[BC_ACC_VN] = vn;
+    d[BC_ACC_IDC] = idc;
+
+    a->vn = vn;
+    a->vbus = vbus;
+    a->idc = idc;
+    a->tau = tau;
+    a->tau_cog = tau_cog;
+    a->tau_net = tau_net;
+    a->n_conn = n;
+}
+
+static void pack(const bc_plant_state *s, double *y)
+{
+    y[Y_I] = s->i[0];
+    y[Y_I + 1] = s->i[1];
+    y[Y_I + 2] = s->i[2];
+    y[Y_TH] = s->theta;
+    y[Y_OM] = s->omega;
+    memcpy(&y[Y_ACC], s->acc, sizeof s->acc);
+}
+
+static void unpack(bc_plant_state *s, const double *y)
+{
+    s->i[0] = y[Y_I];
+    s->i[1] = y[Y_I + 1];
+    s->i[2] = y[Y_I + 2];
+    s->theta = y[Y_TH];
+    s->omega = y[Y_OM];
+    memcpy(s->acc, &y[Y_ACC], sizeof s->acc);
+}
+
+/* One classical Runge-Kutta step of length h from y0 with derivative k1 = f(y0). */
+static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
+                double *y1)
+{
+    double k2[NY], k3[NY], k4[NY], yt[NY];
+    aux_t a;
+    for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
+    rhs(p, s, yt, k2, &a);
+    for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
+    rhs(p, s, yt, k3, &a);
+    for (int j = 0; j < NY; ++j) yt[j] = y0[j] + h * k3[j];
+    rhs(p, s, yt, k4, &a);
+    for (int j = 0; j < NY; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
+    if (p->mech == BC_MECH_IMPOSED) {
+        y1[Y_OM] = y0[Y_OM]; /* exactly constant */
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* angle pieces: back-EMF segments and Hall intervals                                                          */
+
+static void hall_locate(const bc_plant_params *p, bc_plant_state *s)
+{
+    int code = 0;
+    for (int x = 0; x < 3; ++x) {
+        double base = PHI[x] - BC_PI / 6.0 + p->hall_error[x];
+        double m = floor((s->theta - base) / BC_PI);
+        double lo = base + m * BC_PI; /* at a threshold: the interval above (moving back crosses at once) */
+        s->hseg[x].lo = lo;
+        s->hseg[x].hi = lo + BC_PI;
+        long mi = (long)m;
+        if (mi % 2 == 0) {
+            code |= 1 << x;
+        }
+    }
+    s->hall_raw = code;
+}
+
+static void pieces_locate(const bc_plant_params *p, bc_plant_state *s)
+{
+    for (int x = 0; x < 3; ++x) {
+        bc_emf_piece_at(&p->emf[x], s->theta - PHI[x], s->dir, &s->piece[x]);
+        if (p->emf[x].kind == BC_EMF_TABLE) {
+            s->piece[x].lo += PHI[x];
+            s->piece[x].hi += PHI[x];
+        }
+    }
+    /* keep the Hall code; only re-derive the intervals around the current angle */
+    int keep = s->hall_raw;
+    hall_locate(p, s);
+    s->hall_raw = keep;
+}
+
+static void hall_output_toggle(bc_plant_state *s, int bit, double t)
+{
+    s->hall_out ^= bit;
+    s->n_edges += 1u;
+    s->t_edge = t;
+}
+
+static void hall_raw_toggle(const bc_plant_params *p, bc_plant_state *s, int x)
+{
+    int bit = 1 << x;
+    s->hall_raw ^= bit;
+    if (p->hall_delay <= 0.0) {
+        hall_output_toggle(s, bit, s->t);
+        return;
+    }
+    if (s->hq_n == BC_HALL_QUEUE) { /* overrun: the oldest edge is seen now */
+        hall_output_toggle(s, s->hq_code[0], s->t);
+        memmove(&s->hq_t[0], &s->hq_t[1], (BC_HALL_QUEUE - 1) * sizeof s->hq_t[0]);
+        memmove(&s->hq_code[0], &s->hq_code[1], (BC_HALL_QUEUE - 1) * sizeof s->hq_code[0]);
+        s->hq_n -= 1;
+        s->flags |= BC_PLANT_HALL_OVERRUN;
+    }
+    s->hq_t[s->hq_n] = s->t + p->hall_delay;
+    s->hq_code[s->hq_n] = bit;
+    s->hq_n += 1;
+}
+
+/* Cross every piece/Hall bound reached at angle th_reach in the current direction. Returns 1 if any. */
+static int angles_cross(const bc_plant_params *p, bc_plant_state *s, double th_reach)
+{
+    int any = 0;
+    const double tol = 1e-12;
+    for (int x = 0; x < 3; ++x) {
+        if (s->dir > 0) {
+            while (s->piece[x].hi <= th_reach + tol) {
+                bc_emf_piece_step(&p->emf[x], 1, &s->piece[x]);
+                any = 1;
+            }
+            while (s->hseg[x].hi <= th_reach + tol) {
+                s->hseg[x].lo = s->hseg[x].hi;
+                s->hseg[x].hi += BC_PI;
+                hall_raw_toggle(p, s, x);
+                any = 1;
+            }
+        } else {
+            while (s->piece[x].lo >= th_reach - tol) {
+                bc_emf_piece_step(&p->emf[x], -1, &s->piece[x]);
+                any = 1;
+            }
+            while (s->hseg[x].lo >= th_reach - tol) {
+                s->hseg[x].hi = s->hseg[x].lo;
+                s->hseg[x].lo -= BC_PI;
+                hall_raw_toggle(p, s, x);
+                any = 1;
+            }
+        }
+    }
+    return any;
+}
+
+/* Keep theta in [0, 2 pi): shift the angle frame of every piece with it. */
+static void wrap_angle(const bc_plant_params *p, bc_plant_state *s)
+{
+    double shift = 0.0;
+    if (s->theta >= BC_TWO_PI) {
+        shift = -BC_TWO_PI;
+        s->turns = (s->turns + 1u) % (uint32_t)p->p;
+    } else if (s->theta < 0.0) {
+        shift = BC_TWO_PI;
+        s->turns = (s->turns + (uint32_t)p->p - 1u) % (uint32_t)p->p;
+    } else {
+        return;
+    }
+    s->theta += shift;
+    if (s->theta >= BC_TWO_PI || s->theta < 0.0) { /* rounding at the bound */
+        s->theta = 0.0;
+    }
+    for (int x = 0; x < 3; ++x) {
+        if (p->emf[x].kind == BC_EMF_TABLE) {
+            s->piece[x].lo += shift;
+            s->piece[x].hi += shift;
+        }
+        s->hseg[x].lo += shift;
+        s->hseg[x].hi += shift;
+    }
+}
+
+/* Time to the next angle bound, or HUGE_VAL. *th_ev receives the bound. */
+static double angle_event(const bc_plant_params *p, const bc_plant_state *s, double *th_ev)
+{
+    double om = s->omega;
+    if (s->stuck || (p->mech == BC_MECH_IMPOSED && om == 0.0)) {
+        return HUGE_VAL;
+    }
+    double target;
+    if (s->dir > 0) {
+        target = HUGE_VAL;
+        for (int x = 0; x < 3; ++x) {
+            if (s->piece[x].hi < target) target = s->piece[x].hi;
+            if (s->hseg[x].hi < target) target = s->hseg[x].hi;
+        }
+    } else {
+        target = -HUGE_VAL;
+        for (int x = 0; x < 3; ++x) {
+            if (s->piece[x].lo > target) target = s->piece[x].lo;
+            if (s->hseg[x].lo > target) target = s->hseg[x].lo;
+        }
+    }
+    *th_ev = target;
+    double delta = (target - s->theta) * (double)s->dir / (double)p->p; /* mechanical angle to go, >= 0 */
+    if (!(delta >= 0.0)) {
+        return 0.0;
+    }
+    double w0 = om * (double)s->dir;
+    if (p->mech == BC_MECH_IMPOSED) {
+        return w0 > 0.0 ? delta / w0 : HUGE_VAL;
+    }
+    double acc = s->k1[Y_OM] * (double)s->dir;
+    double disc = w0 * w0 + 2.0 * acc * delta;
+    if (disc < 0.0) {
+        return HUGE_VAL; /* stops before the bound: the speed zero crossing comes first */
+    }
+    double den = w0 + sqrt(disc);
+    return den > 0.0 ? 2.0 * delta / den : HUGE_VAL;
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* inverter gates                                                                                             */
+
+static int32_t mode_gate(int32_t mode, int active)
+{
+    switch (mode) {
+    case BC_LEG_PWM: return active ? BC_GATE_U : BC_GATE_L;
+    case BC_LEG_HIGH: return active ? BC_GATE_U : BC_GATE_O;
+    case BC_LEG_LOW: return active ? BC_GATE_L : BC_GATE_O;
+    default: return BC_GATE_O;
+    }
+}
+
+/* Move the actual gate of leg x toward the desired one at time t (a switch turns on only after the other one
+ * has been off for t_dead). Returns 1 if the gate changed. */
+static int gate_update(const bc_plant_params *p, bc_plant_state *s, int x, double t)
+{
+    int32_t g = s->gate[x], des = s->des[x], g0 = g;
+    if (g == des) {
+        return 0;
+    }
+    if (g == BC_GATE_U) {
+        s->t_off_u[x] = t;
+        g = BC_GATE_O;
+    } else if (g == BC_GATE_L) {
+        s->t_off_l[x] = t;
+        g = BC_GATE_O;
+    }
+    if (des == BC_GATE_U && t >= s->t_off_l[x] + p->t_dead) {
+        g = BC_GATE_U;
+    } else if (des == BC_GATE_L && t >= s->t_off_u[x] + p->t_dead) {
+        g = BC_GATE_L;
+    }
+    s->gate[x] = g;
+    return g != g0;
+}
+
+static double next_gate_time(const bc_plant_params *p, const bc_plant_state *s)
+{
+    double tn = HUGE_VAL;
+    for (int x = 0; x < 3; ++x) {
+        if (s->edge_to[x] >= 0 && s->edge_t[x] < tn) {
+            tn = s->edge_t[x];
+        }
+        if (s->gate[x] != s->des[x] && s->des[x] != BC_GATE_O) {
+            double tp = (s->des[x] == BC_GATE_U ? s->t_off_l[x] : s->t_off_u[x]) + p->t_dead;
+            if (tp < tn) {
+                tn = tp;
+            }
+        }
+    }
+    return tn;
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* conduction states                                                                                          */
+
+static void conduction_from_gates(bc_plant_state *s)
+{
+    for (int x = 0; x < 3; ++x) {
+        if (s->gate[x] == BC_GATE_U) {
+            s->cond[x] = BC_COND_SW_U;
+        } else if (s->gate[x] == BC_GATE_L) {
+            s->cond[x] = BC_COND_SW_L;
+        } else if (s->i[x] > 0.0) {
+            s->cond[x] = BC_COND_D_L;
+        } else if (s->i[x] < 0.0) {
+            s->cond[x] = BC_COND_D_U;
+        } else if (s->cond[x] != BC_COND_D_L && s->cond[x] != BC_COND_D_U) {
+            s->cond[x] = BC_COND_OPEN; /* a phase that has just been made to conduct keeps its diode */
+        }
+    }
+}
+
+/* Open phases whose floating terminal leaves [-V_f, v_bus + V_f] conduct (fixed point, docs/plant.md). */
+static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
+{
+    double y[NY], dy[NY];
+    aux_t a;
+    double tol = 1e-9 * (1.0 + fabs(s->v_src));
+    for (int iter = 0; iter < 4; ++iter) {
+        pack(s, y);
+        rhs(p, s, y, dy, &a);
+        int changed = 0;
+        if (a.n_conn == 0) {
+            int hi = 0, lo = 0;
+            for (int x = 1; x < 3; ++x) {
+                if (a.e[x] > a.e[hi]) hi = x;
+                if (a.e[x] < a.e[lo]) lo = x;
+            }
+            if (a.e[hi] - a.e[lo] > a.vbus + 2.0 * p->V_f + tol) {
+                s->cond[hi] = BC_COND_D_U;
+                s->cond[lo] = BC_COND_D_L;
+                changed = 1;
+            }
+        } else {
+            for (int x = 0; x < 3; ++x) {
+                if (s->cond[x] != BC_COND_OPEN || (s->hold_open & (1 << x))) continue;
+                if (a.v[x] < -p->V_f - tol) {
+                    s->cond[x] = BC_COND_D_L;
+                    changed = 1;
+                    break; /* one at a time: the star point moves */
+                }
+                if (a.v[x] > a.vbus + p->V_f + tol) {
+                    s->cond[x] = BC_COND_D_U;
+                    changed = 1;
+                    break;
+                }
+            }
+        }
+        if (!changed) {
+            return;
+        }
+    }
+}
+
+static void resolve(const bc_plant_params *p, bc_plant_state *s)
+{
+    conduction_from_gates(s);
+    resolve_open(p, s);
+    s->k1_valid = 0;
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* watched functions: must stay >= 0 inside a step                                                            */
+
+#define W_DIODE 0  /* + phase: current of a diode-conducting phase, signed to be positive */
+#define W_OPEN_LO 3 /* + phase: open terminal above -V_f */
+#define W_OPEN_HI 6 /* + phase: open terminal below v_bus + V_f */
+#define W_PAIR 9   /* all open: no pair can conduct */
+#define W_OMEGA 10 /* moving: omega keeps its sign */
+#define W_STICK 11 /* stuck: |tau_net| <= tau_c */
+#define NW 12
+
+static void watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
+                       int dir_om, double *g)
+{
+    for (int j = 0; j < NW; ++j) g[j] = HUGE_VAL;
+    for (int x = 0; x < 3; ++x) {
+        switch (s->cond[x]) {
+        case BC_COND_D_L: g[W_DIODE + x] = y[Y_I + x]; break;
+        case BC_COND_D_U: g[W_DIODE + x] = -y[Y_I + x]; break;
+        case BC_COND_OPEN:
+            if (a->n_conn > 0) {
+                g[W_OPEN_LO + x] = a->v[x] + p->V_f;
+                g[W_OPEN_HI + x] = a->vbus + p->V_f - a->v[x];
+            }
+            break;
+        default: break;
+        }
+    }
+    if (a->n_conn == 0) {
+        double emax = a->e[0], emin = a->e[0];
+        for (int x = 1; x < 3; ++x) {
+            if (a->e[x] > emax) emax = a->e[x];
+            if (a->e[x] < emin) emin = a->e[x];
+        }
+        g[W_PAIR] = a->vbus + 2.0 * p->V_f - (emax - emin);
+    }
+    if (p->mech == BC_MECH_DYNAMIC) {
+        if (s->stuck) {
+            g[W_STICK] = p->tau_c - fabs(a->tau_net);
+        } else if (dir_om != 0) {
+            g[W_OMEGA] = y[Y_OM] * (double)dir_om;
+        }
+    }
+}
+
+static double watch_tol(const bc_plant_params *p, const bc_plant_state *s, int w)
+{
+    if (w < W_OPEN_LO) {
+        return 1e-10 * (1.0 + fabs(s->i[0]) + fabs(s->i[1]) + fabs(s->i[2]));
+    }
+    if (w <= W_PAIR) {
+        return 1e-10 * (1.0 + fabs(s->v_src));
+    }
+    if (w == W_OMEGA) {
+        return 1e-12 * (1.0 + fabs(s->omega));
+    }
+    return 1e-10 * (1.0 + p->tau_c);
+}
+
+static double watch_at(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1,
+                       double c, int w, int dir_om)
+{
+    double y[NY], dy[NY], g[NW];
+    aux_t au;
+    rk4(p, s, y0, k1, c, y);
+    rhs(p, s, y, dy, &au);
+    watch_eval(p, s, y, &au, dir_om, g);
+    return g[w];
+}
+
+/* Locate the zero of watch w inside (0, h]: Illinois regula falsi on the RK4 step length. A watch that starts at
+ * zero (a diode that has just begun to conduct) first has its positive excursion found by bisection; 0 is
+ * returned if there is none (the crossing is immediate). */
+static double root_find(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1,
+                        double h, int w, int dir_om, double g0, double g1)
+{
+    double tol = watch_tol(p, s, w);
+    double ttol = 1e-13 * h + 1e-18;
+    double a = 0.0, b = h, ga = g0, gb = g1;
+    if (gb >= -tol) {
+        return b;
+    }
+    if (!(ga > tol)) {
+        for (;;) {
+            if (b <= ttol) {
+                return 0.0;
+            }
+            double c = 0.5 * b;
+            double gc = watch_at(p, s, y0, k1, c, w, dir_om);
+            if (gc > tol) {
+                a = c;
+                ga = gc;
+                break;
+            }
+            b = c;
+            gb = gc;
+        }
+        if (gb >= -tol) {
+            return b;
+        }
+    }
+    int side = 0;
+    for (int it = 0; it < ROOT_MAX_ITER; ++it) {
+        if (b - a <= ttol) {
+            return b;
+        }
+        double c = b - gb * (b - a) / (gb - ga);
+        if (!(c > a && c < b)) {
+            c = 0.5 * (a + b);
+        }
+        double gc = watch_at(p, s, y0, k1, c, w, dir_om);
+        if (fabs(gc) <= tol) {
+            return c;
+        }
+        if (gc < 0.0) {
+            b = c;
+            gb = gc;
+            if (side == -1) ga *= 0.5;
+            side = -1;
+        } else {
+            a = c;
+            ga = gc;
+            if (side == 1) gb *= 0.5;
+            side = 1;
+        }
+    }
+    return b;
+}
+
+/* Apply the transition of watch w at the current state. */
+static void apply_event(const bc_plant_params *p, bc_plant_state *s, int w, const aux_t *a)
+{
+    if (w < W_OPEN_LO) {
+        int x = w - W_DIODE;
+        double r = s->i[x];
+        s->i[x] = 0.0;
+        /* keep the sum exactly zero */
+        int others = 0;
+        for (int z = 0; z < 3; ++z) others += (z != x && s->cond[z] != BC_COND_OPEN);
+        for (int z = 0; z < 3 && others > 0; ++z) {
+            if (z != x && s->cond[z] != BC_COND_OPEN) s->i[z] += r / others;
+        }
+        s->cond[x] = BC_COND_OPEN;
+        if (others == 1) { /* the last pair stopped: the other phase stops too */
+            for (int z = 0; z < 3; ++z) {
+                if (z != x && s->cond[z] != BC_COND_OPEN && fabs(s->i[z]) < 1e-9) {
+                    s->i[z] = 0.0;
+                    if (s->cond[z] == BC_COND_D_L || s->cond[z] == BC_COND_D_U) s->cond[z] = BC_COND_OPEN;
+                }
+            }
+        }
+    } else if (w < W_OPEN_HI) {
+        s->cond[w - W_OPEN_LO] = BC_COND_D_L;
+    } else if (w < W_PAIR) {
+        s->cond[w - W_OPEN_HI] = BC_COND_D_U;
+    } else if (w == W_PAIR) {
+        int hi = 0, lo = 0;
+        for (int x = 1; x < 3; ++x) {
+            if (a->e[x] > a->e[hi]) hi = x;
+            if (a->e[x] < a->e[lo]) lo = x;
+        }
+        s->cond[hi] = BC_COND_D_U;
+        s->cond[lo] = BC_COND_D_L;
+    } else if (w == W_OMEGA) {
+        s->omega = 0.0;
+        if (fabs(a->tau_net) <= p->tau_c) {
+            s->stuck = 1;
+        } else {
+            int nd = a->tau_net > 0.0 ? 1 : -1;
+            if (nd != s->dir) {
+                s->dir = nd;
+                pieces_locate(p, s);
+            }
+        }
+    } else if (w == W_STICK) {
+        s->stuck = 0;
+        int nd = a->tau_net > 0.0 ? 1 : -1;
+        if (nd != s->dir) {
+            s->dir = nd;
+            pieces_locate(p, s);
+        }
+    }
+    conduction_from_gates(s);
+    resolve_open(p, s);
+    s->k1_valid = 0;
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* public                                                                                                     */
+
+static int finite_nonneg(double v) { return isfinite(v) && v >= 0.0; }
+
+int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double theta0, double omega0,
+                  const double i0[3], double v_src)
+{
+    if (p == 0 || s == 0 || i0 == 0) return BC_ERR_PARAM;
+    if (p->p < 1 || !finite_nonneg(p->R) || !(isfinite(p->L) && p->L > 0.0)) return BC_ERR_PARAM;
+    for (int x = 0; x < 3; ++x) {
+        if (bc_emf_check(&p->emf[x]) != BC_OK) return BC_ERR_PARAM;
+        if (!isfinite(p->hall_error[x]) || fabs(p->hall_error[x]) >= BC_PI / 6.0) return BC_ERR_PARAM;
+    }
+    if (p->n_cog < 0) return BC_ERR_PARAM;
+    if (p->n_cog > 0) {
+        if (p->cog_order == 0 || p->cog_amp == 0 || p->cog_phase == 0) return BC_ERR_PARAM;
+        for (int32_t j = 0; j < p->n_cog; ++j) {
+            if (!isfinite(p->cog_order[j]) || !isfinite(p->cog_amp[j]) || !isfinite(p->cog_phase[j]))
+                return BC_ERR_PARAM;
+        }
+    }
+    if (!(isfinite(p->f_pwm) && p->f_pwm > 0.0)) return BC_ERR_PARAM;
+    if (!finite_nonneg(p->t_dead) || p->t_dead >= 0.25 / p->f_pwm) return BC_ERR_PARAM;
+    if (!finite_nonneg(p->R_on) || !finite_nonneg(p->V_f) || !finite_nonneg(p->r_d) || !finite_nonneg(p->R_src))
+        return BC_ERR_PARAM;
+    if (p->mech != BC_MECH_IMPOSED && p->mech != BC_MECH_DYNAMIC) return BC_ERR_PARAM;
+    if (p->mech == BC_MECH_DYNAMIC && !(isfinite(p->J) && p->J > 0.0)) return BC_ERR_PARAM;
+    if (!finite_nonneg(p->B) || !finite_nonneg(p->tau_c) || !finite_nonneg(p->hall_delay)) return BC_ERR_PARAM;
+    if (!isfinite(p->h_max)) return BC_ERR_PARAM;
+    if (!isfinite(t0) || !isfinite(theta0) || !isfinite(omega0) || !isfinite(v_src)) return BC_ERR_PARAM;
+    for (int x = 0; x < 3; ++x) {
+        if (!isfinite(i0[x])) return BC_ERR_PARAM;
+    }
+
+    memset(s, 0, sizeof *s);
+    s->t = t0;
+    double mean = (i0[0] + i0[1] + i0[2]) / 3.0;
+    for (int x = 0; x < 3; ++x) {
+        s->i[x] = i0[x] - mean;
+    }
+    double th = fmod(theta0, BC_TWO_PI);
+    if (th < 0.0) th += BC_TWO_PI;
+    if (th >= BC_TWO_PI) th = 0.0;
+    s->theta = th;
+    s->turns = 0u;
+    s->omega = omega0;
+    s->dir = omega0 < 0.0 ? -1 : 1;
+    s->v_src = v_src;
+    s->t_half = t0;
+    s->rising = 1;
+    for (int x = 0; x < 3; ++x) {
+        s->cmd[x].mode = BC_LEG_OFF;
+        s->cmd[x].duty = 0.0f;
+        s->des[x] = BC_GATE_O;
+        s->gate[x] = BC_GATE_O;
+        s->edge_to[x] = -1;
+        s->t_off_u[x] = -HUGE_VAL;
+        s->t_off_l[x] = -HUGE_VAL;
+        s->cond[x] = BC_COND_OPEN;
+    }
+    pieces_locate(p, s);
+    hall_locate(p, s);
+    s->hall_out = s->hall_raw;
+    s->t_edge = -HUGE_VAL;
+    resolve(p, s);
+    bc_plant_reset_extremes(p, s);
+    return BC_OK;
+}
+
+void bc_plant_set_inputs(const bc_plant_params *p, bc_plant_state *s, double omega, double tau_load, double v_src)
+{
+    s->tau_load = isfinite(tau_load) ? tau_load : 0.0;
+    s->v_src = isfinite(v_src) ? v_src : 0.0;
+    if (p->mech == BC_MECH_IMPOSED && isfinite(omega)) {
+        s->omega = omega;
+        int nd = omega < 0.0 ? -1 : (omega > 0.0 ? 1 : s->dir);
+        if (nd != s->dir) {
+            s->dir = nd;
+            pieces_locate(p, s);
+        }
+    }
+    resolve_open(p, s);
+    s->k1_valid = 0;
+}
+
+void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], int rising)
+{
+    double th = bc_plant_t_half(p);
+    double t0 = s->t;
+    s->t_half = t0;
+    s->rising = rising ? 1 : 0;
+    for (int x = 0; x < 3; ++x) {
+        int32_t mode = cmd[x].mode;
+        float d = cmd[x].duty;
+        if (mode < BC_LEG_OFF || mode > BC_LEG_LOW) {
+            mode = BC_LEG_OFF;
+            s->flags |= BC_PLANT_BAD_DUTY;
+        }
+        if (!(d >= 0.0f)) { /* negative or NaN */
+            d = 0.0f;
+            s->flags |= BC_PLANT_BAD_DUTY;
+        } else if (d > 1.0f) {
+            d = 1.0f;
+            s->flags |= BC_PLANT_BAD_DUTY;
+        }
+        s->cmd[x].mode = mode;
+        s->cmd[x].duty = d;
+        double dd = (double)d;
+        int32_t act = mode_gate(mode, 1), idle = mode_gate(mode, 0);
+        s->edge_to[x] = -1;
+        if (rising) { /* idle, then active from t0 + (1 - d) T/2 */
+            if (dd >= 1.0) {
+                s->des[x] = act;
+            } else {
+                s->des[x] = idle;
+                if (dd > 0.0 && act != idle) {
+                    s->edge_to[x] = act;
+                    s->edge_t[x] = t0 + (1.0 - dd) * th;
+                }
+            }
+        } else { /* active until t0 + d T/2, then idle */
+            if (dd <= 0.0) {
+                s->des[x] = idle;
+            } else {
+                s->des[x] = act;
+                if (dd < 1.0 && act != idle) {
+                    s->edge_to[x] = idle;
+                    s->edge_t[x] = t0 + dd * th;
+                }
+            }
+        }
+        gate_update(p, s, x, t0);
+    }
+    resolve(p, s);
+}
+
+/* Process everything due at the current time and angle. Returns 1 if the circuit changed. */
+static int process_due(const bc_plant_params *p, bc_plant_state *s)
+{
+    int changed = 0;
+    for (int x = 0; x < 3; ++x) {
+        if (s->edge_to[x] >= 0 && s->edge_t[x] <= s->t) {
+            s->des[x] = s->edge_to[x];
+            s->edge_to[x] = -1;
+        }
+        if (s->gate[x] != s->des[x]) {
+            changed |= gate_update(p, s, x, s->t);
+        }
+    }
+    while (s->hq_n > 0 && s->hq_t[0] <= s->t) {
+        hall_output_toggle(s, s->hq_code[0], s->hq_t[0]);
+        memmove(&s->hq_t[0], &s->hq_t[1], (BC_HALL_QUEUE - 1) * sizeof s->hq_t[0]);
+        memmove(&s->hq_code[0], &s->hq_code[1], (BC_HALL_QUEUE - 1) * sizeof s->hq_code[0]);
+        s->hq_n -= 1;
+    }
+    if (angles_cross(p, s, s->theta)) {
+        s->k1_valid = 0;
+    }
+    if (changed) {
+        resolve(p, s);
+    }
+    return changed;
+}
+
+static void ensure_k1(const bc_plant_params *p, bc_plant_state *s)
+{
+    if (s->k1_valid) {
+        return;
+    }
+    double y[NY];
+    aux_t a;
+    pack(s, y);
+    rhs(p, s, y, s->k1, &a);
+    s->aux_tau = a.tau;
+    s->k1_valid = 1;
+}
+
+static void track_extremes(bc_plant_state *s)
+{
+    if (s->aux_tau < s->tau_min) s->tau_min = s->aux_tau;
+    if (s->aux_tau > s->tau_max) s->tau_max = s->aux_tau;
+    for (int x = 0; x < 3; ++x) {
+        double v = fabs(s->i[x]);
+        if (v > s->i_peak[x]) s->i_peak[x] = v;
+    }
+}
+
+void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
+{
+    double hmax = h_max_of(p);
+    int zero_len = 0;
+    double y0[NY], y1[NY], k1n[NY], g0[NW], g1[NW];
+    aux_t a0, a1;
+    for (;;) {
+        process_due(p, s);
+        if (s->t >= t_end) {
+            break;
+        }
+        ensure_k1(p, s);
+        pack(s, y0);
+        /* the step: to the target, a gate edge, a delayed Hall edge, h_max, or an angle bound */
+        double t_stop = t_end;
+        double tg = next_gate_time(p, s);
+        if (tg < t_stop) t_stop = tg;
+        if (s->hq_n > 0 && s->hq_t[0] < t_stop) t_stop = s->hq_t[0];
+        if (s->t + hmax < t_stop) t_stop = s->t + hmax;
+        double th_ev = 0.0;
+        double ha = angle_event(p, s, &th_ev);
+        int angle_step = 0;
+        if (s->t + ha < t_stop) {
+            t_stop = s->t + ha;
+            angle_step = 1;
+        }
+        double h = t_stop - s->t;
+        if (!(h > 0.0)) {
+            /* nothing left to integrate at this instant (an angle bound at the current angle, rounding) */
+            if (angle_step) {
+                angles_cross(p, s, th_ev);
+                s->k1_valid = 0;
+            }
+            if (++zero_len > MAX_ZERO_LENGTH_EVENTS) {
+                s->flags |= BC_PLANT_CHATTER;
+                h = 1e-9 * bc_plant_t_half(p);
+                t_stop = s->t + h;
+                angle_step = 0;
+            } else {
+                continue;
+            }
+        }
+        rk4(p, s, y0, s->k1, h, y1);
+        rhs(p, s, y1, k1n, &a1);
+        /* watched functions: the first that goes negative inside the step is an event */
+        int dir_om = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
+        watch_eval(p, s, y1, &a1, dir_om, g1);
+        int w_hit = -1;
+        double h_hit = h;
+        int any_neg = 0;
+        for (int w = 0; w < NW; ++w) any_neg |= g1[w] < 0.0;
+        if (any_neg && zero_len <= MAX_ZERO_LENGTH_EVENTS) {
+            double dy0[NY];
+            rhs(p, s, y0, dy0, &a0); /* the start of the step, only when a crossing is to be located */
+            watch_eval(p, s, y0, &a0, dir_om, g0);
+            for (int w = 0; w < NW; ++w) {
+                if (g1[w] < 0.0) {
+                    double hw = root_find(p, s, y0, s->k1, h, w, dir_om, g0[w], g1[w]);
+                    if (w_hit < 0 || hw < h_hit) {
+                        w_hit = w;
+                        h_hit = hw;
+                    }
+                }
+            }
+        }
+        if (w_hit >= 0) {
+            if (h_hit < h) {
+                rk4(p, s, y0, s->k1, h_hit, y1);
+                rhs(p, s, y1, k1n, &a1);
+            }
+            unpack(s, y1);
+            s->t = (h_hit < h) ? s->t + h_hit : t_stop;
+            if (p->mech == BC_MECH_IMPOSED) s->omega = y0[Y_OM];
+            s->aux_tau = a1.tau;
+            track_extremes(s);
+            apply_event(p, s, w_hit, &a1);
+            s->n_events += 1;
+            s->n_steps += 1;
+            if (h_hit <= 0.0) {
+                /* a diode that began to conduct at this instant is reverse-driven at once: it stays open until
+                 * time moves on (the terminal sits at its clamp and is leaving it) */
+                if (w_hit < W_OPEN_LO && y0[Y_I + (w_hit - W_DIODE)] == 0.0) {
+                    s->hold_open |= 1 << (w_hit - W_DIODE);
+                    s->cond[w_hit - W_DIODE] = BC_COND_OPEN;
+                    s->k1_valid = 0;
+                }
+                ++zero_len;
+            } else {
+                s->hold_open = 0;
+                zero_len = 0;
+            }
+            wrap_angle(p, s);
+            continue;
+        }
+        unpack(s, y1);
+        s->t = t_stop;
+        memcpy(s->k1, k1n, sizeof k1n);
+        s->k1_valid = 1;
+        s->aux_tau = a1.tau;
+        s->n_steps += 1;
+        zero_len = 0;
+        s->hold_open = 0;
+        track_extremes(s);
+        if (angle_step) {
+            angles_cross(p, s, th_ev);
+            s->k1_valid = 0;
+        }
+        wrap_angle(p, s);
+    }
+}
+
+void bc_plant_output(const bc_plant_params *p, const bc_plant_state *s, bc_plant_out *out)
+{
+    double y[NY], dy[NY];
+    aux_t a;
+    pack(s, y);
+    rhs(p, s, y, dy, &a);
+    for (int x = 0; x < 3; ++x) {
+        out->e[x] = a.e[x];
+        out->k[x] = a.k[x];
+        out->v[x] = a.v[x];
+    }
+    out->v_n = a.vn;
+    out->v_bus = a.vbus;
+    out->i_dc = a.idc;
+    out->tau_e = a.tau;
+    out->tau_cog = a.tau_cog;
+    double sgn = sign_of(s->omega);
+    out->tau_shaft = a.tau - p->B * s->omega - p->tau_c * sgn;
+    out->w_l = 0.5 * p->L * (s->i[0] * s->i[0] + s->i[1] * s->i[1] + s->i[2] * s->i[2]);
+}
+
+void bc_plant_reset_extremes(const bc_plant_params *p, bc_plant_state *s)
+{
+    ensure_k1(p, s);
+    s->tau_min = s->aux_tau;
+    s->tau_max = s->aux_tau;
+    for (int x = 0; x < 3; ++x) {
+        s->i_peak[x] = fabs(s->i[x]);
+    }
+}

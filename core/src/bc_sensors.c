@@ -1,0 +1,82 @@
+/* bc_sensors.c - measurement chain. Equations in bc_sensors.h. */
+#include "bldc/bc_sensors.h"
+
+#include <math.h>
+
+static int finite_nonneg(double v) { return isfinite(v) && v >= 0.0; }
+
+int bc_sensor_init(const bc_sensor_params *p, bc_sensor_state *s)
+{
+    if (p == 0 || s == 0) return BC_ERR_PARAM;
+    uint32_t m = p->i_mask & 7u;
+    if (m != p->i_mask || m == 0u || m == 1u || m == 2u || m == 4u) return BC_ERR_PARAM;
+    for (int x = 0; x < 3; ++x) {
+        if (!isfinite(p->i_gain[x]) || !isfinite(p->i_offset[x])) return BC_ERR_PARAM;
+    }
+    if (!finite_nonneg(p->i_noise) || !finite_nonneg(p->i_lsb) || !isfinite(p->v_gain) || !isfinite(p->v_offset) ||
+        !finite_nonneg(p->v_noise) || !finite_nonneg(p->v_lsb) || !(isfinite(p->f_tick) && p->f_tick > 0.0))
+        return BC_ERR_PARAM;
+    s->rng = p->seed ^ 0x9E3779B97F4A7C15ull;
+    if (s->rng == 0u) s->rng = 1u;
+    s->has_spare = 0;
+    s->spare = 0.0;
+    return BC_OK;
+}
+
+static double uniform01(bc_sensor_state *s)
+{
+    uint64_t x = s->rng;
+    x ^= x >> 12;
+    x ^= x << 25;
+    x ^= x >> 27;
+    s->rng = x;
+    uint64_t r = x * 0x2545F4914F6CDD1Dull;
+    return ((double)(r >> 11) + 0.5) * (1.0 / 9007199254740992.0); /* (0, 1) */
+}
+
+static double normal(bc_sensor_state *s)
+{
+    if (s->has_spare) {
+        s->has_spare = 0;
+        return s->spare;
+    }
+    double u1 = uniform01(s), u2 = uniform01(s);
+    double r = sqrt(-2.0 * log(u1));
+    s->spare = r * sin(BC_TWO_PI * u2);
+    s->has_spare = 1;
+    return r * cos(BC_TWO_PI * u2);
+}
+
+static double quantise(double v, double lsb) { return lsb > 0.0 ? lsb * floor(v / lsb + 0.5) : v; }
+
+uint32_t bc_sensor_tick(const bc_sensor_params *p, double t)
+{
+    if (!(t >= 0.0) || !isfinite(t)) return 0u;
+    double ticks = floor(t * p->f_tick);
+    return (uint32_t)(uint64_t)fmod(ticks, 4294967296.0);
+}
+
+void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_plant_state *ps,
+                       const bc_plant_out *po, bc_ctrl_in *in)
+{
+    for (int x = 0; x < 3; ++x) {
+        if (p->i_mask & (1u << x)) {
+            double v = p->i_gain[x] * ps->i[x] + p->i_offset[x];
+            if (p->i_noise > 0.0) v += p->i_noise * normal(s);
+            in->i_abc[x] = (float)quantise(v, p->i_lsb);
+        } else {
+            in->i_abc[x] = 0.0f;
+        }
+    }
+    in->i_mask = p->i_mask;
+    double v = p->v_gain * po->v_bus + p->v_offset;
+    if (p->v_noise > 0.0) v += p->v_noise * normal(s);
+    in->v_dc = (float)quantise(v, p->v_lsb);
+    in->hall = (uint32_t)ps->hall_out;
+    in->n_edges = ps->n_edges;
+    in->tick_edge = bc_sensor_tick(p, ps->t_edge);
+    in->tick_now = bc_sensor_tick(p, ps->t);
+    in->theta_enc = (float)ps->theta;
+    if (in->theta_enc >= BC_TWO_PI_F) in->theta_enc = 0.0f;
+    in->omega_enc = (float)ps->omega;
+}

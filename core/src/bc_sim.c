@@ -1,0 +1,264 @@
+/* bc_sim.c - the closed-loop runner. Order of one sample in bc_sim.h. */
+#include "bldc/bc_sim.h"
+
+#include <math.h>
+#include <string.h>
+
+static int config_ok(const bc_sim_config *c)
+{
+    if (c == 0 || c->plant == 0 || c->sensors == 0 || c->ctrl.step == 0) return 0;
+    if (c->delay != 0 && c->delay != 1) return 0;
+    if (c->trace_every < 1 || c->trace_sub < 1 || (c->trace_sub > 1 && c->trace_every != 1)) return 0;
+    if (!isfinite(c->metric_t0) || !isfinite(c->metric_t1)) return 0;
+    return 1;
+}
+
+int bc_sim_init(const bc_sim_config *cfg, bc_sim_state *s, double theta0, double omega0, const double i0[3],
+                double v_src0)
+{
+    if (!config_ok(cfg) || s == 0) return BC_ERR_PARAM;
+    memset(s, 0, sizeof *s);
+    int rc = bc_plant_init(cfg->plant, &s->plant, 0.0, theta0, omega0, i0, v_src0);
+    if (rc != BC_OK) return rc;
+    rc = bc_sensor_init(cfg->sensors, &s->sensors);
+    if (rc != BC_OK) return rc;
+    s->k = 0;
+    for (int x = 0; x < 3; ++x) {
+        s->pending[x].mode = BC_LEG_OFF;
+        s->pending[x].duty = 0.0f;
+    }
+    return BC_OK;
+}
+
+static double input_at(const double *arr, double c, int64_t n) { return arr ? arr[n] : c; }
+
+/* ---- trace rows ---------------------------------------------------------------------------------------- */
+
+static void row_open(const bc_sim_config *cfg, bc_sim_state *s)
+{
+    const bc_plant_state *ps = &s->plant;
+    bc_plant_out po;
+    bc_plant_output(cfg->plant, ps, &po);
+    bc_trace_row *r = &s->row;
+    r->t = ps->t;
+    r->theta_e = ps->theta;
+    r->omega_m = ps->omega;
+    r->i_a = ps->i[0];
+    r->i_b = ps->i[1];
+    r->i_c = ps->i[2];
+    r->e_a = po.e[0];
+    r->e_b = po.e[1];
+    r->e_c = po.e[2];
+    r->tau_e = po.tau_e;
+    r->tau_shaft = po.tau_shaft;
+    r->v_bus = po.v_bus;
+    r->hall = (double)ps->hall_out;
+    r->mode_a = (double)ps->cmd[0].mode;
+    r->mode_b = (double)ps->cmd[1].mode;
+    r->mode_c = (double)ps->cmd[2].mode;
+    r->duty_a = (double)ps->cmd[0].duty;
+    r->duty_b = (double)ps->cmd[1].duty;
+    r->duty_c = (double)ps->cmd[2].duty;
+    r->d0 = (double)s->last.diag[0];
+    r->d1 = (double)s->last.diag[1];
+    r->d2 = (double)s->last.diag[2];
+    r->d3 = (double)s->last.diag[3];
+    r->d4 = (double)s->last.diag[4];
+    r->d5 = (double)s->last.diag[5];
+    r->d6 = (double)s->last.diag[6];
+    r->d7 = (double)s->last.diag[7];
+    r->flags = (double)s->last.flags;
+    memcpy(s->row_acc0, ps->acc, sizeof s->row_acc0);
+    s->row_tmin = po.tau_e;
+    s->row_tmax = po.tau_e;
+    s->row_open = 1;
+}
+
+static void row_close(bc_sim_state *s, bc_trace_row *rows, int64_t cap, int64_t *nw, int *overflow)
+{
+    const bc_plant_state *ps = &s->plant;
+    bc_trace_row *r = &s->row;
+    double dt = ps->t - r->t;
+    const double *a0 = s->row_acc0, *a1 = ps->acc;
+    double inv = dt > 0.0 ? 1.0 / dt : 0.0;
+    r->tau_mean = (a1[BC_ACC_TAU] - a0[BC_ACC_TAU]) * inv;
+    r->tau_min = s->row_tmin;
+    r->tau_max = s->row_tmax;
+    r->p_src = (a1[BC_ACC_SRC] - a0[BC_ACC_SRC]) * inv;
+    r->p_cu = (a1[BC_ACC_CU] - a0[BC_ACC_CU]) * inv;
+    r->p_inv = (a1[BC_ACC_SW] - a0[BC_ACC_SW] + a1[BC_ACC_DIODE] - a0[BC_ACC_DIODE] + a1[BC_ACC_RSRC] -
+                a0[BC_ACC_RSRC]) * inv;
+    r->p_emf = (a1[BC_ACC_EMF] - a0[BC_ACC_EMF]) * inv;
+    r->v_a = (a1[BC_ACC_VA] - a0[BC_ACC_VA]) * inv;
+    r->v_b = (a1[BC_ACC_VB] - a0[BC_ACC_VB]) * inv;
+    r->v_c = (a1[BC_ACC_VC] - a0[BC_ACC_VC]) * inv;
+    r->v_n = (a1[BC_ACC_VN] - a0[BC_ACC_VN]) * inv;
+    r->i_dc = (a1[BC_ACC_IDC] - a0[BC_ACC_IDC]) * inv;
+    if (rows != 0 && *nw < cap) {
+        rows[*nw] = *r;
+        *nw += 1;
+    } else if (rows != 0) {
+        *overflow = 1;
+    }
+    s->row_open = 0;
+}
+
+/* ---- metrics ------------------------------------------------------------------------------------------- */
+
+static double w_kin(const bc_plant_params *p, const bc_plant_state *ps)
+{
+    return p->mech == BC_MECH_DYNAMIC ? 0.5 * p->J * ps->omega * ps->omega : 0.0;
+}
+
+static double w_mag(const bc_plant_params *p, const bc_plant_state *ps)
+{
+    return 0.5 * p->L * (ps->i[0] * ps->i[0] + ps->i[1] * ps->i[1] + ps->i[2] * ps->i[2]);
+}
+
+static void metric_start(const bc_sim_config *cfg, bc_sim_state *s)
+{
+    const bc_plant_state *ps = &s->plant;
+    bc_plant_out po;
+    bc_plant_output(cfg->plant, ps, &po);
+    s->m.t0 = ps->t;
+    memcpy(s->m_acc0, ps->acc, sizeof s->m_acc0);
+    s->m.w_l0 = w_mag(cfg->plant, ps);
+    s->m.w_kin0 = w_kin(cfg->plant, ps);
+    s->m.tau_min = po.tau_e;
+    s->m.tau_max = po.tau_e;
+    s->m.tau_ma_min = HUGE_VAL;
+    s->m.tau_ma_max = -HUGE_VAL;
+    for (int x = 0; x < 3; ++x) s->m.i_peak[x] = fabs(ps->i[x]);
+    s->m.n_ma = 0;
+    s->ma_have = 0;
+    s->m.state = 1;
+}
+
+static void metric_stop(const bc_sim_config *cfg, bc_sim_state *s)
+{
+    const bc_plant_state *ps = &s->plant;
+    s->m.t1 = ps->t;
+    for (int j = 0; j < BC_ACC_N; ++j) s->m.E[j] = ps->acc[j] - s->m_acc0[j];
+    s->m.w_l1 = w_mag(cfg->plant, ps);
+    s->m.w_kin1 = w_kin(cfg->plant, ps);
+    s->m.state = 2;
+}
+
+/* Integrate to t, then merge the chunk's extremes into the open row and the running metrics. */
+static void advance_chunk(const bc_sim_config *cfg, bc_sim_state *s, double t)
+{
+    bc_plant_reset_extremes(cfg->plant, &s->plant);
+    bc_plant_advance(cfg->plant, &s->plant, t);
+    const bc_plant_state *ps = &s->plant;
+    if (s->row_open) {
+        if (ps->tau_min < s->row_tmin) s->row_tmin = ps->tau_min;
+        if (ps->tau_max > s->row_tmax) s->row_tmax = ps->tau_max;
+    }
+    if (s->m.state == 1) {
+        if (ps->tau_min < s->m.tau_min) s->m.tau_min = ps->tau_min;
+        if (ps->tau_max > s->m.tau_max) s->m.tau_max = ps->tau_max;
+        for (int x = 0; x < 3; ++x) {
+            if (ps->i_peak[x] > s->m.i_peak[x]) s->m.i_peak[x] = ps->i_peak[x];
+        }
+    }
+}
+
+/* ---- the loop ------------------------------------------------------------------------------------------ */
+
+int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *in, int64_t n, bc_trace_row *rows,
+               int64_t rows_cap, int64_t *rows_written)
+{
+    if (!config_ok(cfg) || s == 0 || in == 0 || n < 0 || rows_written == 0) return BC_ERR_PARAM;
+    const bc_plant_params *pp = cfg->plant;
+    double th = bc_plant_t_half(pp);
+    int has_window = cfg->metric_t1 > cfg->metric_t0;
+    int overflow = 0;
+    *rows_written = 0;
+
+    for (int64_t j = 0; j < n; ++j) {
+        int64_t k = s->k;
+        double t_k = (double)k * th;
+        double t_next = (double)(k + 1) * th;
+        bc_plant_state *ps = &s->plant;
+        ps->t = t_k; /* exact, whatever rounding the last step left */
+
+        /* 1. inputs held over the sample */
+        bc_plant_set_inputs(pp, ps, input_at(in->omega, in->omega_c, j), input_at(in->tau_load, in->tau_load_c, j),
+                            input_at(in->v_src, in->v_src_c, j));
+
+        /* 2. measure, control */
+        bc_plant_out po;
+        bc_plant_output(pp, ps, &po);
+        bc_ctrl_in ci;
+        memset(&ci, 0, sizeof ci);
+        bc_sensor_measure(cfg->sensors, &s->sensors, ps, &po, &ci);
+        ci.ref = (float)input_at(in->ref, in->ref_c, j);
+        ci.omega_ref = (float)input_at(in->omega_ref, in->omega_ref_c, j);
+        bc_ctrl_out co;
+        memset(&co, 0, sizeof co);
+        cfg->ctrl.step(cfg->ctrl.params, cfg->ctrl.state, &ci, &co);
+        s->last = co;
+        s->last_in = ci;
+
+        /* 3. apply */
+        bc_leg_cmd cmd[3];
+        for (int x = 0; x < 3; ++x) {
+            cmd[x] = cfg->delay ? s->pending[x] : co.leg[x];
+            s->pending[x] = co.leg[x];
+        }
+        bc_plant_set_half(pp, ps, cmd, (k % 2) == 0);
+
+        /* half-period torque mean for the moving average */
+        s->half_tau0 = ps->acc[BC_ACC_TAU];
+        s->half_in = has_window && s->m.state == 1 && t_k >= cfg->metric_t0;
+
+        /* 4. integrate to t_next through the row and metric bounds */
+        int sub = cfg->trace_sub;
+        for (int q = 0; q < sub; ++q) {
+            double t_row = t_k + th * (double)q / (double)sub;
+            int row_start = (sub > 1) || (k % cfg->trace_every == 0);
+            if (row_start && (rows != 0)) {
+                if (s->row_open && ps->t >= t_row) {
+                    row_close(s, rows, rows_cap, rows_written, &overflow);
+                }
+                if (!s->row_open) {
+                    row_open(cfg, s);
+                }
+            }
+            double t_seg = (q + 1 == sub) ? t_next : t_k + th * (double)(q + 1) / (double)sub;
+            /* metric bounds inside this segment */
+            if (has_window && s->m.state == 0 && cfg->metric_t0 >= ps->t && cfg->metric_t0 < t_seg) {
+                if (cfg->metric_t0 > ps->t) advance_chunk(cfg, s, cfg->metric_t0);
+                metric_start(cfg, s);
+            }
+            if (has_window && s->m.state == 1 && cfg->metric_t1 > ps->t && cfg->metric_t1 <= t_seg) {
+                advance_chunk(cfg, s, cfg->metric_t1);
+                metric_stop(cfg, s);
+            }
+            advance_chunk(cfg, s, t_seg);
+            if (sub > 1 && rows != 0 && s->row_open) {
+                row_close(s, rows, rows_cap, rows_written, &overflow);
+            }
+        }
+        ps->t = t_next;
+
+        /* moving average over one PWM period of the half-period means, halves fully inside the window */
+        if (s->half_in && s->m.state == 1) {
+            double mean = (ps->acc[BC_ACC_TAU] - s->half_tau0) / th;
+            if (s->ma_have) {
+                double ma = 0.5 * (mean + s->ma_prev);
+                if (ma < s->m.tau_ma_min) s->m.tau_ma_min = ma;
+                if (ma > s->m.tau_ma_max) s->m.tau_ma_max = ma;
+                s->m.n_ma += 1;
+            }
+            s->ma_prev = mean;
+            s->ma_have = 1;
+        }
+        s->k = k + 1;
+        /* a row spanning several samples closes at its window's end */
+        if (sub == 1 && rows != 0 && s->row_open && (s->k % cfg->trace_every) == 0) {
+            row_close(s, rows, rows_cap, rows_written, &overflow);
+        }
+    }
+    return overflow ? BC_ERR_SIZE : BC_OK;
+}

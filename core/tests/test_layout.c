@@ -1,0 +1,63 @@
+/* test_layout.c - the binding's layout table describes every struct it lists completely: members in order,
+ * inside the struct, not overlapping, and the gaps between them no larger than alignment padding; trace rows
+ * are as many doubles as BC_TRACE_FIELDS lists; every registered controller initialises and steps. */
+#include <string.h>
+
+#include "bc_test.h"
+#include "bldc/bc_bind.h"
+#include "bldc/bc_sim.h"
+
+static uint32_t struct_size(const char *name)
+{
+    for (int32_t j = 0; j < bc_struct_count(); ++j) {
+        if (strcmp(bc_struct_get(j)->name, name) == 0) return bc_struct_get(j)->size;
+    }
+    return 0u;
+}
+
+int main(void)
+{
+    /* structs the host fills completely must have no undescribed member */
+    static const char *const complete[] = {"bc_leg_cmd", "bc_emf_shape", "bc_plant_params", "bc_sensor_params",
+                                           "bc_ctrl", "bc_sim_config", "bc_sim_inputs", "bc_sim_metrics",
+                                           "bc_ctrl_in", "bc_ctrl_out", "bc_table_params", "bc_sixv_params"};
+    for (size_t c = 0; c < sizeof complete / sizeof complete[0]; ++c) {
+        uint32_t size = struct_size(complete[c]), end = 0u, covered = 0u;
+        CHECK(size > 0u, "%s has a size entry", complete[c]);
+        for (int32_t j = 0; j < bc_layout_count(); ++j) {
+            const bc_field_desc *f = bc_layout_get(j);
+            if (strcmp(f->strct, complete[c]) != 0) continue;
+            CHECK(f->offset >= end, "%s.%s does not overlap the previous member", f->strct, f->field);
+            CHECK(f->offset - end < 8u, "%s.%s: gap of %u bytes before it (a member missing?)", f->strct, f->field,
+                  f->offset - end);
+            end = f->offset + f->size;
+            covered += f->size;
+            CHECK(end <= size, "%s.%s inside the struct", f->strct, f->field);
+        }
+        CHECK(size - end < 8u, "%s: %u bytes undescribed at the end", complete[c], size - end);
+        CHECK(covered + 16u > size, "%s: %u of %u bytes described", complete[c], covered, size);
+    }
+    CHECK(struct_size("bc_trace_row") == (uint32_t)bc_trace_count() * (uint32_t)sizeof(double), "trace row");
+    CHECK(strcmp(bc_trace_name(0), "t") == 0 && bc_trace_name(bc_trace_count()) == 0, "trace names");
+    /* every controller: init with zeroed params either succeeds or reports BC_ERR_PARAM, step keeps legs sane */
+    for (int32_t j = 0; j < bc_ctrl_count(); ++j) {
+        const bc_ctrl_info *ci = bc_ctrl_get(j);
+        CHECK(struct_size(ci->params) > 0u && struct_size(ci->state) > 0u, "%s sizes", ci->name);
+        static unsigned char pbuf[4096], sbuf[65536];
+        memset(pbuf, 0, sizeof pbuf);
+        memset(sbuf, 0, sizeof sbuf);
+        CHECK(struct_size(ci->params) <= sizeof pbuf && struct_size(ci->state) <= sizeof sbuf, "buffers");
+        if (ci->init(pbuf, sbuf) == BC_OK) {
+            bc_ctrl_in in;
+            memset(&in, 0, sizeof in);
+            in.hall = 1u;
+            in.v_dc = 48.0f;
+            bc_ctrl_out out;
+            ci->step(pbuf, sbuf, &in, &out);
+            for (int x = 0; x < 3; ++x) {
+                CHECK(out.leg[x].duty >= 0.0f && out.leg[x].duty <= 1.0f, "%s duty in [0, 1]", ci->name);
+            }
+        }
+    }
+    return bc_test_summary("test_layout");
+}

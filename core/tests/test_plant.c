@@ -1,0 +1,246 @@
+/* test_plant.c - physics of the plant alone: standstill DC, Hall sequence both ways, open circuit,
+ * diode freewheeling to an open phase, energy balance, step-size convergence, bad parameters. */
+#include <math.h>
+#include <string.h>
+
+#include "bc_test.h"
+#include "bldc/bc_commutation.h"
+#include "bldc/bc_plant.h"
+#include "fixtures.h"
+
+static const double I0[3] = {0.0, 0.0, 0.0};
+
+static void legs(bc_leg_cmd c[3], int ma, float da, int mb, float db, int mc, float dc)
+{
+    c[0].mode = ma; c[0].duty = da;
+    c[1].mode = mb; c[1].duty = db;
+    c[2].mode = mc; c[2].duty = dc;
+}
+
+/* Run whole half periods with a fixed command. */
+static void run_halves(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd c[3], long n, long *k)
+{
+    double th = bc_plant_t_half(p);
+    for (long j = 0; j < n; ++j, ++*k) {
+        bc_plant_set_half(p, s, c, (*k % 2) == 0);
+        bc_plant_advance(p, s, (double)(*k + 1) * th);
+    }
+}
+
+static void test_standstill_dc(void)
+{
+    fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    bc_plant_state s;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, 0.0, I0, 48.0) == BC_OK, "init");
+    bc_leg_cmd c[3];
+    legs(c, BC_LEG_HIGH, 1.0f, BC_LEG_LOW, 1.0f, BC_LEG_OFF, 0.0f);
+    long k = 0;
+    double tau = f.p.L / f.p.R, ifin = 48.0 / (2.0 * f.p.R);
+    double worst = 0.0;
+    for (int m = 1; m <= 20; ++m) {
+        run_halves(&f.p, &s, c, 70, &k); /* 70 halves = 2.5 ms */
+        double exact = ifin * (1.0 - exp(-s.t / tau));
+        double err = fabs(s.i[0] - exact) / ifin;
+        if (err > worst) worst = err;
+    }
+    CHECK(worst < 1e-9, "standstill RL response error %.3g of V/2R", worst);
+    CHECK_NEAR(s.i[0], ifin, 1e-3 * ifin, "i_a -> V/(2R) after 33 time constants");
+    CHECK_NEAR(s.i[1], -s.i[0], 1e-9, "i_b = -i_a");
+    CHECK(s.i[2] == 0.0, "open phase c carries no current");
+}
+
+static void test_hall_sequence(double omega, const int *expect, double *edge_angles)
+{
+    fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    bc_plant_state s;
+    double th0 = 0.01; /* just inside sector 5 -> code 5 */
+    CHECK(bc_plant_init(&f.p, &s, 0.0, th0, omega, I0, 48.0) == BC_OK, "init");
+    bc_leg_cmd c[3];
+    legs(c, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f);
+    CHECK(s.hall_out == 5, "initial code at theta = 0.01 is 5, got %d", s.hall_out);
+    long k = 0;
+    int seen = 0;
+    uint32_t edges = s.n_edges;
+    double th = bc_plant_t_half(&f.p);
+    for (long j = 0; j < 200000 && seen < 12; ++j, ++k) {
+        bc_plant_set_half(&f.p, &s, c, (k % 2) == 0);
+        bc_plant_advance(&f.p, &s, (double)(k + 1) * th);
+        if (s.n_edges != edges) {
+            CHECK(s.n_edges == edges + 1u, "one edge per half period");
+            edges = s.n_edges;
+            CHECK(s.hall_out == expect[seen % 6], "edge %d: code %d, expected %d", seen, s.hall_out, expect[seen % 6]);
+            /* angle at the edge time, from the imposed speed */
+            double th_edge = fmod(th0 + (double)f.p.p * omega * s.t_edge, 2.0 * BC_PI);
+            if (th_edge < 0.0) th_edge += 2.0 * BC_PI;
+            double d = fabs(th_edge - edge_angles[seen % 6]);
+            if (d > BC_PI) d = 2.0 * BC_PI - d;
+            CHECK(d < 1e-9, "edge %d at %.12f rad, expected %.12f", seen, th_edge, edge_angles[seen % 6]);
+            ++seen;
+        }
+    }
+    CHECK(seen == 12, "saw %d edges", seen);
+}
+
+static void test_hall_both_directions(void)
+{
+    const int fwd[6] = {1, 3, 2, 6, 4, 5};
+    double afwd[6], arev[6];
+    for (int j = 0; j < 6; ++j) afwd[j] = BC_PI / 6.0 + (double)j * BC_PI / 3.0;
+    test_hall_sequence(30.0, fwd, afwd);
+    /* backward from code 5 (sector 5, [11pi/6, pi/6)): crossing 11pi/6 enters sector 4 (code 4), ... */
+    const int rev[6] = {4, 6, 2, 3, 1, 5};
+    for (int j = 0; j < 6; ++j) arev[j] = 11.0 * BC_PI / 6.0 - (double)j * BC_PI / 3.0;
+    test_hall_sequence(-30.0, rev, arev);
+}
+
+static void test_open_circuit(void)
+{
+    fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    bc_plant_state s;
+    double om = 0.8 * 48.0 / (2.0 * 0.32); /* below the no-load speed */
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, om, I0, 48.0) == BC_OK, "init");
+    bc_leg_cmd c[3];
+    legs(c, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f);
+    long k = 0;
+    double worst = 0.0;
+    for (int j = 0; j < 400; ++j) {
+        run_halves(&f.p, &s, c, 5, &k);
+        bc_plant_out o;
+        bc_plant_output(&f.p, &s, &o);
+        CHECK(s.i[0] == 0.0 && s.i[1] == 0.0 && s.i[2] == 0.0, "no current below no-load speed");
+        /* line-to-line terminal voltage = line-to-line back-EMF = omega (k_a - k_b) */
+        double want = om * (bc_emf_eval(&f.p.emf[0], s.theta) - bc_emf_eval(&f.p.emf[1], s.theta - 2.0 * BC_PI / 3.0));
+        double err = fabs((o.v[0] - o.v[1]) - want);
+        if (err > worst) worst = err;
+    }
+    CHECK(worst < 1e-9, "open-circuit line voltage = back-EMF (err %.3g V)", worst);
+
+    /* above the no-load speed the diodes rectify: current flows back to the source */
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 1.3 * 75.0, I0, 48.0) == BC_OK, "init");
+    k = 0;
+    run_halves(&f.p, &s, c, 2000, &k);
+    CHECK(s.acc[BC_ACC_SRC] < -1.0, "generator: energy to the source %.3g J", s.acc[BC_ACC_SRC]);
+    double lhs = s.acc[BC_ACC_SRC];
+    double w_l = 0.5 * f.p.L * (s.i[0] * s.i[0] + s.i[1] * s.i[1] + s.i[2] * s.i[2]);
+    double rhs = s.acc[BC_ACC_CU] + s.acc[BC_ACC_DIODE] + s.acc[BC_ACC_SW] + s.acc[BC_ACC_EMF] + w_l;
+    CHECK(fabs(lhs - rhs) < 1e-6 * fabs(lhs), "rectifier energy balance %.3g J of %.3g J", lhs - rhs, lhs);
+}
+
+/* Six-step by the Hall sector, run n electrical periods; returns mean torque over the last one. */
+static double six_step(bc_plant_params *p, bc_plant_state *s, double om, float duty, int periods, double *balance,
+                       int *opens)
+{
+    CHECK(bc_plant_init(p, s, 0.0, 0.2, om, I0, 48.0) == BC_OK, "init");
+    double th = bc_plant_t_half(p);
+    double Te = 2.0 * BC_PI / ((double)p->p * om);
+    long k = 0;
+    bc_leg_cmd c[3];
+    double acc0[BC_ACC_N];
+    double wl0 = 0.0;
+    double t_start = (periods - 1) * Te;
+    int started = 0;
+    *opens = 0;
+    while ((double)k * th < periods * Te) {
+        int sec = bc_hall_sector((uint32_t)s->hall_out), pos, neg;
+        legs(c, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f);
+        if (bc_sector_phases(sec, &pos, &neg) == 0) {
+            c[pos].mode = BC_LEG_HIGH;
+            c[pos].duty = duty;
+            c[neg].mode = BC_LEG_LOW;
+            c[neg].duty = 1.0f;
+        }
+        bc_plant_set_half(p, s, c, (k % 2) == 0);
+        double t1 = (double)(k + 1) * th;
+        if (!started && t_start < t1) {
+            bc_plant_advance(p, s, t_start);
+            memcpy(acc0, s->acc, sizeof acc0);
+            wl0 = 0.5 * p->L * (s->i[0] * s->i[0] + s->i[1] * s->i[1] + s->i[2] * s->i[2]);
+            started = 1;
+        }
+        int64_t ev = s->n_events;
+        bc_plant_advance(p, s, t1 < periods * Te ? t1 : periods * Te);
+        if (s->n_events > ev) *opens += (int)(s->n_events - ev);
+        ++k;
+    }
+    double E[BC_ACC_N];
+    for (int j = 0; j < BC_ACC_N; ++j) E[j] = s->acc[j] - acc0[j];
+    double wl1 = 0.5 * p->L * (s->i[0] * s->i[0] + s->i[1] * s->i[1] + s->i[2] * s->i[2]);
+    double out = E[BC_ACC_RSRC] + E[BC_ACC_CU] + E[BC_ACC_SW] + E[BC_ACC_DIODE] + E[BC_ACC_EMF] + (wl1 - wl0);
+    *balance = (E[BC_ACC_SRC] - out) / E[BC_ACC_SRC];
+    return E[BC_ACC_TAU] / Te;
+}
+
+static void test_six_step_physics(void)
+{
+    fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.R_on = 0.004;
+    f.p.V_f = 0.7;
+    f.p.r_d = 0.002;
+    f.p.R_src = 0.01;
+    bc_plant_state s;
+    double bal;
+    int ev;
+    double om = 0.5 * 75.0;
+    double tau = six_step(&f.p, &s, om, 0.7f, 4, &bal, &ev);
+    CHECK(fabs(bal) < 1e-6, "six-step energy balance %.3g relative", bal);
+    double bal1 = bal;
+    CHECK(ev > 0, "diode current zero crossings located (%d events)", ev);
+    CHECK(tau > 1.0, "motoring torque %.4f N m", tau);
+    /* step-size convergence: halve and quarter h_max */
+    double T_N = 2.0 * 0.32 * 50.0;
+    f.p.h_max = 0.5 * bc_plant_t_half(&f.p);
+    double tau2 = six_step(&f.p, &s, om, 0.7f, 4, &bal, &ev);
+    f.p.h_max = 0.125 * bc_plant_t_half(&f.p);
+    double tau8 = six_step(&f.p, &s, om, 0.7f, 4, &bal, &ev);
+    CHECK(fabs(tau - tau2) / T_N < 1e-6, "halving the step: %.3g p.u.", fabs(tau - tau2) / T_N);
+    /* the residue of the balance is RK4 truncation error: it falls with the step (4th order) */
+    CHECK(fabs(bal) < fabs(bal1) / 4.0 || fabs(bal) < 1e-12, "balance converges: %.3g -> %.3g", bal1, bal);
+    CHECK(fabs(tau2 - tau8) / T_N < 1e-6, "quartering it again: %.3g p.u.", fabs(tau2 - tau8) / T_N);
+}
+
+static void test_bad_params(void)
+{
+    fixture f;
+    bc_plant_state s;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.L = 0.0;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "L = 0 rejected");
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.R = NAN;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "R = NaN rejected");
+    fixture_htm(&f, BC_MECH_DYNAMIC);
+    f.p.J = -1.0;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "J < 0 rejected");
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.y[1] = INFINITY;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "inf in table rejected");
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.x[2] = f.x[1];
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "non-increasing angles rejected");
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.t_dead = 1.0 / 14e3;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "dead time > T/4 rejected");
+    /* NaN duties are sanitised by the plant */
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 10.0, I0, 48.0) == BC_OK, "init");
+    bc_leg_cmd c[3];
+    legs(c, BC_LEG_HIGH, NAN, BC_LEG_LOW, 2.0f, 9, 0.5f);
+    bc_plant_set_half(&f.p, &s, c, 1);
+    bc_plant_advance(&f.p, &s, bc_plant_t_half(&f.p));
+    CHECK((s.flags & BC_PLANT_BAD_DUTY) != 0u, "bad duty flagged");
+    CHECK(isfinite(s.i[0]) && isfinite(s.i[1]), "currents finite");
+}
+
+int main(void)
+{
+    test_standstill_dc();
+    test_hall_both_directions();
+    test_open_circuit();
+    test_six_step_physics();
+    test_bad_params();
+    return bc_test_summary("test_plant");
+}
