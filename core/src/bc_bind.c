@@ -170,6 +170,12 @@ static const bc_ctrl_info CONTROLLERS[] = {
      {"sector", "duty", "", "", "", "", "", ""}},
 };
 
+#define ACC_NAME(NAME, name, unit, doc) #name,
+static const char *const ACC_NAMES[] = {BC_ACC_FIELDS(ACC_NAME)};
+
+int32_t bc_acc_count(void) { return BC_ACC_N; }
+const char *bc_acc_name(int32_t j) { return (j >= 0 && j < BC_ACC_N) ? ACC_NAMES[j] : 0; }
+
 int32_t bc_ctrl_count(void) { return (int32_t)(sizeof CONTROLLERS / sizeof CONTROLLERS[0]); }
 const bc_ctrl_info *bc_ctrl_get(int32_t j) { return (j >= 0 && j < bc_ctrl_count()) ? &CONTROLLERS[j] : 0; }
 

@@ -20,11 +20,14 @@ static const double SIN_PHI[3] = {0.0, 0.86602540378443864676, -0.86602540378443
 #define ROOT_MAX_ITER 80
 
 /* Instantaneous circuit quantities computed with the derivative. */
-typedef struct {
+typedef struct aux_s {
     double k[3], e[3], v[3];
     double vn, vbus, idc, tau, tau_cog, tau_net;
     int n_conn;
 } aux_t;
+
+static void watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
+                       int dir_om, double *g);
 
 double bc_plant_t_half(const bc_plant_params *p) { return 0.5 / p->f_pwm; }
 
@@ -195,11 +198,12 @@ static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double 
 {
     double k2[NY], k3[NY], k4[NY], yt[NY];
     aux_t a;
-    for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
+    /* the integrals (Y_ACC ...) never feed back: intermediate stages need only currents, angle, speed */
+    for (int j = 0; j < Y_ACC; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
     rhs(p, s, yt, k2, &a);
-    for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
+    for (int j = 0; j < Y_ACC; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
     rhs(p, s, yt, k3, &a);
-    for (int j = 0; j < NY; ++j) yt[j] = y0[j] + h * k3[j];
+    for (int j = 0; j < Y_ACC; ++j) yt[j] = y0[j] + h * k3[j];
     rhs(p, s, yt, k4, &a);
     for (int j = 0; j < NY; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
     if (p->mech == BC_MECH_IMPOSED) {
@@ -445,6 +449,11 @@ static void conduction_from_gates(bc_plant_state *s)
 /* Open phases whose floating terminal leaves [-V_f, v_bus + V_f] conduct (fixed point, docs/plant.md). */
 static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
 {
+    int any_open = 0;
+    for (int x = 0; x < 3; ++x) any_open |= (s->cond[x] == BC_COND_OPEN);
+    if (!any_open) {
+        return;
+    }
     double y[NY], dy[NY];
     aux_t a;
     double tol = 1e-9 * (1.0 + fabs(s->v_src));
@@ -479,16 +488,23 @@ static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
             }
         }
         if (!changed) {
+            /* the derivative at this state and topology is the next step's k1 */
+            memcpy(s->k1, dy, sizeof dy);
+            s->aux_tau = a.tau;
+            s->wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
+            watch_eval(p, s, y, &a, s->wdir, s->wcache);
+            s->k1_valid = 1;
             return;
         }
     }
+    s->k1_valid = 0;
 }
 
 static void resolve(const bc_plant_params *p, bc_plant_state *s)
 {
     conduction_from_gates(s);
-    resolve_open(p, s);
     s->k1_valid = 0;
+    resolve_open(p, s);
 }
 
 /* ---------------------------------------------------------------------------------------------------------- */
@@ -500,7 +516,7 @@ static void resolve(const bc_plant_params *p, bc_plant_state *s)
 #define W_PAIR 9   /* all open: no pair can conduct */
 #define W_OMEGA 10 /* moving: omega keeps its sign */
 #define W_STICK 11 /* stuck: |tau_net| <= tau_c */
-#define NW 12
+#define NW BC_PLANT_NW
 
 static void watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
                        int dir_om, double *g)
@@ -550,6 +566,26 @@ static double watch_tol(const bc_plant_params *p, const bc_plant_state *s, int w
     return 1e-10 * (1.0 + p->tau_c);
 }
 
+/* Zero in (0, h) of the cubic Hermite interpolant through (0, g0, d0) and (h, g1, d1) (d: dg/dt), by Newton
+ * from the secant; -1 if none is found. */
+static double hermite_zero(double h, double g0, double g1, double d0, double d1)
+{
+    double u = g0 / (g0 - g1);
+    for (int it = 0; it < 8; ++it) {
+        double u2 = u * u, u3 = u2 * u;
+        double h00 = 2.0 * u3 - 3.0 * u2 + 1.0, h10 = u3 - 2.0 * u2 + u, h01 = -2.0 * u3 + 3.0 * u2, h11 = u3 - u2;
+        double g = h00 * g0 + h10 * h * d0 + h01 * g1 + h11 * h * d1;
+        double dg = (6.0 * u2 - 6.0 * u) * g0 + (3.0 * u2 - 4.0 * u + 1.0) * h * d0 + (-6.0 * u2 + 6.0 * u) * g1 +
+                    (3.0 * u2 - 2.0 * u) * h * d1;
+        if (dg == 0.0) break;
+        double un = u - g / dg;
+        if (!(un > 0.0 && un < 1.0)) return -1.0;
+        if (fabs(un - u) < 1e-12) return un * h;
+        u = un;
+    }
+    return (u > 0.0 && u < 1.0) ? u * h : -1.0;
+}
+
 static double watch_at(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1,
                        double c, int w, int dir_om)
 {
@@ -565,7 +601,7 @@ static double watch_at(const bc_plant_params *p, const bc_plant_state *s, const 
  * zero (a diode that has just begun to conduct) first has its positive excursion found by bisection; 0 is
  * returned if there is none (the crossing is immediate). */
 static double root_find(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1,
-                        double h, int w, int dir_om, double g0, double g1)
+                        double h, int w, int dir_om, double g0, double g1, double hermite_guess)
 {
     double tol = watch_tol(p, s, w);
     double ttol = 1e-13 * h + 1e-18;
@@ -593,11 +629,16 @@ static double root_find(const bc_plant_params *p, const bc_plant_state *s, const
         }
     }
     int side = 0;
+    double guess = hermite_guess >= 0.0 ? hermite_guess : -1.0;
     for (int it = 0; it < ROOT_MAX_ITER; ++it) {
         if (b - a <= ttol) {
             return b;
         }
         double c = b - gb * (b - a) / (gb - ga);
+        if (guess > a && guess < b) {
+            c = guess; /* first try: the zero of the cubic Hermite interpolant of the current */
+        }
+        guess = -1.0;
         if (!(c > a && c < b)) {
             c = 0.5 * (a + b);
         }
@@ -673,9 +714,7 @@ static void apply_event(const bc_plant_params *p, bc_plant_state *s, int w, cons
             pieces_locate(p, s);
         }
     }
-    conduction_from_gates(s);
-    resolve_open(p, s);
-    s->k1_valid = 0;
+    resolve(p, s);
 }
 
 /* ---------------------------------------------------------------------------------------------------------- */
@@ -760,8 +799,8 @@ void bc_plant_set_inputs(const bc_plant_params *p, bc_plant_state *s, double ome
             pieces_locate(p, s);
         }
     }
-    resolve_open(p, s);
     s->k1_valid = 0;
+    resolve_open(p, s);
 }
 
 void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], int rising)
@@ -853,6 +892,8 @@ static void ensure_k1(const bc_plant_params *p, bc_plant_state *s)
     pack(s, y);
     rhs(p, s, y, s->k1, &a);
     s->aux_tau = a.tau;
+    s->wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
+    watch_eval(p, s, y, &a, s->wdir, s->wcache);
     s->k1_valid = 1;
 }
 
@@ -871,7 +912,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
     double hmax = h_max_of(p);
     int zero_len = 0;
     double y0[NY], y1[NY], k1n[NY], g0[NW], g1[NW];
-    aux_t a0, a1;
+    aux_t a1;
     for (;;) {
         process_due(p, s);
         if (s->t >= t_end) {
@@ -911,19 +952,23 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
         rk4(p, s, y0, s->k1, h, y1);
         rhs(p, s, y1, k1n, &a1);
         /* watched functions: the first that goes negative inside the step is an event */
-        int dir_om = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
+        int dir_om = s->wdir;
         watch_eval(p, s, y1, &a1, dir_om, g1);
         int w_hit = -1;
         double h_hit = h;
         int any_neg = 0;
         for (int w = 0; w < NW; ++w) any_neg |= g1[w] < 0.0;
         if (any_neg && zero_len <= MAX_ZERO_LENGTH_EVENTS) {
-            double dy0[NY];
-            rhs(p, s, y0, dy0, &a0); /* the start of the step, only when a crossing is to be located */
-            watch_eval(p, s, y0, &a0, dir_om, g0);
+            memcpy(g0, s->wcache, sizeof g0); /* the watches at the step start */
             for (int w = 0; w < NW; ++w) {
                 if (g1[w] < 0.0) {
-                    double hw = root_find(p, s, y0, s->k1, h, w, dir_om, g0[w], g1[w]);
+                    double guess = -1.0;
+                    if (w < W_OPEN_LO && g0[w] > 0.0) { /* a diode current: its derivative is known at both ends */
+                        int x = w - W_DIODE;
+                        double sg = s->cond[x] == BC_COND_D_L ? 1.0 : -1.0;
+                        guess = hermite_zero(h, g0[w], g1[w], sg * s->k1[Y_I + x], sg * k1n[Y_I + x]);
+                    }
+                    double hw = root_find(p, s, y0, s->k1, h, w, dir_om, g0[w], g1[w], guess);
                     if (w_hit < 0 || hw < h_hit) {
                         w_hit = w;
                         h_hit = hw;
@@ -963,6 +1008,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
         unpack(s, y1);
         s->t = t_stop;
         memcpy(s->k1, k1n, sizeof k1n);
+        memcpy(s->wcache, g1, sizeof g1);
         s->k1_valid = 1;
         s->aux_tau = a1.tau;
         s->n_steps += 1;
@@ -975,6 +1021,15 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
         }
         wrap_angle(p, s);
     }
+}
+
+double bc_plant_vbus(const bc_plant_params *p, const bc_plant_state *s)
+{
+    double idc = 0.0;
+    for (int x = 0; x < 3; ++x) {
+        if (s->cond[x] == BC_COND_SW_U || s->cond[x] == BC_COND_D_U) idc += s->i[x];
+    }
+    return s->v_src - p->R_src * idc;
 }
 
 void bc_plant_output(const bc_plant_params *p, const bc_plant_state *s, bc_plant_out *out)

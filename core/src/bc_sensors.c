@@ -56,8 +56,8 @@ uint32_t bc_sensor_tick(const bc_sensor_params *p, double t)
     return (uint32_t)(uint64_t)fmod(ticks, 4294967296.0);
 }
 
-void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_plant_state *ps,
-                       const bc_plant_out *po, bc_ctrl_in *in)
+void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_plant_state *ps, double v_bus,
+                       bc_ctrl_in *in)
 {
     for (int x = 0; x < 3; ++x) {
         if (p->i_mask & (1u << x)) {
@@ -69,7 +69,7 @@ void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_p
         }
     }
     in->i_mask = p->i_mask;
-    double v = p->v_gain * po->v_bus + p->v_offset;
+    double v = p->v_gain * v_bus + p->v_offset;
     if (p->v_noise > 0.0) v += p->v_noise * normal(s);
     in->v_dc = (float)quantise(v, p->v_lsb);
     in->hall = (uint32_t)ps->hall_out;

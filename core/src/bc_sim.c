@@ -187,11 +187,9 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
                             input_at(in->v_src, in->v_src_c, j));
 
         /* 2. measure, control */
-        bc_plant_out po;
-        bc_plant_output(pp, ps, &po);
         bc_ctrl_in ci;
         memset(&ci, 0, sizeof ci);
-        bc_sensor_measure(cfg->sensors, &s->sensors, ps, &po, &ci);
+        bc_sensor_measure(cfg->sensors, &s->sensors, ps, bc_plant_vbus(pp, ps), &ci);
         ci.ref = (float)input_at(in->ref, in->ref_c, j);
         ci.omega_ref = (float)input_at(in->omega_ref, in->omega_ref_c, j);
         bc_ctrl_out co;

@@ -43,6 +43,9 @@ const char *bc_trace_name(int32_t j);
 const char *bc_trace_unit(int32_t j);
 const char *bc_trace_doc(int32_t j);
 
+int32_t bc_acc_count(void);
+const char *bc_acc_name(int32_t j); /* names of bc_plant.h's integrated quantities acc[] */
+
 int32_t bc_ctrl_count(void);
 const bc_ctrl_info *bc_ctrl_get(int32_t j);
 

@@ -47,29 +47,37 @@
 #define BC_COND_D_U 3
 #define BC_COND_D_L 4
 
-/* Integrated quantities (acc[]): J unless stated. */
-#define BC_ACC_SRC 0    /* V_src i_dc: energy delivered by the DC source */
-#define BC_ACC_RSRC 1   /* R_src i_dc^2 */
-#define BC_ACC_CU 2     /* R sum i^2 */
-#define BC_ACC_SW 3     /* R_on i^2 in conducting switches */
-#define BC_ACC_DIODE 4  /* (V_f + r_d |i|) |i| in conducting diodes */
-#define BC_ACC_EMF 5    /* sum e_x i_x = tau_em omega_m: electrical -> mechanical */
-#define BC_ACC_COG 6    /* tau_cog omega_m */
-#define BC_ACC_FRIC 7   /* (B omega + tau_c sign omega) omega */
-#define BC_ACC_LOAD 8   /* tau_L omega */
-#define BC_ACC_TAU 9    /* integral of tau_e dt, N m s */
-#define BC_ACC_TAU2 10  /* integral of tau_e^2 dt, N^2 m^2 s */
-#define BC_ACC_I2A 11   /* integral of i_a^2 dt, A^2 s (and b, c) */
-#define BC_ACC_I2B 12
-#define BC_ACC_I2C 13
-#define BC_ACC_VA 14    /* integral of terminal voltage v_a dt, V s (and b, c) */
-#define BC_ACC_VB 15
-#define BC_ACC_VC 16
-#define BC_ACC_VN 17    /* integral of v_n dt, V s */
-#define BC_ACC_IDC 18   /* integral of i_dc dt, A s */
-#define BC_ACC_N 19
+/* Integrated quantities acc[], listed once: X(NAME, name, unit, description). */
+#define BC_ACC_FIELDS(X)                                                                      \
+    X(SRC, src, "J", "V_src i_dc: energy delivered by the DC source")                         \
+    X(RSRC, Rsrc, "J", "R_src i_dc^2: loss in the source resistance")                        \
+    X(CU, cu, "J", "R sum i^2: copper loss")                                                  \
+    X(SW, sw, "J", "R_on i^2 in conducting switches")                                         \
+    X(DIODE, diode, "J", "(V_f + r_d |i|) |i| in conducting diodes")                          \
+    X(EMF, emf, "J", "sum e_x i_x = tau_em omega_m: electrical to mechanical")               \
+    X(COG, cog, "J", "tau_cog omega_m")                                                       \
+    X(FRIC, fric, "J", "(B omega + tau_c sign omega) omega: friction loss")                   \
+    X(LOAD, load, "J", "tau_L omega: energy to the load")                                     \
+    X(TAU, tau, "N m s", "integral of tau_e")                                                 \
+    X(TAU2, tau2, "N^2 m^2 s", "integral of tau_e^2")                                         \
+    X(I2A, i2a, "A^2 s", "integral of i_a^2")                                                 \
+    X(I2B, i2b, "A^2 s", "integral of i_b^2")                                                 \
+    X(I2C, i2c, "A^2 s", "integral of i_c^2")                                                 \
+    X(VA, va, "V s", "integral of the terminal voltage v_a")                                  \
+    X(VB, vb, "V s", "integral of v_b")                                                       \
+    X(VC, vc, "V s", "integral of v_c")                                                       \
+    X(VN, vn, "V s", "integral of the star-point voltage")                                    \
+    X(IDC, idc, "A s", "integral of the DC current")
+
+enum {
+#define BC_ACC_ENUM(NAME, name, unit, doc) BC_ACC_##NAME,
+    BC_ACC_FIELDS(BC_ACC_ENUM)
+#undef BC_ACC_ENUM
+    BC_ACC_N
+};
 
 #define BC_HALL_QUEUE 8
+#define BC_PLANT_NW 12 /* functions watched for sign changes inside a step (diodes, open phases, speed) */
 
 /* Plant flags (bc_plant_state.flags). */
 #define BC_PLANT_BAD_DUTY 0x1u   /* a leg command had a NaN or out-of-range duty (treated as clamped / 0) */
@@ -150,6 +158,8 @@ typedef struct {
     int32_t k1_valid;
     double k1[5 + BC_ACC_N];
     double aux_tau;          /* tau_e at the current state (valid with k1) */
+    double wcache[BC_PLANT_NW]; /* watched functions at the current state (valid with k1) */
+    int32_t wdir;               /* speed sign the watches were evaluated with */
     /* statistics */
     uint32_t flags;          /* BC_PLANT_* */
     int64_t n_steps;         /* accepted RK4 steps */
@@ -188,6 +198,9 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
 
 /* Instantaneous outputs at the current state. */
 void bc_plant_output(const bc_plant_params *p, const bc_plant_state *s, bc_plant_out *out);
+
+/* DC bus voltage at the inverter now, V (cheaper than bc_plant_output). */
+double bc_plant_vbus(const bc_plant_params *p, const bc_plant_state *s);
 
 /* Restart the tau_min/tau_max/i_peak trackers from the current state. */
 void bc_plant_reset_extremes(const bc_plant_params *p, bc_plant_state *s);

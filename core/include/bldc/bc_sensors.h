@@ -40,8 +40,8 @@ typedef struct {
 int bc_sensor_init(const bc_sensor_params *p, bc_sensor_state *s);
 
 /* Fill the measurement fields of `in` (not ref/omega_ref) from the plant at its current time. */
-void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_plant_state *ps,
-                       const bc_plant_out *po, bc_ctrl_in *in);
+void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_plant_state *ps, double v_bus,
+                       bc_ctrl_in *in);
 
 /* Capture-timer tick at time t (0 for t < 0 or non-finite t). */
 uint32_t bc_sensor_tick(const bc_sensor_params *p, double t);
