@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+__version__ = "0.1.0"
+
 from .catalog import load
+from .control import Control, OpenLoop, SixStepVoltage
 from .errors import BldclabError
 from .motor import (
     BackEmf,
@@ -17,22 +20,29 @@ from .motor import (
     Table,
     Trapezoid,
 )
-
-__version__ = "0.1.0"
+from .results import Metrics, SimResult
+from .sim import Scenario, simulate
 
 __all__ = [
     "BackEmf",
     "BldclabError",
     "Cogging",
+    "Control",
     "Drive",
     "Fourier",
     "Inverter",
     "Mechanics",
+    "Metrics",
     "Motor",
+    "OpenLoop",
+    "Scenario",
     "Sensors",
+    "SimResult",
     "Sinusoid",
+    "SixStepVoltage",
     "Table",
     "Trapezoid",
     "__version__",
     "load",
+    "simulate",
 ]

@@ -1,0 +1,116 @@
+"""Controller choices for :func:`bldclab.simulate`: each names a C controller and fills its parameters.
+
+The C code is what runs (``core/include/bldc/``); these frozen dataclasses only choose it and its settings.
+What the per-sample reference ``Scenario.ref`` means depends on the controller (see each class).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, ClassVar, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .errors import BldclabError
+
+if TYPE_CHECKING:
+    from ._core import Core
+    from .motor import Drive
+
+__all__ = ["Control", "OpenLoop", "SixStepVoltage"]
+
+
+class Control:
+    """Base class: the C registry name and how to fill the parameter struct."""
+
+    c_name: ClassVar[str] = ""
+    ref_meaning: ClassVar[str] = ""
+
+    def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:
+        """Return the filled C parameter record; arrays it points to are appended to ``keep``."""
+        raise NotImplementedError  # pragma: no cover - abstract
+
+    def describe(self) -> dict[str, object]:
+        """Return the settings as plain values (for result metadata)."""
+        out: dict[str, object] = {"controller": self.c_name}
+        for k, v in self.__dict__.items():
+            out[k] = v.tolist() if isinstance(v, np.ndarray) else v
+        return out
+
+
+_MODES = {"off": 0, "pwm": 1, "high": 2, "low": 3}
+
+
+@dataclass(frozen=True, eq=False)
+class OpenLoop(Control):
+    """Replay precomputed leg commands, one triple per sample (half PWM period); all legs off afterwards.
+
+    Parameters
+    ----------
+    modes : array_like of int, shape (N, 3)
+        Leg modes per sample: 0 off, 1 complementary PWM, 2 upper chops, 3 lower chops.
+    duties : array_like of float, shape (N, 3)
+        Duties in [0, 1].
+    """
+
+    modes: ArrayLike
+    duties: ArrayLike
+    c_name: ClassVar[str] = "table"
+    ref_meaning: ClassVar[str] = "unused"
+
+    def __post_init__(self) -> None:
+        m = np.asarray(self.modes)
+        d = np.asarray(self.duties, dtype=float)
+        if m.ndim != 2 or m.shape[1] != 3 or d.shape != m.shape:
+            raise BldclabError("control.modes", f"modes and duties need shape (N, 3), got {m.shape} and {d.shape}")
+        if not np.all(np.isin(m, list(_MODES.values()))):
+            raise BldclabError("control.modes", "modes must be 0 (off), 1 (pwm), 2 (high) or 3 (low)")
+        if not np.all(np.isfinite(d)) or np.any(d < 0.0) or np.any(d > 1.0):
+            raise BldclabError("control.duties", "duties must be finite and within [0, 1]")
+        object.__setattr__(self, "modes", m.astype(np.int32))
+        object.__setattr__(self, "duties", d)
+
+    def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:  # noqa: D102
+        cmd = np.zeros((len(self.modes), 3), dtype=core.dtypes["bc_leg_cmd"])  # type: ignore[arg-type]
+        cmd["mode"] = self.modes
+        cmd["duty"] = self.duties
+        keep.append(cmd)
+        rec = core.record("bc_table_params")
+        rec["cmd"] = cmd.ctypes.data
+        rec["n"] = cmd.shape[0]
+        return rec
+
+    def describe(self) -> dict[str, object]:  # noqa: D102
+        return {"controller": self.c_name, "samples": len(self.modes)}  # type: ignore[arg-type]
+
+
+_CHOP = {"high": 0, "low": 1, "bipolar": 2, "sync": 3}
+
+
+@dataclass(frozen=True)
+class SixStepVoltage(Control):
+    """Six-step voltage mode: Hall sector to the two conducting legs, duty = reference (no current control).
+
+    The reference (``Scenario.ref``) is the duty in [-1, 1]; its sign is the direction.
+
+    Parameters
+    ----------
+    chopping : {"high", "low", "bipolar", "sync"}
+        ``high``: the positive phase's upper switch chops, the negative phase's lower switch stays on; ``low``: the
+        reverse; ``bipolar``: both chop together; ``sync``: the positive leg is complementary (synchronous
+        rectification) and the negative leg's lower switch stays on.
+    """
+
+    chopping: Literal["high", "low", "bipolar", "sync"] = "high"
+    c_name: ClassVar[str] = "sixv"
+    ref_meaning: ClassVar[str] = "duty in [-1, 1]"
+
+    def __post_init__(self) -> None:
+        if self.chopping not in _CHOP:
+            raise BldclabError("control.chopping", f"must be one of {', '.join(_CHOP)}, got {self.chopping!r}")
+
+    def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:  # noqa: D102
+        rec = core.record("bc_sixv_params")
+        rec["chop"] = _CHOP[self.chopping]
+        return rec

@@ -1,0 +1,288 @@
+"""Results of a simulation: named signals, window metrics, plots, files."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import BldclabError
+
+__all__ = ["Metrics", "SimResult"]
+
+
+@dataclass(frozen=True)
+class Metrics:
+    """What happened over a metric window [t0, t1] of a run (computed in C from integrated power flows).
+
+    Attributes
+    ----------
+    t0, t1 : float
+        Window (s).
+    tau_mean : float
+        Mean electromagnetic torque (N m).
+    tau_min, tau_max : float
+        Extremes of the instantaneous torque (N m).
+    ripple : float
+        ``tau_max - tau_min`` (N m).
+    tau_ma_min, tau_ma_max : float
+        Extremes of the torque averaged over one PWM period (N m); nan if the window is under two samples.
+    ripple_ma : float
+        ``tau_ma_max - tau_ma_min`` (N m): the ripple without the PWM component.
+    tau_std : float
+        Root-mean-square deviation of the torque from its mean (N m).
+    omega_mean : float
+        Mean mechanical speed (rad/s).
+    p_src, p_Rsrc, p_cu, p_sw, p_diode, p_emf, p_cog, p_fric, p_load : float
+        Mean powers (W): from the DC source; lost in the source resistance, the windings, the switches, the diodes;
+        converted to mechanical (``sum e i``); cogging; friction; to the load.
+    dW_L, dW_kin : float
+        Change of magnetic and kinetic energy over the window (J).
+    balance_electrical : float
+        ``(E_src - E_Rsrc - E_cu - E_sw - E_diode - E_emf - dW_L) / max(|E_src|, |E_emf|)``: the integration's
+        energy residue (dimensionless).
+    balance_mechanical : float
+        ``(E_emf + E_cog - E_fric - E_load - dW_kin) / max(|E_emf|, ...)`` (dynamic mechanics; 0 otherwise).
+    i_rms, i_peak : tuple of float
+        Per-phase rms and peak current (A).
+    efficiency : float
+        Shaft power ``p_emf + p_cog - p_fric`` over ``p_src`` (motoring; nan if ``p_src <= 0``).
+    """
+
+    t0: float
+    t1: float
+    tau_mean: float
+    tau_min: float
+    tau_max: float
+    ripple: float
+    tau_ma_min: float
+    tau_ma_max: float
+    ripple_ma: float
+    tau_std: float
+    omega_mean: float
+    p_src: float
+    p_Rsrc: float
+    p_cu: float
+    p_sw: float
+    p_diode: float
+    p_emf: float
+    p_cog: float
+    p_fric: float
+    p_load: float
+    dW_L: float
+    dW_kin: float
+    balance_electrical: float
+    balance_mechanical: float
+    i_rms: tuple[float, float, float]
+    i_peak: tuple[float, float, float]
+    efficiency: float
+
+    @classmethod
+    def from_c(cls, m: np.void, acc_names: tuple[str, ...], imposed: bool, omega_integral: float) -> Metrics:
+        """Build from a ``bc_sim_metrics`` record."""
+        dt = float(m["t1"] - m["t0"])
+        E = {name: float(v) for name, v in zip(acc_names, m["E"], strict=True)}
+        p = {k: v / dt for k, v in E.items()}
+        dW_L = float(m["w_l1"] - m["w_l0"])
+        dW_kin = float(m["w_kin1"] - m["w_kin0"])
+        scale_e = max(abs(E["src"]), abs(E["emf"]), 1e-300)
+        bal_e = (E["src"] - E["Rsrc"] - E["cu"] - E["sw"] - E["diode"] - E["emf"] - dW_L) / scale_e
+        if imposed:
+            bal_m = 0.0
+        else:
+            scale_m = max(abs(E["emf"]), abs(E["fric"]), abs(E["load"]), abs(dW_kin), 1e-300)
+            bal_m = (E["emf"] + E["cog"] - E["fric"] - E["load"] - dW_kin) / scale_m
+        tau_mean = E["tau"] / dt
+        ma_min, ma_max = float(m["tau_ma_min"]), float(m["tau_ma_max"])
+        if int(m["n_ma"]) == 0:
+            ma_min = ma_max = math.nan
+        shaft = p["emf"] + p["cog"] - p["fric"]
+        return cls(
+            t0=float(m["t0"]), t1=float(m["t1"]), tau_mean=tau_mean, tau_min=float(m["tau_min"]),
+            tau_max=float(m["tau_max"]), ripple=float(m["tau_max"] - m["tau_min"]), tau_ma_min=ma_min,
+            tau_ma_max=ma_max, ripple_ma=ma_max - ma_min,
+            tau_std=math.sqrt(max(E["tau2"] / dt - tau_mean**2, 0.0)), omega_mean=omega_integral / dt,
+            p_src=p["src"], p_Rsrc=p["Rsrc"], p_cu=p["cu"], p_sw=p["sw"], p_diode=p["diode"], p_emf=p["emf"],
+            p_cog=p["cog"], p_fric=p["fric"], p_load=p["load"], dW_L=dW_L, dW_kin=dW_kin,
+            balance_electrical=bal_e, balance_mechanical=bal_m,
+            i_rms=(math.sqrt(E["i2a"] / dt), math.sqrt(E["i2b"] / dt), math.sqrt(E["i2c"] / dt)),
+            i_peak=(float(m["i_peak"][0]), float(m["i_peak"][1]), float(m["i_peak"][2])),
+            efficiency=shaft / p["src"] if p["src"] > 0.0 else math.nan)
+
+
+class SimResult:
+    """The outcome of :func:`bldclab.simulate`: named signals over time, window metrics, metadata.
+
+    Signals are numpy arrays of equal length, one value per trace row; ``units`` and ``docs`` describe them.
+    Instantaneous signals (``i_a``, ``tau_e``, ...) hold the value at the start of the row's window, mean signals
+    (``tau_mean``, ``p_src``, ``v_a``, ...) the mean over the window (see ``docs``). Access a signal as
+    ``res["i_a"]`` or ``res.i_a``.
+
+    Parameters
+    ----------
+    signals : dict of str to ndarray
+        Signals, including the time ``t`` (s).
+    units, docs : dict of str to str
+        Unit and description of each signal.
+    metrics : Metrics or None
+        Metrics over the scenario's metric window.
+    meta : dict
+        How the result was produced (drive, control, scenario, version, statistics).
+    """
+
+    def __init__(self, signals: dict[str, NDArray[np.float64]], units: dict[str, str], docs: dict[str, str],
+                 metrics: Metrics | None, meta: dict[str, Any]) -> None:
+        self.signals = signals
+        self.units = units
+        self.docs = docs
+        self.metrics = metrics
+        self.meta = meta
+
+    def __getitem__(self, name: str) -> NDArray[np.float64]:
+        """Return the signal ``name``."""
+        try:
+            return self.signals[name]
+        except KeyError:
+            raise KeyError(f"no signal {name!r}; signals: {', '.join(self.signals)}") from None
+
+    def __getattr__(self, name: str) -> NDArray[np.float64]:
+        """Return the signal ``name`` as an attribute."""
+        if name.startswith("_") or name in ("signals", "units", "docs", "metrics", "meta"):
+            raise AttributeError(name)
+        try:
+            return self.signals[name]
+        except KeyError:
+            raise AttributeError(f"SimResult has no signal {name!r}") from None
+
+    def __len__(self) -> int:
+        """Number of trace rows."""
+        return len(self.signals["t"])
+
+    @property
+    def t(self) -> NDArray[np.float64]:
+        """Time of each row (s)."""
+        return self.signals["t"]
+
+    def __repr__(self) -> str:
+        """Short description."""
+        m = f", tau_mean={self.metrics.tau_mean:.4g} N m" if self.metrics else ""
+        ctrl = self.meta.get("control", {}).get("controller", "?")
+        return f"<SimResult {self.meta.get('drive', {}).get('name', '')} {ctrl}: {len(self)} rows{m}>"
+
+    def _repr_html_(self) -> str:
+        """Jupyter: metadata and metrics as a table."""
+        rows = "".join(f"<tr><td>{k}</td><td>{v:.6g}</td></tr>" for k, v in asdict(self.metrics).items()
+                       if isinstance(v, float)) if self.metrics else ""
+        return f"<p>{self!r}</p><table>{rows}</table>"
+
+    def to_pandas(self) -> Any:
+        """Return the signals as a pandas DataFrame indexed by time ``t`` (s)."""
+        import pandas as pd
+
+        df = pd.DataFrame({k: v for k, v in self.signals.items() if k != "t"}, index=pd.Index(self.t, name="t"))
+        df.attrs["units"] = dict(self.units)
+        return df
+
+    def plot(self, signals: tuple[str, ...] | list[str] | None = None, *, fig: Any = None) -> Any:
+        """Plot signals against time, one axis per group (currents, torque, voltages by default).
+
+        Parameters
+        ----------
+        signals : sequence of str, optional
+            Signals to plot, one axis each; default: currents, torque (instantaneous and window mean), back-EMFs.
+        fig : matplotlib.figure.Figure, optional
+            Figure to draw into.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from matplotlib.figure import Figure
+
+        groups: list[tuple[str, ...]]
+        if signals is None:
+            groups = [("i_a", "i_b", "i_c"), ("tau_e", "tau_mean"), ("e_a", "e_b", "e_c")]
+        else:
+            groups = [(s,) for s in signals]
+        fig = fig or Figure(figsize=(9, 2.2 * len(groups) + 0.6), layout="constrained")
+        axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
+        for ax, group in zip(axes, groups, strict=True):
+            for name in group:
+                ax.plot(self.t * 1e3, self[name], lw=0.9, label=name)
+            ax.set_ylabel(f"[{self.units.get(group[0], '')}]")
+            ax.legend(loc="upper right", fontsize=8, ncols=len(group))
+            ax.grid(True, lw=0.3)
+        axes[-1].set_xlabel("t [ms]")
+        return fig
+
+    # ---------------------------------------------------------------------------------------------------------
+    # files
+
+    def save(self, path: str | Path) -> Path:
+        """Write the result to a ``.npz`` file (signals, units, metrics and metadata as JSON), atomically.
+
+        Parameters
+        ----------
+        path : str or Path
+            Target file; ``.npz`` is appended if missing.
+
+        Returns
+        -------
+        Path
+            The file written.
+        """
+        p = Path(path)
+        if p.suffix != ".npz":
+            p = p.with_suffix(p.suffix + ".npz")
+        header = {"units": self.units, "docs": self.docs, "meta": self.meta,
+                  "metrics": asdict(self.metrics) if self.metrics else None}
+        fd, tmp = tempfile.mkstemp(dir=p.parent or ".", suffix=".tmp")
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                np.savez_compressed(fh, __header__=np.array(json.dumps(header, default=_json_default)),
+                                    **self.signals)
+            os.replace(tmp, p)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+        return p
+
+    @classmethod
+    def load(cls, path: str | Path) -> SimResult:
+        """Read a result written by :meth:`save`.
+
+        Raises
+        ------
+        BldclabError
+            If the file is missing or not a bldclab result.
+        """
+        p = Path(path)
+        try:
+            with np.load(p, allow_pickle=False) as z:
+                header = json.loads(str(z["__header__"]))
+                signals = {k: z[k] for k in z.files if k != "__header__"}
+        except (OSError, KeyError, ValueError) as exc:
+            raise BldclabError("result file", f"cannot read a bldclab result ({exc})", str(p)) from None
+        metrics = None
+        if header.get("metrics"):
+            kw = header["metrics"]
+            for f in fields(Metrics):
+                if f.name in ("i_rms", "i_peak"):
+                    kw[f.name] = tuple(kw[f.name])
+            metrics = Metrics(**kw)
+        return cls(signals, header["units"], header["docs"], metrics, header["meta"])
+
+
+def _json_default(obj: object) -> object:
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    return str(obj)
