@@ -40,7 +40,8 @@ static double h_max_of(const bc_plant_params *p)
 /* ---------------------------------------------------------------------------------------------------------- */
 /* back-EMF shapes and cogging at an angle inside the current pieces                                          */
 
-static void shapes_at(const bc_plant_params *p, const bc_plant_state *s, double th, double k[3])
+static void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s, double th,
+                      double *restrict k)
 {
     int trig = 0;
     double c = 0.0, sn = 0.0;
@@ -71,9 +72,6 @@ static void shapes_at(const bc_plant_params *p, const bc_plant_state *s, double 
 
 static double cogging_at(const bc_plant_params *p, const bc_plant_state *s, double th)
 {
-    if (p->n_cog <= 0) {
-        return 0.0;
-    }
     double th_m = (th + BC_TWO_PI * (double)s->turns) / (double)p->p;
     double tau = 0.0;
     for (int32_t j = 0; j < p->n_cog; ++j) {
@@ -87,89 +85,133 @@ static double sign_of(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0);
 /* ---------------------------------------------------------------------------------------------------------- */
 /* the derivative                                                                                             */
 
-static void rhs(const bc_plant_params *p, const bc_plant_state *s, const double *y, double *dy, aux_t *a)
+static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+                double *restrict dy, aux_t *restrict a)
 {
-    const double *i = &y[Y_I];
-    double th = y[Y_TH], om = y[Y_OM];
-    shapes_at(p, s, th, a->k);
-    for (int x = 0; x < 3; ++x) {
-        a->e[x] = om * a->k[x];
+    const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
+    const double th = y[Y_TH], om = y[Y_OM];
+    double k[3];
+    shapes_at(p, s, th, k);
+    const double e0 = om * k[0], e1 = om * k[1], e2 = om * k[2];
+    const double R = p->R, V_f = p->V_f;
+    /* terminals from the precomputed conduction coefficients: v_x = up v_bus + U0 - r i (no branches) */
+    const double idc = s->tc_up[0] * i0 + s->tc_up[1] * i1 + s->tc_up[2] * i2;
+    const double vbus = s->v_src - p->R_src * idc;
+    const double r0 = s->tc_r[0], r1 = s->tc_r[1], r2 = s->tc_r[2];
+    const double v0 = s->tc_up[0] * vbus + s->tc_u0[0] - r0 * i0;
+    const double v1 = s->tc_up[1] * vbus + s->tc_u0[1] - r1 * i1;
+    const double v2 = s->tc_up[2] * vbus + s->tc_u0[2] - r2 * i2;
+    const double u0 = v0 - R * i0 - e0, u1 = v1 - R * i1 - e1, u2 = v2 - R * i2 - e2;
+    const double c0 = s->tc_conn[0], c1 = s->tc_conn[1], c2 = s->tc_conn[2];
+    const double vn = s->tc_n > 0 ? (c0 * u0 + c1 * u1 + c2 * u2) * s->tc_inv_n : 0.5 * vbus - (e0 + e1 + e2) / 3.0;
+    const double g = s->tc_gain;
+    dy[Y_I] = c0 * (u0 - vn) * g;
+    dy[Y_I + 1] = c1 * (u1 - vn) * g;
+    dy[Y_I + 2] = c2 * (u2 - vn) * g;
+    const double sq0 = i0 * i0, sq1 = i1 * i1, sq2 = i2 * i2;
+    const double a0 = fabs(i0), a1 = fabs(i1), a2 = fabs(i2);
+    const double p_sw = s->tc_sw[0] * r0 * sq0 + s->tc_sw[1] * r1 * sq1 + s->tc_sw[2] * r2 * sq2;
+    const double p_d = s->tc_dio[0] * (V_f + r0 * a0) * a0 + s->tc_dio[1] * (V_f + r1 * a1) * a1 +
+                       s->tc_dio[2] * (V_f + r2 * a2) * a2;
+    const double tau_cog = p->n_cog > 0 ? cogging_at(p, s, th) : 0.0;
+    const double tau = k[0] * i0 + k[1] * i1 + k[2] * i2 + tau_cog;
+    const double tau_net = tau - s->tau_load;
+    double t_fric = 0.0;
+    if (!s->stuck && (p->B > 0.0 || p->tau_c > 0.0)) {
+        double sgn = sign_of(om);
+        if (sgn == 0.0) sgn = sign_of(tau_net);
+        t_fric = p->B * om + p->tau_c * sgn;
     }
-    double idc = 0.0;
-    for (int x = 0; x < 3; ++x) {
-        if (s->cond[x] == BC_COND_SW_U || s->cond[x] == BC_COND_D_U) {
-            idc += i[x];
-        }
-    }
-    double vbus = s->v_src - p->R_src * idc;
-    double u[3] = {0.0, 0.0, 0.0};
-    double sum = 0.0, p_sw = 0.0, p_d = 0.0;
-    int n = 0;
-    for (int x = 0; x < 3; ++x) {
-        double U, r;
-        switch (s->cond[x]) {
-        case BC_COND_SW_U: U = vbus; r = p->R_on; p_sw += r * i[x] * i[x]; break;
-        case BC_COND_SW_L: U = 0.0; r = p->R_on; p_sw += r * i[x] * i[x]; break;
-        case BC_COND_D_U: U = vbus + p->V_f; r = p->r_d; p_d += (p->V_f + r * fabs(i[x])) * fabs(i[x]); break;
-        case BC_COND_D_L: U = -p->V_f; r = p->r_d; p_d += (p->V_f + r * fabs(i[x])) * fabs(i[x]); break;
-        default: continue;
-        }
-        a->v[x] = U - r * i[x];
-        u[x] = a->v[x] - p->R * i[x] - a->e[x];
-        sum += u[x];
-        ++n;
-    }
-    double vn = n > 0 ? sum / n : 0.5 * vbus - (a->e[0] + a->e[1] + a->e[2]) / 3.0;
-    double p_emf = 0.0, tau_em = 0.0;
-    for (int x = 0; x < 3; ++x) {
-        if (s->cond[x] == BC_COND_OPEN) {
-            a->v[x] = a->e[x] + vn;
-            dy[Y_I + x] = 0.0;
-        } else {
-            dy[Y_I + x] = n >= 2 ? (u[x] - vn) / p->L : 0.0;
-        }
-        p_emf += a->e[x] * i[x];
-        tau_em += a->k[x] * i[x];
-    }
-    double tau_cog = cogging_at(p, s, th);
-    double tau = tau_em + tau_cog;
-    double tau_net = tau - s->tau_load;
-    double sgn = sign_of(om);
-    if (sgn == 0.0 && !s->stuck) {
-        sgn = sign_of(tau_net);
-    }
-    double t_fric = s->stuck ? 0.0 : p->B * om + p->tau_c * sgn;
     dy[Y_TH] = (double)p->p * om;
     dy[Y_OM] = (p->mech == BC_MECH_DYNAMIC && !s->stuck) ? (tau_net - t_fric) / p->J : 0.0;
+    /* the open terminals float at e + v_n */
+    const double t0 = c0 != 0.0 ? v0 : e0 + vn, t1 = c1 != 0.0 ? v1 : e1 + vn, t2 = c2 != 0.0 ? v2 : e2 + vn;
 
-    double *d = &dy[Y_ACC];
+    double *restrict d = &dy[Y_ACC];
     d[BC_ACC_SRC] = s->v_src * idc;
     d[BC_ACC_RSRC] = p->R_src * idc * idc;
-    d[BC_ACC_CU] = p->R * (i[0] * i[0] + i[1] * i[1] + i[2] * i[2]);
+    d[BC_ACC_CU] = R * (sq0 + sq1 + sq2);
     d[BC_ACC_SW] = p_sw;
     d[BC_ACC_DIODE] = p_d;
-    d[BC_ACC_EMF] = p_emf;
+    d[BC_ACC_EMF] = e0 * i0 + e1 * i1 + e2 * i2;
     d[BC_ACC_COG] = tau_cog * om;
     d[BC_ACC_FRIC] = t_fric * om;
     d[BC_ACC_LOAD] = s->tau_load * om;
     d[BC_ACC_TAU] = tau;
     d[BC_ACC_TAU2] = tau * tau;
-    d[BC_ACC_I2A] = i[0] * i[0];
-    d[BC_ACC_I2B] = i[1] * i[1];
-    d[BC_ACC_I2C] = i[2] * i[2];
-    d[BC_ACC_VA] = a->v[0];
-    d[BC_ACC_VB] = a->v[1];
-    d[BC_ACC_VC] = a->v[2];
+    d[BC_ACC_I2A] = sq0;
+    d[BC_ACC_I2B] = sq1;
+    d[BC_ACC_I2C] = sq2;
+    d[BC_ACC_VA] = t0;
+    d[BC_ACC_VB] = t1;
+    d[BC_ACC_VC] = t2;
     d[BC_ACC_VN] = vn;
     d[BC_ACC_IDC] = idc;
 
-    a->vn = vn;
-    a->vbus = vbus;
-    a->idc = idc;
-    a->tau = tau;
-    a->tau_cog = tau_cog;
-    a->tau_net = tau_net;
-    a->n_conn = n;
+    if (a) {
+        a->k[0] = k[0];
+        a->k[1] = k[1];
+        a->k[2] = k[2];
+        a->e[0] = e0;
+        a->e[1] = e1;
+        a->e[2] = e2;
+        a->v[0] = t0;
+        a->v[1] = t1;
+        a->v[2] = t2;
+        a->vn = vn;
+        a->vbus = vbus;
+        a->idc = idc;
+        a->tau = tau;
+        a->tau_cog = tau_cog;
+        a->tau_net = tau_net;
+        a->n_conn = s->tc_n;
+    }
+}
+
+/* Circuit coefficients of the present conduction states (bc_plant.h, tc_*). Call after any change of cond[]. */
+static void topology_set(const bc_plant_params *p, bc_plant_state *s)
+{
+    int n = 0;
+    for (int x = 0; x < 3; ++x) {
+        double up = 0.0, u0 = 0.0, r = 0.0, conn = 1.0, sw = 0.0, dio = 0.0;
+        switch (s->cond[x]) {
+        case BC_COND_SW_U: up = 1.0; r = p->R_on; sw = 1.0; break;
+        case BC_COND_SW_L: r = p->R_on; sw = 1.0; break;
+        case BC_COND_D_U: up = 1.0; u0 = p->V_f; r = p->r_d; dio = 1.0; break;
+        case BC_COND_D_L: u0 = -p->V_f; r = p->r_d; dio = 1.0; break;
+        default: conn = 0.0; break;
+        }
+        s->tc_up[x] = up;
+        s->tc_u0[x] = u0;
+        s->tc_r[x] = r;
+        s->tc_conn[x] = conn;
+        s->tc_sw[x] = sw;
+        s->tc_dio[x] = dio;
+        n += conn != 0.0;
+    }
+    s->tc_n = n;
+    s->tc_inv_n = n > 0 ? 1.0 / (double)n : 0.0;
+    s->tc_gain = n >= 2 ? 1.0 / p->L : 0.0;
+}
+
+/* Outputs from the quantities computed with a derivative. */
+static void aux_to_out(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
+                       bc_plant_out *out)
+{
+    for (int x = 0; x < 3; ++x) {
+        out->e[x] = a->e[x];
+        out->k[x] = a->k[x];
+        out->v[x] = a->v[x];
+    }
+    out->v_n = a->vn;
+    out->v_bus = a->vbus;
+    out->i_dc = a->idc;
+    out->tau_e = a->tau;
+    out->tau_cog = a->tau_cog;
+    double om = y[Y_OM];
+    out->tau_shaft = a->tau - p->B * om - p->tau_c * sign_of(om);
+    out->w_l = 0.5 * p->L * (y[Y_I] * y[Y_I] + y[Y_I + 1] * y[Y_I + 1] + y[Y_I + 2] * y[Y_I + 2]);
+    (void)s;
 }
 
 static void pack(const bc_plant_state *s, double *y)
@@ -197,14 +239,14 @@ static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double 
                 double *y1)
 {
     double k2[NY], k3[NY], k4[NY], yt[NY];
-    aux_t a;
+    aux_t *a = 0;
     /* the integrals (Y_ACC ...) never feed back: intermediate stages need only currents, angle, speed */
     for (int j = 0; j < Y_ACC; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
-    rhs(p, s, yt, k2, &a);
+    rhs(p, s, yt, k2, a);
     for (int j = 0; j < Y_ACC; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
-    rhs(p, s, yt, k3, &a);
+    rhs(p, s, yt, k3, a);
     for (int j = 0; j < Y_ACC; ++j) yt[j] = y0[j] + h * k3[j];
-    rhs(p, s, yt, k4, &a);
+    rhs(p, s, yt, k4, a);
     for (int j = 0; j < NY; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
     if (p->mech == BC_MECH_IMPOSED) {
         y1[Y_OM] = y0[Y_OM]; /* exactly constant */
@@ -429,7 +471,7 @@ static double next_gate_time(const bc_plant_params *p, const bc_plant_state *s)
 /* ---------------------------------------------------------------------------------------------------------- */
 /* conduction states                                                                                          */
 
-static void conduction_from_gates(bc_plant_state *s)
+static void conduction_from_gates(const bc_plant_params *p, bc_plant_state *s)
 {
     for (int x = 0; x < 3; ++x) {
         if (s->gate[x] == BC_GATE_U) {
@@ -444,6 +486,7 @@ static void conduction_from_gates(bc_plant_state *s)
             s->cond[x] = BC_COND_OPEN; /* a phase that has just been made to conduct keeps its diode */
         }
     }
+    topology_set(p, s);
 }
 
 /* Open phases whose floating terminal leaves [-V_f, v_bus + V_f] conduct (fixed point, docs/plant.md). */
@@ -487,7 +530,9 @@ static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
                 }
             }
         }
-        if (!changed) {
+        if (changed) {
+            topology_set(p, s);
+        } else {
             /* the derivative at this state and topology is the next step's k1 */
             memcpy(s->k1, dy, sizeof dy);
             s->aux_tau = a.tau;
@@ -502,7 +547,7 @@ static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
 
 static void resolve(const bc_plant_params *p, bc_plant_state *s)
 {
-    conduction_from_gates(s);
+    conduction_from_gates(p, s);
     s->k1_valid = 0;
     resolve_open(p, s);
 }
@@ -586,14 +631,21 @@ static double hermite_zero(double h, double g0, double g1, double d0, double d1)
     return (u > 0.0 && u < 1.0) ? u * h : -1.0;
 }
 
+/* The watch w after an RK4 step of length c; the step's end state, derivative and aux land in *root. */
+typedef struct {
+    double h;
+    double y[NY], dy[NY];
+    aux_t a;
+} root_pt;
+
 static double watch_at(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1,
-                       double c, int w, int dir_om)
+                       double c, int w, int dir_om, root_pt *rp)
 {
-    double y[NY], dy[NY], g[NW];
-    aux_t au;
-    rk4(p, s, y0, k1, c, y);
-    rhs(p, s, y, dy, &au);
-    watch_eval(p, s, y, &au, dir_om, g);
+    double g[NW];
+    rk4(p, s, y0, k1, c, rp->y);
+    rhs(p, s, rp->y, rp->dy, &rp->a);
+    rp->h = c;
+    watch_eval(p, s, rp->y, &rp->a, dir_om, g);
     return g[w];
 }
 
@@ -601,8 +653,9 @@ static double watch_at(const bc_plant_params *p, const bc_plant_state *s, const 
  * zero (a diode that has just begun to conduct) first has its positive excursion found by bisection; 0 is
  * returned if there is none (the crossing is immediate). */
 static double root_find(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1,
-                        double h, int w, int dir_om, double g0, double g1, double hermite_guess)
+                        double h, int w, int dir_om, double g0, double g1, double hermite_guess, root_pt *rp)
 {
+    rp->h = -1.0; /* no state computed at the returned length yet */
     double tol = watch_tol(p, s, w);
     double ttol = 1e-13 * h + 1e-18;
     double a = 0.0, b = h, ga = g0, gb = g1;
@@ -615,7 +668,7 @@ static double root_find(const bc_plant_params *p, const bc_plant_state *s, const
                 return 0.0;
             }
             double c = 0.5 * b;
-            double gc = watch_at(p, s, y0, k1, c, w, dir_om);
+            double gc = watch_at(p, s, y0, k1, c, w, dir_om, rp);
             if (gc > tol) {
                 a = c;
                 ga = gc;
@@ -642,7 +695,7 @@ static double root_find(const bc_plant_params *p, const bc_plant_state *s, const
         if (!(c > a && c < b)) {
             c = 0.5 * (a + b);
         }
-        double gc = watch_at(p, s, y0, k1, c, w, dir_om);
+        double gc = watch_at(p, s, y0, k1, c, w, dir_om, rp);
         if (fabs(gc) <= tol) {
             return c;
         }
@@ -873,9 +926,6 @@ static int process_due(const bc_plant_params *p, bc_plant_state *s)
         memmove(&s->hq_code[0], &s->hq_code[1], (BC_HALL_QUEUE - 1) * sizeof s->hq_code[0]);
         s->hq_n -= 1;
     }
-    if (angles_cross(p, s, s->theta)) {
-        s->k1_valid = 0;
-    }
     if (changed) {
         resolve(p, s);
     }
@@ -913,6 +963,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
     int zero_len = 0;
     double y0[NY], y1[NY], k1n[NY], g0[NW], g1[NW];
     aux_t a1;
+    root_pt rtry, rbest;
     for (;;) {
         process_due(p, s);
         if (s->t >= t_end) {
@@ -968,16 +1019,25 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                         double sg = s->cond[x] == BC_COND_D_L ? 1.0 : -1.0;
                         guess = hermite_zero(h, g0[w], g1[w], sg * s->k1[Y_I + x], sg * k1n[Y_I + x]);
                     }
-                    double hw = root_find(p, s, y0, s->k1, h, w, dir_om, g0[w], g1[w], guess);
+                    double hw = root_find(p, s, y0, s->k1, h, w, dir_om, g0[w], g1[w], guess, &rtry);
                     if (w_hit < 0 || hw < h_hit) {
                         w_hit = w;
                         h_hit = hw;
+                        if (rtry.h == hw) {
+                            rbest = rtry;
+                        } else {
+                            rbest.h = -1.0;
+                        }
                     }
                 }
             }
         }
         if (w_hit >= 0) {
-            if (h_hit < h) {
+            if (h_hit < h && rbest.h == h_hit) {
+                memcpy(y1, rbest.y, sizeof y1);
+                memcpy(k1n, rbest.dy, sizeof k1n);
+                a1 = rbest.a;
+            } else if (h_hit < h) {
                 rk4(p, s, y0, s->k1, h_hit, y1);
                 rhs(p, s, y1, k1n, &a1);
             }
@@ -995,6 +1055,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                 if (w_hit < W_OPEN_LO && y0[Y_I + (w_hit - W_DIODE)] == 0.0) {
                     s->hold_open |= 1 << (w_hit - W_DIODE);
                     s->cond[w_hit - W_DIODE] = BC_COND_OPEN;
+                    topology_set(p, s);
                     s->k1_valid = 0;
                 }
                 ++zero_len;
@@ -1038,19 +1099,7 @@ void bc_plant_output(const bc_plant_params *p, const bc_plant_state *s, bc_plant
     aux_t a;
     pack(s, y);
     rhs(p, s, y, dy, &a);
-    for (int x = 0; x < 3; ++x) {
-        out->e[x] = a.e[x];
-        out->k[x] = a.k[x];
-        out->v[x] = a.v[x];
-    }
-    out->v_n = a.vn;
-    out->v_bus = a.vbus;
-    out->i_dc = a.idc;
-    out->tau_e = a.tau;
-    out->tau_cog = a.tau_cog;
-    double sgn = sign_of(s->omega);
-    out->tau_shaft = a.tau - p->B * s->omega - p->tau_c * sgn;
-    out->w_l = 0.5 * p->L * (s->i[0] * s->i[0] + s->i[1] * s->i[1] + s->i[2] * s->i[2]);
+    aux_to_out(p, s, y, &a, out);
 }
 
 void bc_plant_reset_extremes(const bc_plant_params *p, bc_plant_state *s)

@@ -162,7 +162,7 @@ class SimResult:
             raise AttributeError(f"SimResult has no signal {name!r}") from None
 
     def __len__(self) -> int:
-        """Number of trace rows."""
+        """Return the number of trace rows."""
         return len(self.signals["t"])
 
     @property

@@ -30,8 +30,10 @@ Profile = float | ArrayLike | Callable[[NDArray[np.float64]], ArrayLike] | None
 
 @dataclass(frozen=True, eq=False)
 class Scenario:
-    """What to simulate. Every time-varying input is a number, an array with one value per sample (half PWM
-    period), or a function of the sample times (s, array) returning such an array.
+    """What to simulate.
+
+    Every time-varying input (a profile) is a number, an array with one value per sample (half PWM period), or a
+    function of the sample times (s, array) returning such an array.
 
     Parameters
     ----------
@@ -207,7 +209,7 @@ def _sensor_params(drive: Drive) -> np.ndarray:
 
 
 def samples_of(drive: Drive, duration: float) -> int:
-    """Number of controller samples (half PWM periods) covering ``duration`` seconds."""
+    """Return the number of controller samples (half PWM periods) covering ``duration`` seconds."""
     n = duration * 2.0 * drive.inverter.f_pwm
     return max(1, math.ceil(n - 1e-9))
 

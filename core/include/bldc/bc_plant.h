@@ -113,6 +113,20 @@ typedef struct {
     double h_max;           /* longest RK4 step, s (<= 0: half a PWM period) */
 } bc_plant_params;
 
+/* Instantaneous quantities at the current state (for sensors and the trace). */
+typedef struct {
+    double e[3];      /* back-EMF, V */
+    double k[3];      /* shapes, V s/rad */
+    double v[3];      /* terminal voltages, V */
+    double v_n;       /* star point, V */
+    double v_bus;     /* DC bus at the inverter, V */
+    double i_dc;      /* DC current, A */
+    double tau_e;     /* electromagnetic torque incl. cogging, N m */
+    double tau_cog;   /* cogging torque, N m */
+    double tau_shaft; /* tau_e - B omega - tau_c sign(omega): what a dynamometer holds, N m */
+    double w_l;       /* magnetic energy (L/2) sum i^2, J */
+} bc_plant_out;
+
 typedef struct {
     double lo, hi; /* bounds of the constant-state interval of a Hall sensor, in the plant's angle frame */
 } bc_hall_seg;
@@ -140,6 +154,16 @@ typedef struct {
     double t_off_l[3];      /* last time the lower switch turned off, s */
     int32_t cond[3];        /* BC_COND_* */
     int32_t hold_open;      /* bit x: phase x stays open until time advances (a spurious diode turn-on) */
+    /* circuit coefficients of the present conduction states, set whenever they change (internal) */
+    double tc_up[3];        /* 1 if tied to the + rail */
+    double tc_u0[3];        /* constant part of the terminal source U_x, V */
+    double tc_r[3];         /* device resistance in series, Ohm */
+    double tc_conn[3];      /* 1 if connected */
+    double tc_sw[3];        /* 1 if through a switch */
+    double tc_dio[3];       /* 1 if through a diode */
+    double tc_inv_n;        /* 1 / connected phases (0 if none) */
+    double tc_gain;         /* 1/L if at least two phases conduct, else 0 */
+    int32_t tc_n;           /* connected phases */
     /* angle-dependent pieces */
     bc_emf_piece piece[3];  /* current back-EMF piece per phase (bounds in the global angle frame) */
     bc_hall_seg hseg[3];    /* current Hall interval per sensor */
@@ -165,20 +189,6 @@ typedef struct {
     int64_t n_steps;         /* accepted RK4 steps */
     int64_t n_events;        /* located events (zero crossings, re-conductions) */
 } bc_plant_state;
-
-/* Instantaneous quantities at the current state (for sensors and the trace). */
-typedef struct {
-    double e[3];      /* back-EMF, V */
-    double k[3];      /* shapes, V s/rad */
-    double v[3];      /* terminal voltages, V */
-    double v_n;       /* star point, V */
-    double v_bus;     /* DC bus at the inverter, V */
-    double i_dc;      /* DC current, A */
-    double tau_e;     /* electromagnetic torque incl. cogging, N m */
-    double tau_cog;   /* cogging torque, N m */
-    double tau_shaft; /* tau_e - B omega - tau_c sign(omega): what a dynamometer holds, N m */
-    double w_l;       /* magnetic energy (L/2) sum i^2, J */
-} bc_plant_out;
 
 /* Validate params and set the initial state at time t0 (a half-period boundary), electrical angle theta0,
  * speed omega0, currents i0 (projected to sum zero), DC source v_src, all legs off.
