@@ -48,7 +48,8 @@ def main() -> int:
         for trace in (False, True):
             r, info = one(drive, pu, args.seconds, trace, args.repeats)
             worst = max(worst, r)
-            print(f"{pu:>10.2f} {'yes' if trace else 'no':>6} {r:>15.4f} {TARGET:>7.3f} {'yes' if r <= TARGET else 'NO':>4}"
+            ok = "yes" if r <= TARGET else "NO"
+            print(f"{pu:>10.2f} {'yes' if trace else 'no':>6} {r:>15.4f} {TARGET:>7.3f} {ok:>4}"
                   f" {info['tau']:>10.2f} {info['i_rms']:>10.1f} {info['steps']:>9.0f} {info['events']:>9.0f}")
     print(f"worst: {worst:.4f} s per simulated second (target {TARGET})")
     return 0
