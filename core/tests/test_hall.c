@@ -1,0 +1,113 @@
+/* test_hall.c - Hall decoding, speed and angle from the real plant and sensor chain at constant speed, both
+ * directions, capture-timer wrap-around, invalid codes, standstill. */
+#include <math.h>
+#include <string.h>
+
+#include "bc_test.h"
+#include "bldc/bc_hall.h"
+#include "bldc/bc_plant.h"
+#include "bldc/bc_sensors.h"
+#include "fixtures.h"
+
+static double angle_diff(double a, double b)
+{
+    double d = fmod(a - b, 2.0 * BC_PI);
+    if (d > BC_PI) d -= 2.0 * BC_PI;
+    if (d < -BC_PI) d += 2.0 * BC_PI;
+    return d;
+}
+
+/* Spin at omega (mechanical) for n samples starting at time t0; return the worst angle error once the speed is
+ * valid, and the speed error. */
+static void spin(double omega, double t0, long n, double *err_th, double *err_om, int *edges, int *valid_from)
+{
+    fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    bc_plant_state ps;
+    double i0[3] = {0.0, 0.0, 0.0};
+    CHECK(bc_plant_init(&f.p, &ps, t0, 0.3, omega, i0, 48.0) == BC_OK, "plant");
+    bc_sensor_state ss;
+    CHECK(bc_sensor_init(&f.sp, &ss) == BC_OK, "sensors");
+    bc_hall_params hp = {(float)f.sp.f_tick, 5.0f, 0.0f};
+    bc_hall_state hs;
+    CHECK(bc_hall_init(&hp, &hs) == BC_OK, "hall");
+    bc_leg_cmd off[3] = {{0, 0.0f}, {0, 0.0f}, {0, 0.0f}};
+    double th = bc_plant_t_half(&f.p);
+    *err_th = 0.0;
+    *err_om = 0.0;
+    *edges = 0;
+    *valid_from = -1;
+    for (long k = 0; k < n; ++k) {
+        bc_ctrl_in in;
+        memset(&in, 0, sizeof in);
+        bc_sensor_measure(&f.sp, &ss, &ps, 48.0, &in);
+        bc_hall_out ho;
+        bc_hall_step(&hp, &hs, &in, &ho);
+        CHECK(ho.valid == 1 && ho.sector >= 0, "valid code");
+        CHECK(ho.theta >= 0.0f && ho.theta < BC_TWO_PI_F, "angle in range");
+        *edges += ho.edge;
+        if (ho.speed_valid) {
+            if (*valid_from < 0) *valid_from = *edges;
+            double e = fabs(angle_diff((double)ho.theta, ps.theta));
+            if (e > *err_th) *err_th = e;
+            double eo = fabs((double)ho.omega_e - 8.0 * omega) / fabs(8.0 * omega);
+            if (eo > *err_om) *err_om = eo;
+            CHECK(ho.dir == (omega > 0.0 ? 1 : -1), "direction");
+        }
+        bc_plant_set_half(&f.p, &ps, off, 1);
+        bc_plant_advance(&f.p, &ps, t0 + (double)(k + 1) * th);
+    }
+}
+
+int main(void)
+{
+    double e_th, e_om;
+    int edges, from;
+    /* 0.5 Omega_0 forward: 10 MHz capture, intervals of ~2 ms: speed to 1e-4, angle to a few 1e-4 rad */
+    spin(37.5, 0.0, 8000, &e_th, &e_om, &edges, &from);
+    CHECK(from == 2, "speed valid from the second edge (got %d)", from);
+    CHECK(edges > 20, "edges %d", edges);
+    CHECK(e_om < 1e-4, "speed error %.3g", e_om);
+    CHECK(e_th < 1e-3, "angle error %.3g rad", e_th);
+    /* backward */
+    spin(-37.5, 0.0, 8000, &e_th, &e_om, &edges, &from);
+    CHECK(e_om < 1e-4 && e_th < 1e-3, "backward: speed %.3g, angle %.3g", e_om, e_th);
+    /* the capture timer wraps (2^32 ticks at 10 MHz = 429.5 s): start just before */
+    spin(37.5, 429.0, 20000, &e_th, &e_om, &edges, &from);
+    CHECK(e_om < 1e-4 && e_th < 1e-3, "across the tick wrap: speed %.3g, angle %.3g", e_om, e_th);
+
+    /* invalid codes and standstill */
+    bc_hall_params hp = {10e6f, 5.0f, 0.0f};
+    bc_hall_state hs;
+    CHECK(bc_hall_init(&hp, &hs) == BC_OK, "init");
+    bc_ctrl_in in;
+    memset(&in, 0, sizeof in);
+    bc_hall_out ho;
+    in.hall = 7u;
+    bc_hall_step(&hp, &hs, &in, &ho);
+    CHECK(ho.valid == 0 && ho.sector == -1 && ho.speed_valid == 0, "111 invalid");
+    in.hall = 0u;
+    bc_hall_step(&hp, &hs, &in, &ho);
+    CHECK(ho.valid == 0, "000 invalid");
+    in.hall = 3u;
+    in.tick_now = 1000u;
+    bc_hall_step(&hp, &hs, &in, &ho);
+    CHECK(ho.valid == 1 && ho.sector == 1 && ho.speed_valid == 0, "standstill: sector, no speed");
+    CHECK(fabsf(ho.theta - (BC_PI_F / 6.0f + BC_PI_F / 3.0f + BC_PI_F / 6.0f)) < 1e-6f, "middle of the sector");
+    /* two edges then the motor stops: the speed decays to zero */
+    in.hall = 2u; in.n_edges = 1u; in.tick_edge = 100000u; in.tick_now = 100010u;
+    bc_hall_step(&hp, &hs, &in, &ho);
+    in.hall = 6u; in.n_edges = 2u; in.tick_edge = 200000u; in.tick_now = 200010u;
+    bc_hall_step(&hp, &hs, &in, &ho);
+    CHECK(ho.speed_valid == 1 && fabsf(ho.omega_e - (BC_PI_F / 3.0f) / 0.01f) < 1e-2f, "speed from 10 ms");
+    in.tick_now = 200000u + 10000000u; /* 1 s later, no edge */
+    bc_hall_step(&hp, &hs, &in, &ho);
+    CHECK(ho.speed_valid == 0 && ho.omega_e == 0.0f, "stopped motor: speed 0 after the timeout");
+    /* a skipped sector (two edges between steps) does not give a false speed */
+    in.hall = 5u; in.n_edges = 4u; in.tick_edge = 210000000u; in.tick_now = 210000010u;
+    bc_hall_step(&hp, &hs, &in, &ho);
+    CHECK(ho.speed_valid == 0, "skipped edge: no speed");
+    bc_hall_params bad = {0.0f, 5.0f, 0.0f};
+    CHECK(bc_hall_init(&bad, &hs) == BC_ERR_PARAM, "f_tick = 0 rejected");
+    return bc_test_summary("test_hall");
+}
