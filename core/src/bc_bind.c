@@ -4,12 +4,11 @@
 #include <stddef.h>
 
 #include "bldc/bc_emf.h"
-#include "bldc/bc_openloop.h"
 #include "bldc/bc_plant.h"
 #include "bldc/bc_sensors.h"
 #include "bldc/bc_sim.h"
 
-#define F(S, member, type) {#S, #member, type, (uint32_t)offsetof(S, member), (uint32_t)sizeof(((S *)0)->member)}
+#define F BC_BIND_FIELD
 
 static const bc_field_desc FIELDS[] = {
     F(bc_leg_cmd, mode, "i4"),
@@ -126,25 +125,66 @@ static const bc_field_desc FIELDS[] = {
     F(bc_ctrl_out, leg, "bc_leg_cmd"),
     F(bc_ctrl_out, diag, "f4"),
     F(bc_ctrl_out, flags, "u4"),
-
-    F(bc_table_params, cmd, "ptr"),
-    F(bc_table_params, n, "i8"),
-    F(bc_sixv_params, chop, "i4"),
 };
 
-#define S(T) {#T, (uint32_t)sizeof(T)}
+#define S BC_BIND_STRUCT
 
 static const bc_struct_desc STRUCTS[] = {
     S(bc_leg_cmd),      S(bc_emf_shape),    S(bc_plant_params), S(bc_plant_state), S(bc_sensor_params),
     S(bc_sensor_state), S(bc_ctrl),         S(bc_sim_config),   S(bc_sim_inputs),  S(bc_sim_metrics),
-    S(bc_sim_state),    S(bc_trace_row),    S(bc_ctrl_in),      S(bc_ctrl_out),    S(bc_table_params),
-    S(bc_table_state),  S(bc_sixv_params),  S(bc_sixv_state),
+    S(bc_sim_state),    S(bc_trace_row),    S(bc_ctrl_in),      S(bc_ctrl_out),
 };
 
-int32_t bc_layout_count(void) { return (int32_t)(sizeof FIELDS / sizeof FIELDS[0]); }
-const bc_field_desc *bc_layout_get(int32_t j) { return (j >= 0 && j < bc_layout_count()) ? &FIELDS[j] : 0; }
-int32_t bc_struct_count(void) { return (int32_t)(sizeof STRUCTS / sizeof STRUCTS[0]); }
-const bc_struct_desc *bc_struct_get(int32_t j) { return (j >= 0 && j < bc_struct_count()) ? &STRUCTS[j] : 0; }
+/* Controller providers (src/bc_bind_<name>.c): one line each. */
+extern const bc_bind_provider bc_bind_openloop_table;
+extern const bc_bind_provider bc_bind_openloop_sixv;
+
+static const bc_bind_provider *const PROVIDERS[] = {
+    &bc_bind_openloop_table,
+    &bc_bind_openloop_sixv,
+};
+
+#define N_PROVIDERS ((int32_t)(sizeof PROVIDERS / sizeof PROVIDERS[0]))
+#define N_FIELDS ((int32_t)(sizeof FIELDS / sizeof FIELDS[0]))
+#define N_STRUCTS ((int32_t)(sizeof STRUCTS / sizeof STRUCTS[0]))
+
+int32_t bc_layout_count(void)
+{
+    int32_t n = N_FIELDS;
+    for (int32_t j = 0; j < N_PROVIDERS; ++j) n += PROVIDERS[j]->n_fields;
+    return n;
+}
+
+const bc_field_desc *bc_layout_get(int32_t j)
+{
+    if (j < 0) return 0;
+    if (j < N_FIELDS) return &FIELDS[j];
+    j -= N_FIELDS;
+    for (int32_t q = 0; q < N_PROVIDERS; ++q) {
+        if (j < PROVIDERS[q]->n_fields) return &PROVIDERS[q]->fields[j];
+        j -= PROVIDERS[q]->n_fields;
+    }
+    return 0;
+}
+
+int32_t bc_struct_count(void)
+{
+    int32_t n = N_STRUCTS;
+    for (int32_t j = 0; j < N_PROVIDERS; ++j) n += PROVIDERS[j]->n_structs;
+    return n;
+}
+
+const bc_struct_desc *bc_struct_get(int32_t j)
+{
+    if (j < 0) return 0;
+    if (j < N_STRUCTS) return &STRUCTS[j];
+    j -= N_STRUCTS;
+    for (int32_t q = 0; q < N_PROVIDERS; ++q) {
+        if (j < PROVIDERS[q]->n_structs) return &PROVIDERS[q]->structs[j];
+        j -= PROVIDERS[q]->n_structs;
+    }
+    return 0;
+}
 
 #define TRACE_NAME(name, unit, doc) #name,
 #define TRACE_UNIT(name, unit, doc) unit,
@@ -158,25 +198,13 @@ const char *bc_trace_name(int32_t j) { return (j >= 0 && j < bc_trace_count()) ?
 const char *bc_trace_unit(int32_t j) { return (j >= 0 && j < bc_trace_count()) ? TRACE_UNITS[j] : 0; }
 const char *bc_trace_doc(int32_t j) { return (j >= 0 && j < bc_trace_count()) ? TRACE_DOCS[j] : 0; }
 
-/* Adapters from the typed controller API to the generic slot. */
-static int table_init(const void *p, void *s) { return bc_table_init(p, s); }
-static void table_step(const void *p, void *s, const bc_ctrl_in *in, bc_ctrl_out *out) { bc_table_step(p, s, in, out); }
-static int sixv_init(const void *p, void *s) { return bc_sixv_init(p, s); }
-static void sixv_step(const void *p, void *s, const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sixv_step(p, s, in, out); }
-
-static const bc_ctrl_info CONTROLLERS[] = {
-    {"table", "bc_table_params", "bc_table_state", table_init, table_step, {"", "", "", "", "", "", "", ""}},
-    {"sixv", "bc_sixv_params", "bc_sixv_state", sixv_init, sixv_step,
-     {"sector", "duty", "", "", "", "", "", ""}},
-};
-
 #define ACC_NAME(NAME, name, unit, doc) #name,
 static const char *const ACC_NAMES[] = {BC_ACC_FIELDS(ACC_NAME)};
 
 int32_t bc_acc_count(void) { return BC_ACC_N; }
 const char *bc_acc_name(int32_t j) { return (j >= 0 && j < BC_ACC_N) ? ACC_NAMES[j] : 0; }
 
-int32_t bc_ctrl_count(void) { return (int32_t)(sizeof CONTROLLERS / sizeof CONTROLLERS[0]); }
-const bc_ctrl_info *bc_ctrl_get(int32_t j) { return (j >= 0 && j < bc_ctrl_count()) ? &CONTROLLERS[j] : 0; }
+int32_t bc_ctrl_count(void) { return N_PROVIDERS; }
+const bc_ctrl_info *bc_ctrl_get(int32_t j) { return (j >= 0 && j < N_PROVIDERS) ? PROVIDERS[j]->info : 0; }
 
 const char *bc_version(void) { return "0.1.0"; }

@@ -20,13 +20,17 @@ int main(void)
     /* structs the host fills completely must have no undescribed member */
     static const char *const complete[] = {"bc_leg_cmd", "bc_emf_shape", "bc_plant_params", "bc_sensor_params",
                                            "bc_ctrl", "bc_sim_config", "bc_sim_inputs", "bc_sim_metrics",
-                                           "bc_ctrl_in", "bc_ctrl_out", "bc_table_params", "bc_sixv_params"};
-    for (size_t c = 0; c < sizeof complete / sizeof complete[0]; ++c) {
-        uint32_t size = struct_size(complete[c]), end = 0u, covered = 0u;
-        CHECK(size > 0u, "%s has a size entry", complete[c]);
+                                           "bc_ctrl_in", "bc_ctrl_out"};
+    const char *names[64];
+    size_t n_names = 0;
+    for (size_t c = 0; c < sizeof complete / sizeof complete[0]; ++c) names[n_names++] = complete[c];
+    for (int32_t j = 0; j < bc_ctrl_count() && n_names < 64; ++j) names[n_names++] = bc_ctrl_get(j)->params;
+    for (size_t c = 0; c < n_names; ++c) {
+        uint32_t size = struct_size(names[c]), end = 0u, covered = 0u;
+        CHECK(size > 0u, "%s has a size entry", names[c]);
         for (int32_t j = 0; j < bc_layout_count(); ++j) {
             const bc_field_desc *f = bc_layout_get(j);
-            if (strcmp(f->strct, complete[c]) != 0) continue;
+            if (strcmp(f->strct, names[c]) != 0) continue;
             CHECK(f->offset >= end, "%s.%s does not overlap the previous member", f->strct, f->field);
             CHECK(f->offset - end < 8u, "%s.%s: gap of %u bytes before it (a member missing?)", f->strct, f->field,
                   f->offset - end);
@@ -34,8 +38,8 @@ int main(void)
             covered += f->size;
             CHECK(end <= size, "%s.%s inside the struct", f->strct, f->field);
         }
-        CHECK(size - end < 8u, "%s: %u bytes undescribed at the end", complete[c], size - end);
-        CHECK(covered + 16u > size, "%s: %u of %u bytes described", complete[c], covered, size);
+        CHECK(size - end < 8u, "%s: %u bytes undescribed at the end", names[c], size - end);
+        CHECK(covered + 16u > size, "%s: %u of %u bytes described", names[c], covered, size);
     }
     CHECK(struct_size("bc_trace_row") == (uint32_t)bc_trace_count() * (uint32_t)sizeof(double), "trace row");
     CHECK(strcmp(bc_trace_name(0), "t") == 0 && bc_trace_name(bc_trace_count()) == 0, "trace names");

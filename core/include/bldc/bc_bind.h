@@ -7,6 +7,7 @@
 #ifndef BC_BIND_H
 #define BC_BIND_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "bldc/bc_types.h"
@@ -32,6 +33,20 @@ typedef struct {
     bc_ctrl_step_fn step;
     const char *diag[BC_DIAG_N];                     /* meaning of diag[0..7] ("" unused) */
 } bc_ctrl_info;
+
+/* What one controller contributes to the binding: its structs' layouts and sizes and its registry entry.
+ * Each controller has a provider in src/bc_bind_<name>.c; bc_bind.c lists the providers once. */
+typedef struct {
+    const bc_field_desc *fields;
+    int32_t n_fields;
+    const bc_struct_desc *structs;
+    int32_t n_structs;
+    const bc_ctrl_info *info;
+} bc_bind_provider;
+
+#define BC_BIND_FIELD(S, member, type) \
+    {#S, #member, type, (uint32_t)offsetof(S, member), (uint32_t)sizeof(((S *)0)->member)}
+#define BC_BIND_STRUCT(T) {#T, (uint32_t)sizeof(T)}
 
 int32_t bc_layout_count(void);
 const bc_field_desc *bc_layout_get(int32_t j);

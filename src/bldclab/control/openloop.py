@@ -1,8 +1,4 @@
-"""Controller choices for :func:`bldclab.simulate`: each names a C controller and fills its parameters.
-
-The C code is what runs (``core/include/bldc/``); these frozen dataclasses only choose it and its settings.
-What the per-sample reference ``Scenario.ref`` means depends on the controller (see each class).
-"""
+"""Open-loop drivers: replay of precomputed leg commands, and six-step voltage mode (``core/.../bc_openloop.h``)."""
 
 from __future__ import annotations
 
@@ -12,31 +8,14 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import BldclabError
+from ..errors import BldclabError
+from .base import Control
 
 if TYPE_CHECKING:
-    from ._core import Core
-    from .motor import Drive
+    from .._core import Core
+    from ..motor import Drive
 
-__all__ = ["Control", "OpenLoop", "SixStepVoltage"]
-
-
-class Control:
-    """Base class: the C registry name and how to fill the parameter struct."""
-
-    c_name: ClassVar[str] = ""
-    ref_meaning: ClassVar[str] = ""
-
-    def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:
-        """Return the filled C parameter record; arrays it points to are appended to ``keep``."""
-        raise NotImplementedError  # pragma: no cover - abstract
-
-    def describe(self) -> dict[str, object]:
-        """Return the settings as plain values (for result metadata)."""
-        out: dict[str, object] = {"controller": self.c_name}
-        for k, v in self.__dict__.items():
-            out[k] = v.tolist() if isinstance(v, np.ndarray) else v
-        return out
+__all__ = ["OpenLoop", "SixStepVoltage"]
 
 
 _MODES = {"off": 0, "pwm": 1, "high": 2, "low": 3}
