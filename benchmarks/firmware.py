@@ -1,0 +1,110 @@
+"""Firmware table: each controller cross-compiled for a Cortex-M4F and its cost per step.
+
+- Flash and RAM per controller: the controllers (not the plant) are built with Debian's gcc-arm-none-eabi and
+  newlib (``-mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard``, C99, the project's warnings as errors), linked
+  into the bare-metal harness ``core/firmware/harness.c`` one controller at a time with ``--gc-sections``; the cost
+  is the image size minus the empty harness (libm functions a controller pulls in are included).
+- Instructions per step: ``core/firmware/cost.c`` on the host (``-O2``) under ``valgrind --tool=callgrind``
+  (instruction counts are repeatable, unlike time), per input scenario; the worst scenario is reported.
+
+Run: ``python benchmarks/firmware.py`` (needs arm-none-eabi-gcc, libnewlib-arm-none-eabi, valgrind, cc).
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+CORE = ROOT / "core"
+WARN = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wdouble-promotion", "-Werror"]
+ARM = ["-mcpu=cortex-m4", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard", "-mthumb", "-Os", "-ffunction-sections",
+       "-fdata-sections"]
+PLANT_SIDE = {"bc_plant.c", "bc_emf.c", "bc_sensors.c", "bc_sim.c"}
+SCENARIOS = ("run", "edge", "invalid", "nan")
+
+
+def controller_sources() -> list[Path]:
+    """Core sources that run on the MCU: everything but the plant side and the host binding."""
+    return sorted(p for p in (CORE / "src").glob("*.c") if p.name not in PLANT_SIDE and not p.name.startswith("bc_bind"))
+
+
+def harness_names() -> list[str]:
+    text = (CORE / "firmware" / "harness.c").read_text()
+    return list(dict.fromkeys(m.lower() for m in re.findall(r"defined\(BC_FW_(\w+)\)", text)))
+
+
+def cost_names() -> list[str]:
+    text = (CORE / "firmware" / "cost.c").read_text()
+    return re.findall(r'\{"(\w+)", \w+_init, \w+_step\}', text)
+
+
+def arm_sizes(tmp: Path) -> dict[str, tuple[int, int]]:
+    """(flash, ram) bytes of each harness image: text + data, data + bss."""
+    out = {}
+    for name in ["none", *harness_names()]:
+        elf = tmp / f"{name}.elf"
+        cmd = ["arm-none-eabi-gcc", *ARM, *WARN, f"-DBC_FW_{name.upper()}", f"-I{CORE / 'include'}",
+               str(CORE / "firmware" / "harness.c"), *map(str, controller_sources()), "-Wl,--gc-sections",
+               "--specs=nosys.specs", "-lm", "-o", str(elf)]
+        subprocess.run(cmd, check=True, capture_output=True, text=True)
+        line = subprocess.run(["arm-none-eabi-size", str(elf)], check=True, capture_output=True,
+                              text=True).stdout.splitlines()[-1].split()
+        text, data, bss = int(line[0]), int(line[1]), int(line[2])
+        out[name] = (text + data, data + bss)
+    return out
+
+
+def instruction_counts(tmp: Path, n: int) -> dict[str, dict[str, float]]:
+    exe = tmp / "cost"
+    subprocess.run(["cc", "-O2", "-g", *WARN[:1], f"-I{CORE / 'include'}", str(CORE / "firmware" / "cost.c"),
+                    *map(str, controller_sources()), "-lm", "-o", str(exe)], check=True)
+    out: dict[str, dict[str, float]] = {}
+    for name in cost_names():
+        out[name] = {}
+        for sc in SCENARIOS:
+            cg = tmp / f"cg.{name}.{sc}"
+            subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={cg}", str(exe), name, sc, str(n)],
+                           check=True, capture_output=True)
+            ann = subprocess.run(["callgrind_annotate", "--inclusive=yes", str(cg)], check=True, capture_output=True,
+                                 text=True).stdout
+            m = re.search(rf"^\s*([\d,]+)\s+\([^)]*\)\s+\S*cost\.c:{name}_step\b", ann, flags=re.M)
+            if not m:
+                raise RuntimeError(f"no callgrind line for {name}_step")
+            out[name][sc] = int(m.group(1).replace(",", "")) / n
+    return out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=20000, help="steps per scenario for the instruction counts")
+    args = ap.parse_args()
+    for tool in ("arm-none-eabi-gcc", "valgrind", "cc"):
+        if shutil.which(tool) is None:
+            print(f"missing tool: {tool} (tools/install-system-deps installs it)", file=sys.stderr)
+            return 1
+    with tempfile.TemporaryDirectory() as d:
+        tmp = Path(d)
+        sizes = arm_sizes(tmp)
+        counts = instruction_counts(tmp, args.steps)
+    base_flash, base_ram = sizes.pop("none")
+    print("controllers on a Cortex-M4F (arm-none-eabi-gcc -Os, hard float), cost per step on the host (-O2)")
+    print(f"{'controller':<12} {'flash [B]':>10} {'RAM [B]':>8} "
+          + " ".join(f"{'instr/' + s:>13}" for s in SCENARIOS) + f" {'worst':>8}")
+    for name in sorted(set(sizes) | set(counts)):
+        flash, ram = sizes.get(name, (base_flash, base_ram))
+        c = counts.get(name, {})
+        cells = " ".join(f"{c[s]:>13.0f}" if s in c else f"{'-':>13}" for s in SCENARIOS)
+        worst = f"{max(c.values()):>8.0f}" if c else f"{'-':>8}"
+        print(f"{name:<12} {flash - base_flash:>10d} {ram - base_ram:>8d} {cells} {worst}")
+    print(f"(baseline harness: {base_flash} B flash, {base_ram} B RAM; RAM includes the static params and state)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

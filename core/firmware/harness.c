@@ -1,0 +1,56 @@
+/*
+ * harness.c - bare-metal harness for the controllers: the image an MCU would run, minus the peripherals.
+ * Built for a Cortex-M4F by benchmarks/firmware.py with exactly one BC_FW_<NAME> defined (or none, for the
+ * baseline), so each controller's flash and RAM cost is the difference to the baseline image.
+ * Measurements come from volatile locations (as if from ADC and timer registers); the leg commands go to volatile
+ * locations (as if to the timer's compare registers).
+ */
+#include <stdint.h>
+
+#include "bldc/bc_types.h"
+
+volatile bc_ctrl_in bc_fw_in;    /* written by "interrupts" */
+volatile bc_ctrl_out bc_fw_out;  /* read by "the PWM timer" */
+
+#if defined(BC_FW_TABLE)
+#include "bldc/bc_openloop.h"
+static bc_leg_cmd cmds[3];
+static const bc_table_params P = {cmds, 1};
+static bc_table_state S;
+#define INIT() bc_table_init(&P, &S)
+#define STEP(in, out) bc_table_step(&P, &S, in, out)
+#elif defined(BC_FW_SIXV)
+#include "bldc/bc_openloop.h"
+static const bc_sixv_params P = {BC_SIXV_HIGH};
+static bc_sixv_state S;
+#define INIT() bc_sixv_init(&P, &S)
+#define STEP(in, out) bc_sixv_step(&P, &S, in, out)
+#elif defined(BC_FW_HALL)
+#include "bldc/bc_hall.h"
+static const bc_hall_params P = {10e6f, 5.0f, 0.0f};
+static bc_hall_state S;
+static bc_hall_out H;
+#define INIT() bc_hall_init(&P, &S)
+#define STEP(in, out) (bc_hall_step(&P, &S, in, &H), (out)->diag[0] = H.theta)
+#elif defined(BC_FW_PI)
+#include "bldc/bc_pi.h"
+static const bc_pi_params P = {0.47f, 314.0f, 35.7e-6f, -48.0f, 48.0f};
+static bc_pi_state S;
+#define INIT() bc_pi_init(&P, &S)
+#define STEP(in, out) ((out)->diag[0] = bc_pi_step(&P, &S, (in)->ref - (in)->i_abc[0], 0.0f))
+#else
+#define INIT() 0
+#define STEP(in, out) ((out)->diag[0] = (in)->ref)
+#endif
+
+int main(void)
+{
+    int rc = INIT();
+    for (;;) {
+        bc_ctrl_in in = bc_fw_in;
+        bc_ctrl_out out;
+        out.flags = (uint32_t)rc;
+        STEP(&in, &out);
+        bc_fw_out = out;
+    }
+}

@@ -1,0 +1,46 @@
+"""The controllers build for a Cortex-M4F with the project's warnings as errors, and their cost harness runs."""
+
+from __future__ import annotations
+
+import importlib.util
+import subprocess
+import sys
+from pathlib import Path
+
+from conftest import require_tool
+
+ROOT = Path(__file__).resolve().parents[1]
+spec = importlib.util.spec_from_file_location("firmware_bench", ROOT / "benchmarks" / "firmware.py")
+fw = importlib.util.module_from_spec(spec)
+sys.modules["firmware_bench"] = fw
+spec.loader.exec_module(fw)
+
+
+def test_every_controller_cross_compiles_for_cortex_m4f(tmp_path):
+    require_tool("arm-none-eabi-gcc")
+    sizes = fw.arm_sizes(tmp_path)
+    base = sizes.pop("none")
+    assert set(sizes) == set(fw.harness_names())
+    for name, (flash, ram) in sizes.items():
+        assert flash > base[0], f"{name} adds no code: the harness does not call it"
+        assert flash - base[0] < 32_000, f"{name}: {flash - base[0]} B of flash"
+        assert ram >= base[1]
+
+
+def test_every_registered_controller_is_in_the_firmware_harness():
+    import bldclab._core as core
+
+    registered = set(core.core().controllers) - {"table"}  # table replays host arrays: a simulation driver
+    assert registered <= set(fw.harness_names()), registered - set(fw.harness_names())
+    assert registered <= set(fw.cost_names()), registered - set(fw.cost_names())
+
+
+def test_cost_harness_runs_every_scenario(tmp_path):
+    require_tool("cc")
+    exe = tmp_path / "cost"
+    subprocess.run(["cc", "-O2", "-I", str(fw.CORE / "include"), str(fw.CORE / "firmware" / "cost.c"),
+                    *map(str, fw.controller_sources()), "-lm", "-o", str(exe)], check=True)
+    for name in fw.cost_names():
+        for sc in fw.SCENARIOS:
+            out = subprocess.run([str(exe), name, sc, "2000"], check=True, capture_output=True, text=True).stdout
+            assert out.startswith(f"{name} {sc} 2000")
