@@ -213,3 +213,19 @@ def test_profiles_arrays_and_functions_agree():
     b = bl.simulate(HTM, bl.SixStepVoltage(), bl.Scenario(duration=0.01, speed=lambda t: 20.0 + 100 * t, ref=0.3))
     np.testing.assert_allclose(a.i_a, b.i_a, rtol=0, atol=1e-9)  # t from arange/(2f) vs arange*T/2: rounding
     assert a.omega_m[-1] == pytest.approx(20.0 + 100 * t[-1])
+
+
+def test_faults_reach_plant_and_sensors():
+    om = 0.4 * HTM.Omega_0
+    sc = bl.Scenario(duration=0.05, speed=om, ref=0.6, theta0=0.3,
+                     faults=(bl.Fault("phase_open", "b", t_on=0.0105), bl.Fault("hall_stuck", "a", 0.02, value=1)))
+    res = bl.simulate(HTM, bl.SixStepVoltage(), sc)
+    after = res.t > 0.0105 + 1e-6
+    assert np.all(res.i_b[after] == 0.0) and np.any(np.abs(res.i_b[~after]) > 10)
+    assert res.meta["stats"]["e_fault"] > 0
+    codes = res.hall.astype(int)[res.t > 0.02 + 1e-6]
+    assert np.all(codes & 1) and np.any(codes == 7)
+    with pytest.raises(BldclabError, match=r"fault\.kind"):
+        bl.Fault("melt", "a", 0.0)
+    with pytest.raises(BldclabError, match=r"fault\.t_off"):
+        bl.Fault("hall_glitch", "a", 0.1, t_off=0.05)

@@ -19,6 +19,12 @@ static const bc_field_desc FIELDS[] = {
     F(bc_emf_shape, x, "ptr"),
     F(bc_emf_shape, y, "ptr"),
 
+    F(bc_fault, kind, "i4"),
+    F(bc_fault, phase, "i4"),
+    F(bc_fault, t_on, "f8"),
+    F(bc_fault, t_off, "f8"),
+    F(bc_fault, value, "f8"),
+
     F(bc_plant_params, p, "i4"),
     F(bc_plant_params, R, "f8"),
     F(bc_plant_params, L, "f8"),
@@ -40,6 +46,7 @@ static const bc_field_desc FIELDS[] = {
     F(bc_plant_params, hall_error, "f8"),
     F(bc_plant_params, hall_delay, "f8"),
     F(bc_plant_params, h_max, "f8"),
+    F(bc_plant_params, fault, "bc_fault"),
 
     F(bc_sensor_params, i_mask, "u4"),
     F(bc_sensor_params, i_gain, "f8"),
@@ -52,6 +59,7 @@ static const bc_field_desc FIELDS[] = {
     F(bc_sensor_params, v_lsb, "f8"),
     F(bc_sensor_params, f_tick, "f8"),
     F(bc_sensor_params, seed, "u8"),
+    F(bc_sensor_params, fault, "bc_fault"),
 
     F(bc_ctrl, step, "ptr"),
     F(bc_ctrl, params, "ptr"),
@@ -105,6 +113,7 @@ static const bc_field_desc FIELDS[] = {
     F(bc_plant_state, flags, "u4"),
     F(bc_plant_state, n_steps, "i8"),
     F(bc_plant_state, n_events, "i8"),
+    F(bc_plant_state, e_fault, "f8"),
 
     F(bc_sim_state, plant, "bc_plant_state"),
     F(bc_sim_state, k, "i8"),
@@ -130,7 +139,7 @@ static const bc_field_desc FIELDS[] = {
 #define S BC_BIND_STRUCT
 
 static const bc_struct_desc STRUCTS[] = {
-    S(bc_leg_cmd),      S(bc_emf_shape),    S(bc_plant_params), S(bc_plant_state), S(bc_sensor_params),
+    S(bc_fault),        S(bc_leg_cmd),      S(bc_emf_shape),    S(bc_plant_params), S(bc_plant_state), S(bc_sensor_params),
     S(bc_sensor_state), S(bc_ctrl),         S(bc_sim_config),   S(bc_sim_inputs),  S(bc_sim_metrics),
     S(bc_sim_state),    S(bc_trace_row),    S(bc_ctrl_in),      S(bc_ctrl_out),
 };

@@ -28,6 +28,7 @@ typedef struct aux_s {
 
 static void watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
                        int dir_om, double *g);
+static int faults_apply(const bc_plant_params *p, bc_plant_state *s);
 
 double bc_plant_t_half(const bc_plant_params *p) { return 0.5 / p->f_pwm; }
 
@@ -288,11 +289,38 @@ static void pieces_locate(const bc_plant_params *p, bc_plant_state *s)
     s->hall_raw = keep;
 }
 
-static void hall_output_toggle(bc_plant_state *s, int bit, double t)
+/* The code the controller sees: the delayed sensor code with the active sensor faults applied. */
+static int32_t hall_visible(const bc_plant_params *p, const bc_plant_state *s, double t)
 {
-    s->hall_out ^= bit;
-    s->n_edges += 1u;
-    s->t_edge = t;
+    int32_t code = s->hall_true;
+    for (int j = 0; j < BC_FAULT_MAX; ++j) {
+        const bc_fault *f = &p->fault[j];
+        if (!(t >= f->t_on && t < f->t_off)) continue;
+        int32_t bit = 1 << f->phase;
+        if (f->kind == BC_FAULT_HALL_STUCK) {
+            code = f->value != 0.0 ? (code | bit) : (code & ~bit);
+        } else if (f->kind == BC_FAULT_HALL_GLITCH) {
+            code ^= bit;
+        }
+    }
+    return code;
+}
+
+/* Recompute the visible code; every change is an edge for the capture timer. */
+static void hall_refresh(const bc_plant_params *p, bc_plant_state *s, double t)
+{
+    int32_t code = hall_visible(p, s, t);
+    if (code != s->hall_out) {
+        s->hall_out = code;
+        s->n_edges += 1u;
+        s->t_edge = t;
+    }
+}
+
+static void hall_output_toggle(const bc_plant_params *p, bc_plant_state *s, int bit, double t)
+{
+    s->hall_true ^= bit;
+    hall_refresh(p, s, t);
 }
 
 static void hall_raw_toggle(const bc_plant_params *p, bc_plant_state *s, int x)
@@ -300,11 +328,11 @@ static void hall_raw_toggle(const bc_plant_params *p, bc_plant_state *s, int x)
     int bit = 1 << x;
     s->hall_raw ^= bit;
     if (p->hall_delay <= 0.0) {
-        hall_output_toggle(s, bit, s->t);
+        hall_output_toggle(p, s, bit, s->t);
         return;
     }
     if (s->hq_n == BC_HALL_QUEUE) { /* overrun: the oldest edge is seen now */
-        hall_output_toggle(s, s->hq_code[0], s->t);
+        hall_output_toggle(p, s, s->hq_code[0], s->t);
         memmove(&s->hq_t[0], &s->hq_t[1], (BC_HALL_QUEUE - 1) * sizeof s->hq_t[0]);
         memmove(&s->hq_code[0], &s->hq_code[1], (BC_HALL_QUEUE - 1) * sizeof s->hq_code[0]);
         s->hq_n -= 1;
@@ -474,7 +502,9 @@ static double next_gate_time(const bc_plant_params *p, const bc_plant_state *s)
 static void conduction_from_gates(const bc_plant_params *p, bc_plant_state *s)
 {
     for (int x = 0; x < 3; ++x) {
-        if (s->gate[x] == BC_GATE_U) {
+        if (s->open_fault & (1 << x)) {
+            s->cond[x] = BC_COND_OPEN; /* disconnected: neither switch nor diode can carry current */
+        } else if (s->gate[x] == BC_GATE_U) {
             s->cond[x] = BC_COND_SW_U;
         } else if (s->gate[x] == BC_GATE_L) {
             s->cond[x] = BC_COND_SW_L;
@@ -505,19 +535,20 @@ static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
         rhs(p, s, y, dy, &a);
         int changed = 0;
         if (a.n_conn == 0) {
-            int hi = 0, lo = 0;
-            for (int x = 1; x < 3; ++x) {
-                if (a.e[x] > a.e[hi]) hi = x;
-                if (a.e[x] < a.e[lo]) lo = x;
+            int hi = -1, lo = -1;
+            for (int x = 0; x < 3; ++x) {
+                if (s->open_fault & (1 << x)) continue;
+                if (hi < 0 || a.e[x] > a.e[hi]) hi = x;
+                if (lo < 0 || a.e[x] < a.e[lo]) lo = x;
             }
-            if (a.e[hi] - a.e[lo] > a.vbus + 2.0 * p->V_f + tol) {
+            if (hi >= 0 && lo >= 0 && hi != lo && a.e[hi] - a.e[lo] > a.vbus + 2.0 * p->V_f + tol) {
                 s->cond[hi] = BC_COND_D_U;
                 s->cond[lo] = BC_COND_D_L;
                 changed = 1;
             }
         } else {
             for (int x = 0; x < 3; ++x) {
-                if (s->cond[x] != BC_COND_OPEN || (s->hold_open & (1 << x))) continue;
+                if (s->cond[x] != BC_COND_OPEN || ((s->hold_open | s->open_fault) & (1 << x))) continue;
                 if (a.v[x] < -p->V_f - tol) {
                     s->cond[x] = BC_COND_D_L;
                     changed = 1;
@@ -572,7 +603,7 @@ static void watch_eval(const bc_plant_params *p, const bc_plant_state *s, const 
         case BC_COND_D_L: g[W_DIODE + x] = y[Y_I + x]; break;
         case BC_COND_D_U: g[W_DIODE + x] = -y[Y_I + x]; break;
         case BC_COND_OPEN:
-            if (a->n_conn > 0) {
+            if (a->n_conn > 0 && !(s->open_fault & (1 << x))) {
                 g[W_OPEN_LO + x] = a->v[x] + p->V_f;
                 g[W_OPEN_HI + x] = a->vbus + p->V_f - a->v[x];
             }
@@ -581,12 +612,13 @@ static void watch_eval(const bc_plant_params *p, const bc_plant_state *s, const 
         }
     }
     if (a->n_conn == 0) {
-        double emax = a->e[0], emin = a->e[0];
-        for (int x = 1; x < 3; ++x) {
+        double emax = -HUGE_VAL, emin = HUGE_VAL;
+        for (int x = 0; x < 3; ++x) {
+            if (s->open_fault & (1 << x)) continue;
             if (a->e[x] > emax) emax = a->e[x];
             if (a->e[x] < emin) emin = a->e[x];
         }
-        g[W_PAIR] = a->vbus + 2.0 * p->V_f - (emax - emin);
+        if (emax > emin) g[W_PAIR] = a->vbus + 2.0 * p->V_f - (emax - emin);
     }
     if (p->mech == BC_MECH_DYNAMIC) {
         if (s->stuck) {
@@ -741,13 +773,16 @@ static void apply_event(const bc_plant_params *p, bc_plant_state *s, int w, cons
     } else if (w < W_PAIR) {
         s->cond[w - W_OPEN_HI] = BC_COND_D_U;
     } else if (w == W_PAIR) {
-        int hi = 0, lo = 0;
-        for (int x = 1; x < 3; ++x) {
-            if (a->e[x] > a->e[hi]) hi = x;
-            if (a->e[x] < a->e[lo]) lo = x;
+        int hi = -1, lo = -1;
+        for (int x = 0; x < 3; ++x) {
+            if (s->open_fault & (1 << x)) continue;
+            if (hi < 0 || a->e[x] > a->e[hi]) hi = x;
+            if (lo < 0 || a->e[x] < a->e[lo]) lo = x;
         }
-        s->cond[hi] = BC_COND_D_U;
-        s->cond[lo] = BC_COND_D_L;
+        if (hi >= 0 && lo >= 0 && hi != lo) {
+            s->cond[hi] = BC_COND_D_U;
+            s->cond[lo] = BC_COND_D_L;
+        }
     } else if (w == W_OMEGA) {
         s->omega = 0.0;
         if (fabs(a->tau_net) <= p->tau_c) {
@@ -800,6 +835,12 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     if (p->mech == BC_MECH_DYNAMIC && !(isfinite(p->J) && p->J > 0.0)) return BC_ERR_PARAM;
     if (!finite_nonneg(p->B) || !finite_nonneg(p->tau_c) || !finite_nonneg(p->hall_delay)) return BC_ERR_PARAM;
     if (!isfinite(p->h_max)) return BC_ERR_PARAM;
+    for (int j = 0; j < BC_FAULT_MAX; ++j) {
+        const bc_fault *f = &p->fault[j];
+        if (f->kind == BC_FAULT_NONE) continue;
+        if (f->kind < BC_FAULT_NONE || f->kind > BC_FAULT_HALL_GLITCH || f->phase < 0 || f->phase > 2) return BC_ERR_PARAM;
+        if (isnan(f->t_on) || isnan(f->t_off) || !(f->t_off > f->t_on) || !isfinite(f->value)) return BC_ERR_PARAM;
+    }
     if (!isfinite(t0) || !isfinite(theta0) || !isfinite(omega0) || !isfinite(v_src)) return BC_ERR_PARAM;
     for (int x = 0; x < 3; ++x) {
         if (!isfinite(i0[x])) return BC_ERR_PARAM;
@@ -833,8 +874,10 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     }
     pieces_locate(p, s);
     hall_locate(p, s);
-    s->hall_out = s->hall_raw;
+    s->hall_true = s->hall_raw;
+    s->hall_out = hall_visible(p, s, t0);
     s->t_edge = -HUGE_VAL;
+    (void)faults_apply(p, s);
     resolve(p, s);
     bc_plant_reset_extremes(p, s);
     return BC_OK;
@@ -907,10 +950,51 @@ void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg
     resolve(p, s);
 }
 
+/* Next start or end of an injected fault after the current time (HUGE_VAL if none). */
+static double next_fault_time(const bc_plant_params *p, const bc_plant_state *s)
+{
+    double tn = HUGE_VAL;
+    for (int j = 0; j < BC_FAULT_MAX; ++j) {
+        const bc_fault *f = &p->fault[j];
+        if (f->kind == BC_FAULT_NONE) continue;
+        if (f->t_on > s->t && f->t_on < tn) tn = f->t_on;
+        if (f->t_off > s->t && f->t_off < tn) tn = f->t_off;
+    }
+    return tn;
+}
+
+/* Apply the faults active now. A phase disconnected while carrying current loses it at once (an arc): the other
+ * two keep the sum zero with the least change, and the magnetic energy that disappears is booked in e_fault.
+ * Returns 1 if the circuit changed. */
+static int faults_apply(const bc_plant_params *p, bc_plant_state *s)
+{
+    int32_t open = 0;
+    for (int j = 0; j < BC_FAULT_MAX; ++j) {
+        const bc_fault *f = &p->fault[j];
+        if (f->kind == BC_FAULT_PHASE_OPEN && s->t >= f->t_on && s->t < f->t_off) open |= 1 << f->phase;
+    }
+    hall_refresh(p, s, s->t);
+    if (open == s->open_fault) return 0;
+    int32_t newly = open & ~s->open_fault;
+    s->open_fault = open;
+    for (int x = 0; x < 3; ++x) {
+        if (!(newly & (1 << x)) || s->i[x] == 0.0) continue;
+        double w0 = 0.5 * p->L * (s->i[0] * s->i[0] + s->i[1] * s->i[1] + s->i[2] * s->i[2]);
+        int y = (x + 1) % 3, z = (x + 2) % 3;
+        double iy = 0.5 * (s->i[y] - s->i[z]);
+        s->i[x] = 0.0;
+        s->i[y] = iy;
+        s->i[z] = -iy;
+        double w1 = 0.5 * p->L * (s->i[0] * s->i[0] + s->i[1] * s->i[1] + s->i[2] * s->i[2]);
+        s->e_fault += w0 - w1;
+    }
+    return 1;
+}
+
 /* Process everything due at the current time and angle. Returns 1 if the circuit changed. */
 static int process_due(const bc_plant_params *p, bc_plant_state *s)
 {
-    int changed = 0;
+    int changed = faults_apply(p, s);
     for (int x = 0; x < 3; ++x) {
         if (s->edge_to[x] >= 0 && s->edge_t[x] <= s->t) {
             s->des[x] = s->edge_to[x];
@@ -921,7 +1005,7 @@ static int process_due(const bc_plant_params *p, bc_plant_state *s)
         }
     }
     while (s->hq_n > 0 && s->hq_t[0] <= s->t) {
-        hall_output_toggle(s, s->hq_code[0], s->hq_t[0]);
+        hall_output_toggle(p, s, s->hq_code[0], s->hq_t[0]);
         memmove(&s->hq_t[0], &s->hq_t[1], (BC_HALL_QUEUE - 1) * sizeof s->hq_t[0]);
         memmove(&s->hq_code[0], &s->hq_code[1], (BC_HALL_QUEUE - 1) * sizeof s->hq_code[0]);
         s->hq_n -= 1;
@@ -976,6 +1060,8 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
         double tg = next_gate_time(p, s);
         if (tg < t_stop) t_stop = tg;
         if (s->hq_n > 0 && s->hq_t[0] < t_stop) t_stop = s->hq_t[0];
+        double tf = next_fault_time(p, s);
+        if (tf < t_stop) t_stop = tf;
         if (s->t + hmax < t_stop) t_stop = s->t + hmax;
         double th_ev = 0.0;
         double ha = angle_event(p, s, &th_ev);

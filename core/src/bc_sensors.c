@@ -16,6 +16,13 @@ int bc_sensor_init(const bc_sensor_params *p, bc_sensor_state *s)
     if (!finite_nonneg(p->i_noise) || !finite_nonneg(p->i_lsb) || !isfinite(p->v_gain) || !isfinite(p->v_offset) ||
         !finite_nonneg(p->v_noise) || !finite_nonneg(p->v_lsb) || !(isfinite(p->f_tick) && p->f_tick > 0.0))
         return BC_ERR_PARAM;
+    for (int j = 0; j < BC_FAULT_MAX; ++j) {
+        const bc_fault *f = &p->fault[j];
+        if (f->kind == BC_FAULT_NONE) continue;
+        if ((f->kind != BC_FAULT_CURRENT_OFFSET && f->kind != BC_FAULT_CURRENT_LOSS) || f->phase < 0 || f->phase > 2 ||
+            isnan(f->t_on) || isnan(f->t_off) || !(f->t_off > f->t_on) || !isfinite(f->value))
+            return BC_ERR_PARAM;
+    }
     s->rng = p->seed ^ 0x9E3779B97F4A7C15ull;
     if (s->rng == 0u) s->rng = 1u;
     s->has_spare = 0;
@@ -63,6 +70,12 @@ void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_p
         if (p->i_mask & (1u << x)) {
             double v = p->i_gain[x] * ps->i[x] + p->i_offset[x];
             if (p->i_noise > 0.0) v += p->i_noise * normal(s);
+            for (int j = 0; j < BC_FAULT_MAX; ++j) {
+                const bc_fault *f = &p->fault[j];
+                if (f->phase != x || !(ps->t >= f->t_on && ps->t < f->t_off)) continue;
+                if (f->kind == BC_FAULT_CURRENT_OFFSET) v += f->value;
+                if (f->kind == BC_FAULT_CURRENT_LOSS) v = 0.0;
+            }
             in->i_abc[x] = (float)quantise(v, p->i_lsb);
         } else {
             in->i_abc[x] = 0.0f;

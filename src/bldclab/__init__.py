@@ -21,7 +21,7 @@ from .motor import (
     Trapezoid,
 )
 from .results import Metrics, SimResult
-from .sim import Scenario, simulate
+from .sim import Fault, Scenario, simulate
 
 __all__ = [
     "BackEmf",
@@ -29,6 +29,7 @@ __all__ = [
     "Cogging",
     "Control",
     "Drive",
+    "Fault",
     "Fourier",
     "Inverter",
     "Mechanics",

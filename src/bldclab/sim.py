@@ -23,9 +23,52 @@ from .errors import BldclabError
 from .motor import Drive
 from .results import Metrics, SimResult
 
-__all__ = ["Scenario", "simulate"]
+__all__ = ["Fault", "Scenario", "simulate"]
 
 Profile = float | ArrayLike | Callable[[NDArray[np.float64]], ArrayLike] | None
+
+_FAULT_KINDS = {"phase_open": (1, "plant"), "hall_stuck": (2, "plant"), "hall_glitch": (3, "plant"),
+                "current_offset": (4, "sensors"), "current_loss": (5, "sensors")}
+_MAX_FAULTS = 4
+
+
+@dataclass(frozen=True)
+class Fault:
+    """A fault injected during a run, active on ``[t_on, t_off)``.
+
+    Parameters
+    ----------
+    kind : {"phase_open", "hall_stuck", "hall_glitch", "current_offset", "current_loss"}
+        ``phase_open``: the phase's wire breaks (no current through switch or diode; a current flowing at ``t_on``
+        is lost in an arc, booked as ``meta["stats"]["e_fault"]``); ``hall_stuck``: the phase's Hall sensor reads
+        ``value`` (0 or 1); ``hall_glitch``: it reads inverted; ``current_offset``: the phase's current sensor reads
+        ``value`` A more; ``current_loss``: it reads 0. A DC-bus sag is a ``Scenario.v_dc`` profile; a misplaced
+        Hall edge is ``Sensors.hall_error``.
+    phase : {"a", "b", "c"}
+        Phase (or its sensor).
+    t_on, t_off : float
+        Start and end (s); ``t_off`` defaults to never.
+    value : float
+        Stuck level (0/1) or offset (A).
+    """
+
+    kind: str
+    phase: str
+    t_on: float
+    t_off: float = math.inf
+    value: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in _FAULT_KINDS:
+            raise BldclabError("fault.kind", f"must be one of {', '.join(_FAULT_KINDS)}, got {self.kind!r}")
+        if self.phase not in ("a", "b", "c"):
+            raise BldclabError("fault.phase", f"must be 'a', 'b' or 'c', got {self.phase!r}")
+        _check_scalar("fault.t_on", self.t_on)
+        if not (isinstance(self.t_off, int | float) and not math.isnan(self.t_off) and self.t_off > self.t_on):
+            raise BldclabError("fault.t_off", f"must be after t_on ({self.t_on}), got {self.t_off}")
+        _check_scalar("fault.value", self.value)
+        if self.kind == "hall_stuck" and self.value not in (0.0, 1.0):
+            raise BldclabError("fault.value", f"a stuck Hall sensor reads 0 or 1, got {self.value}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,6 +111,8 @@ class Scenario:
         Metric window (t0, t1) in s; ``None``: no metrics.
     h_max : float
         Longest integration step (s); 0: half a PWM period (events set the steps anyway).
+    faults : tuple of Fault
+        Faults injected during the run (at most four in the plant and four in the sensors).
     """
 
     duration: float
@@ -85,6 +130,7 @@ class Scenario:
     trace: bool = True
     window: tuple[float, float] | None = None
     h_max: float = 0.0
+    faults: tuple[Fault, ...] = ()
 
     def __post_init__(self) -> None:
         _check_scalar("scenario.duration", self.duration, positive=True)
@@ -106,6 +152,11 @@ class Scenario:
         _check_scalar("scenario.h_max", self.h_max)
         if self.h_max < 0:
             raise BldclabError("scenario.h_max", "must be >= 0")
+        if not all(isinstance(f, Fault) for f in self.faults):
+            raise BldclabError("scenario.faults", "must be a tuple of bldclab.Fault")
+        for where in ("plant", "sensors"):
+            if sum(_FAULT_KINDS[f.kind][1] == where for f in self.faults) > _MAX_FAULTS:
+                raise BldclabError("scenario.faults", f"at most {_MAX_FAULTS} faults in the {where}")
         if self.window is not None:
             if len(self.window) != 2:
                 raise BldclabError("scenario.window", "must be (t0, t1) in seconds")
@@ -248,6 +299,17 @@ def simulate(drive: Drive, control: Control, scenario: Scenario) -> SimResult:
 
     plant = _plant_params(drive, 0 if imposed else 1, scenario.h_max, keep)
     sensors = _sensor_params(drive)
+    slots = {"plant": 0, "sensors": 0}
+    for f in scenario.faults:
+        code, where = _FAULT_KINDS[f.kind]
+        rec = plant if where == "plant" else sensors
+        j = slots[where]
+        slots[where] += 1
+        rec["fault"]["kind"][0, j] = code
+        rec["fault"]["phase"][0, j] = "abc".index(f.phase)
+        rec["fault"]["t_on"][0, j] = f.t_on
+        rec["fault"]["t_off"][0, j] = f.t_off
+        rec["fault"]["value"][0, j] = f.value
     info = c.controllers[control.c_name]
     cparams = control.c_params(drive, c, keep, n)
     cstate = c.opaque(info.state)
@@ -331,7 +393,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario) -> SimResult:
         "scenario": _describe_scenario(scenario),
         "samples": n,
         "stats": {"steps": int(plant_st["n_steps"]), "events": int(plant_st["n_events"]),
-                  "plant_flags": int(plant_st["flags"])},
+                  "plant_flags": int(plant_st["flags"]), "e_fault": float(plant_st["e_fault"])},
         "final": {"t": float(plant_st["t"]), "i": [float(v) for v in plant_st["i"]],
                   "theta_e": float(plant_st["theta"]), "omega_m": float(plant_st["omega"])},
     }

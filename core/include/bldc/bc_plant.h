@@ -79,6 +79,24 @@ enum {
 #define BC_HALL_QUEUE 8
 #define BC_PLANT_NW 12 /* functions watched for sign changes inside a step (diodes, open phases, speed) */
 
+/* Faults the plant injects (bc_plant_params.fault): each active on [t_on, t_off). */
+#define BC_FAULT_MAX 4
+#define BC_FAULT_NONE 0
+#define BC_FAULT_PHASE_OPEN 1  /* phase `phase` disconnected (broken wire): no current through switch or diode */
+#define BC_FAULT_HALL_STUCK 2  /* Hall sensor `phase` reads `value` (0 or 1) */
+#define BC_FAULT_HALL_GLITCH 3 /* Hall sensor `phase` reads inverted */
+/* ... and the sensor chain injects (bc_sensor_params.fault): */
+#define BC_FAULT_CURRENT_OFFSET 4 /* current sensor of phase `phase` reads `value` A more */
+#define BC_FAULT_CURRENT_LOSS 5   /* current sensor of phase `phase` reads 0 (lost) */
+
+typedef struct {
+    int32_t kind;  /* BC_FAULT_* */
+    int32_t phase; /* phase or sensor index 0..2 */
+    double t_on;   /* start, s */
+    double t_off;  /* end, s (HUGE_VAL: permanent) */
+    double value;  /* kind-specific value */
+} bc_fault;
+
 /* Plant flags (bc_plant_state.flags). */
 #define BC_PLANT_BAD_DUTY 0x1u   /* a leg command had a NaN or out-of-range duty (treated as clamped / 0) */
 #define BC_PLANT_CHATTER 0x2u    /* too many events at one instant; the integrator forced progress */
@@ -111,6 +129,8 @@ typedef struct {
     double hall_delay;      /* delay of the edges, s */
     /* numerics */
     double h_max;           /* longest RK4 step, s (<= 0: half a PWM period) */
+    /* injected faults */
+    bc_fault fault[BC_FAULT_MAX];
 } bc_plant_params;
 
 /* Instantaneous quantities at the current state (for sensors and the trace). */
@@ -168,7 +188,10 @@ typedef struct {
     bc_emf_piece piece[3];  /* current back-EMF piece per phase (bounds in the global angle frame) */
     bc_hall_seg hseg[3];    /* current Hall interval per sensor */
     int32_t hall_raw;       /* Hall code at the sensors now */
-    int32_t hall_out;       /* Hall code the controller sees (after the delay) */
+    int32_t hall_true;      /* Hall code after the sensors' delay, before faults */
+    int32_t hall_out;       /* Hall code the controller sees (after the delay and the sensor faults) */
+    int32_t open_fault;     /* bit x: phase x disconnected now */
+    double e_fault;         /* magnetic energy lost when a phase with current was disconnected, J */
     uint32_t n_edges;       /* edges seen by the controller */
     double t_edge;          /* time of the last edge seen, s */
     int32_t hq_n;           /* delayed edges waiting */

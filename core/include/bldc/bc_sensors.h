@@ -29,6 +29,7 @@ typedef struct {
     double v_lsb;        /* quantisation step, V (0: none) */
     double f_tick;       /* capture timer frequency, Hz */
     uint64_t seed;       /* noise generator seed */
+    bc_fault fault[BC_FAULT_MAX]; /* sensor faults (BC_FAULT_CURRENT_*), each active on [t_on, t_off) */
 } bc_sensor_params;
 
 typedef struct {
