@@ -31,7 +31,8 @@ SCENARIOS = ("run", "edge", "invalid", "nan")
 
 def controller_sources() -> list[Path]:
     """Core sources that run on the MCU: everything but the plant side and the host binding."""
-    return sorted(p for p in (CORE / "src").glob("*.c") if p.name not in PLANT_SIDE and not p.name.startswith("bc_bind"))
+    srcs = (CORE / "src").glob("*.c")
+    return sorted(p for p in srcs if p.name not in PLANT_SIDE and not p.name.startswith("bc_bind"))
 
 
 def harness_names() -> list[str]:
@@ -40,8 +41,10 @@ def harness_names() -> list[str]:
 
 
 def cost_names() -> list[str]:
-    text = (CORE / "firmware" / "cost.c").read_text()
-    return re.findall(r'\{"(\w+)", \w+_init, \w+_step\}', text)
+    """Targets of the host tools (core/firmware/targets.c)."""
+    text = (CORE / "firmware" / "targets.c").read_text()
+    names = re.findall(r'\{"(\w+)", [A-Z_| ]+, \w+_init, \w+_step\}', text)
+    return [n for n in names if n != "canary"]  # the canary exists only in the test of the fuzz checks
 
 
 def arm_sizes(tmp: Path) -> dict[str, tuple[int, int]]:
@@ -63,7 +66,8 @@ def arm_sizes(tmp: Path) -> dict[str, tuple[int, int]]:
 def instruction_counts(tmp: Path, n: int) -> dict[str, dict[str, float]]:
     exe = tmp / "cost"
     subprocess.run(["cc", "-O2", "-g", *WARN[:1], f"-I{CORE / 'include'}", str(CORE / "firmware" / "cost.c"),
-                    *map(str, controller_sources()), "-lm", "-o", str(exe)], check=True)
+                    str(CORE / "firmware" / "targets.c"), *map(str, controller_sources()), "-lm", "-o", str(exe)],
+                   check=True)
     out: dict[str, dict[str, float]] = {}
     for name in cost_names():
         out[name] = {}
@@ -73,7 +77,7 @@ def instruction_counts(tmp: Path, n: int) -> dict[str, dict[str, float]]:
                            check=True, capture_output=True)
             ann = subprocess.run(["callgrind_annotate", "--inclusive=yes", str(cg)], check=True, capture_output=True,
                                  text=True).stdout
-            m = re.search(rf"^\s*([\d,]+)\s+\([^)]*\)\s+\S*cost\.c:{name}_step\b", ann, flags=re.M)
+            m = re.search(rf"^\s*([\d,]+)\s+\([^)]*\)\s+\S*targets\.c:{name}_step\b", ann, flags=re.M)
             if not m:
                 raise RuntimeError(f"no callgrind line for {name}_step")
             out[name][sc] = int(m.group(1).replace(",", "")) / n

@@ -39,7 +39,8 @@ def test_cost_harness_runs_every_scenario(tmp_path):
     require_tool("cc")
     exe = tmp_path / "cost"
     subprocess.run(["cc", "-O2", "-I", str(fw.CORE / "include"), str(fw.CORE / "firmware" / "cost.c"),
-                    *map(str, fw.controller_sources()), "-lm", "-o", str(exe)], check=True)
+                    str(fw.CORE / "firmware" / "targets.c"), *map(str, fw.controller_sources()), "-lm", "-o", str(exe)],
+                   check=True)
     for name in fw.cost_names():
         for sc in fw.SCENARIOS:
             out = subprocess.run([str(exe), name, sc, "2000"], check=True, capture_output=True, text=True).stdout

@@ -5,50 +5,16 @@
  *   edge     a Hall edge at every sample (commutation every step)
  *   invalid  invalid Hall codes (safe-state path)
  *   nan      non-finite measurements (input-validation path)
- * The step function's inclusive instruction count divided by N is the cost per step; the worst scenario is the
- * figure that matters for a real-time budget.
+ * The target's step (targets.c) inclusive instruction count divided by N is the cost per step; the worst scenario is
+ * the figure that matters for a real-time budget.
  */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "bldc/bc_hall.h"
-#include "bldc/bc_openloop.h"
-#include "bldc/bc_pi.h"
 #include "bldc/bc_types.h"
-
-typedef struct {
-    const char *name;
-    int (*init)(void);
-    void (*step)(const bc_ctrl_in *in, bc_ctrl_out *out);
-} entry;
-
-static bc_sixv_params sixv_p = {BC_SIXV_HIGH};
-static bc_sixv_state sixv_s;
-static int sixv_init(void) { return bc_sixv_init(&sixv_p, &sixv_s); }
-__attribute__((noinline)) static void sixv_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sixv_step(&sixv_p, &sixv_s, in, out); }
-
-static bc_hall_params hall_p = {10e6f, 5.0f, 0.0f};
-static bc_hall_state hall_s;
-static int hall_init(void) { return bc_hall_init(&hall_p, &hall_s); }
-__attribute__((noinline)) static void hall_step(const bc_ctrl_in *in, bc_ctrl_out *out)
-{
-    bc_hall_out h;
-    bc_hall_step(&hall_p, &hall_s, in, &h);
-    out->diag[0] = h.theta;
-}
-
-static bc_pi_params pi_p = {0.47f, 314.0f, 35.7e-6f, -48.0f, 48.0f};
-static bc_pi_state pi_s;
-static int pi_init(void) { return bc_pi_init(&pi_p, &pi_s); }
-__attribute__((noinline)) static void pi_step(const bc_ctrl_in *in, bc_ctrl_out *out) { out->diag[0] = bc_pi_step(&pi_p, &pi_s, in->ref - in->i_abc[0], 0.0f); }
-
-static const entry ENTRIES[] = {
-    {"sixv", sixv_init, sixv_step},
-    {"hall", hall_init, hall_step},
-    {"pi", pi_init, pi_step},
-};
+#include "targets.h"
 
 static void make_input(const char *scenario, long k, bc_ctrl_in *in)
 {
@@ -85,9 +51,10 @@ int main(int argc, char **argv)
         return 2;
     }
     long n = atol(argv[3]);
-    for (size_t j = 0; j < sizeof ENTRIES / sizeof ENTRIES[0]; ++j) {
-        if (strcmp(ENTRIES[j].name, argv[1]) != 0) continue;
-        if (ENTRIES[j].init() != BC_OK) {
+    for (int j = 0; j < bc_fw_n_targets; ++j) {
+        const bc_fw_target *tg = &bc_fw_targets[j];
+        if (strcmp(tg->name, argv[1]) != 0) continue;
+        if (tg->init() != BC_OK) {
             fprintf(stderr, "init failed\n");
             return 1;
         }
@@ -97,7 +64,7 @@ int main(int argc, char **argv)
         double sink = 0.0;
         for (long k = 0; k < n; ++k) {
             memset(&out, 0, sizeof out);
-            ENTRIES[j].step(&inputs[k % 1024], &out);
+            tg->step(&inputs[k % 1024], &out);
             sink += (double)out.leg[0].duty + (double)out.diag[0];
         }
         printf("%s %s %ld %g\n", argv[1], argv[2], n, sink);

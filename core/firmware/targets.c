@@ -1,0 +1,52 @@
+/* targets.c - every controller (and the blocks they are built of) with working parameters, for host tools. */
+#include "targets.h"
+
+#include <math.h>
+
+#include "bldc/bc_hall.h"
+#include "bldc/bc_openloop.h"
+#include "bldc/bc_pi.h"
+
+/* The host tools call each target through a pointer: keep the steps out of line so they are measurable. */
+#define STEP_FN __attribute__((noinline)) static void
+
+static bc_sixv_params sixv_p = {BC_SIXV_HIGH};
+static bc_sixv_state sixv_s;
+static int sixv_init(void) { return bc_sixv_init(&sixv_p, &sixv_s); }
+STEP_FN sixv_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sixv_step(&sixv_p, &sixv_s, in, out); }
+
+static bc_hall_params hall_p = {10e6f, 5.0f, 0.0f};
+static bc_hall_state hall_s;
+static int hall_init(void) { return bc_hall_init(&hall_p, &hall_s); }
+STEP_FN hall_step(const bc_ctrl_in *in, bc_ctrl_out *out)
+{
+    bc_hall_out h;
+    bc_hall_step(&hall_p, &hall_s, in, &h);
+    out->diag[0] = h.theta;
+    out->diag[1] = h.omega_e;
+}
+
+static bc_pi_params pi_p = {0.47f, 314.0f, 35.7e-6f, -48.0f, 48.0f};
+static bc_pi_state pi_s;
+static int pi_init(void) { return bc_pi_init(&pi_p, &pi_s); }
+STEP_FN pi_step(const bc_ctrl_in *in, bc_ctrl_out *out) { out->diag[0] = bc_pi_step(&pi_p, &pi_s, in->ref - in->i_abc[0], 0.0f); }
+
+#ifdef BC_FUZZ_CANARY
+/* A deliberately wrong controller (built only by the test that proves the fuzz checks can fail): on a NaN bus it
+ * emits a duty above 1 instead of the safe state. */
+STEP_FN canary_step(const bc_ctrl_in *in, bc_ctrl_out *out)
+{
+    bc_sixv_step(&sixv_p, &sixv_s, in, out);
+    if (isnan(in->v_dc)) out->leg[0].duty = 2.0f;
+}
+#endif
+
+const bc_fw_target bc_fw_targets[] = {
+#ifdef BC_FUZZ_CANARY
+    {"canary", BC_USES_HALL, sixv_init, canary_step},
+#endif
+    {"sixv", BC_USES_HALL, sixv_init, sixv_step},
+    {"hall", BC_IS_BLOCK, hall_init, hall_step},
+    {"pi", BC_IS_BLOCK, pi_init, pi_step},
+};
+const int bc_fw_n_targets = (int)(sizeof bc_fw_targets / sizeof bc_fw_targets[0]);

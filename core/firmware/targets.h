@@ -1,0 +1,26 @@
+/*
+ * targets.h - the controllers as host tools see them (instruction counts, fuzzing): each with working
+ * parameters, an init, a step, and the inputs it depends on (so a checker knows when the safe state is required).
+ * Adding a controller: one entry in targets.c.
+ */
+#ifndef BC_FW_TARGETS_H
+#define BC_FW_TARGETS_H
+
+#include "bldc/bc_types.h"
+
+#define BC_USES_HALL 0x1u     /* an invalid Hall code must give the safe state */
+#define BC_USES_CURRENT 0x2u  /* a non-finite current must give the safe state */
+#define BC_USES_VDC 0x4u      /* a non-finite or non-positive DC bus must give the safe state */
+#define BC_IS_BLOCK 0x8u      /* a building block (not a controller): its own checks in diag */
+
+typedef struct {
+    const char *name;
+    unsigned uses;
+    int (*init)(void);
+    void (*step)(const bc_ctrl_in *in, bc_ctrl_out *out);
+} bc_fw_target;
+
+extern const bc_fw_target bc_fw_targets[];
+extern const int bc_fw_n_targets;
+
+#endif
