@@ -874,6 +874,7 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     }
     pieces_locate(p, s);
     hall_locate(p, s);
+    for (int j = 0; j < BC_FAULT_MAX; ++j) s->has_faults |= p->fault[j].kind != BC_FAULT_NONE;
     s->hall_true = s->hall_raw;
     s->hall_out = hall_visible(p, s, t0);
     s->t_edge = -HUGE_VAL;
@@ -885,9 +886,15 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
 
 void bc_plant_set_inputs(const bc_plant_params *p, bc_plant_state *s, double omega, double tau_load, double v_src)
 {
-    s->tau_load = isfinite(tau_load) ? tau_load : 0.0;
-    s->v_src = isfinite(v_src) ? v_src : 0.0;
-    if (p->mech == BC_MECH_IMPOSED && isfinite(omega)) {
+    double tl = isfinite(tau_load) ? tau_load : 0.0;
+    double vs = isfinite(v_src) ? v_src : 0.0;
+    int imposed = p->mech == BC_MECH_IMPOSED && isfinite(omega);
+    if (tl == s->tau_load && vs == s->v_src && (!imposed || omega == s->omega)) {
+        return; /* nothing changed: the cached derivative stays valid */
+    }
+    s->tau_load = tl;
+    s->v_src = vs;
+    if (imposed) {
         s->omega = omega;
         int nd = omega < 0.0 ? -1 : (omega > 0.0 ? 1 : s->dir);
         if (nd != s->dir) {
@@ -903,6 +910,7 @@ void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg
 {
     double th = bc_plant_t_half(p);
     double t0 = s->t;
+    int changed = 0;
     s->t_half = t0;
     s->rising = rising ? 1 : 0;
     for (int x = 0; x < 3; ++x) {
@@ -945,15 +953,18 @@ void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg
                 }
             }
         }
-        gate_update(p, s, x, t0);
+        changed |= gate_update(p, s, x, t0);
     }
-    resolve(p, s);
+    if (changed) {
+        resolve(p, s); /* otherwise the circuit and its cached derivative are unchanged */
+    }
 }
 
 /* Next start or end of an injected fault after the current time (HUGE_VAL if none). */
 static double next_fault_time(const bc_plant_params *p, const bc_plant_state *s)
 {
     double tn = HUGE_VAL;
+    if (!s->has_faults) return tn;
     for (int j = 0; j < BC_FAULT_MAX; ++j) {
         const bc_fault *f = &p->fault[j];
         if (f->kind == BC_FAULT_NONE) continue;
@@ -968,6 +979,7 @@ static double next_fault_time(const bc_plant_params *p, const bc_plant_state *s)
  * Returns 1 if the circuit changed. */
 static int faults_apply(const bc_plant_params *p, bc_plant_state *s)
 {
+    if (!s->has_faults) return 0;
     int32_t open = 0;
     for (int j = 0; j < BC_FAULT_MAX; ++j) {
         const bc_fault *f = &p->fault[j];
@@ -1163,8 +1175,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
         s->hold_open = 0;
         track_extremes(s);
         if (angle_step) {
-            angles_cross(p, s, th_ev);
-            s->k1_valid = 0;
+            angles_cross(p, s, th_ev); /* the shapes are continuous: the cached derivative stays valid */
         }
         wrap_angle(p, s);
     }

@@ -191,6 +191,7 @@ typedef struct {
     int32_t hall_true;      /* Hall code after the sensors' delay, before faults */
     int32_t hall_out;       /* Hall code the controller sees (after the delay and the sensor faults) */
     int32_t open_fault;     /* bit x: phase x disconnected now */
+    int32_t has_faults;     /* any fault configured (checked once at init) */
     double e_fault;         /* magnetic energy lost when a phase with current was disconnected, J */
     uint32_t n_edges;       /* edges seen by the controller */
     double t_edge;          /* time of the last edge seen, s */
