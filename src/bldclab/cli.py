@@ -30,6 +30,8 @@ import numpy as np
 from . import __version__, analytic
 from .catalog import load, names
 from .errors import BldclabError
+from .identify import configure_cli as _configure_identify
+from .identify import run_cli as _run_identify
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -262,6 +264,7 @@ def _run_analyze(args: argparse.Namespace) -> int:
 COMMANDS: tuple[Command, ...] = (
     Command("analyze", "paper 1 closed forms for a motor: Table I, characteristics, Figs 7-8",
             _configure_analyze, _run_analyze),
+    Command("identify", "back-EMF tables from a constant-speed waveform (paper 2)", _configure_identify, _run_identify),
 )
 
 
