@@ -96,6 +96,8 @@ static const bc_field_desc FIELDS[] = {
     F(bc_sim_metrics, tau_max, "f8"),
     F(bc_sim_metrics, tau_ma_min, "f8"),
     F(bc_sim_metrics, tau_ma_max, "f8"),
+    F(bc_sim_metrics, tau_s_min, "f8"),
+    F(bc_sim_metrics, tau_s_max, "f8"),
     F(bc_sim_metrics, i_peak, "f8"),
     F(bc_sim_metrics, n_ma, "i4"),
     F(bc_sim_metrics, state, "i4"),

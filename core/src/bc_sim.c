@@ -128,6 +128,8 @@ static void metric_start(const bc_sim_config *cfg, bc_sim_state *s)
     s->m.tau_max = po.tau_e;
     s->m.tau_ma_min = HUGE_VAL;
     s->m.tau_ma_max = -HUGE_VAL;
+    s->m.tau_s_min = HUGE_VAL;
+    s->m.tau_s_max = -HUGE_VAL;
     for (int x = 0; x < 3; ++x) s->m.i_peak[x] = fabs(ps->i[x]);
     s->m.n_ma = 0;
     s->ma_have = 0;
@@ -205,6 +207,14 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
             s->pending[x] = co.leg[x];
         }
         bc_plant_set_half(pp, ps, cmd, (k % 2) == 0);
+
+        /* torque at the sample instant, inside the metric window */
+        if (s->m.state == 1) {
+            bc_plant_out po;
+            bc_plant_output(pp, ps, &po);
+            if (po.tau_e < s->m.tau_s_min) s->m.tau_s_min = po.tau_e;
+            if (po.tau_e > s->m.tau_s_max) s->m.tau_s_max = po.tau_e;
+        }
 
         /* half-period torque mean for the moving average */
         s->half_tau0 = ps->acc[BC_ACC_TAU];

@@ -2,8 +2,10 @@
 
 An operating point is measured as on a dynamometer test bench: the speed is imposed, the controller runs from
 rest until the transients have died out, then the torque is averaged over whole electrical periods. Ripple is
-reported two ways: max - min of the instantaneous torque, and max - min of its moving average over one PWM
-period (the PWM component removed).
+reported three ways: max - min of the instantaneous torque; of its moving average over one PWM period; and of its
+values at the controller samples (carrier valleys and peaks, where the currents cross their PWM-period averages):
+the last removes the PWM component without flattening commutation spikes a few PWM periods wide, and is the one to
+compare with closed forms that assume ideal current regulation.
 """
 
 from __future__ import annotations
@@ -30,9 +32,10 @@ class PointResult:
         Mechanical speed (rad/s).
     speed_pu : float
         Speed in per unit of ``Omega_0`` (-).
-    tau_mean, ripple, ripple_ma : float
-        Mean torque, max - min of the torque, max - min of its one-PWM-period moving average (N m).
-    tau_mean_pu, ripple_pu, ripple_ma_pu : float
+    tau_mean, ripple, ripple_ma, ripple_sampled : float
+        Mean torque, max - min of the torque, of its one-PWM-period moving average, and of its values at the
+        controller samples (PWM-free: :class:`~bldclab.results.Metrics`) (N m).
+    tau_mean_pu, ripple_pu, ripple_ma_pu, ripple_sampled_pu : float
         The same in per unit of ``T_N`` (-).
     efficiency : float
         Shaft power over DC power (-).
@@ -45,9 +48,11 @@ class PointResult:
     tau_mean: float
     ripple: float
     ripple_ma: float
+    ripple_sampled: float
     tau_mean_pu: float
     ripple_pu: float
     ripple_ma_pu: float
+    ripple_sampled_pu: float
     efficiency: float
     metrics: Metrics
 
@@ -99,6 +104,7 @@ def steady_state(drive: Drive, control: Control, speed: float, ref: Profile, *, 
     assert m is not None
     T_N = drive.T_N
     point = PointResult(speed=speed, speed_pu=speed / drive.Omega_0, tau_mean=m.tau_mean, ripple=m.ripple,
-                        ripple_ma=m.ripple_ma, tau_mean_pu=m.tau_mean / T_N, ripple_pu=m.ripple / T_N,
-                        ripple_ma_pu=m.ripple_ma / T_N, efficiency=m.efficiency, metrics=m)
+                        ripple_ma=m.ripple_ma, ripple_sampled=m.ripple_sampled, tau_mean_pu=m.tau_mean / T_N,
+                        ripple_pu=m.ripple / T_N, ripple_ma_pu=m.ripple_ma / T_N,
+                        ripple_sampled_pu=m.ripple_sampled / T_N, efficiency=m.efficiency, metrics=m)
     return point, res

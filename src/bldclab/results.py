@@ -35,7 +35,15 @@ class Metrics:
     tau_ma_min, tau_ma_max : float
         Extremes of the torque averaged over one PWM period (N m); nan if the window is under two samples.
     ripple_ma : float
-        ``tau_ma_max - tau_ma_min`` (N m): the ripple without the PWM component.
+        ``tau_ma_max - tau_ma_min`` (N m). A moving average removes the PWM component but also flattens features
+        shorter than a few PWM periods, such as commutation spikes.
+    tau_s_min, tau_s_max : float
+        Extremes of the torque at the controller samples (carrier valleys and peaks), N m. There the phase currents
+        cross their PWM-period averages, so these samples carry no PWM ripple while keeping the sampling
+        resolution.
+    ripple_sampled : float
+        ``tau_s_max - tau_s_min`` (N m): the torque ripple without its PWM component (the measure to compare with
+        closed forms that assume ideal current regulation).
     tau_std : float
         Root-mean-square deviation of the torque from its mean (N m).
     omega_mean : float
@@ -65,6 +73,9 @@ class Metrics:
     tau_ma_min: float
     tau_ma_max: float
     ripple_ma: float
+    tau_s_min: float
+    tau_s_max: float
+    ripple_sampled: float
     tau_std: float
     omega_mean: float
     p_src: float
@@ -107,7 +118,8 @@ class Metrics:
         return cls(
             t0=float(m["t0"]), t1=float(m["t1"]), tau_mean=tau_mean, tau_min=float(m["tau_min"]),
             tau_max=float(m["tau_max"]), ripple=float(m["tau_max"] - m["tau_min"]), tau_ma_min=ma_min,
-            tau_ma_max=ma_max, ripple_ma=ma_max - ma_min,
+            tau_ma_max=ma_max, ripple_ma=ma_max - ma_min, tau_s_min=float(m["tau_s_min"]),
+            tau_s_max=float(m["tau_s_max"]), ripple_sampled=float(m["tau_s_max"] - m["tau_s_min"]),
             tau_std=math.sqrt(max(E["tau2"] / dt - tau_mean**2, 0.0)), omega_mean=omega_integral / dt,
             p_src=p["src"], p_Rsrc=p["Rsrc"], p_cu=p["cu"], p_sw=p["sw"], p_diode=p["diode"], p_emf=p["emf"],
             p_cog=p["cog"], p_fric=p["fric"], p_load=p["load"], dW_L=dW_L, dW_kin=dW_kin,

@@ -81,6 +81,8 @@ typedef struct {
     double tau_min, tau_max; /* extremes of the instantaneous torque, N m */
     double tau_ma_min;       /* extremes of the one-PWM-period moving average of the torque, N m */
     double tau_ma_max;
+    double tau_s_min;        /* extremes of the torque at the samples (carrier valleys and peaks), N m: there the */
+    double tau_s_max;        /* currents cross their PWM-period average, so this is the ripple without PWM */
     double i_peak[3];        /* largest |i_x|, A */
     int32_t n_ma;            /* moving-average values seen */
     int32_t state;           /* 0 not started, 1 running, 2 done */
