@@ -38,6 +38,18 @@ static const bc_pi_params P = {0.47f, 314.0f, 35.7e-6f, -48.0f, 48.0f};
 static bc_pi_state S;
 #define INIT() bc_pi_init(&P, &S)
 #define STEP(in, out) ((out)->diag[0] = bc_pi_step(&P, &S, (in)->ref - (in)->i_abc[0], 0.0f))
+#elif defined(BC_FW_SIXSTEP)
+#include "params.h"
+static const bc_sixstep_params P = HTM_SIXSTEP_PARAMS(0);
+static bc_sixstep_state S;
+#define INIT() bc_sixstep_init(&P, &S)
+#define STEP(in, out) bc_sixstep_step(&P, &S, in, out)
+#elif defined(BC_FW_SINE)
+#include "params.h"
+static const bc_sine_params P = HTM_SINE_PARAMS;
+static bc_sine_state S;
+#define INIT() bc_sine_init(&P, &S)
+#define STEP(in, out) bc_sine_step(&P, &S, in, out)
 #else
 #define INIT() 0
 #define STEP(in, out) ((out)->diag[0] = (in)->ref)

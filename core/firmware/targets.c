@@ -6,6 +6,7 @@
 #include "bldc/bc_hall.h"
 #include "bldc/bc_openloop.h"
 #include "bldc/bc_pi.h"
+#include "params.h"
 
 /* The host tools call each target through a pointer: keep the steps out of line so they are measurable. */
 #define STEP_FN __attribute__((noinline)) static void
@@ -31,6 +32,16 @@ static bc_pi_state pi_s;
 static int pi_init(void) { return bc_pi_init(&pi_p, &pi_s); }
 STEP_FN pi_step(const bc_ctrl_in *in, bc_ctrl_out *out) { out->diag[0] = bc_pi_step(&pi_p, &pi_s, in->ref - in->i_abc[0], 0.0f); }
 
+static const bc_sixstep_params sixstep_p = HTM_SIXSTEP_PARAMS(0);
+static bc_sixstep_state sixstep_s;
+static int sixstep_init(void) { return bc_sixstep_init(&sixstep_p, &sixstep_s); }
+STEP_FN sixstep_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sixstep_step(&sixstep_p, &sixstep_s, in, out); }
+
+static const bc_sine_params sine_p = HTM_SINE_PARAMS;
+static bc_sine_state sine_s;
+static int sine_init(void) { return bc_sine_init(&sine_p, &sine_s); }
+STEP_FN sine_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sine_step(&sine_p, &sine_s, in, out); }
+
 #ifdef BC_FUZZ_CANARY
 /* A deliberately wrong controller (built only by the test that proves the fuzz checks can fail): on a NaN bus it
  * emits a duty above 1 instead of the safe state. */
@@ -46,6 +57,8 @@ const bc_fw_target bc_fw_targets[] = {
     {"canary", BC_USES_HALL, sixv_init, canary_step},
 #endif
     {"sixv", BC_USES_HALL, sixv_init, sixv_step},
+    {"sixstep", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sixstep_init, sixstep_step},
+    {"sine", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sine_init, sine_step},
     {"hall", BC_IS_BLOCK, hall_init, hall_step},
     {"pi", BC_IS_BLOCK, pi_init, pi_step},
 };

@@ -149,10 +149,14 @@ static const bc_struct_desc STRUCTS[] = {
 /* Controller providers (src/bc_bind_<name>.c): one line each. */
 extern const bc_bind_provider bc_bind_openloop_table;
 extern const bc_bind_provider bc_bind_openloop_sixv;
+extern const bc_bind_provider bc_bind_sixstep;
+extern const bc_bind_provider bc_bind_sine;
 
 static const bc_bind_provider *const PROVIDERS[] = {
     &bc_bind_openloop_table,
     &bc_bind_openloop_sixv,
+    &bc_bind_sixstep,
+    &bc_bind_sine,
 };
 
 #define N_PROVIDERS ((int32_t)(sizeof PROVIDERS / sizeof PROVIDERS[0]))

@@ -5,7 +5,7 @@ from __future__ import annotations
 __version__ = "0.1.0"
 
 from .catalog import load
-from .control import Control, OpenLoop, SixStepVoltage
+from .control import Control, OpenLoop, Sine, SixStep, SixStepVoltage
 from .errors import BldclabError
 from .motor import (
     BackEmf,
@@ -39,7 +39,9 @@ __all__ = [
     "Scenario",
     "Sensors",
     "SimResult",
+    "Sine",
     "Sinusoid",
+    "SixStep",
     "SixStepVoltage",
     "Table",
     "Trapezoid",

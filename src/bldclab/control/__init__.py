@@ -9,5 +9,7 @@ from __future__ import annotations
 
 from .base import Control
 from .openloop import OpenLoop, SixStepVoltage
+from .sine import Sine
+from .sixstep import SixStep
 
-__all__ = ["Control", "OpenLoop", "SixStepVoltage"]
+__all__ = ["Control", "OpenLoop", "Sine", "SixStep", "SixStepVoltage"]

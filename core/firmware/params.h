@@ -1,0 +1,32 @@
+/*
+ * params.h - the controllers configured for the htm-48v drive (paper 1, Table II: 8 pole pairs, 50 mOhm, 75 uH,
+ * k_phi 0.32 V s/rad, 14 kHz PWM sampled at 28 kHz), as the firmware harness and the host tools use them.
+ * Current-loop gains: bldclab.design.pi_gains(R, L, 1000 Hz, 90 deg) (phase loop: R, L; line loop: 2R, 2L).
+ */
+#ifndef BC_FW_PARAMS_H
+#define BC_FW_PARAMS_H
+
+#include "bldc/bc_sine.h"
+#include "bldc/bc_sixstep.h"
+
+#define HTM_TS 35.714286e-6f
+
+#define HTM_SIXSTEP_PARAMS(REF_TORQUE)                                                                        \
+    {.reg = BC_SIXSTEP_PRED, .chop = BC_SIXSTEP_PWMPWM, .ref_torque = (REF_TORQUE), .delay = 1, .advance = 1, \
+     .emf_ff = 1, .regen = 1, .p = 8, .ts = HTM_TS, .R = 0.05f, .L = 75e-6f, .k_e = 0.64f, .kp = 0.9425f,      \
+     .ki = 628.3f, .band = 5.0f, .i_max = 100.0f, .v_max = 96.0f, .f_tick = 10e6f, .omega_min = 6.0f,         \
+     .theta_offset = 0.0f}
+
+/* k_a of the ideal 120-degree trapezoid at 12 points over one electrical period (multiples of 30 degrees). */
+static const float HTM_EMF_12[12] = {0.0f,  0.32f,  0.32f,  0.32f,  0.32f,  0.32f,
+                                     0.0f, -0.32f, -0.32f, -0.32f, -0.32f, -0.32f};
+
+#define HTM_SINE_PARAMS                                                                                         \
+    {.p = 8, .R = 0.05f, .L = 75e-6f, .k_phi = 0.32f, .k_1 = 0.3891f, .ts = HTM_TS, .kp = 0.4712f, .ki = 314.2f, \
+     .v_max = 96.0f, .i_s_max = 57.7f, .i_max = 100.0f, .speed_limit = 1, .decouple = 1, .advance = 1.5f,        \
+     .limit = BC_SINE_LIMIT_HEX, .overmod = 0, .emf_ff = 1, .emf_n = 12,                                          \
+     .emf_k = {HTM_EMF_12, HTM_EMF_12, HTM_EMF_12}, .angle = BC_SINE_ANGLE_HALL, .f_tick = 10e6f,                 \
+     .omega_min = 10.0f, .theta_offset = 0.0f, .omega_on = 53.6f, .omega_off = 42.9f,                             \
+     .six = HTM_SIXSTEP_PARAMS(1), .flying_start = 0, .speed_loop = 0, .kp_w = 0.0f, .ki_w = 0.0f, .tau_max = 0.0f}
+
+#endif /* BC_FW_PARAMS_H */

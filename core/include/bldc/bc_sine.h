@@ -1,0 +1,163 @@
+/*
+ * bc_sine.h - sinusoidal current supply of a PM BLDC motor (paper 1, section V): d,q current control on the
+ * Hall-interpolated angle, min-max SVM kept in linear modulation, square-wave start (float).
+ *
+ * Axes (bc_transform.h): q along phase a's back-EMF fundamental (the torque axis), d along the rotor PM flux,
+ * 90 degrees behind q; i_d < 0 would weaken the field (not used: i_d,ref = 0). Paper 1 names its torque axis "d"
+ * ((45)); its i_d,s,ref is our i_q,ref. The Park angle is theta_d = theta - pi.
+ *
+ * One sample (T_s = half a PWM period), in this order:
+ *
+ *  1. Safety. Latched over-current trip (|i_x| > i_max on a measured or derived phase), invalid Hall code,
+ *     non-finite measurement or v_dc <= 0: all legs off (BC_FLAG_SAFE with BC_FLAG_OVERCURRENT, _HALL_INVALID or
+ *     _BAD_INPUT) and back to the start mode. Only bc_sine_init clears the over-current trip.
+ *  2. Angle and speed from bc_hall: theta(k) = theta_edge + Omega_e (t_k - t_edge), Omega_e = (pi/3) / (time
+ *     between the last two edges) (paper 1 (46)); or theta = in->theta_enc (angle = BC_SINE_ANGLE_ENCODER, a
+ *     reference for comparison). The speed is always bc_hall's. omega_m = Omega_e / p.
+ *  3. Mode. Start (square wave, bc_sixstep) until |Omega_e| >= omega_on with a valid speed; sine until
+ *     |Omega_e| < omega_off (hysteresis) or the speed becomes invalid. With flying_start the start mode first
+ *     coasts (legs off) until the rotor is known to be slower than omega_on (a valid speed below it, or no Hall
+ *     edge for (pi/3) / omega_on), so that a drive enabled on a fast-turning rotor (a dynamometer) goes straight
+ *     to the sine mode after two Hall edges instead of square-wave braking at high speed.
+ *  4. Torque reference tau: in->ref (N m), or a speed PI on omega_m (speed_loop = 1, in->omega_ref in rad/s):
+ *
+ *         tau = PI_w(omega_ref - omega_m),  |tau| <= tau_max,  anti-windup on the torque actually commanded
+ *
+ *  5. Sine mode, current references (45) and the limits that keep modulation linear:
+ *
+ *         i_q,ref = tau / (1.5 k_1)                          (45): torque of a current in phase with the
+ *                                                            fundamental k_1 (for the ideal trapezoid
+ *                                                            1.5 k_1 = 18 k_phi / pi^2, (12))
+ *         |i_q,ref| <= i_s_max = I_s,N = 2/sqrt(3) I_N        (8)
+ *         |i_q,ref| <= I_s,sat = (v_dc - 2 k_phi |omega_m|) / g(omega_e)       (speed_limit = 1)
+ *         g = sqrt(3)/2 |omega_e| L + 3/2 R      if |omega_e| L >= R / sqrt(3)
+ *         g = sqrt(3) sqrt(R^2 + (omega_e L)^2)  otherwise
+ *         i_d,ref = 0
+ *
+ *     I_s,sat is paper 1 (23) with the resistance: the peak line-to-line voltage of balanced currents of peak I in
+ *     phase with the fundamental is at most 2 k_phi |omega_m| + g I (exact for the 120-degree trapezoid when (18)
+ *     holds; for R = 0 it is (20), and I_s,sat = (23)). Where 2 k_phi |omega_m| >= v_dc, I_s,sat = 0.
+ *  6. Current PIs (bc_pi), output first:
+ *
+ *         u_d = k_p e_d + x_d + ff_d,   e_d = i_d,ref - i_d,   ff_d = R i_d,ref - omega_e L i_q,ref   (decouple)
+ *         u_q = k_p e_q + x_q + ff_q,   e_q = i_q,ref - i_q,   ff_q = R i_q,ref + omega_e L i_d,ref   (decouple)
+ *
+ *  7. Voltage angle with delay compensation: the output is applied one sample later and held for one sample, so
+ *     it acts on average 1.5 T_s after the measurement: theta_v = theta + advance Omega_e T_s (advance = 1.5).
+ *     u_abc = Clarke^-1 Park^-1(u_dq, theta_v - pi).
+ *  8. Back-EMF feed-forward (emf_ff = 1): from the per-phase shape tables (emf_n points uniform on [0, 2 pi) of
+ *     each phase's local angle, linear interpolation):
+ *
+ *         f_x = omega_m k_x(theta_v - x 2 pi/3)
+ *
+ *     so the voltage carries the shape's harmonics and the currents stay sinusoidal (paper 1 (15) assumes
+ *     sinusoidal currents).
+ *  9. Linear-modulation limit on v_abc = f_abc + k u_abc, k in [0, 1] the largest that fits:
+ *
+ *         BC_SINE_LIMIT_HEX:     max_x v_x - min_x v_x <= v_dc    (the whole linear range of min-max SVM; the
+ *                                                                 instantaneous form of paper 1 (20) <= V_N)
+ *         BC_SINE_LIMIT_CIRCLE:  |Clarke(v_abc)| <= v_dc / sqrt(3) (the hexagon's inscribed circle)
+ *
+ *     If f alone exceeds the limit it is scaled down to it (k = 0). The PIs update with the realised output:
+ *     bc_pi_update(e, u, k u) (anti-windup). overmod = 1 skips the limit (k = 1): the duties clip and the realised
+ *     voltage, taken back from the clipped duties, drives the anti-windup.
+ * 10. SVM (bc_svm): d_x = 1/2 + (v_x - (max + min)/2) / v_dc, all legs BC_LEG_PWM.
+ *
+ * Square-wave start: bc_sixstep (composed, its own parameters in `six`, re-initialised on every entry to the start
+ * mode) with the torque reference limited to |tau| <= six.k_e sqrt(3)/2 i_s_max, i.e. a square-wave current of at
+ * most I_N = sqrt(3)/2 I_s,N (paper 1's equal rms premise (7)); its flags pass through.
+ * Hand-off to sine (bumpless): the d,q integrators are set so that the first sine output is the voltage the present
+ * state needs (i_d, i_q measured, omega_m k_1 the back-EMF fundamental on q):
+ *
+ *         x_d = R i_d - omega_e L i_q - ff_d
+ *         x_q = R i_q + omega_e L i_d + omega_m k_1 - ff_q - [emf_ff] omega_m k_1
+ *
+ * diag: 0 i_d (A), 1 i_q (A), 2 i_q,ref (A; in the start mode the sine current of the same torque), 3 v_d (V),
+ *       4 v_q (V) (the applied voltage in the frame of theta_v; 0 in the start mode), 5 theta (rad, the angle
+ *       used), 6 omega_e (rad/s, Hall), 7 mode (0 square start, 1 sine).
+ */
+#ifndef BC_SINE_H
+#define BC_SINE_H
+
+#include <stdint.h>
+
+#include "bldc/bc_hall.h"
+#include "bldc/bc_pi.h"
+#include "bldc/bc_sixstep.h"
+#include "bldc/bc_transform.h"
+#include "bldc/bc_types.h"
+
+#define BC_SINE_ANGLE_HALL 0    /* bc_hall's interpolated angle (46) */
+#define BC_SINE_ANGLE_ENCODER 1 /* in->theta_enc (reference sensor) */
+
+#define BC_SINE_LIMIT_HEX 0    /* max - min of the phase references <= v_dc */
+#define BC_SINE_LIMIT_CIRCLE 1 /* |v_alpha,beta| <= v_dc / sqrt(3) */
+
+#define BC_SINE_MODE_START 0
+#define BC_SINE_MODE_SINE 1
+
+#define BC_SINE_EMF_N_MAX 4096 /* largest back-EMF table */
+
+typedef struct {
+    /* the controller's motor model */
+    int32_t p;   /* pole pairs (>= 1) */
+    float R;     /* phase resistance, Ohm (>= 0): limits, decoupling, hand-off */
+    float L;     /* inclusive phase inductance, H (> 0) */
+    float k_phi; /* half the peak line-to-line shape, V s/rad (> 0): voltage limit (23) */
+    float k_1;   /* amplitude of the back-EMF fundamental, V s/rad (> 0): (45) */
+    /* current loops */
+    float ts;       /* sampling period, s (> 0): half the PWM period */
+    float kp;       /* d,q PI proportional gain, V/A (>= 0) */
+    float ki;       /* d,q PI integral gain, V/(A s) (>= 0) */
+    float v_max;    /* bound of the d,q PI integrators, V (> 0) */
+    float i_s_max;  /* I_s,N: limit of |i_q,ref|, A (> 0) */
+    float i_max;    /* over-current trip, A (> 0) */
+    int32_t speed_limit; /* 1: |i_q,ref| <= I_s,sat above base speed ((23) with R); 0: off */
+    int32_t decouple;    /* 1: R-L feed-forward ff_d, ff_q; 0: off */
+    float advance;       /* voltage angle advance, samples (0 .. 4; 1.5 compensates delay + PWM) */
+    /* modulation */
+    int32_t limit;   /* BC_SINE_LIMIT_* */
+    int32_t overmod; /* 1: no linear limit, duties clip (explicit overmodulation); 0: linear only */
+    /* back-EMF feed-forward */
+    int32_t emf_ff;          /* 1: add f_x = omega_m k_x(theta_v - x 2 pi/3) */
+    int32_t emf_n;           /* points per table (3 .. BC_SINE_EMF_N_MAX) */
+    const float *emf_k[3];   /* k_x at local angles 2 pi j / emf_n, V s/rad (phases a, b, c) */
+    /* angle */
+    int32_t angle;      /* BC_SINE_ANGLE_* */
+    float f_tick;       /* Hall capture timer, Hz (> 0) */
+    float omega_min;    /* Hall: slower than this (electrical rad/s) the speed is invalid (> 0) */
+    float theta_offset; /* Hall angle correction, electrical rad */
+    /* square-wave start and hand-off */
+    float omega_on;         /* electrical rad/s: sine from |Omega_e| >= omega_on (> 0) */
+    float omega_off;        /* electrical rad/s: back to start below (0 <= omega_off <= omega_on) */
+    bc_sixstep_params six;  /* the start controller; ref_torque must be 1 (bc_sine passes it a torque) */
+    int32_t flying_start;   /* 1: in the start mode, coast (legs off) until the rotor is known to be slower than
+                               omega_on: a valid Hall speed below it, or no Hall edge for (pi/3) / omega_on */
+    /* optional speed loop */
+    int32_t speed_loop; /* 1: tau = PI_w(omega_ref - omega_m) */
+    float kp_w;         /* N m / (rad/s) (>= 0) */
+    float ki_w;         /* N m / rad (>= 0) */
+    float tau_max;      /* torque limit of the speed loop, N m (> 0 when speed_loop) */
+} bc_sine_params;
+
+typedef struct {
+    bc_hall_params hall_p; /* derived in init */
+    bc_hall_state hall;
+    bc_pi_params pi_p;     /* d and q loops (same gains) */
+    bc_pi_state pi_d, pi_q;
+    bc_pi_params piw_p;    /* speed loop */
+    bc_pi_state pi_w;
+    bc_sixstep_state six;  /* the start controller, re-initialised whenever the start mode is entered */
+    int32_t mode;    /* BC_SINE_MODE_* */
+    int32_t tripped; /* over-current trip latched */
+    int32_t six_run; /* start mode: the square-wave controller runs (0: coasting, flying_start) */
+    int32_t n_quiet; /* samples since the last Hall edge while coasting */
+} bc_sine_state;
+
+/* Validate the parameters (BC_ERR_PARAM) and reset the state: start mode, integrators 0, trip cleared. */
+int bc_sine_init(const bc_sine_params *p, bc_sine_state *s);
+
+/* One sample: measurements in, leg commands for the next half period and diagnostics out. */
+void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *in, bc_ctrl_out *out);
+
+#endif /* BC_SINE_H */

@@ -1,0 +1,325 @@
+/* bc_sine.c - sinusoidal current supply with square-wave start. Laws and their order in bc_sine.h. */
+#include "bldc/bc_sine.h"
+
+#include <math.h>
+
+static int finite_pos(float v) { return isfinite(v) && v > 0.0f; }
+static int finite_nonneg(float v) { return isfinite(v) && v >= 0.0f; }
+static int is_flag(int32_t v) { return v == 0 || v == 1; }
+static float clampf(float v, float lo, float hi) { return v < lo ? lo : (v > hi ? hi : v); }
+
+int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
+{
+    if (p == 0 || s == 0) return BC_ERR_PARAM;
+    if (p->p < 1 || !finite_nonneg(p->R) || !finite_pos(p->L) || !finite_pos(p->k_phi) || !finite_pos(p->k_1))
+        return BC_ERR_PARAM;
+    if (!finite_pos(p->ts) || !finite_nonneg(p->kp) || !finite_nonneg(p->ki) || !finite_pos(p->v_max) ||
+        !finite_pos(p->i_s_max) || !finite_pos(p->i_max))
+        return BC_ERR_PARAM;
+    if (!is_flag(p->speed_limit) || !is_flag(p->decouple) || !is_flag(p->overmod) || !is_flag(p->emf_ff) ||
+        !is_flag(p->speed_loop))
+        return BC_ERR_PARAM;
+    if (!(isfinite(p->advance) && p->advance >= 0.0f && p->advance <= 4.0f)) return BC_ERR_PARAM;
+    if (p->limit != BC_SINE_LIMIT_HEX && p->limit != BC_SINE_LIMIT_CIRCLE) return BC_ERR_PARAM;
+    if (p->angle != BC_SINE_ANGLE_HALL && p->angle != BC_SINE_ANGLE_ENCODER) return BC_ERR_PARAM;
+    if (p->emf_ff) {
+        if (p->emf_n < 3 || p->emf_n > BC_SINE_EMF_N_MAX) return BC_ERR_PARAM;
+        for (int x = 0; x < 3; ++x) {
+            if (p->emf_k[x] == 0) return BC_ERR_PARAM;
+            for (int32_t j = 0; j < p->emf_n; ++j) {
+                if (!isfinite(p->emf_k[x][j])) return BC_ERR_PARAM;
+            }
+        }
+    }
+    if (!finite_pos(p->omega_on) || !finite_nonneg(p->omega_off) || p->omega_off > p->omega_on) return BC_ERR_PARAM;
+    if (p->speed_loop && (!finite_nonneg(p->kp_w) || !finite_nonneg(p->ki_w) || !finite_pos(p->tau_max)))
+        return BC_ERR_PARAM;
+    if (!is_flag(p->flying_start)) return BC_ERR_PARAM;
+    if (p->six.ref_torque != 1 || bc_sixstep_init(&p->six, &s->six) != BC_OK) return BC_ERR_PARAM;
+
+    s->hall_p.f_tick = p->f_tick;
+    s->hall_p.omega_min = p->omega_min;
+    s->hall_p.theta_offset = p->theta_offset;
+    if (bc_hall_init(&s->hall_p, &s->hall) != BC_OK) return BC_ERR_PARAM;
+    s->pi_p.kp = p->kp;
+    s->pi_p.ki = p->ki;
+    s->pi_p.ts = p->ts;
+    s->pi_p.u_min = -p->v_max;
+    s->pi_p.u_max = p->v_max;
+    if (bc_pi_init(&s->pi_p, &s->pi_d) != BC_OK || bc_pi_init(&s->pi_p, &s->pi_q) != BC_OK) return BC_ERR_PARAM;
+    s->piw_p.kp = p->speed_loop ? p->kp_w : 0.0f;
+    s->piw_p.ki = p->speed_loop ? p->ki_w : 0.0f;
+    s->piw_p.ts = p->ts;
+    s->piw_p.u_min = p->speed_loop ? -p->tau_max : -1.0f;
+    s->piw_p.u_max = p->speed_loop ? p->tau_max : 1.0f;
+    if (bc_pi_init(&s->piw_p, &s->pi_w) != BC_OK) return BC_ERR_PARAM;
+    s->mode = BC_SINE_MODE_START;
+    s->tripped = 0;
+    s->six_run = !p->flying_start;
+    s->n_quiet = 0;
+    return BC_OK;
+}
+
+/* k_x(theta) from a table of n points uniform on [0, 2 pi), linear interpolation, periodic. */
+static float table_k(const float *k, int32_t n, float theta)
+{
+    float u = bc_wrap_2pi(theta) * ((float)n / BC_TWO_PI_F);
+    int32_t j = (int32_t)u;
+    if (j < 0) j = 0;
+    if (j > n - 1) j = n - 1;
+    float frac = clampf(u - (float)j, 0.0f, 1.0f);
+    int32_t j1 = (j + 1 < n) ? j + 1 : 0;
+    return k[j] + frac * (k[j1] - k[j]); /* k = k_j + (k_j+1 - k_j) frac */
+}
+
+/* Largest k in [0, 1] with max - min of (f + k g) <= lim: each line pair must satisfy |f_xy + k g_xy| <= lim.
+ * Assumes |f_xy| <= lim. */
+static float hex_scale(const float f[3], const float g[3], float lim)
+{
+    float k = 1.0f;
+    for (int x = 0; x < 3; ++x) {
+        int y = (x + 1) % 3;
+        float fxy = f[x] - f[y], gxy = g[x] - g[y];
+        if (gxy > 0.0f && fxy + gxy > lim) k = fminf(k, (lim - fxy) / gxy);
+        if (gxy < 0.0f && fxy + gxy < -lim) k = fminf(k, (-lim - fxy) / gxy);
+    }
+    return clampf(k, 0.0f, 1.0f);
+}
+
+/* Largest k in [0, 1] with |F + k G| <= r (alpha-beta vectors), assuming |F| <= r:
+ * |F|^2 + 2 k F.G + k^2 |G|^2 = r^2 solved for its positive root. */
+static float circle_scale(bc_ab F, bc_ab G, float r)
+{
+    float gg = G.alpha * G.alpha + G.beta * G.beta;
+    float fg = F.alpha * G.alpha + F.beta * G.beta;
+    float ff = F.alpha * F.alpha + F.beta * F.beta;
+    if (!(gg > 0.0f)) return 1.0f;
+    float sum = ff + 2.0f * fg + gg;
+    if (sum <= r * r) return 1.0f;
+    float disc = fg * fg - gg * (ff - r * r);
+    float k = (-fg + sqrtf(fmaxf(disc, 0.0f))) / gg;
+    return isfinite(k) ? clampf(k, 0.0f, 1.0f) : 0.0f;
+}
+
+/* Line-to-line spread max - min of three values. */
+static float spread(const float v[3]) { return fmaxf(v[0], fmaxf(v[1], v[2])) - fminf(v[0], fminf(v[1], v[2])); }
+
+/* I_s,sat: the largest current amplitude whose peak line-to-line voltage stays within v_dc ((23) with R). */
+static float i_sat(const bc_sine_params *p, float v_dc, float omega_e)
+{
+    float w = fabsf(omega_e);
+    float x = w * p->L;                              /* reactance omega_e L */
+    float head = v_dc - 2.0f * p->k_phi * w / (float)p->p; /* v_dc - 2 k_phi |omega_m| */
+    if (!(head > 0.0f)) return 0.0f;
+    float g;
+    if (x * BC_SQRT3_F >= p->R) {
+        g = 0.5f * BC_SQRT3_F * x + 1.5f * p->R; /* g = sqrt(3)/2 omega_e L + 3/2 R */
+    } else {
+        g = BC_SQRT3_F * sqrtf(p->R * p->R + x * x); /* g = sqrt(3) |R + j omega_e L| */
+    }
+    if (!(g > 0.0f)) return p->i_s_max;
+    float i = head / g; /* I_s,sat = (v_dc - 2 k_phi |omega_m|) / g */
+    return isfinite(i) ? i : p->i_s_max;
+}
+
+/* Enter the start mode: the square-wave controller starts afresh, the d,q integrators are cleared (the hand-off
+ * sets them again). */
+static void reset_to_start(const bc_sine_params *p, bc_sine_state *s)
+{
+    s->mode = BC_SINE_MODE_START;
+    s->six_run = !p->flying_start;
+    s->n_quiet = 0;
+    (void)bc_sixstep_init(&p->six, &s->six); /* validated in bc_sine_init */
+    bc_pi_reset(&s->pi_p, &s->pi_d, 0.0f);
+    bc_pi_reset(&s->pi_p, &s->pi_q, 0.0f);
+}
+
+static void go_safe(const bc_sine_params *p, bc_sine_state *s, bc_ctrl_out *out, uint32_t why)
+{
+    reset_to_start(p, s);
+    bc_legs_off(out);
+    out->flags |= why | BC_FLAG_SAFE;
+}
+
+void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *in, bc_ctrl_out *out)
+{
+    for (int j = 0; j < BC_DIAG_N; ++j) out->diag[j] = 0.0f;
+    for (int x = 0; x < 3; ++x) {
+        out->leg[x].mode = BC_LEG_OFF;
+        out->leg[x].duty = 0.0f;
+    }
+    out->flags = 0u;
+
+    /* 1. safety */
+    if (s->tripped) {
+        go_safe(p, s, out, BC_FLAG_OVERCURRENT);
+        return;
+    }
+    uint32_t mask = in->i_mask & 7u;
+    int n_meas = (int)(mask & 1u) + (int)((mask >> 1) & 1u) + (int)((mask >> 2) & 1u);
+    int bad = !(isfinite(in->v_dc) && in->v_dc > 0.0f) || n_meas < 2;
+    for (int x = 0; x < 3; ++x) {
+        if (((mask >> x) & 1u) && !isfinite(in->i_abc[x])) bad = 1;
+    }
+    if (p->angle == BC_SINE_ANGLE_ENCODER && !isfinite(in->theta_enc)) bad = 1;
+    if (p->speed_loop ? !isfinite(in->omega_ref) : !isfinite(in->ref)) bad = 1;
+    bc_hall_out h;
+    bc_hall_step(&s->hall_p, &s->hall, in, &h); /* keeps the edge bookkeeping even when the output is safe */
+    if (bad) {
+        go_safe(p, s, out, BC_FLAG_BAD_INPUT);
+        return;
+    }
+    bc_abc i;
+    i.a = (mask & 1u) ? in->i_abc[0] : 0.0f;
+    i.b = (mask & 2u) ? in->i_abc[1] : 0.0f;
+    i.c = (mask & 4u) ? in->i_abc[2] : 0.0f;
+    if (!(mask & 1u)) i.a = -(i.b + i.c); /* the unmeasured phase from i_a + i_b + i_c = 0 */
+    if (!(mask & 2u)) i.b = -(i.a + i.c);
+    if (!(mask & 4u)) i.c = -(i.a + i.b);
+    if (!(fabsf(i.a) <= p->i_max && fabsf(i.b) <= p->i_max && fabsf(i.c) <= p->i_max)) {
+        s->tripped = 1;
+        go_safe(p, s, out, BC_FLAG_OVERCURRENT);
+        return;
+    }
+    if (!h.valid) {
+        go_safe(p, s, out, BC_FLAG_HALL_INVALID);
+        return;
+    }
+
+    /* 2. angle and speed */
+    float theta = (p->angle == BC_SINE_ANGLE_ENCODER) ? bc_wrap_2pi(in->theta_enc) : h.theta;
+    float omega_e = h.speed_valid ? h.omega_e : 0.0f;
+    float omega_m = omega_e / (float)p->p;
+    float v_dc = in->v_dc;
+
+    /* 3. mode */
+    int was = s->mode;
+    if (s->mode == BC_SINE_MODE_START) {
+        if (h.speed_valid && fabsf(omega_e) >= p->omega_on) s->mode = BC_SINE_MODE_SINE;
+    } else if (!h.speed_valid || fabsf(omega_e) < p->omega_off) {
+        reset_to_start(p, s);
+    }
+
+    /* measured d,q currents at theta (d axis at theta - pi: sin(theta - pi) = -sin theta) */
+    float sd = -sinf(theta), cd = -cosf(theta);
+    bc_dq idq = bc_park(bc_clarke(i), sd, cd);
+
+    /* 4. torque reference */
+    float tau, tau_u = 0.0f, e_w = 0.0f;
+    if (p->speed_loop) {
+        e_w = in->omega_ref - omega_m;
+        tau_u = bc_pi_output(&s->piw_p, &s->pi_w, e_w, 0.0f); /* tau = PI_w(omega_ref - omega_m) */
+        tau = bc_pi_limit(&s->piw_p, tau_u);
+    } else {
+        tau = in->ref;
+    }
+
+    if (s->mode == BC_SINE_MODE_START && !s->six_run) {
+        /* flying start: coast until the rotor is known to be slower than omega_on */
+        s->n_quiet = h.edge ? 0 : (s->n_quiet < INT32_MAX ? s->n_quiet + 1 : s->n_quiet);
+        float quiet = (float)s->n_quiet * p->ts;
+        if ((h.speed_valid && fabsf(omega_e) < p->omega_on) || quiet * p->omega_on >= BC_PI_F / 3.0f) s->six_run = 1;
+        if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, 0.0f);
+    }
+    if (s->mode == BC_SINE_MODE_START && s->six_run) {
+        /* square-wave start: bc_sixstep with the torque limited to a square-wave current of I_N */
+        float tau_lim = p->six.k_e * (0.5f * BC_SQRT3_F) * p->i_s_max;
+        bc_ctrl_in in6 = *in;
+        in6.ref = clampf(tau, -tau_lim, tau_lim);
+        bc_sixstep_step(&p->six, &s->six, &in6, out);
+        if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, in6.ref);
+        for (int j = 0; j < BC_DIAG_N; ++j) out->diag[j] = 0.0f;
+        out->diag[2] = in6.ref / (1.5f * p->k_1);
+    }
+    out->diag[0] = idq.d;
+    out->diag[1] = idq.q;
+    out->diag[5] = theta;
+    out->diag[6] = omega_e;
+    out->diag[7] = (float)s->mode;
+    if (s->mode == BC_SINE_MODE_START) return;
+
+    /* 5. current references (45), (8), (23) with R */
+    float i_lim = p->i_s_max;
+    if (p->speed_limit) i_lim = fminf(i_lim, i_sat(p, v_dc, omega_e));
+    float iq_ref = clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
+    float id_ref = 0.0f;
+    if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, 1.5f * p->k_1 * iq_ref);
+
+    /* 6. current PIs with the R-L feed-forward */
+    float ff_d = 0.0f, ff_q = 0.0f;
+    if (p->decouple) {
+        ff_d = p->R * id_ref - omega_e * p->L * iq_ref; /* ff_d = R i_d,ref - omega_e L i_q,ref */
+        ff_q = p->R * iq_ref + omega_e * p->L * id_ref; /* ff_q = R i_q,ref + omega_e L i_d,ref */
+    }
+    if (was == BC_SINE_MODE_START) {
+        /* bumpless hand-off: integrators from the voltage the present state needs */
+        float e_q1 = omega_m * p->k_1; /* back-EMF fundamental on q */
+        float x_d = p->R * idq.d - omega_e * p->L * idq.q - ff_d;
+        float x_q = p->R * idq.q + omega_e * p->L * idq.d + e_q1 - ff_q - (p->emf_ff ? e_q1 : 0.0f);
+        bc_pi_reset(&s->pi_p, &s->pi_d, x_d);
+        bc_pi_reset(&s->pi_p, &s->pi_q, x_q);
+    }
+    float e_d = id_ref - idq.d, e_q = iq_ref - idq.q;
+    bc_dq u;
+    u.d = bc_pi_output(&s->pi_p, &s->pi_d, e_d, ff_d); /* u_d = k_p e_d + x_d + ff_d */
+    u.q = bc_pi_output(&s->pi_p, &s->pi_q, e_q, ff_q); /* u_q = k_p e_q + x_q + ff_q */
+
+    /* 7. voltage angle advanced by the loop delay: theta_v = theta + advance Omega_e T_s */
+    float theta_v = bc_wrap_2pi(theta + p->advance * omega_e * p->ts);
+    float sv = -sinf(theta_v), cv = -cosf(theta_v);
+    bc_abc g = bc_clarke_inv(bc_park_inv(u, sv, cv));
+    float gv[3] = {g.a, g.b, g.c};
+
+    /* 8. back-EMF feed-forward f_x = omega_m k_x(theta_v - x 2 pi/3) */
+    float f[3] = {0.0f, 0.0f, 0.0f};
+    if (p->emf_ff) {
+        for (int x = 0; x < 3; ++x) {
+            f[x] = omega_m * table_k(p->emf_k[x], p->emf_n, theta_v - (float)x * (BC_TWO_PI_F / 3.0f));
+        }
+    }
+
+    /* 9. linear-modulation limit: v = f + k u */
+    float k = 1.0f;
+    if (!p->overmod) {
+        if (p->limit == BC_SINE_LIMIT_HEX) {
+            float sf = spread(f);
+            if (sf > v_dc) {
+                for (int x = 0; x < 3; ++x) f[x] *= v_dc / sf;
+            }
+            k = hex_scale(f, gv, v_dc);
+        } else {
+            float r = v_dc * BC_INV_SQRT3_F;
+            bc_abc fa = {f[0], f[1], f[2]};
+            bc_ab F = bc_clarke(fa), G = bc_clarke(g);
+            float nf = sqrtf(F.alpha * F.alpha + F.beta * F.beta);
+            if (nf > r) {
+                for (int x = 0; x < 3; ++x) f[x] *= r / nf;
+                F = bc_clarke((bc_abc){f[0], f[1], f[2]});
+            }
+            k = circle_scale(F, G, r);
+        }
+    }
+    bc_abc v = {f[0] + k * gv[0], f[1] + k * gv[1], f[2] + k * gv[2]};
+
+    /* 10. SVM */
+    float duty[3];
+    int clipped = bc_svm(v, v_dc, duty);
+    bc_dq ur = {k * u.d, k * u.q};
+    if (clipped && p->overmod) {
+        /* realised voltage from the clipped duties, minus the feed-forward, in the frame of theta_v */
+        bc_abc va = {duty[0] * v_dc - f[0], duty[1] * v_dc - f[1], duty[2] * v_dc - f[2]};
+        ur = bc_park(bc_clarke(va), sv, cv);
+    }
+    bc_pi_update(&s->pi_p, &s->pi_d, e_d, u.d, ur.d);
+    bc_pi_update(&s->pi_p, &s->pi_q, e_q, u.q, ur.q);
+    if (k < 1.0f || clipped) out->flags |= BC_FLAG_SATURATED;
+
+    for (int x = 0; x < 3; ++x) {
+        out->leg[x].mode = BC_LEG_PWM;
+        out->leg[x].duty = duty[x];
+    }
+    bc_dq vdq = bc_park(bc_clarke(v), sv, cv);
+    out->diag[2] = iq_ref;
+    out->diag[3] = vdq.d;
+    out->diag[4] = vdq.q;
+}

@@ -1,0 +1,452 @@
+/* bc_sixstep.c - real square-wave (120-degree) current-controlled supply. Laws in bc_sixstep.h. */
+#include "bldc/bc_sixstep.h"
+
+#include <math.h>
+
+#include "bldc/bc_commutation.h"
+
+#define PI3_F (BC_PI_F / 3.0f)
+#define PI6_F (BC_PI_F / 6.0f)
+
+static float clampf(float v, float lo, float hi) { return v < lo ? lo : (v > hi ? hi : v); }
+
+static int fin(float v) { return isfinite(v) ? 1 : 0; }
+
+int bc_sixstep_init(const bc_sixstep_params *p, bc_sixstep_state *s)
+{
+    if (p == 0 || s == 0) return BC_ERR_PARAM;
+    if (p->reg < BC_SIXSTEP_PI || p->reg > BC_SIXSTEP_PRED) return BC_ERR_PARAM;
+    if (p->chop < BC_SIXSTEP_BIPOLAR || p->chop > BC_SIXSTEP_SYNC) return BC_ERR_PARAM;
+    if ((p->ref_torque != 0 && p->ref_torque != 1) || (p->delay != 0 && p->delay != 1) ||
+        (p->advance != 0 && p->advance != 1) || (p->emf_ff != 0 && p->emf_ff != 1) ||
+        (p->regen != 0 && p->regen != 1) || p->p < 1)
+        return BC_ERR_PARAM;
+    if (!fin(p->ts) || !fin(p->R) || !fin(p->L) || !fin(p->k_e) || !fin(p->kp) || !fin(p->ki) || !fin(p->band) ||
+        !fin(p->i_max) || !fin(p->v_max) || !fin(p->f_tick) || !fin(p->omega_min) || !fin(p->theta_offset))
+        return BC_ERR_PARAM;
+    if (!(p->ts > 0.0f) || p->R < 0.0f || !(p->L > 0.0f) || !(p->k_e > 0.0f) || p->kp < 0.0f || p->ki < 0.0f ||
+        !(p->band > 0.0f) || !(p->i_max > 0.0f) || !(p->v_max > 0.0f))
+        return BC_ERR_PARAM;
+    s->hall_p.f_tick = p->f_tick;
+    s->hall_p.omega_min = p->omega_min;
+    s->hall_p.theta_offset = p->theta_offset;
+    if (bc_hall_init(&s->hall_p, &s->hall) != BC_OK) return BC_ERR_PARAM;
+    s->pi_p.kp = p->kp;
+    s->pi_p.ki = p->ki;
+    s->pi_p.ts = p->ts;
+    s->pi_p.u_min = -1.0f;
+    s->pi_p.u_max = 1.0f;
+    if (bc_pi_init(&s->pi_p, &s->pi) != BC_OK) return BC_ERR_PARAM;
+    for (int x = 0; x < 3; ++x) {
+        s->applied[x].mode = BC_LEG_OFF;
+        s->applied[x].duty = 0.0f;
+    }
+    s->sector = -1;
+    s->incoming = -1;
+    s->hyst_on = 0;
+    s->oc_latched = 0;
+    return BC_OK;
+}
+
+/* ------------------------------------------------------------------------------------------------------------ */
+/* average model (BC_SIXSTEP_PRED) */
+
+/* Ideal 120-degree trapezoid of unit flat top, zero rising at th = 0:
+ * k(th) = 6 th/pi on [0, pi/6], 1 on [pi/6, 5 pi/6], 6 (pi - th)/pi on [5 pi/6, pi], odd. */
+static float trapezoid(float th)
+{
+    if (!fin(th) || fabsf(th) > 64.0f) return 0.0f;
+    while (th < 0.0f) th += BC_TWO_PI_F; /* a few turns at most */
+    while (th >= BC_TWO_PI_F) th -= BC_TWO_PI_F;
+    float sgn = 1.0f;
+    if (th > BC_PI_F) {
+        th -= BC_PI_F;
+        sgn = -1.0f;
+    }
+    float k = 1.0f;
+    if (th < PI6_F) k = th / PI6_F;
+    else if (th > 5.0f * PI6_F) k = (BC_PI_F - th) / PI6_F;
+    return sgn * clampf(k, 0.0f, 1.0f);
+}
+
+/* Average terminal voltage u of a leg over a half period from its command and the sign of its current; returns 1 if
+ * the phase is connected, 0 if open. A HIGH/LOW leg with d = 0 never switches on: it behaves as OFF. */
+static int leg_average(const bc_leg_cmd *c, float i, float v, float *u)
+{
+    float d = c->duty;
+    int mode = (int)c->mode;
+    if ((mode == BC_LEG_HIGH || mode == BC_LEG_LOW) && !(d > 0.0f)) mode = BC_LEG_OFF;
+    switch (mode) {
+    case BC_LEG_PWM:                   /* u = d V whatever the current */
+        *u = d * v;
+        return 1;
+    case BC_LEG_HIGH:                  /* i < 0: switch or upper diode, V; i >= 0: V for d, lower diode 0 after */
+        *u = i < 0.0f ? v : d * v;
+        return 1;
+    case BC_LEG_LOW:                   /* i > 0: switch or lower diode, 0; i <= 0: 0 for d, upper diode V after */
+        *u = i > 0.0f ? 0.0f : (1.0f - d) * v;
+        return 1;
+    default:                           /* diodes only: 0 (i > 0), V (i < 0), open (i = 0) */
+        if (i > 0.0f) {
+            *u = 0.0f;
+            return 1;
+        }
+        if (i < 0.0f) {
+            *u = v;
+            return 1;
+        }
+        *u = 0.0f;
+        return 0;
+    }
+}
+
+static int diode_only(const bc_leg_cmd *c)
+{
+    return c->mode == BC_LEG_OFF || ((c->mode == BC_LEG_HIGH || c->mode == BC_LEG_LOW) && !(c->duty > 0.0f));
+}
+
+int bc_sixstep_predict(const bc_leg_cmd cmd[3], float v, const float e[3], float R, float L, float t, float i[3])
+{
+    float left = t;
+    int opened = 0;
+    /* at most one segment per diode-only phase opening, plus the last */
+    for (int seg = 0; seg < 4 && left > 0.0f; ++seg) {
+        float u[3], di[3];
+        int conn[3];
+        int n = 0;
+        float sum = 0.0f;
+        for (int x = 0; x < 3; ++x) {
+            conn[x] = leg_average(&cmd[x], i[x], v, &u[x]);
+            if (conn[x]) {
+                ++n;
+                sum += u[x] - R * i[x] - e[x];
+            }
+        }
+        if (n < 2) { /* no closed path: no current */
+            i[0] = i[1] = i[2] = 0.0f;
+            return opened;
+        }
+        /* v_n = mean over the connected phases of (u_j - R i_j - e_j);  L di_j/dt = u_j - R i_j - e_j - v_n */
+        float vn = sum / (float)n;
+        for (int x = 0; x < 3; ++x) di[x] = conn[x] ? (u[x] - R * i[x] - e[x] - vn) / L : 0.0f;
+        /* the first diode-only phase whose current reaches zero opens there */
+        float h = left;
+        int z = -1;
+        for (int x = 0; x < 3; ++x) {
+            if (conn[x] && diode_only(&cmd[x]) && i[x] * di[x] < 0.0f) {
+                float tz = -i[x] / di[x];
+                if (tz < h) {
+                    h = tz;
+                    z = x;
+                }
+            }
+        }
+        for (int x = 0; x < 3; ++x) i[x] += di[x] * h;
+        if (z >= 0) {
+            ++opened;
+            float r = i[z]; /* rounding residue: keep the sum zero */
+            i[z] = 0.0f;
+            for (int x = 0; x < 3; ++x)
+                if (x != z && conn[x]) {
+                    i[x] += r;
+                    break;
+                }
+        }
+        left -= h;
+    }
+    return opened;
+}
+
+/* ------------------------------------------------------------------------------------------------------------ */
+/* commands */
+
+/* Leg commands of a chopping pattern for the normalised pair voltage m (third leg off). m < 0: both legs chop. */
+static void build(int chop, int pos, int neg, int chop_leg, float m, bc_leg_cmd c[3])
+{
+    for (int x = 0; x < 3; ++x) {
+        c[x].mode = BC_LEG_OFF;
+        c[x].duty = 0.0f;
+    }
+    c[pos].mode = BC_LEG_HIGH;
+    c[neg].mode = BC_LEG_LOW;
+    if (chop == BC_SIXSTEP_BIPOLAR || m < 0.0f) { /* u = (2 d - 1) V,  d = (1 + m)/2 */
+        float d = clampf(0.5f * (1.0f + m), 0.0f, 1.0f);
+        c[pos].duty = d;
+        c[neg].duty = d;
+        return;
+    }
+    m = clampf(m, 0.0f, 1.0f);
+    switch (chop) {
+    case BC_SIXSTEP_PWMPWM: /* u = m V: one leg chops, the other is fully on */
+        c[pos].duty = chop_leg == pos ? m : 1.0f;
+        c[neg].duty = chop_leg == neg ? m : 1.0f;
+        break;
+    case BC_SIXSTEP_SYNC:   /* u = m V */
+        c[pos].mode = BC_LEG_PWM;
+        c[pos].duty = m;
+        c[neg].duty = 1.0f;
+        break;
+    default:                /* high side: u = m V */
+        c[pos].duty = m;
+        c[neg].duty = 1.0f;
+        break;
+    }
+}
+
+static void safe(bc_sixstep_state *s, bc_ctrl_out *out, uint32_t flags)
+{
+    bc_legs_off(out);
+    for (int x = 0; x < 3; ++x) s->applied[x] = out->leg[x];
+    out->flags |= flags | BC_FLAG_SAFE;
+    out->diag[0] = -1.0f;
+    out->diag[5] = -1.0f;
+    out->diag[6] = -1.0f;
+    bc_pi_reset(&s->pi_p, &s->pi, 0.0f);
+    s->hyst_on = 0;
+    s->sector = -1;
+    s->incoming = -1;
+}
+
+/* Everything the duty solver needs. */
+typedef struct {
+    int chop, pos, neg, chop_leg, x;
+    float sgn, v, R, L, ts;
+    float e1[3];  /* back-EMF over the interval the output applies to */
+    float i1[3];  /* currents at its start */
+} pred_ctx;
+
+/* Regulated current at the end of the interval the output applies to, with pair voltage m; *opened counts the
+ * diode currents that end inside it. */
+static float pred_end(const pred_ctx *c, float m, int *opened)
+{
+    bc_leg_cmd cmd[3];
+    float i[3] = {c->i1[0], c->i1[1], c->i1[2]};
+    build(c->chop, c->pos, c->neg, c->chop_leg, m, cmd);
+    *opened += bc_sixstep_predict(cmd, c->v, c->e1, c->R, c->L, c->ts, i);
+    return c->sgn * i[c->x];
+}
+
+/* Solve pred_end(m) = target for m in [lo, hi] given f at both ends (f_lo < 0 < f_hi). Without a diode current
+ * ending inside the sample at either end, none ends in between (its end time is monotonic in m) and the end
+ * current is affine in m: the line through the ends is the solution. Otherwise Illinois on the bracket. */
+static float solve_bracket(const pred_ctx *c, float target, float lo, float hi, float f_lo, float f_hi, int affine)
+{
+    float a = lo, b = hi, fa = f_lo, fb = f_hi;
+    float tol = 1e-4f * (1.0f + fabsf(target));
+    float d = a - fa * (b - a) / (fb - fa);
+    if (affine) return fin(d) ? clampf(d, lo, hi) : lo;
+    for (int it = 0; it < 12; ++it) { /* superlinear: 3-6 iterations to the tolerance in practice */
+        int op = 0;
+        d = clampf(d, a, b);
+        float fd = pred_end(c, d, &op) - target;
+        if (!fin(fd)) break;
+        if (fabsf(fd) <= tol || b - a < 1e-6f) break;
+        if ((fd < 0.0f) == (fa < 0.0f)) {
+            a = d;
+            fa = fd;
+            fb *= 0.5f;
+        } else {
+            b = d;
+            fb = fd;
+            fa *= 0.5f;
+        }
+        d = a - fa * (b - a) / (fb - fa);
+    }
+    return fin(d) ? clampf(d, lo, hi) : lo;
+}
+
+/* Solve pred_end(m) = target for m in [m_lo, 1]: first on [0, 1], then on [m_lo, 0]; *sat = 1 if limited. */
+static float solve_m(const pred_ctx *c, float target, float m_lo, int *sat)
+{
+    int op01 = 0, op_lo = 0;
+    float f0 = pred_end(c, 0.0f, &op01) - target;
+    float f1 = pred_end(c, 1.0f, &op01) - target;
+    *sat = 0;
+    if (!(fin(f0) && fin(f1))) {
+        *sat = 1;
+        return 0.0f;
+    }
+    if (f1 <= 0.0f) { /* full voltage cannot do more */
+        *sat = f1 < 0.0f;
+        return 1.0f;
+    }
+    if (f0 < 0.0f) return solve_bracket(c, target, 0.0f, 1.0f, f0, f1, op01 == 0);
+    if (f0 == 0.0f || !(m_lo < 0.0f)) {
+        *sat = f0 > 0.0f;
+        return 0.0f;
+    }
+    float fl = pred_end(c, m_lo, &op_lo) - target;
+    if (!fin(fl)) {
+        *sat = 1;
+        return 0.0f;
+    }
+    if (fl >= 0.0f) {
+        *sat = fl > 0.0f;
+        return m_lo;
+    }
+    /* m = 0 (unipolar pattern) and m < 0 (both legs chop) are different circuits: never assume a line across */
+    return solve_bracket(c, target, m_lo, 0.0f, fl, f0, 0);
+}
+
+/* ------------------------------------------------------------------------------------------------------------ */
+
+void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_ctrl_in *in, bc_ctrl_out *out)
+{
+    for (int j = 0; j < BC_DIAG_N; ++j) out->diag[j] = 0.0f;
+    out->flags = 0u;
+
+    bc_hall_out h;
+    bc_hall_step(&s->hall_p, &s->hall, in, &h);
+    out->diag[4] = h.omega_e;
+
+    /* measurements: two measured phases give the third, i_a + i_b + i_c = 0 */
+    uint32_t mask = in->i_mask & 7u;
+    int n_meas = 0, bad = 0;
+    float i[3], sum = 0.0f;
+    for (int x = 0; x < 3; ++x) {
+        i[x] = 0.0f;
+        if (mask & (1u << x)) {
+            ++n_meas;
+            if (!fin(in->i_abc[x])) bad = 1;
+            else {
+                i[x] = in->i_abc[x];
+                sum += i[x];
+            }
+        }
+    }
+    if (n_meas == 2) {
+        for (int x = 0; x < 3; ++x)
+            if (!(mask & (1u << x))) i[x] = -sum;
+    }
+    float v = in->v_dc;
+    if (n_meas < 2 || !fin(v) || !(v > 0.0f) || v > p->v_max || !fin(in->ref) || !fin(sum)) bad = 1;
+    if (!h.valid || bad) {
+        safe(s, out, (h.valid ? 0u : BC_FLAG_HALL_INVALID) | (bad ? BC_FLAG_BAD_INPUT : 0u));
+        return;
+    }
+
+    /* over-current: trip above i_max, latched until every |i| < i_max / 2 */
+    float i_abs = 0.0f;
+    for (int x = 0; x < 3; ++x) i_abs = fabsf(i[x]) > i_abs ? fabsf(i[x]) : i_abs;
+    if (!fin(i_abs) || i_abs > p->i_max) s->oc_latched = 1;
+    else if (s->oc_latched && i_abs < 0.5f * p->i_max) s->oc_latched = 0;
+    if (s->oc_latched) {
+        safe(s, out, BC_FLAG_OVERCURRENT);
+        return;
+    }
+
+    /* commutation: the sector seen, or the next one when its Hall edge is due within the first half of the
+     * interval this output applies to (advance) */
+    float ts = p->ts;
+    float lead = ((float)p->delay + 0.5f) * ts;
+    float w_abs = fabsf(h.omega_e);
+    float travel = -1.0f; /* angle travelled since the edge at the middle of that interval; < 0 unknown */
+    int sector = h.sector;
+    if (h.speed_valid) {
+        float since = (float)(uint32_t)(in->tick_now - in->tick_edge) / p->f_tick;
+        float now = w_abs * since;
+        travel = w_abs * (since + lead);
+        if (p->advance && h.dir != 0 && now < PI3_F && travel >= PI3_F) {
+            sector = (sector + (h.dir > 0 ? 1 : 5)) % 6;
+            travel -= PI3_F;
+        }
+    }
+    if (sector != s->sector) {
+        int inc = -1;
+        if (s->sector >= 0) {
+            int po, no, pn, nn;
+            (void)bc_sector_phases(s->sector, &po, &no);
+            (void)bc_sector_phases(sector, &pn, &nn);
+            if (pn != po && pn != no) inc = pn;
+            else if (nn != po && nn != no) inc = nn;
+        }
+        s->incoming = inc;
+        s->sector = sector;
+    }
+    int pos, neg;
+    (void)bc_sector_phases(sector, &pos, &neg);
+    float ref = in->ref;
+    if (ref < 0.0f) { /* reverse torque: swap the roles */
+        int t = pos;
+        pos = neg;
+        neg = t;
+    }
+    int third = 3 - pos - neg;
+    int x = (s->incoming == pos || s->incoming == neg) ? s->incoming : pos;
+    float sgn = x == pos ? 1.0f : -1.0f;
+    float i_reg = sgn * i[x];
+    float i_ref = fabsf(ref);
+    if (p->ref_torque) i_ref /= p->k_e;
+    i_ref = clampf(i_ref, 0.0f, p->i_max);
+
+    /* PWM-on-PWM: the incoming phase chops in the first half of the sector, the other one in the second */
+    int chop_leg = -1;
+    if (p->chop == BC_SIXSTEP_PWMPWM) chop_leg = (travel < 0.0f || travel < PI6_F) ? x : (x == pos ? neg : pos);
+    else if (p->chop == BC_SIXSTEP_BIPOLAR) chop_leg = 3;
+    else chop_leg = pos;
+
+    /* back-EMF estimate over the interval the output applies to (mid-interval angle):
+     * e_j = (k_e/2) (Omega_e/p) k(theta + Omega_e t - j 2 pi/3) */
+    float w_m = h.omega_e / (float)p->p;
+    float e1[3], e0[3];
+    for (int j = 0; j < 3; ++j) {
+        float th = h.theta - (float)j * (BC_TWO_PI_F / 3.0f);
+        e0[j] = 0.5f * p->k_e * w_m * trapezoid(th + h.omega_e * 0.5f * ts);
+        e1[j] = 0.5f * p->k_e * w_m * trapezoid(th + h.omega_e * lead);
+    }
+
+    /* lowest normalised pair voltage: -1 (both legs off) with bipolar chopping or regen, else 0 (freewheel) */
+    float m_lo = (p->chop == BC_SIXSTEP_BIPOLAR || p->regen) ? -1.0f : 0.0f;
+    float m = 0.0f;
+    int sat = 0;
+    if (p->reg == BC_SIXSTEP_PRED) {
+        pred_ctx c;
+        c.chop = (int)p->chop;
+        c.pos = pos;
+        c.neg = neg;
+        c.chop_leg = chop_leg;
+        c.x = x;
+        c.sgn = sgn;
+        c.v = v;
+        c.R = p->R;
+        c.L = p->L;
+        c.ts = ts;
+        for (int j = 0; j < 3; ++j) {
+            c.e1[j] = e1[j];
+            c.i1[j] = i[j];
+        }
+        /* i(k+1) = F(i(k), c_applied): the command already in force (delay 1) */
+        if (p->delay) (void)bc_sixstep_predict(s->applied, v, e0, p->R, p->L, ts, c.i1);
+        /* sgn_x i_x(k+1+D) = F(i(k+D), c(m)) = I_ref */
+        m = solve_m(&c, i_ref, m_lo, &sat);
+    } else if (p->reg == BC_SIXSTEP_HYST) {
+        /* m = 1 below I_ref - band/2, m = m_lo above I_ref + band/2, else unchanged */
+        if (i_reg < i_ref - 0.5f * p->band) s->hyst_on = 1;
+        else if (i_reg > i_ref + 0.5f * p->band) s->hyst_on = 0;
+        m = s->hyst_on ? 1.0f : m_lo;
+    } else {
+        /* m = u / V_dc = k_p e / V_dc + x + u_ff / V_dc,  u_ff = e_pos - e_neg + 2 R I_ref;  x updated with the
+         * realised m (back-calculation, bc_pi.h) */
+        float err = i_ref - i_reg;
+        float ff = p->emf_ff ? (e1[pos] - e1[neg] + 2.0f * p->R * i_ref) / v : 0.0f;
+        float mu = bc_pi_output(&s->pi_p, &s->pi, err / v, ff);
+        m = clampf(fin(mu) ? mu : 0.0f, m_lo, 1.0f);
+        sat = !(m == mu);
+        bc_pi_update(&s->pi_p, &s->pi, err / v, mu, m);
+    }
+    m = fin(m) ? clampf(m, m_lo, 1.0f) : 0.0f;
+
+    build((int)p->chop, pos, neg, chop_leg, m, out->leg);
+    for (int j = 0; j < 3; ++j) { /* never pass on a bad duty */
+        if (!(out->leg[j].duty >= 0.0f && out->leg[j].duty <= 1.0f)) out->leg[j].duty = 0.0f;
+        s->applied[j] = out->leg[j];
+    }
+    if (sat) out->flags |= BC_FLAG_SATURATED;
+    out->diag[0] = (float)sector;
+    out->diag[1] = i_reg;
+    out->diag[2] = i_ref;
+    out->diag[3] = m;
+    out->diag[5] = (float)x;
+    out->diag[6] = m < 0.0f ? 3.0f : (float)chop_leg;
+    out->diag[7] = fabsf(i[third]);
+}

@@ -1,0 +1,610 @@
+/* test_sine.c - bc_transform (Clarke, Park, min-max SVM) and bc_sine: parameter validation, limits, hand-off,
+ * safe states, random and extreme inputs, and the closed loop with the htm-48v fixture (imposed speed, and a start
+ * from standstill through the square-wave hand-off). */
+#include <math.h>
+#include <string.h>
+
+#include "bc_test.h"
+#include "bldc/bc_commutation.h"
+#include "bldc/bc_sim.h"
+#include "bldc/bc_sine.h"
+#include "bldc/bc_transform.h"
+#include "fixtures.h"
+
+#define EMF_N 360
+static float emf_tab[3][EMF_N];
+
+static const double K_PHI = 0.32;
+static const double I_N = 50.0;
+static const double OMEGA_N = 640.0 * 2.0 * BC_PI / 60.0; /* Table II, rad/s */
+
+static double k1_trap(void) { return 12.0 / (BC_PI * BC_PI) * K_PHI; } /* paper 1 (10) */
+static double i_sn(void) { return 2.0 / sqrt(3.0) * I_N; }            /* paper 1 (8) */
+
+/* 32-bit LCG for reproducible random inputs */
+static uint32_t rng = 12345u;
+static uint32_t rnd_u32(void)
+{
+    rng = rng * 1664525u + 1013904223u;
+    return rng;
+}
+static double rnd(void) { return (double)(rnd_u32() >> 8) / 16777216.0; } /* [0, 1) */
+
+/* The htm-48v controller as bldclab.Sine fills it (PI gains of pi_gains(0.05, 75e-6, 1 kHz, 90 deg)). */
+static void sine_params(bc_sine_params *p, const fixture *f)
+{
+    memset(p, 0, sizeof *p);
+    for (int x = 0; x < 3; ++x) {
+        for (int j = 0; j < EMF_N; ++j) {
+            emf_tab[x][j] = (float)bc_emf_eval(&f->p.emf[x], 2.0 * BC_PI * j / EMF_N);
+        }
+        p->emf_k[x] = emf_tab[x];
+    }
+    double wc = 2.0 * BC_PI * 1000.0;
+    p->p = 8;
+    p->R = (float)f->p.R;
+    p->L = 75e-6f;
+    p->k_phi = (float)K_PHI;
+    p->k_1 = (float)k1_trap();
+    p->ts = (float)bc_plant_t_half(&f->p);
+    p->kp = (float)(wc * 75e-6);
+    p->ki = (float)(wc * 0.05);
+    p->v_max = 96.0f;
+    p->i_s_max = (float)i_sn();
+    p->i_max = 100.0f;
+    p->speed_limit = 1;
+    p->decouple = 1;
+    p->advance = 1.5f;
+    p->limit = BC_SINE_LIMIT_HEX;
+    p->emf_ff = 1;
+    p->emf_n = EMF_N;
+    p->angle = BC_SINE_ANGLE_HALL;
+    p->f_tick = (float)f->sp.f_tick;
+    p->omega_on = (float)(8.0 * 0.1 * OMEGA_N);
+    p->omega_off = 0.8f * p->omega_on;
+    p->omega_min = 0.25f * p->omega_off;
+    bc_sixstep_params *q = &p->six;
+    q->reg = BC_SIXSTEP_PRED; /* bldclab.SixStep's defaults */
+    q->chop = BC_SIXSTEP_PWMPWM;
+    q->ref_torque = 1;
+    q->delay = 1;
+    q->advance = 1;
+    q->emf_ff = 1;
+    q->regen = 1;
+    q->p = 8;
+    q->ts = p->ts;
+    q->R = p->R;
+    q->L = p->L;
+    q->k_e = (float)(2.0 * K_PHI);
+    q->kp = (float)(wc * 150e-6);
+    q->ki = (float)(wc * 0.1);
+    q->band = 5.0f;
+    q->i_max = 100.0f;
+    q->v_max = 96.0f;
+    q->f_tick = p->f_tick;
+    q->omega_min = 0.05f * p->omega_on;
+}
+
+static void sine_slot(const void *p, void *s, const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sine_step(p, s, in, out); }
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* a synthetic rotor at constant electrical speed we (rad/s) from theta0, carrying i_x = I sin(theta - x 2pi/3 + phi) */
+
+typedef struct {
+    double theta0, we, I, phi, f_tick;
+} rotor;
+
+static void rotor_in(const rotor *r, double t, float tau_ref, bc_ctrl_in *in)
+{
+    memset(in, 0, sizeof *in);
+    double th = r->theta0 + r->we * t;
+    double m0 = floor((r->theta0 - BC_PI / 6.0) / (BC_PI / 3.0));
+    double m = floor((th - BC_PI / 6.0) / (BC_PI / 3.0));
+    int sector = (int)(m - 6.0 * floor(m / 6.0));
+    in->hall = bc_sector_code(sector);
+    in->n_edges = (uint32_t)(m - m0);
+    if (m > m0) {
+        double te = (BC_PI / 6.0 + m * BC_PI / 3.0 - r->theta0) / r->we;
+        in->tick_edge = (uint32_t)(te * r->f_tick);
+    }
+    in->tick_now = (uint32_t)(t * r->f_tick);
+    for (int x = 0; x < 3; ++x) in->i_abc[x] = (float)(r->I * sin(th - x * 2.0 * BC_PI / 3.0 + r->phi));
+    in->i_mask = 3u;
+    in->v_dc = 48.0f;
+    in->theta_enc = (float)fmod(th, 2.0 * BC_PI);
+    in->omega_enc = (float)(r->we / 8.0);
+    in->ref = tau_ref;
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+
+static void test_transforms(void)
+{
+    bc_ab ab = bc_clarke((bc_abc){1.0f, -0.5f, -0.5f});
+    CHECK_NEAR(ab.alpha, 1.0, 1e-6, "Clarke alpha of (1, -1/2, -1/2)");
+    CHECK_NEAR(ab.beta, 0.0, 1e-6, "Clarke beta of (1, -1/2, -1/2)");
+    ab = bc_clarke((bc_abc){0.0f, 1.0f, -1.0f});
+    CHECK_NEAR(ab.beta, 2.0 / sqrt(3.0), 1e-6, "Clarke beta of (0, 1, -1)");
+    ab = bc_clarke((bc_abc){3.0f, 3.0f, 3.0f});
+    CHECK(fabsf(ab.alpha) < 1e-6f && fabsf(ab.beta) < 1e-6f, "zero sequence dropped");
+    for (int k = 0; k < 72; ++k) {
+        float th = (float)k * (BC_TWO_PI_F / 72.0f);
+        float I = 57.7f;
+        bc_abc i = {I * sinf(th), I * sinf(th - BC_TWO_PI_F / 3.0f), I * sinf(th - 2.0f * BC_TWO_PI_F / 3.0f)};
+        bc_ab a = bc_clarke(i);
+        CHECK(fabsf(a.alpha - I * sinf(th)) < 1e-4f && fabsf(a.beta + I * cosf(th)) < 1e-4f,
+              "alpha = I sin, beta = -I cos at %g", (double)th);
+        float thd = bc_theta_d(th);
+        bc_dq dq = bc_park(a, sinf(thd), cosf(thd));
+        CHECK(fabsf(dq.q - I) < 1e-4f * I && fabsf(dq.d) < 1e-4f * I, "q along the back-EMF: i_q = I, i_d = 0 at %g: "
+              "(%g, %g)", (double)th, (double)dq.d, (double)dq.q);
+        /* d is the PM flux axis, 90 degrees behind q: a current set leading i_q by 90 degrees lies on -d */
+        bc_abc i2 = {I * cosf(th), I * cosf(th - BC_TWO_PI_F / 3.0f), I * cosf(th - 2.0f * BC_TWO_PI_F / 3.0f)};
+        bc_dq dq2 = bc_park(bc_clarke(i2), sinf(thd), cosf(thd));
+        CHECK(fabsf(dq2.d + I) < 1e-4f * I && fabsf(dq2.q) < 1e-4f * I, "90 degrees ahead of q is -d at %g",
+              (double)th);
+        bc_abc back = bc_clarke_inv(bc_park_inv(dq, sinf(thd), cosf(thd)));
+        CHECK(fabsf(back.a - i.a) < 1e-3f && fabsf(back.b - i.b) < 1e-3f && fabsf(back.c - i.c) < 1e-3f,
+              "round trip abc -> dq -> abc");
+    }
+    CHECK_NEAR(bc_wrap_2pi(-0.5f), 2.0 * BC_PI - 0.5, 1e-5, "wrap negative");
+    CHECK(bc_wrap_2pi(NAN) == 0.0f && bc_wrap_2pi(INFINITY) == 0.0f, "wrap non-finite");
+    CHECK_NEAR(bc_theta_d(0.25f), 0.25 + BC_PI, 1e-5, "theta_d = theta - pi, wrapped");
+}
+
+static void test_svm(void)
+{
+    float d[3];
+    /* linear range: the half-period averages of the line voltages equal the references' differences */
+    int worst_lin = 0;
+    double worst = 0.0;
+    for (int k = 0; k < 20000; ++k) {
+        float vdc = (float)(1.0 + 100.0 * rnd());
+        bc_abc v = {(float)((rnd() - 0.5) * 2.0 * (double)vdc), (float)((rnd() - 0.5) * 2.0 * (double)vdc),
+                    (float)((rnd() - 0.5) * 2.0 * (double)vdc)};
+        float hi = fmaxf(v.a, fmaxf(v.b, v.c)), lo = fminf(v.a, fminf(v.b, v.c));
+        int r = bc_svm(v, vdc, d);
+        for (int x = 0; x < 3; ++x) CHECK(d[x] >= 0.0f && d[x] <= 1.0f, "duty in [0, 1]");
+        if (hi - lo <= 0.999f * vdc) {
+            worst_lin |= r;
+            double e1 = fabs((double)((d[0] - d[1]) * vdc) - (double)(v.a - v.b));
+            double e2 = fabs((double)((d[1] - d[2]) * vdc) - (double)(v.b - v.c));
+            worst = fmax(worst, fmax(e1, e2) / (double)vdc);
+            CHECK_NEAR(0.5f * (fmaxf(d[0], fmaxf(d[1], d[2])) + fminf(d[0], fminf(d[1], d[2]))), 0.5, 1e-6,
+                       "min-max: centred between the rails");
+        } else if (hi - lo > 1.001f * vdc) {
+            CHECK(r == BC_SVM_CLIPPED, "outside the hexagon: clipped");
+        }
+    }
+    CHECK(worst_lin == BC_SVM_LINEAR, "inside the hexagon: linear");
+    CHECK(worst < 1e-6, "line voltages averaged = references: worst error %.3g of V_dc", worst);
+    /* a balanced sine of peak V_dc / sqrt(3) is the largest that stays linear */
+    int clipped_at = 0, clipped_over = 0;
+    for (int k = 0; k < 360; ++k) {
+        float th = (float)k * (BC_TWO_PI_F / 360.0f);
+        float a = 48.0f / BC_SQRT3_F;
+        bc_abc v = {a * sinf(th), a * sinf(th - BC_TWO_PI_F / 3.0f), a * sinf(th + BC_TWO_PI_F / 3.0f)};
+        clipped_at |= bc_svm(v, 48.0f, d);
+        bc_abc w = {1.02f * v.a, 1.02f * v.b, 1.02f * v.c};
+        clipped_over |= bc_svm(w, 48.0f, d);
+    }
+    CHECK(clipped_at == BC_SVM_LINEAR && clipped_over == BC_SVM_CLIPPED, "sine limit V_dc/sqrt(3)");
+    CHECK(bc_svm((bc_abc){NAN, 0.0f, 0.0f}, 48.0f, d) == BC_SVM_CLIPPED && d[0] == 0.5f && d[1] == 0.5f,
+          "NaN reference: duties 1/2");
+    CHECK(bc_svm((bc_abc){1.0f, 0.0f, 0.0f}, 0.0f, d) == BC_SVM_CLIPPED && d[2] == 0.5f, "v_dc = 0: duties 1/2");
+    bc_svm((bc_abc){3e38f, -3e38f, 0.0f}, 48.0f, d);
+    for (int x = 0; x < 3; ++x) CHECK(isfinite(d[x]) && d[x] >= 0.0f && d[x] <= 1.0f, "huge references");
+}
+
+static void test_params(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    bc_sine_params p, q;
+    static bc_sine_state s;
+    sine_params(&p, &f);
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "htm parameters accepted");
+    CHECK(s.mode == BC_SINE_MODE_START && s.tripped == 0, "starts in the square-wave mode");
+    memset(&q, 0, sizeof q);
+    CHECK(bc_sine_init(&q, &s) == BC_ERR_PARAM, "zeroed parameters rejected");
+    CHECK(bc_sine_init(0, &s) == BC_ERR_PARAM && bc_sine_init(&p, 0) == BC_ERR_PARAM, "NULL rejected");
+#define BAD(stmt, what)                                                    \
+    do {                                                                   \
+        q = p;                                                             \
+        stmt;                                                              \
+        CHECK(bc_sine_init(&q, &s) == BC_ERR_PARAM, "rejected: %s", what); \
+    } while (0)
+    BAD(q.p = 0, "p = 0");
+    BAD(q.L = 0.0f, "L = 0");
+    BAD(q.R = -1.0f, "R < 0");
+    BAD(q.k_1 = NAN, "k_1 NaN");
+    BAD(q.k_phi = 0.0f, "k_phi = 0");
+    BAD(q.ts = 0.0f, "ts = 0");
+    BAD(q.kp = -1.0f, "kp < 0");
+    BAD(q.ki = INFINITY, "ki inf");
+    BAD(q.i_s_max = 0.0f, "i_s_max = 0");
+    BAD(q.i_max = NAN, "i_max NaN");
+    BAD(q.v_max = 0.0f, "v_max = 0");
+    BAD(q.decouple = 2, "decouple = 2");
+    BAD(q.advance = 5.0f, "advance = 5");
+    BAD(q.limit = 2, "limit = 2");
+    BAD(q.angle = -1, "angle = -1");
+    BAD(q.emf_n = 2, "emf_n = 2");
+    BAD(q.emf_k[1] = 0, "emf table NULL");
+    BAD(q.omega_off = 2.0f * q.omega_on, "omega_off > omega_on");
+    BAD(q.omega_on = 0.0f, "omega_on = 0");
+    BAD(q.f_tick = 0.0f, "f_tick = 0");
+    BAD((q.speed_loop = 1, q.tau_max = 0.0f), "speed loop without a torque limit");
+    BAD(q.six.ref_torque = 0, "start controller not in torque mode");
+    BAD(q.six.L = 0.0f, "start controller parameters");
+#undef BAD
+    q = p;
+    q.emf_ff = 0;
+    q.emf_k[0] = 0;
+    CHECK(bc_sine_init(&q, &s) == BC_OK, "no tables needed without feed-forward");
+    emf_tab[2][7] = NAN;
+    CHECK(bc_sine_init(&p, &s) == BC_ERR_PARAM, "non-finite table value rejected");
+    sine_params(&p, &f);
+}
+
+static void test_safe_states(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    bc_sine_params p;
+    static bc_sine_state s;
+    sine_params(&p, &f);
+    rotor r = {0.3, 8.0 * 0.5 * 75.0, 0.0, 0.0, f.sp.f_tick};
+    bc_ctrl_in in;
+    bc_ctrl_out out;
+    const uint32_t SAFE_HALL = BC_FLAG_SAFE | BC_FLAG_HALL_INVALID, SAFE_BAD = BC_FLAG_SAFE | BC_FLAG_BAD_INPUT;
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    for (uint32_t code = 0u; code < 8u; code += 7u) {
+        rotor_in(&r, 0.0, 10.0f, &in);
+        in.hall = code;
+        bc_sine_step(&p, &s, &in, &out);
+        CHECK(out.flags == SAFE_HALL, "Hall code %u: flags 0x%x", code, out.flags);
+        for (int x = 0; x < 3; ++x) CHECK(out.leg[x].mode == BC_LEG_OFF && out.leg[x].duty == 0.0f, "legs off");
+    }
+    const char *what[] = {"NaN current", "inf current", "v_dc = 0", "v_dc < 0", "v_dc NaN", "ref NaN", "one phase"};
+    for (int k = 0; k < 7; ++k) {
+        rotor_in(&r, 1e-3, 10.0f, &in);
+        if (k == 0) in.i_abc[0] = NAN;
+        if (k == 1) in.i_abc[1] = -INFINITY;
+        if (k == 2) in.v_dc = 0.0f;
+        if (k == 3) in.v_dc = -48.0f;
+        if (k == 4) in.v_dc = NAN;
+        if (k == 5) in.ref = NAN;
+        if (k == 6) in.i_mask = 4u;
+        bc_sine_step(&p, &s, &in, &out);
+        CHECK(out.flags == SAFE_BAD, "%s: flags 0x%x", what[k], out.flags);
+        for (int x = 0; x < 3; ++x) CHECK(out.leg[x].mode == BC_LEG_OFF, "%s: legs off", what[k]);
+    }
+    /* an unmeasured phase may hold anything */
+    rotor_in(&r, 1e-3, 10.0f, &in);
+    in.i_abc[2] = NAN;
+    bc_sine_step(&p, &s, &in, &out);
+    CHECK(!(out.flags & BC_FLAG_SAFE), "unmeasured phase ignored: flags 0x%x", out.flags);
+    /* encoder angle: a NaN encoder is bad input only when it is used */
+    bc_sine_params pe = p;
+    pe.angle = BC_SINE_ANGLE_ENCODER;
+    CHECK(bc_sine_init(&pe, &s) == BC_OK, "init encoder");
+    in.theta_enc = NAN;
+    bc_sine_step(&pe, &s, &in, &out);
+    CHECK(out.flags == SAFE_BAD, "NaN encoder angle");
+    /* over-current on the derived phase c, latched until init */
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    rotor_in(&r, 1e-3, 10.0f, &in);
+    in.i_abc[0] = 60.0f;
+    in.i_abc[1] = 60.0f; /* i_c = -120 A */
+    bc_sine_step(&p, &s, &in, &out);
+    CHECK(out.flags == (BC_FLAG_SAFE | BC_FLAG_OVERCURRENT), "over-current on the derived phase: 0x%x", out.flags);
+    rotor_in(&r, 2e-3, 10.0f, &in);
+    bc_sine_step(&p, &s, &in, &out);
+    CHECK(out.flags == (BC_FLAG_SAFE | BC_FLAG_OVERCURRENT) && out.leg[0].mode == BC_LEG_OFF, "trip latched");
+    CHECK(bc_sine_init(&p, &s) == BC_OK && s.tripped == 0, "init clears the trip");
+}
+
+/* Random and extreme inputs, every option: the output is always finite, duties in [0, 1], modes valid. */
+static void test_fuzz(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    bc_sine_params base;
+    sine_params(&base, &f);
+    static const float special[] = {NAN, INFINITY, -INFINITY, 3e38f, -3e38f, 1e-38f, -1e-38f, 0.0f, 1e6f, -1e6f};
+    int bad_out = 0, n_sine = 0;
+    for (int variant = 0; variant < 8; ++variant) {
+        bc_sine_params p = base;
+        p.angle = variant & 1;
+        p.limit = (variant >> 1) & 1;
+        p.overmod = (variant >> 2) & 1;
+        p.speed_loop = variant == 3 || variant == 6;
+        p.tau_max = 40.0f;
+        p.emf_ff = variant != 5;
+        p.omega_on = (variant & 1) ? 1.0f : p.omega_on; /* reach the sine mode easily */
+        p.omega_off = (variant & 1) ? 0.5f : p.omega_off;
+        p.omega_min = (variant & 1) ? 0.1f : p.omega_min;
+        static bc_sine_state s;
+        CHECK(bc_sine_init(&p, &s) == BC_OK, "init variant %d", variant);
+        uint32_t tick = 0u, edges = 0u, hall_code = 1u, tick_edge = 0u;
+        for (int k = 0; k < 30000; ++k) {
+            bc_ctrl_in in;
+            memset(&in, 0, sizeof in);
+            int wild = (rnd_u32() % 64u) == 0u;
+            for (int x = 0; x < 3; ++x) {
+                in.i_abc[x] = wild ? special[rnd_u32() % 10u] : (float)((rnd() - 0.5) * 160.0);
+            }
+            in.i_mask = wild ? rnd_u32() : 3u;
+            in.v_dc = wild ? special[rnd_u32() % 10u] : (float)(1.0 + 100.0 * rnd());
+            tick += (uint32_t)(rnd_u32() % 2000u);
+            if (rnd_u32() % 16u == 0u) { /* a Hall edge, mostly forward */
+                int sec = bc_hall_sector(hall_code);
+                hall_code = bc_sector_code((sec + ((rnd_u32() % 4u) == 0u ? 5 : 1)) % 6);
+                edges += 1u;
+                tick_edge = tick;
+            }
+            in.hall = wild ? (rnd_u32() % 9u) : hall_code;
+            in.n_edges = wild ? rnd_u32() : edges;
+            in.tick_edge = wild ? rnd_u32() : tick_edge;
+            in.tick_now = tick;
+            in.theta_enc = wild ? special[rnd_u32() % 10u] : (float)(rnd() * 7.0);
+            in.omega_enc = (float)(rnd() * 100.0);
+            in.ref = wild ? special[rnd_u32() % 10u] : (float)((rnd() - 0.5) * 200.0);
+            in.omega_ref = wild ? special[rnd_u32() % 10u] : (float)((rnd() - 0.5) * 200.0);
+            bc_ctrl_out out;
+            bc_sine_step(&p, &s, &in, &out);
+            for (int x = 0; x < 3; ++x) {
+                if (!(out.leg[x].duty >= 0.0f && out.leg[x].duty <= 1.0f) || out.leg[x].mode < BC_LEG_OFF ||
+                    out.leg[x].mode > BC_LEG_LOW)
+                    bad_out += 1;
+            }
+            for (int j = 0; j < BC_DIAG_N; ++j) bad_out += !isfinite(out.diag[j]);
+            n_sine += s.mode == BC_SINE_MODE_SINE;
+            if (s.tripped) (void)bc_sine_init(&p, &s);
+        }
+    }
+    CHECK(bad_out == 0, "every output finite, duties in [0, 1]: %d bad", bad_out);
+    CHECK(n_sine > 1000, "the sine mode was exercised: %d samples", n_sine);
+}
+
+/* Limits of the current reference, linear modulation, and the bumpless hand-off on a synthetic rotor. */
+static void test_limits_and_handoff(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    bc_sine_params p;
+    static bc_sine_state s;
+    sine_params(&p, &f);
+    p.emf_ff = 0; /* the hand-off voltage is then the model's exactly (no table ripple on q) */
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    double k1 = k1_trap(), R = 0.05, L = 75e-6, Ts = (double)p.ts;
+    double wm = 37.5, we = 8.0 * wm; /* 0.5 Omega_0 */
+    rotor r = {0.3, we, i_sn(), 0.0, f.sp.f_tick};
+    float tau_n = (float)(1.5 * k1 * i_sn()); /* T_s,N (12) */
+    bc_ctrl_in in;
+    bc_ctrl_out out;
+    int k_switch = -1, n_sat = 0;
+    double worst_spread = 0.0, worst_theta = 0.0;
+    for (int k = 0; k < 2000; ++k) {
+        rotor_in(&r, k * Ts, tau_n, &in);
+        int before = s.mode;
+        bc_sine_step(&p, &s, &in, &out);
+        if (before == BC_SINE_MODE_START && s.mode == BC_SINE_MODE_SINE && k_switch < 0) {
+            k_switch = k;
+            /* bumpless: the first sine output is the voltage the present state needs (i_d = 0, i_q = I_s,N) */
+            CHECK_NEAR(out.diag[4], wm * k1 + R * i_sn(), 0.02, "hand-off v_q = omega_m k_1 + R i_q");
+            CHECK_NEAR(out.diag[3], -we * L * i_sn(), 0.02, "hand-off v_d = -omega_e L i_q");
+        }
+        if (s.mode == BC_SINE_MODE_SINE) {
+            double hi = fmax(out.leg[0].duty, fmax(out.leg[1].duty, out.leg[2].duty));
+            double lo = fmin(out.leg[0].duty, fmin(out.leg[1].duty, out.leg[2].duty));
+            worst_spread = fmax(worst_spread, hi - lo);
+            n_sat += (out.flags & BC_FLAG_SATURATED) != 0u;
+            double th = fmod(0.3 + we * k * Ts, 2.0 * BC_PI), dth = fabs((double)out.diag[5] - th);
+            worst_theta = fmax(worst_theta, fmin(dth, 2.0 * BC_PI - dth));
+            CHECK_NEAR(out.diag[2], i_sn(), 1e-3, "i_q,ref = tau / (1.5 k_1) = I_s,N");
+            for (int x = 0; x < 3; ++x) CHECK(out.leg[x].mode == BC_LEG_PWM, "complementary legs");
+        }
+    }
+    CHECK(k_switch > 0 && k_switch < 400, "hand-off after two Hall edges: sample %d", k_switch);
+    CHECK(n_sat == 0 && worst_spread < 1.0, "linear modulation at half speed: duty spread %.3f", worst_spread);
+    CHECK(worst_theta < 1e-3, "Hall-interpolated angle at constant speed: error %.2g rad", worst_theta);
+
+    /* torque reference beyond the rating: |i_q,ref| <= I_s,N (8), both signs */
+    for (int sgn = -1; sgn <= 1; sgn += 2) {
+        rotor_in(&r, 2000 * Ts, (float)sgn * 1e4f, &in);
+        bc_sine_step(&p, &s, &in, &out);
+        CHECK_NEAR(out.diag[2], sgn * i_sn(), 1e-3, "|i_q,ref| <= I_s,N");
+    }
+    /* above the base speed: I_s,sat ((23) with R) */
+    for (int lim = 0; lim <= 1; ++lim) {
+        p.speed_limit = lim;
+        CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+        double w2 = 0.97 * 75.0, we2 = 8.0 * w2;
+        rotor r2 = {0.3, we2, 20.0, 0.0, f.sp.f_tick};
+        for (int k = 0; k < 400; ++k) {
+            rotor_in(&r2, k * Ts, tau_n, &in);
+            bc_sine_step(&p, &s, &in, &out);
+        }
+        double isat = (48.0 - 2.0 * K_PHI * w2) / (sqrt(3.0) / 2.0 * we2 * L + 1.5 * R);
+        CHECK(s.mode == BC_SINE_MODE_SINE, "sine mode at 0.97 Omega_0");
+        CHECK_NEAR(out.diag[2], lim ? isat : i_sn(), 2e-3 * i_sn(), lim ? "I_s,sat (23) with R" : "limit off");
+    }
+    /* with R = 0, (23) exactly: I_s,sat = 2/sqrt(3) (V - 2 k_phi Omega) / (p Omega L) */
+    p.speed_limit = 1;
+    p.R = 0.0f;
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    {
+        double w2 = 0.97 * 75.0;
+        rotor r2 = {0.3, 8.0 * w2, 20.0, 0.0, f.sp.f_tick};
+        for (int k = 0; k < 400; ++k) {
+            rotor_in(&r2, k * Ts, tau_n, &in);
+            bc_sine_step(&p, &s, &in, &out);
+        }
+        double i23 = 2.0 / sqrt(3.0) * (48.0 - 2.0 * K_PHI * w2) / (8.0 * w2 * L);
+        CHECK_NEAR(out.diag[2], i23, 2e-3 * i23, "paper 1 (23)");
+    }
+}
+
+/* Flying start: coast until the rotor is known to be slower than omega_on. */
+static void test_flying_start(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    bc_sine_params p;
+    static bc_sine_state s;
+    sine_params(&p, &f);
+    p.flying_start = 1;
+    double Ts = (double)p.ts;
+    float tau_n = (float)(1.5 * k1_trap() * i_sn());
+    bc_ctrl_in in;
+    bc_ctrl_out out;
+    /* a rotor turning at 0.9 Omega_0 with a braking torque: legs off until the sine mode takes over */
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    rotor r = {0.3, 8.0 * 0.9 * 75.0, 0.0, 0.0, f.sp.f_tick};
+    int k_sine = -1, active_before = 0;
+    for (int k = 0; k < 600; ++k) {
+        rotor_in(&r, k * Ts, -tau_n, &in);
+        bc_sine_step(&p, &s, &in, &out);
+        if (s.mode == BC_SINE_MODE_SINE && k_sine < 0) k_sine = k;
+        if (k_sine < 0) {
+            for (int x = 0; x < 3; ++x) active_before |= out.leg[x].mode != BC_LEG_OFF;
+            CHECK(out.flags == 0u, "coasting is not a fault");
+        }
+    }
+    double t_two_edges = 2.0 * (BC_PI / 3.0) / r.we;
+    CHECK(k_sine > 0 && k_sine * Ts < t_two_edges + 2.0 * Ts, "sine after two edges: %.3f ms", k_sine * Ts * 1e3);
+    CHECK(!active_before, "no square-wave braking at high speed");
+    double isat = (48.0 - 2.0 * K_PHI * 0.9 * 75.0) / (sqrt(3.0) / 2.0 * r.we * 75e-6 + 1.5 * 0.05);
+    CHECK_NEAR(out.diag[2], -isat, 2e-3 * isat, "braking at -I_s,sat");
+    /* at standstill the square-wave start begins once no edge came for (pi/3) / omega_on */
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    rotor r0 = {0.3, 1e-9, 0.0, 0.0, f.sp.f_tick};
+    int k_act = -1;
+    for (int k = 0; k < 1000 && k_act < 0; ++k) {
+        rotor_in(&r0, k * Ts, tau_n, &in);
+        bc_sine_step(&p, &s, &in, &out);
+        if (out.leg[0].mode != BC_LEG_OFF || out.leg[1].mode != BC_LEG_OFF || out.leg[2].mode != BC_LEG_OFF) k_act = k;
+    }
+    double t_wait = (BC_PI / 3.0) / (double)p.omega_on;
+    CHECK(k_act > 0 && fabs(k_act * Ts - t_wait) <= 2.0 * Ts, "square-wave start after %.3f ms (wait %.3f ms)",
+          k_act * Ts * 1e3, t_wait * 1e3);
+    /* without flying start the square wave drives from the first sample */
+    p.flying_start = 0;
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    rotor_in(&r0, 0.0, tau_n, &in);
+    bc_sine_step(&p, &s, &in, &out);
+    CHECK(out.leg[0].mode != BC_LEG_OFF || out.leg[1].mode != BC_LEG_OFF, "start at once");
+}
+
+/* Closed loop, htm-48v with R = 0 at imposed half speed: mean torque (13) and ripple (15) of paper 1. */
+static void test_closed_loop_imposed(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.R = 0.0;
+    static bc_sine_params p;
+    static bc_sine_state s;
+    sine_params(&p, &f); /* model R = 0; the PI keeps the gains designed for 50 mOhm */
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    static bc_sim_config cfg;
+    static bc_sim_inputs in;
+    static bc_sim_state st;
+    memset(&cfg, 0, sizeof cfg);
+    memset(&in, 0, sizeof in);
+    cfg.plant = &f.p;
+    cfg.sensors = &f.sp;
+    cfg.delay = 1;
+    cfg.trace_every = 1;
+    cfg.trace_sub = 1;
+    double om = 37.5, Te = 2.0 * BC_PI / (8.0 * om), TN = 2.0 * K_PHI * I_N;
+    cfg.metric_t0 = 2.0 * Te;
+    cfg.metric_t1 = 4.0 * Te;
+    in.omega_c = om;
+    in.v_src_c = 48.0;
+    in.ref_c = 1.5 * k1_trap() * i_sn();
+    cfg.ctrl.step = sine_slot;
+    cfg.ctrl.params = &p;
+    cfg.ctrl.state = &s;
+    static const double i0[3] = {0.0, 0.0, 0.0};
+    CHECK(bc_sim_init(&cfg, &st, 0.3, om, i0, 48.0) == BC_OK, "sim init");
+    int64_t n = (int64_t)ceil(4.1 * Te / bc_plant_t_half(&f.p)), nw = 0;
+    CHECK(bc_sim_run(&cfg, &st, &in, n, 0, 0, &nw) == BC_OK, "run");
+    CHECK(st.m.state == 2, "window closed");
+    double tau = st.m.E[BC_ACC_TAU] / (st.m.t1 - st.m.t0) / TN;
+    double rip = (st.m.tau_ma_max - st.m.tau_ma_min) / TN;
+    CHECK_NEAR(tau, 18.0 / (sqrt(3.0) * BC_PI * BC_PI), 0.005, "mean torque (13), p.u.");
+    CHECK_NEAR(rip, 2.0 / sqrt(3.0) - 1.0, 0.02, "PWM-averaged ripple (15), p.u.");
+    for (int x = 0; x < 3; ++x) {
+        CHECK(fabs(st.m.i_peak[x] - i_sn()) < 0.05 * i_sn(), "peak current %.2f A", st.m.i_peak[x]);
+    }
+}
+
+/* Closed loop from standstill with the rotor mechanics: square-wave start, hand-off at 0.1 Omega_N, no current
+ * above 1.2 I_N around the switch. */
+static void test_closed_loop_start(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_DYNAMIC);
+    static bc_sine_params p;
+    static bc_sine_state s;
+    sine_params(&p, &f);
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    static bc_sim_config cfg;
+    static bc_sim_inputs in;
+    static bc_sim_state st;
+    memset(&cfg, 0, sizeof cfg);
+    memset(&in, 0, sizeof in);
+    cfg.plant = &f.p;
+    cfg.sensors = &f.sp;
+    cfg.ctrl.step = sine_slot;
+    cfg.ctrl.params = &p;
+    cfg.ctrl.state = &s;
+    cfg.delay = 1;
+    cfg.trace_every = 1;
+    cfg.trace_sub = 1;
+    in.v_src_c = 48.0;
+    in.ref_c = 1.5 * k1_trap() * i_sn(); /* T_s,N */
+    in.tau_load_c = 0.5 * 2.0 * K_PHI * I_N;
+    static const double i0[3] = {0.0, 0.0, 0.0};
+    CHECK(bc_sim_init(&cfg, &st, 0.3, 0.0, i0, 48.0) == BC_OK, "sim init");
+    enum { N = 1680 }; /* 60 ms */
+    static bc_trace_row rows[N];
+    int64_t nw = 0;
+    CHECK(bc_sim_run(&cfg, &st, &in, N, rows, N, &nw) == BC_OK && nw == N, "run");
+    int k_sw = -1, safe = 0;
+    for (int k = 0; k < N; ++k) {
+        if (k_sw < 0 && rows[k].d7 == 1.0) k_sw = k;
+        safe |= ((uint32_t)rows[k].flags & BC_FLAG_SAFE) != 0u;
+    }
+    CHECK(!safe, "never safe");
+    CHECK(k_sw > 0, "hands off to the sine mode");
+    if (k_sw <= 0) return;
+    CHECK(rows[k_sw].d6 >= 8.0 * 0.1 * OMEGA_N * (1.0 - 1e-6), "Hall speed at the switch %.2f rad/s >= 0.1 Omega_N",
+          rows[k_sw].d6);
+    CHECK(rows[k_sw].omega_m >= 0.1 * OMEGA_N, "rotor speed at the switch %.2f rad/s", rows[k_sw].omega_m);
+    double peak = 0.0;
+    for (int k = k_sw - 140; k < k_sw + 280 && k < N; ++k) { /* 5 ms before, 10 ms after */
+        for (int x = 0; x < 3; ++x) peak = fmax(peak, fabs((&rows[k].i_a)[x]));
+    }
+    CHECK(peak <= 1.2 * I_N, "no current above 1.2 I_N around the switch: %.2f A", peak);
+    int back = 0;
+    for (int k = k_sw; k < N; ++k) back |= rows[k].d7 != 1.0;
+    CHECK(!back, "stays in the sine mode while accelerating");
+    CHECK(st.plant.omega > rows[k_sw].omega_m, "keeps accelerating: %.2f rad/s", st.plant.omega);
+}
+
+int main(void)
+{
+    test_transforms();
+    test_svm();
+    test_params();
+    test_safe_states();
+    test_fuzz();
+    test_limits_and_handoff();
+    test_flying_start();
+    test_closed_loop_imposed();
+    test_closed_loop_start();
+    return bc_test_summary("test_sine");
+}

@@ -1,0 +1,255 @@
+"""Sinusoidal current supply of a PM BLDC motor, paper 1 section V (``core/include/bldc/bc_sine.h``).
+
+d,q current control on the Hall-interpolated angle (paper 1 (46)), torque reference to current by (45), current
+limits that keep the modulation linear ((8) and (23) with R), min-max SVM, optional back-EMF feed-forward from the
+motor's shapes, square-wave start below a hand-off speed. The theory and the measurements are in ``docs/sine.md``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, ClassVar, Literal
+
+import numpy as np
+
+from ..analytic import i_sN, r_total
+from ..design import pi_gains
+from ..errors import BldclabError
+from .base import Control
+from .sixstep import SixStep
+
+if TYPE_CHECKING:
+    from .._core import Core
+    from ..motor import Drive
+
+__all__ = ["Sine", "fundamental_k1"]
+
+_ANGLE = {"hall": 0, "encoder": 1}
+_LIMIT = {"hexagon": 0, "circle": 1}
+
+
+def fundamental_k1(drive: Drive) -> float:
+    """Return the amplitude ``k_1`` of the back-EMF fundamental (V s/rad), mean over the three phases.
+
+    For the ideal 120-degree trapezoid ``k_1 = 12/pi^2 k_phi`` (paper 1 (10)).
+
+    Parameters
+    ----------
+    drive : Drive
+        The drive whose back-EMF shapes are used.
+
+    Returns
+    -------
+    float
+        Amplitude (V s/rad).
+    """
+    amps = []
+    for shape in drive.motor.emf.shapes:
+        a, b = shape.fourier(1)
+        amps.append(math.hypot(float(a[1]), float(b[1])))
+    return float(np.mean(amps))
+
+
+def _pos(name: str, v: object, allow_zero: bool = False) -> None:
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v < 0 or (
+            v == 0 and not allow_zero):
+        raise BldclabError(f"control.{name}", f"must be a finite number {'>=' if allow_zero else '>'} 0, got {v!r}")
+
+
+@dataclass(frozen=True)
+class Sine(Control):
+    """Sinusoidal current supply (paper 1): d,q PI current loops, SVM, square-wave start.
+
+    The reference (``Scenario.ref``) is the torque in N m (or, with ``speed_loop``, ``Scenario.omega_ref`` is the
+    mechanical speed in rad/s). Torque to current: ``i_q,ref = tau / (1.5 k_1)`` with ``k_1`` the back-EMF
+    fundamental (paper 1 (45)); the current is limited to ``I_s,N = 2/sqrt(3) I_N`` (8) and, above the base speed,
+    to the amplitude the bus can impress in linear modulation ((23) with R).
+
+    Parameters
+    ----------
+    angle : {"hall", "encoder"}
+        Angle for the d,q transforms: the Hall-interpolated angle (paper 1 (46)), or the encoder (an ideal
+        reference for comparison). The speed comes from the Hall sensors either way.
+    emf_feedforward : bool
+        Add the back-EMF ``omega_m k_x(theta)`` from the motor's own shapes (tables of ``emf_points`` points) to the
+        phase voltage references, so the trapezoid's harmonics do not distort the currents.
+    decoupling : bool
+        Add the R-L steady-state voltages ``R i_ref + omega_e L J i_ref`` to the PI outputs.
+    advance : float
+        Voltage angle advance in samples (half PWM periods): 1.5 compensates one sample of computation delay and
+        half a sample of PWM; 0 switches the compensation off.
+    limit : {"hexagon", "circle"}
+        Linear-modulation limit: the whole linear range of min-max SVM (line voltages <= ``V_dc``), or its
+        inscribed circle ``|v_alpha,beta| <= V_dc / sqrt(3)``.
+    overmodulation : bool
+        Explicit overmodulation: no linear limit, the duties clip.
+    speed_limit : bool
+        Reduce the current amplitude above the base speed ((23) with R). Off: the current stays at the reference
+        and the voltage limit does the rest (for measuring the base speed).
+    bandwidth_hz, phase_margin_deg : float
+        Current-loop design (paper 1: 1 kHz, 90 deg), :func:`bldclab.design.pi_gains` without delay.
+    R_design : float, optional
+        Resistance (Ohm) the PI gains are designed for. Default: the drive's ``R + R_on``, but at least
+        ``omega_c L / 10``: the 90-degree design cancels the R-L pole (``k_i = omega_c R``), so with a small R
+        the integral action would vanish (R = 0: none at all, and a steady error of about 1 % of the current
+        remains); the floor puts the PI zero a decade below the crossover (phase margin 84 deg). Given
+        explicitly, it is used as is. The controller's model (limits, decoupling, hand-off) always uses the
+        drive's ``R + R_on``.
+    handoff_speed : float, optional
+        Mechanical speed (rad/s) above which the sinusoidal supply takes over from the square-wave start; default
+        ``0.1 Omega_N`` (paper 1, V.B).
+    handoff_hysteresis : float
+        Fraction of ``handoff_speed`` below it at which the drive returns to the square-wave start (-), in [0, 1).
+    i_max : float, optional
+        Over-current trip (A); default ``2 I_N``.
+    emf_points : int
+        Points per back-EMF table (uniform over one electrical period; a multiple of 12 holds the corners of a
+        120-degree trapezoid).
+    speed_loop : bool
+        Outer speed PI on the Hall speed; the torque reference becomes its output.
+    speed_bandwidth_hz : float
+        Crossover of the speed loop (Hz) for the default gains: ``k_p = J omega_b``, ``k_i = k_p omega_b / 4``
+        (``omega_b = 2 pi speed_bandwidth_hz``, ``J`` of the drive's mechanics; phase margin 76 deg).
+    speed_kp, speed_ki : float, optional
+        Speed PI gains (N m s/rad, N m/rad), overriding the defaults.
+    tau_max : float, optional
+        Torque limit of the speed loop (N m); default ``T_s,N`` (12).
+    start : SixStep
+        The square-wave start below the hand-off speed (:class:`~bldclab.control.SixStep`, composed: its own
+        settings; its ``reference`` is set to ``"torque"``, since the sine supply passes it the torque reference).
+    flying_start : bool
+        Coast (legs off) in the start mode until the rotor is known to be slower than the hand-off speed (a valid
+        Hall speed below it, or no Hall edge for the time the rotor takes for 60 electrical degrees at that
+        speed). For runs that enable the drive on a rotor already turning fast (a dynamometer at imposed speed),
+        so that the sine mode takes over after two Hall edges without square-wave braking at high speed.
+    """
+
+    angle: Literal["hall", "encoder"] = "hall"
+    emf_feedforward: bool = True
+    decoupling: bool = True
+    advance: float = 1.5
+    limit: Literal["hexagon", "circle"] = "hexagon"
+    overmodulation: bool = False
+    speed_limit: bool = True
+    bandwidth_hz: float = 1000.0
+    phase_margin_deg: float = 90.0
+    R_design: float | None = None
+    handoff_speed: float | None = None
+    handoff_hysteresis: float = 0.2
+    i_max: float | None = None
+    emf_points: int = 360
+    speed_loop: bool = False
+    speed_bandwidth_hz: float = 5.0
+    speed_kp: float | None = None
+    speed_ki: float | None = None
+    tau_max: float | None = None
+    start: SixStep = field(default_factory=lambda: SixStep(reference="torque"))
+    flying_start: bool = False
+    c_name: ClassVar[str] = "sine"
+    ref_meaning: ClassVar[str] = "torque, N m"
+
+    def __post_init__(self) -> None:
+        if self.angle not in _ANGLE:
+            raise BldclabError("control.angle", f"must be one of {', '.join(_ANGLE)}, got {self.angle!r}")
+        if self.limit not in _LIMIT:
+            raise BldclabError("control.limit", f"must be one of {', '.join(_LIMIT)}, got {self.limit!r}")
+        for name in ("emf_feedforward", "decoupling", "overmodulation", "speed_limit", "speed_loop", "flying_start"):
+            if not isinstance(getattr(self, name), bool):
+                raise BldclabError(f"control.{name}", f"must be True or False, got {getattr(self, name)!r}")
+        _pos("advance", self.advance, allow_zero=True)
+        if self.advance > 4:
+            raise BldclabError("control.advance", f"must be within [0, 4] samples, got {self.advance!r}")
+        _pos("bandwidth_hz", self.bandwidth_hz)
+        _pos("phase_margin_deg", self.phase_margin_deg)
+        for name in ("R_design", "handoff_speed", "i_max", "tau_max"):
+            v = getattr(self, name)
+            if v is not None:
+                _pos(name, v, allow_zero=name == "R_design")
+        _pos("handoff_hysteresis", self.handoff_hysteresis, allow_zero=True)
+        if self.handoff_hysteresis >= 1:
+            raise BldclabError("control.handoff_hysteresis", f"must be in [0, 1), got {self.handoff_hysteresis!r}")
+        if isinstance(self.emf_points, bool) or not isinstance(self.emf_points, int) or not 3 <= self.emf_points \
+                <= 4096:
+            raise BldclabError("control.emf_points", f"must be an integer in [3, 4096], got {self.emf_points!r}")
+        if not isinstance(self.start, SixStep):
+            raise BldclabError("control.start", f"must be a bldclab.SixStep, got {type(self.start).__name__}")
+        _pos("speed_bandwidth_hz", self.speed_bandwidth_hz)
+        for name in ("speed_kp", "speed_ki"):
+            if getattr(self, name) is not None:
+                _pos(name, getattr(self, name), allow_zero=True)
+
+    def gains(self, drive: Drive) -> tuple[float, float]:
+        """Return the d,q current PI gains ``(k_p, k_i)`` (V/A, V/(A s)) for a drive.
+
+        Parameters
+        ----------
+        drive : Drive
+            Uses its inductance and resistance (or ``R_design``).
+
+        Returns
+        -------
+        tuple of float
+            ``k_p`` (V/A) and ``k_i`` (V/(A s)).
+        """
+        return pi_gains(self._r_design(drive, 1.0), drive.motor.L, self.bandwidth_hz, self.phase_margin_deg)
+
+    def _r_design(self, drive: Drive, scale: float) -> float:
+        """Design resistance of a loop of ``scale`` phases in series (Ohm)."""
+        if self.R_design is not None:
+            return scale * float(self.R_design)
+        wc = 2.0 * math.pi * self.bandwidth_hz
+        return scale * max(r_total(drive), wc * drive.motor.L / 10.0)
+
+    def describe(self) -> dict[str, object]:  # noqa: D102
+        out = super().describe()
+        out["start"] = self.start.describe()
+        return out
+
+    def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:  # noqa: D102
+        m, inv, sen = drive.motor, drive.inverter, drive.sensors
+        rec = core.record("bc_sine_params")
+        R = r_total(drive)
+        kp, ki = self.gains(drive)
+        k1 = fundamental_k1(drive)
+        rec["p"] = m.p
+        rec["R"] = R
+        rec["L"] = m.L
+        rec["k_phi"] = m.k_phi
+        rec["k_1"] = k1
+        rec["ts"] = 0.5 / inv.f_pwm
+        rec["kp"] = kp
+        rec["ki"] = ki
+        rec["v_max"] = 2.0 * inv.V_dc
+        rec["i_s_max"] = i_sN(drive)
+        rec["i_max"] = 2.0 * m.I_N if self.i_max is None else self.i_max
+        rec["speed_limit"] = int(self.speed_limit)
+        rec["decouple"] = int(self.decoupling)
+        rec["advance"] = self.advance
+        rec["limit"] = _LIMIT[self.limit]
+        rec["overmod"] = int(self.overmodulation)
+        rec["emf_ff"] = int(self.emf_feedforward)
+        rec["emf_n"] = self.emf_points
+        th = np.arange(self.emf_points) * (2.0 * math.pi / self.emf_points)
+        for x, shape in enumerate(m.emf.shapes):
+            tab = np.ascontiguousarray(shape(th), dtype=np.float32)
+            keep.append(tab)
+            rec["emf_k"][0, x] = tab.ctypes.data
+        rec["angle"] = _ANGLE[self.angle]
+        on = 0.1 * m.Omega_nominal if self.handoff_speed is None else float(self.handoff_speed)
+        rec["f_tick"] = sen.f_tick
+        rec["omega_on"] = m.p * on
+        rec["omega_off"] = m.p * on * (1.0 - self.handoff_hysteresis)
+        rec["omega_min"] = 0.25 * m.p * on * (1.0 - self.handoff_hysteresis)  # Hall speed valid well below omega_off
+        rec["theta_offset"] = 0.0
+        start = self.start if self.start.reference == "torque" else dataclasses.replace(self.start, reference="torque")
+        rec["six"][0] = start.c_params(drive, core, keep, n_samples)[0]
+        rec["flying_start"] = int(self.flying_start)
+        rec["speed_loop"] = int(self.speed_loop)
+        wb = 2.0 * math.pi * self.speed_bandwidth_hz
+        kp_w = drive.mechanics.J * wb if self.speed_kp is None else self.speed_kp
+        rec["kp_w"] = kp_w
+        rec["ki_w"] = kp_w * wb / 4.0 if self.speed_ki is None else self.speed_ki
+        rec["tau_max"] = 1.5 * k1 * i_sN(drive) if self.tau_max is None else self.tau_max
+        return rec

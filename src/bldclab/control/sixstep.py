@@ -1,0 +1,167 @@
+"""Real square-wave (120-degree) current-controlled supply, paper 1 section IV.A (``core/include/bldc/bc_sixstep.h``).
+
+Hall commutation with the outgoing phase left to freewheel through its diode, the current of the incoming phase
+regulated by a PI, a hysteresis band or a predictive ("deadbeat") law, with a selectable chopping pattern. The
+theory, the design of the predictive law and the measurements against paper 1 are in ``docs/sixstep.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, ClassVar, Literal
+
+import numpy as np
+
+from ..analytic import r_total
+from ..design import pi_gains
+from ..errors import BldclabError
+from .base import Control
+
+if TYPE_CHECKING:
+    from .._core import Core
+    from ..motor import Drive
+
+__all__ = ["SixStep"]
+
+_REG = {"pi": 0, "hysteresis": 1, "predictive": 2}
+_CHOP = {"bipolar": 0, "high": 1, "pwm-on-pwm": 2, "sync": 3}
+_REF = {"current": 0, "torque": 1}
+
+
+def _number(name: str, v: object, *, allow_zero: bool = False, allow_none: bool = False) -> None:
+    if v is None and allow_none:
+        return
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v < 0 or (
+            v == 0 and not allow_zero):
+        raise BldclabError(f"control.{name}", f"must be a finite number {'>=' if allow_zero else '>'} 0, got {v!r}")
+
+
+@dataclass(frozen=True)
+class SixStep(Control):
+    """Real square-wave current supply: Hall commutation, 120-degree conduction, current regulation.
+
+    The reference (``Scenario.ref``) is the current amplitude ``I`` in A (``reference="current"``) or the torque in
+    N m (``reference="torque"``, converted to ``I = tau / (2 k_phi)``, paper 1 (6)). A negative reference reverses
+    the torque (the two conducting phases swap roles).
+
+    Parameters
+    ----------
+    regulation : {"predictive", "pi", "hysteresis"}
+        ``predictive``: the duty that brings the incoming phase's current to the reference at the sample after next,
+        from an average model of the inverter and motor (full voltage when it cannot: paper 1's idealisation);
+        ``pi``: PI on the line current with back-EMF feed-forward, gains from :func:`bldclab.design.pi_gains` for
+        the line ``2 R``, ``2 L``; ``hysteresis``: on below ``I - band/2``, off above ``I + band/2`` at the samples.
+    chopping : {"pwm-on-pwm", "bipolar", "high", "sync"}
+        ``pwm-on-pwm``: a phase chops in the first and last 30 degrees of its conduction and is fully on in the
+        middle 60 (the pattern that realises paper 1's commutation); ``bipolar``: both conducting legs chop;
+        ``high``: the positive phase's upper switch chops, the negative phase's lower switch stays on; ``sync``: as
+        ``high`` with a complementary (synchronous) positive leg.
+    reference : {"current", "torque"}
+        Meaning of ``Scenario.ref``.
+    delay : int
+        Samples between computing and applying an output, 0 or 1; must equal ``Scenario.delay`` (the predictive
+        law predicts over it).
+    advance : bool
+        Commutate at the sample nearest the Hall edge predicted from the Hall speed, instead of on the edge seen
+        (which is on average 1.5 samples late with ``delay = 1``).
+    bandwidth_hz, phase_margin_deg : float
+        PI design (paper 1: 1 kHz, 90 deg) for the line R-L ``(2 R, 2 L)``, used when ``kp``/``ki`` are not given.
+    kp, ki : float, optional
+        PI gains (V/A, V/(A s)) overriding the design.
+    emf_feedforward : bool
+        PI: add the line back-EMF estimate and ``2 R I`` to the PI output.
+    regen : bool
+        Let the unipolar patterns (``pwm-on-pwm``, ``high``, ``sync``) reach negative pair voltages by switching
+        both legs as ``bipolar`` does, when the regulation asks for one. Without it their lowest voltage is 0
+        (freewheeling, which short-circuits the line back-EMF): a braking current cannot be held once the line
+        back-EMF exceeds ``2 R I``, and the hysteresis "off" state freewheels instead of returning the current to
+        the bus.
+    band : float, optional
+        Hysteresis band, total width (A); default ``0.1 I_N``.
+    i_max : float, optional
+        Over-current trip and reference limit (A); default ``2 I_N``.
+    omega_min : float, optional
+        Slowest speed the Hall estimate reports (electrical rad/s); default ``0.01 p Omega_0``.
+    theta_offset : float
+        Hall angle correction (electrical rad).
+    """
+
+    regulation: Literal["predictive", "pi", "hysteresis"] = "predictive"
+    chopping: Literal["pwm-on-pwm", "bipolar", "high", "sync"] = "pwm-on-pwm"
+    reference: Literal["current", "torque"] = "current"
+    delay: int = 1
+    advance: bool = True
+    bandwidth_hz: float = 1000.0
+    phase_margin_deg: float = 90.0
+    kp: float | None = None
+    ki: float | None = None
+    emf_feedforward: bool = True
+    regen: bool = True
+    band: float | None = None
+    i_max: float | None = None
+    omega_min: float | None = None
+    theta_offset: float = 0.0
+    c_name: ClassVar[str] = "sixstep"
+    ref_meaning: ClassVar[str] = "current amplitude, A (or torque, N m)"
+
+    def __post_init__(self) -> None:
+        for name, table in (("regulation", _REG), ("chopping", _CHOP), ("reference", _REF)):
+            if getattr(self, name) not in table:
+                raise BldclabError(f"control.{name}", f"must be one of {', '.join(table)}, got {getattr(self, name)!r}")
+        if self.delay not in (0, 1) or isinstance(self.delay, bool):
+            raise BldclabError("control.delay", f"must be 0 or 1 sample, got {self.delay!r}")
+        for name in ("advance", "emf_feedforward", "regen"):
+            if not isinstance(getattr(self, name), bool):
+                raise BldclabError(f"control.{name}", f"must be True or False, got {getattr(self, name)!r}")
+        _number("bandwidth_hz", self.bandwidth_hz)
+        _number("phase_margin_deg", self.phase_margin_deg)
+        _number("kp", self.kp, allow_zero=True, allow_none=True)
+        _number("ki", self.ki, allow_zero=True, allow_none=True)
+        for name in ("band", "i_max", "omega_min"):
+            _number(name, getattr(self, name), allow_none=True)
+        if isinstance(self.theta_offset, bool) or not isinstance(self.theta_offset, int | float) or not math.isfinite(
+                self.theta_offset):
+            raise BldclabError("control.theta_offset", f"must be a finite number, got {self.theta_offset!r}")
+
+    def gains(self, drive: Drive) -> tuple[float, float]:
+        """Return the PI gains ``(k_p, k_i)`` of the line current loop (V/A, V/(A s)).
+
+        Parameters
+        ----------
+        drive : Drive
+            Its ``R + R_on`` and ``L`` give the line plant ``1 / (2 R + s 2 L)``.
+
+        Returns
+        -------
+        tuple of float
+            ``k_p`` (V/A) and ``k_i`` (V/(A s)): the given ones, else :func:`bldclab.design.pi_gains`.
+        """
+        kp, ki = pi_gains(2.0 * r_total(drive), 2.0 * drive.motor.L, self.bandwidth_hz, self.phase_margin_deg)
+        return (kp if self.kp is None else float(self.kp)), (ki if self.ki is None else float(self.ki))
+
+    def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:  # noqa: D102
+        m, inv = drive.motor, drive.inverter
+        kp, ki = self.gains(drive)
+        rec = core.record("bc_sixstep_params")
+        rec["reg"] = _REG[self.regulation]
+        rec["chop"] = _CHOP[self.chopping]
+        rec["ref_torque"] = _REF[self.reference]
+        rec["delay"] = self.delay
+        rec["advance"] = int(self.advance)
+        rec["emf_ff"] = int(self.emf_feedforward)
+        rec["regen"] = int(self.regen)
+        rec["p"] = m.p
+        rec["ts"] = 0.5 / inv.f_pwm
+        rec["R"] = r_total(drive)
+        rec["L"] = m.L
+        rec["k_e"] = 2.0 * m.k_phi
+        rec["kp"] = kp
+        rec["ki"] = ki
+        rec["band"] = 0.1 * m.I_N if self.band is None else self.band
+        rec["i_max"] = 2.0 * m.I_N if self.i_max is None else self.i_max
+        rec["v_max"] = 2.0 * inv.V_dc
+        rec["f_tick"] = drive.sensors.f_tick
+        rec["omega_min"] = 0.01 * m.p * drive.Omega_0 if self.omega_min is None else self.omega_min
+        rec["theta_offset"] = self.theta_offset
+        return rec
