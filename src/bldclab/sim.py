@@ -291,6 +291,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario) -> SimResult:
     if not isinstance(control, Control):
         raise BldclabError("control", f"expected a bldclab.control controller, got {type(control).__name__}")
     c = core()
+    control = control.with_delay(scenario.delay)
     keep: list[object] = []
     n = samples_of(drive, scenario.duration)
     t_half = 0.5 / drive.inverter.f_pwm
@@ -346,7 +347,9 @@ def simulate(drive: Drive, control: Control, scenario: Scenario) -> SimResult:
     cfg["trace_every"] = scenario.trace_every
     cfg["trace_sub"] = scenario.trace_sub
     if scenario.window is not None:
-        cfg["metric_t0"], cfg["metric_t1"] = scenario.window
+        # the run ends at the last whole sample; a window ending within rounding of it closes there
+        t0w, t1w = scenario.window
+        cfg["metric_t0"], cfg["metric_t1"] = t0w, min(t1w, n * t_half)
 
     state = c.opaque("bc_sim_state")
     i0 = np.ascontiguousarray(scenario.i0, dtype=float)

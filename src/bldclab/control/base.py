@@ -23,6 +23,14 @@ class Control:
         """Return the filled C parameter record; arrays it points to are appended to ``keep``."""
         raise NotImplementedError  # pragma: no cover - abstract
 
+    def with_delay(self, delay: int) -> Control:
+        """Return the controller configured for the runner's computation delay (samples, 0 or 1).
+
+        :func:`bldclab.simulate` calls this with ``Scenario.delay``, so a controller that predicts across the delay
+        always knows the delay actually applied. Controllers without such a setting return themselves.
+        """
+        return self
+
     def describe(self) -> dict[str, object]:
         """Return the settings as plain values (for result metadata)."""
         out: dict[str, object] = {"controller": self.c_name}

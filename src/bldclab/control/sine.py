@@ -207,6 +207,9 @@ class Sine(Control):
         out["start"] = self.start.describe()
         return out
 
+    def with_delay(self, delay: int) -> Control:  # noqa: D102 - Control.with_delay: the square-wave start's delay
+        return self if delay == self.start.delay else dataclasses.replace(self, start=self.start.with_delay(delay))
+
     def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:  # noqa: D102
         m, inv, sen = drive.motor, drive.inverter, drive.sensors
         rec = core.record("bc_sine_params")

@@ -7,6 +7,7 @@ theory, the design of the predictive law and the measurements against paper 1 ar
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar, Literal
@@ -60,8 +61,8 @@ class SixStep(Control):
     reference : {"current", "torque"}
         Meaning of ``Scenario.ref``.
     delay : int
-        Samples between computing and applying an output, 0 or 1; must equal ``Scenario.delay`` (the predictive
-        law predicts over it).
+        Samples between computing and applying an output, 0 or 1 (the predictive law predicts over it);
+        :func:`bldclab.simulate` sets it from ``Scenario.delay``.
     advance : bool
         Commutate at the sample nearest the Hall edge predicted from the Hall speed, instead of on the edge seen
         (which is on average 1.5 samples late with ``delay = 1``).
@@ -139,6 +140,9 @@ class SixStep(Control):
         """
         kp, ki = pi_gains(2.0 * r_total(drive), 2.0 * drive.motor.L, self.bandwidth_hz, self.phase_margin_deg)
         return (kp if self.kp is None else float(self.kp)), (ki if self.ki is None else float(self.ki))
+
+    def with_delay(self, delay: int) -> Control:  # noqa: D102 - Control.with_delay
+        return self if delay == self.delay else dataclasses.replace(self, delay=delay)
 
     def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:  # noqa: D102
         m, inv = drive.motor, drive.inverter
