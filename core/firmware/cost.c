@@ -16,7 +16,7 @@
 #include "bldc/bc_types.h"
 #include "targets.h"
 
-static void make_input(const char *scenario, long k, bc_ctrl_in *in)
+static void make_input(const bc_fw_target *tg, const char *scenario, long k, bc_ctrl_in *in)
 {
     static const uint32_t seq[6] = {1u, 3u, 2u, 6u, 4u, 5u};
     memset(in, 0, sizeof *in);
@@ -24,15 +24,15 @@ static void make_input(const char *scenario, long k, bc_ctrl_in *in)
     long e = k / per_edge;
     in->hall = seq[e % 6];
     in->n_edges = (uint32_t)e;
-    in->tick_edge = (uint32_t)(e * per_edge * 357);
-    in->tick_now = (uint32_t)(k * 357);
+    in->tick_edge = (uint32_t)((float)(e * per_edge) * tg->tick_per_ts);
+    in->tick_now = (uint32_t)((float)k * tg->tick_per_ts);
     float th = 0.1f * (float)k;
-    in->i_abc[0] = 50.0f * sinf(th);
-    in->i_abc[1] = 50.0f * sinf(th - 2.0944f);
-    in->i_abc[2] = 50.0f * sinf(th + 2.0944f);
+    in->i_abc[0] = tg->i_amp * sinf(th);
+    in->i_abc[1] = tg->i_amp * sinf(th - 2.0944f);
+    in->i_abc[2] = tg->i_amp * sinf(th + 2.0944f);
     in->i_mask = 3u;
-    in->v_dc = 48.0f;
-    in->ref = 0.5f;
+    in->v_dc = tg->v_dc;
+    in->ref = tg->ref;
     in->omega_ref = 30.0f;
     in->theta_enc = fmodf(th, 6.2831853f);
     in->omega_enc = 30.0f;
@@ -59,7 +59,7 @@ int main(int argc, char **argv)
             return 1;
         }
         static bc_ctrl_in inputs[1024];
-        for (long k = 0; k < 1024; ++k) make_input(argv[2], k, &inputs[k]);
+        for (long k = 0; k < 1024; ++k) make_input(tg, argv[2], k, &inputs[k]);
         bc_ctrl_out out;
         double sink = 0.0;
         for (long k = 0; k < n; ++k) {

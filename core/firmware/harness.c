@@ -50,6 +50,12 @@ static const bc_sine_params P = HTM_SINE_PARAMS;
 static bc_sine_state S;
 #define INIT() bc_sine_init(&P, &S)
 #define STEP(in, out) bc_sine_step(&P, &S, in, out)
+#elif defined(BC_FW_LU)
+#include "params.h"
+static const bc_lu_params P = LU4KW_LU_PARAMS;
+static bc_lu_state S;
+#define INIT() bc_lu_init(&P, &S)
+#define STEP(in, out) bc_lu_step(&P, &S, in, out)
 #else
 #define INIT() 0
 #define STEP(in, out) ((out)->diag[0] = (in)->ref)

@@ -6,6 +6,7 @@
 #ifndef BC_FW_PARAMS_H
 #define BC_FW_PARAMS_H
 
+#include "bldc/bc_lu.h"
 #include "bldc/bc_sine.h"
 #include "bldc/bc_sixstep.h"
 
@@ -28,5 +29,14 @@ static const float HTM_EMF_12[12] = {0.0f,  0.32f,  0.32f,  0.32f,  0.32f,  0.32
      .emf_k = {HTM_EMF_12, HTM_EMF_12, HTM_EMF_12}, .angle = BC_SINE_ANGLE_HALL, .f_tick = 10e6f,                 \
      .omega_min = 10.0f, .theta_offset = 0.0f, .omega_on = 53.6f, .omega_off = 42.9f,                             \
      .six = HTM_SIXSTEP_PARAMS(1), .flying_start = 0, .speed_loop = 0, .kp_w = 0.0f, .ki_w = 0.0f, .tau_max = 0.0f}
+
+/* bc_lu on the lu-4kw drive (paper 2: 2 pole pairs, 0.059 Ohm, 0.29 mH, 300 V, 10 kHz PWM sampled at 20 kHz),
+ * with a 12-point ideal trapezoid for its shape tables (k_phi 0.4 V s/rad). */
+static const float LU_F_12[12] = {0.0f, 0.4f, 0.4f, 0.4f, 0.4f, 0.4f, 0.0f, -0.4f, -0.4f, -0.4f, -0.4f, -0.4f};
+
+#define LU4KW_LU_PARAMS                                                                                           \
+    {.f = {LU_F_12, LU_F_12, LU_F_12}, .n = 12, .p = 2, .method = BC_LU_TORQUE, .delay = 1, .order = 1,            \
+     .L = 0.29e-3f, .R = 0.059f, .ts = 50e-6f, .i_max = 48.0f, .i_zero = 0.16f, .v_max = 600.0f, .k_phi = 0.4f,     \
+     .kp = 3.63f, .ki = 1939.0f, .f_tick = 20e6f, .omega_min = 7.5f, .theta_offset = 0.0f}
 
 #endif /* BC_FW_PARAMS_H */

@@ -42,6 +42,11 @@ static bc_sine_state sine_s;
 static int sine_init(void) { return bc_sine_init(&sine_p, &sine_s); }
 STEP_FN sine_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sine_step(&sine_p, &sine_s, in, out); }
 
+static const bc_lu_params lu_p = LU4KW_LU_PARAMS;
+static bc_lu_state lu_s;
+static int lu_init(void) { return bc_lu_init(&lu_p, &lu_s); }
+STEP_FN lu_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_lu_step(&lu_p, &lu_s, in, out); }
+
 #ifdef BC_FUZZ_CANARY
 /* A deliberately wrong controller (built only by the test that proves the fuzz checks can fail): on a NaN bus it
  * emits a duty above 1 instead of the safe state. */
@@ -54,12 +59,13 @@ STEP_FN canary_step(const bc_ctrl_in *in, bc_ctrl_out *out)
 
 const bc_fw_target bc_fw_targets[] = {
 #ifdef BC_FUZZ_CANARY
-    {"canary", BC_USES_HALL, sixv_init, canary_step},
+    {"canary", BC_USES_HALL, sixv_init, canary_step, 48.0f, 50.0f, 0.5f, 357.0f},
 #endif
-    {"sixv", BC_USES_HALL, sixv_init, sixv_step},
-    {"sixstep", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sixstep_init, sixstep_step},
-    {"sine", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sine_init, sine_step},
-    {"hall", BC_IS_BLOCK, hall_init, hall_step},
-    {"pi", BC_IS_BLOCK, pi_init, pi_step},
+    {"sixv", BC_USES_HALL, sixv_init, sixv_step, 48.0f, 50.0f, 0.5f, 357.0f},
+    {"sixstep", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sixstep_init, sixstep_step, 48.0f, 50.0f, 50.0f, 357.0f},
+    {"sine", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sine_init, sine_step, 48.0f, 57.7f, 33.7f, 357.0f},
+    {"lu", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, lu_init, lu_step, 300.0f, 15.9f, 12.7f, 1000.0f},
+    {"hall", BC_IS_BLOCK, hall_init, hall_step, 48.0f, 50.0f, 0.0f, 357.0f},
+    {"pi", BC_IS_BLOCK, pi_init, pi_step, 48.0f, 50.0f, 10.0f, 357.0f},
 };
 const int bc_fw_n_targets = (int)(sizeof bc_fw_targets / sizeof bc_fw_targets[0]);

@@ -18,6 +18,10 @@ typedef struct {
     unsigned uses;
     int (*init)(void);
     void (*step)(const bc_ctrl_in *in, bc_ctrl_out *out);
+    float v_dc;        /* nominal DC bus of the drive it is configured for, V */
+    float i_amp;       /* nominal phase current amplitude, A */
+    float ref;         /* a nominal reference (the controller's own unit) */
+    float tick_per_ts; /* capture-timer ticks per sample */
 } bc_fw_target;
 
 extern const bc_fw_target bc_fw_targets[];

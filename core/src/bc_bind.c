@@ -151,12 +151,14 @@ extern const bc_bind_provider bc_bind_openloop_table;
 extern const bc_bind_provider bc_bind_openloop_sixv;
 extern const bc_bind_provider bc_bind_sixstep;
 extern const bc_bind_provider bc_bind_sine;
+extern const bc_bind_provider bc_bind_lu;
 
 static const bc_bind_provider *const PROVIDERS[] = {
     &bc_bind_openloop_table,
     &bc_bind_openloop_sixv,
     &bc_bind_sixstep,
     &bc_bind_sine,
+    &bc_bind_lu,
 };
 
 #define N_PROVIDERS ((int32_t)(sizeof PROVIDERS / sizeof PROVIDERS[0]))

@@ -5,7 +5,7 @@ from __future__ import annotations
 __version__ = "0.1.0"
 
 from .catalog import load
-from .control import Control, OpenLoop, Sine, SixStep, SixStepVoltage
+from .control import Control, Lu, OpenLoop, Sine, SixStep, SixStepVoltage
 from .errors import BldclabError
 from .motor import (
     BackEmf,
@@ -32,6 +32,7 @@ __all__ = [
     "Fault",
     "Fourier",
     "Inverter",
+    "Lu",
     "Mechanics",
     "Metrics",
     "Motor",

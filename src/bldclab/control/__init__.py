@@ -8,8 +8,9 @@ family; adding one: a module here with a :class:`Control` subclass, and its impo
 from __future__ import annotations
 
 from .base import Control
+from .lu import Lu
 from .openloop import OpenLoop, SixStepVoltage
 from .sine import Sine
 from .sixstep import SixStep
 
-__all__ = ["Control", "OpenLoop", "Sine", "SixStep", "SixStepVoltage"]
+__all__ = ["Control", "Lu", "OpenLoop", "Sine", "SixStep", "SixStepVoltage"]

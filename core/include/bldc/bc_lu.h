@@ -1,0 +1,208 @@
+/*
+ * bc_lu.h - paper 2's torque controller (H. Lu, L. Zhang, W. Qu, IEEE Trans. Power Electron. 2008) and the two
+ * methods it is compared with: torque control neglecting the finite DC bus (no D_o) and conventional rectangular
+ * current control (float). Derivations and conventions: docs/theory-paper2.md.
+ *
+ * Notation. The Hall sector gives the phase driven positive and the one driven negative (bc_commutation.h). With
+ * T* = in.ref (N m) >= 0 the pair is P = pos, N = neg; with T* < 0 the roles swap (reverse torque). F is the third
+ * phase, whose leg is off (in a commutation: the outgoing phase). V = measured v_dc; Omega_e from bc_hall,
+ * w = Omega_e / p (mechanical); theta from bc_hall (angle interpolated between Hall edges, paper 2 Figs 8-9).
+ * f_x = f_x(theta - x 2 pi/3) are the back-EMF shape functions (25), V s/rad, read from three tables of n uniform
+ * points of the phase's local angle by linear interpolation; e_x = w f_x. Sums run over a, b, c:
+ *
+ *     T      = sum f_x i_x                                    torque (1) with e = f w: w cancels (defined at w = 0)
+ *     fbar   = (f_a + f_b + f_c) / 3,    g = (f_a - f_b)^2 + (f_b - f_c)^2 + (f_c - f_a)^2,    lam = f_P - f_N
+ *
+ * One-step models (the paper's state-space averages over one sample T_s, shapes frozen over the step, R i taken
+ * at the start of the step; the paper neglects R, here R = params.R, 0 reproduces the paper). Bipolar chopping:
+ * S = +1 for D T_s (P's upper and N's lower switch on), S = -1 otherwise (both off, the diodes conduct):
+ *
+ *   (6)/(7)   F open:       di_P = -di_N = T_s (V (2D - 1) - w lam - 2 R i_P) / (2 L)
+ *   (14)/(15) F conducts through its diode (v_F = 0 if i_F > 0, V if i_F < 0), three phases:
+ *                           di_x = T_s (v_x - v_n - w f_x - R i_x) / L,   v_n = (v_a + v_b + v_c - w sum f) / 3,
+ *                           v_P = D V, v_N = (1 - D) V   (average terminal voltages over the sample)
+ *   (22)      D_o mode:     the same with v_P = V, v_N = 0, v_F = D_o V (i_F > 0) or (1 - D_o) V (i_F < 0)
+ *   extinction: in (14)/(15) v_n does not depend on D, so F's slope s_F = (v_F - v_n - w f_F - R i_F) / L does not
+ *             either. If i_F + s_F T_s has the other sign, F opens at t_x = -i_F / s_F inside the sample: the step is
+ *             (14)/(15) over [0, t_x] and (6)/(7) over [t_x, T_s] (the duty enters both with the same gain).
+ *
+ * Laws: the duty that makes the model's T(k+1) = T*, written with the shapes (w appears only in numerators):
+ *
+ *   (9')   D_n = 1/2 + (T* - T) L / (V T_s lam) + w lam / (2 V) + R i_P / V                        F open
+ *   (17')  D_c = [(T* - T) L / T_s + w g / 3 + R T - V (f_N - fbar) - v_F (f_F - fbar)] / (V lam)   F conducts all T_s
+ *   (D_s)  D_s = D_n + i_F L (2 f_F - f_P - f_N) / (2 V T_s lam) + R t_x i_F / (2 V T_s)      F opens at t_x < T_s
+ *   (24')  D_o = [(T* - T) L / T_s + w g / 3 + R T - B] / (sig V (f_F - fbar)),   sig = sign(i_F),
+ *               B = V (f_P - fbar) (i_F > 0),  B = -V (f_N - fbar) (i_F < 0)
+ *
+ * (9') is paper (9), (17') is (17) (with i_F > 0: P incoming, N non-commutated, F outgoing; i_F < 0 is the mirror
+ * image), (24') is (24), each multiplied out with e = f w and R added. D_s (not in the paper) is the exact
+ * solution of the split step: D_s -> D_n as i_F -> 0 and D_s = D_c when t_x = T_s.
+ *
+ * Switching logic (one sample; "conducts" = |i_F| > i_zero):
+ *   - F open: normal conduction, pos HIGH D_n, neg LOW D_n (S = -1: both off, diodes), F off.    mode 0
+ *   - F conducts: commutation, the pair (incoming and non-commutated phases) chops with D_c (or D_s), F off so its
+ *     diode freewheels.                                                                         mode 1
+ *   - method LU, D_c (or D_s) > 1 (torque still short at full duty), and the D_o lever sig (f_F - fbar) has the
+ *     torque's sign: D_o mode: P HIGH 1, N LOW 1, F HIGH D_o (i_F > 0) or LOW D_o (i_F < 0), with D_o kept
+ *     between D_zero (F reaches exactly 0 at the end of the sample: (22) is invalid past the zero) and D_hold
+ *     (i_F constant: D_o slows the outgoing current, it never stops or reverses it).             mode 2
+ *   - The commutation ends when |i_F| <= i_zero (measured, or predicted with delay 1).
+ *   - method NO_DO: as LU without the D_o mode (paper 2's "torque control neglecting finite dc bus").
+ *   - method RECT: conventional rectangular current control: the same pairs and bipolar chopping, F off; a PI
+ *     (bc_pi) on the current of the non-commutated phase in the pair's direction, i_m = -i_N if i_F >= 0, i_P if
+ *     i_F < 0 (the pair current i_P = -i_N in two-phase conduction), holds I* = min(|T*| / (2 k_phi), i_max):
+ *         u = k_p (I* - i_m) + x   (V, pair voltage, no back-EMF feed-forward),   D = 1/2 + u / (2 V),
+ *     the integrator updated with the realised u = (2 D - 1) V (anti-windup), and negated when the sign of T*
+ *     changes (the swapped pair's back-EMF has the other sign).
+ *   Duties are clamped to [0, 1] (BC_FLAG_SATURATED when clamped).
+ *
+ * Switching order (order = 1; not in the paper). The averaged models assume both phases of the pair conduct in
+ * both switch states. A pair phase with zero current cannot conduct in the off state (its diode would have to carry
+ * current the wrong way): the incoming phase at the start of a commutation, and any phase in discontinuous
+ * conduction. Centre-aligned PWM puts the off part of a rising half period (after a carrier valley) first and that
+ * of a falling half period last, so the end current then depends on the order. With order = 1 the step follows the
+ * half period part by part (the same circuit, R i at the start of the step, a diode-only phase opening when its
+ * current reaches zero: exact for R = 0 and frozen shapes) and the PAIR duty is the root of T(k+1) = T* in [0, 1]
+ * (Illinois method started from the closed-form duty, which is returned unchanged whenever the averaged model holds).
+ * The half period's direction comes from counting samples from bc_lu_init, which the runner calls before its first
+ * sample, taken at a carrier valley (firmware: the PWM timer's counting direction).
+ *
+ * Delay. The runner applies an output one sample after it was computed (delay = 1, the DSP case) or at once
+ * (delay = 0, what the paper's laws assume: the duty computed at k acts over [k, k+1]). With delay = 1 the step
+ * first predicts i(k+1) from the measured i(k) under the command already in force over [k, k+1] (the same models),
+ * takes theta(k+1) = theta(k) + Omega_e T_s, and solves the law for [k+1, k+2] from there. With delay = 0 the laws
+ * start from the measurements.
+ *
+ * Guards. |lam| (and the D_o lever) below lever_min = 1e-3 max|f| is replaced by lever_min with its sign: the
+ * duties saturate instead of dividing by ~0 (only a wrong angle puts the pair near a zero crossing). Omega_e = 0
+ * (standstill, no two Hall edges yet): the angle is the middle of the sector and every law still holds.
+ *
+ * Safety: invalid Hall code (000, 111) -> all legs off, BC_FLAG_HALL_INVALID | BC_FLAG_SAFE. Non-finite measured
+ * current, fewer than two measured phases, v_dc non-finite, <= 0 or > v_max, non-finite reference -> all legs off,
+ * BC_FLAG_BAD_INPUT | BC_FLAG_SAFE. |i_x| > i_max on any measured or reconstructed phase -> all legs off,
+ * BC_FLAG_OVERCURRENT | BC_FLAG_SAFE, latched until every |i_x| < i_max / 2 at a sample (or bc_lu_init).
+ * Output duties are finite and in [0, 1] for any input.
+ *
+ * Diagnostics: diag[0] mode (-1 safe, 0 normal, 1 commutation D_c/D_s, 2 D_o), [1] duty computed (D_n, D_c, D_s or
+ * D_o; RECT: D), [2] T estimated at this sample from the measured currents (N m), [3] the model's torque at the
+ * next sample (N m: under the new output with delay 0, under the output in force with delay 1), [4] theta (rad),
+ * [5] Omega_e (electrical rad/s), [6] i_F of the new output's off phase at the start of its interval (A),
+ * [7] sector (-1 safe).
+ */
+#ifndef BC_LU_H
+#define BC_LU_H
+
+#include <stdint.h>
+
+#include "bldc/bc_hall.h"
+#include "bldc/bc_pi.h"
+#include "bldc/bc_types.h"
+
+/* method */
+#define BC_LU_TORQUE 0 /* paper 2: D_n, D_c, D_o */
+#define BC_LU_NO_DO 1  /* paper 2 without D_o: "torque control neglecting finite dc bus" */
+#define BC_LU_RECT 2   /* conventional rectangular current control (PI), same commutation and chopping */
+
+/* plan kinds: what an output does (kept for the delay-1 prediction) */
+#define BC_LU_SAFE 0 /* all legs off */
+#define BC_LU_PAIR 1 /* P HIGH d, N LOW d, F off: normal conduction and commutation (D_n, D_c, D_s, RECT) */
+#define BC_LU_DO 2   /* P HIGH 1, N LOW 1, F HIGH d (i_F > 0) or LOW d (i_F < 0) */
+
+typedef struct {
+    const float *f[3];  /* shape tables f_a, f_b, f_c: f_x at its local angle 2 pi j / n, j = 0..n-1, V s/rad */
+    int32_t n;          /* points per table (>= 3) */
+    int32_t p;          /* pole pairs (>= 1) */
+    int32_t method;     /* BC_LU_TORQUE, BC_LU_NO_DO, BC_LU_RECT */
+    int32_t delay;      /* samples between computing and applying an output, 0 or 1 (as the runner/DSP) */
+    int32_t order;      /* 0: the averaged models; 1: also the switching order within the half period (see above) */
+    float L;            /* inclusive phase inductance L_self - M, H (> 0) */
+    float R;            /* phase resistance in the models, Ohm (>= 0; 0: the paper's laws) */
+    float ts;           /* sampling period, half the PWM period, s (> 0) */
+    float i_max;        /* over-current trip, A (> 0) */
+    float i_zero;       /* an off phase with |i| <= i_zero is open (commutation over), A (>= 0, < i_max) */
+    float v_max;        /* largest plausible DC-bus measurement, V (> 0) */
+    float k_phi;        /* RECT: I* = |T*| / (2 k_phi), V s/rad (> 0) */
+    float kp;           /* RECT: PI proportional gain of the pair-current loop, V/A (>= 0) */
+    float ki;           /* RECT: PI integral gain, V/(A s) (>= 0) */
+    float f_tick;       /* Hall capture-timer frequency, Hz (> 0) */
+    float omega_min;    /* Hall: slowest speed estimated, electrical rad/s (> 0) */
+    float theta_offset; /* Hall: angle correction, electrical rad */
+} bc_lu_params;
+
+/* What an output does over its interval. */
+typedef struct {
+    int32_t kind; /* BC_LU_SAFE, BC_LU_PAIR, BC_LU_DO */
+    int32_t pos;  /* P: phase whose upper switch chops (PAIR) or is on (DO) */
+    int32_t neg;  /* N: phase whose lower switch chops (PAIR) or is on (DO) */
+    int32_t off;  /* F: the third phase (off in PAIR, chopping in DO) */
+    int32_t sig;  /* DO: +1 F's upper switch chops (i_F > 0), -1 its lower switch (i_F < 0); PAIR: 0 */
+    float duty;   /* D (PAIR) or D_o (DO) */
+} bc_lu_plan;
+
+typedef struct {
+    bc_hall_params hall_p; /* derived in init */
+    bc_hall_state hall;
+    bc_pi_params pi_p;     /* derived in init: RECT's PI, output the pair voltage in [-v_max, v_max] */
+    bc_pi_state pi;
+    float lever_min;       /* derived in init: 1e-3 max |f|, V s/rad */
+    float tol;             /* derived in init: torque tolerance of the ordered solve, 1e-4 max |f| i_max, N m */
+    bc_lu_plan applied;    /* the output in force over the current sample (delay 1: the previous output) */
+    int32_t oc_latched;    /* over-current trip latched */
+    int32_t parity;        /* 0: the sample being taken is at a carrier valley (the next half period rises) */
+    int32_t dir;           /* RECT: sign of the last torque reference (+1, -1; 0 none yet) */
+} bc_lu_state;
+
+/* An operating point at the start of a step: what the models and laws need. */
+typedef struct {
+    float i[3];    /* phase currents, A (sum 0) */
+    float f[3];    /* shapes at the step's angle, V s/rad */
+    float omega_m; /* mechanical speed, rad/s */
+    float v_dc;    /* DC bus, V (> 0) */
+} bc_lu_point;
+
+/* Validate the parameters (finite, in range, tables present and not all zero) and reset the state.
+ * BC_OK or BC_ERR_PARAM. */
+int bc_lu_init(const bc_lu_params *p, bc_lu_state *s);
+
+/* One sample: measurements in, leg commands for the next half period out (see above). */
+void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_ctrl_out *out);
+
+/* The blocks of the step, exposed for tests. */
+
+/* Linear interpolation of a table of n uniform points over [0, 2 pi) at any finite angle theta (rad). */
+float bc_lu_shape(const float *table, int32_t n, float theta);
+
+/* Shapes f_a, f_b, f_c at the electrical angle theta (each at its local angle theta - x 2 pi/3). */
+void bc_lu_shapes(const bc_lu_params *p, float theta, float f[3]);
+
+/* T = sum f_x i_x (N m). */
+float bc_lu_torque(const bc_lu_point *x);
+
+/* Time (s, in [0, ts]) the off phase F keeps conducting through its diode while P, N chop (the extinction rule
+ * above): 0 if |i_F| <= i_zero, ts if its current does not reach zero within the sample. */
+float bc_lu_extinction(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg);
+
+/* The laws (unclamped duties): (9'), (17'), D_s, (24'). lever_min guards the denominators. */
+float bc_lu_dn(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, float lever_min);
+float bc_lu_dc(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, float lever_min);
+float bc_lu_ds(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, float lever_min);
+float bc_lu_do(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, float lever_min);
+
+/* D_o keeping F's current between zero and constant over the sample: *d_zero (reaches 0 at the end), *d_hold. */
+void bc_lu_do_bounds(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float *d_zero, float *d_hold);
+
+/* The averaged one-step models: the currents at the end of the step under a plan (SAFE: all legs off, ordered). */
+void bc_lu_predict(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan *plan, float i_next[3]);
+
+/* The ordered one-step model: the same circuit followed through the half period's two parts in their order
+ * (rising = 1: off-part first; 0: on-part first), a diode-only phase opening when its current reaches zero. */
+void bc_lu_predict_ordered(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan *plan, int rising,
+                           float i_next[3]);
+
+/* The PAIR duty that makes the ordered model's T(k+1) = T* (|error| <= tol, N m), starting from the closed-form
+ * duty d0; beyond [0, 1] it returns d0 if d0 is beyond on the same side, else 1 + (or -) the shortfall over the
+ * torque range: > 1 means T* is out of reach at full duty, < 0 at zero duty. */
+float bc_lu_solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
+                       float d0, float tol);
+
+#endif /* BC_LU_H */

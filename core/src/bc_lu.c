@@ -1,0 +1,586 @@
+/* bc_lu.c - paper 2's torque controller, its no-D_o variant and rectangular current control. Laws in bc_lu.h,
+ * derivations in docs/theory-paper2.md. */
+#include "bldc/bc_lu.h"
+
+#include <math.h>
+
+#include "bldc/bc_commutation.h"
+
+static float clampf(float v, float lo, float hi) { return v < lo ? lo : (v > hi ? hi : v); }
+
+/* |lev| below lev_min is replaced by lev_min with lev's sign (+ for 0 or NaN): a denominator never near 0. */
+static float guard(float lev, float lev_min)
+{
+    if (fabsf(lev) >= lev_min) return lev;
+    return lev < 0.0f ? -lev_min : lev_min;
+}
+
+/* ---- shapes and torque ------------------------------------------------------------------------------------ */
+
+float bc_lu_shape(const float *table, int32_t n, float theta)
+{
+    float nf = (float)n;
+    if (!isfinite(theta)) theta = 0.0f;
+    /* u = theta n / (2 pi) wrapped to [0, n); f = table[j] + (u - j) (table[j+1] - table[j]), table[n] = table[0] */
+    float u = fmodf(theta * (nf / BC_TWO_PI_F), nf);
+    if (u < 0.0f) u += nf;
+    if (!(u >= 0.0f && u < nf)) u = 0.0f;
+    int32_t j = (int32_t)u;
+    if (j > n - 1) j = n - 1;
+    float fr = u - (float)j;
+    int32_t j1 = j + 1 < n ? j + 1 : 0;
+    return table[j] + fr * (table[j1] - table[j]);
+}
+
+void bc_lu_shapes(const bc_lu_params *p, float theta, float f[3])
+{
+    /* f_x = f_x(theta - x 2 pi/3): each table is a function of its phase's local angle */
+    for (int x = 0; x < 3; ++x) f[x] = bc_lu_shape(p->f[x], p->n, theta - (float)x * (BC_TWO_PI_F / 3.0f));
+}
+
+/* T = sum f_x i_x: (1) with e_x = f_x w, so w cancels */
+float bc_lu_torque(const bc_lu_point *x) { return x->f[0] * x->i[0] + x->f[1] * x->i[1] + x->f[2] * x->i[2]; }
+
+static float sum3(const float v[3]) { return v[0] + v[1] + v[2]; }
+
+/* g / w^2 = (f_a - f_b)^2 + (f_b - f_c)^2 + (f_c - f_a)^2 */
+static float g_of(const float f[3])
+{
+    float ab = f[0] - f[1], bc = f[1] - f[2], ca = f[2] - f[0];
+    return ab * ab + bc * bc + ca * ca;
+}
+
+/* ---- one-step models ------------------------------------------------------------------------------------- */
+
+/* Diode voltage of an off phase: lower diode (0) for i_F > 0, upper diode (V) for i_F < 0. */
+static float v_diode(float i_f, float v) { return i_f >= 0.0f ? 0.0f : v; }
+
+/* Off phase's slope while P and N chop bipolar (v_P + v_N = V at every instant, so v_n does not depend on S):
+ *     s_F = (v_F - v_n - w f_F - R i_F) / L,   v_n = (V + v_F - w sum f) / 3 */
+static float slope_off(const bc_lu_params *p, const bc_lu_point *x, int off)
+{
+    float v_f = v_diode(x->i[off], x->v_dc);
+    float v_n = (x->v_dc + v_f - x->omega_m * sum3(x->f)) / 3.0f;
+    return (v_f - v_n - x->omega_m * x->f[off] - p->R * x->i[off]) / p->L;
+}
+
+float bc_lu_extinction(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg)
+{
+    int off = 3 - pos - neg;
+    float i_f = x->i[off];
+    if (!(fabsf(i_f) > p->i_zero)) return 0.0f;
+    /* i_F(T_s) = i_F + s_F T_s; t_x = T_s i_F / (i_F - i_F(T_s)) = -i_F / s_F when the sign changes */
+    float end = i_f + slope_off(p, x, off) * p->ts;
+    if ((i_f > 0.0f && end > 0.0f) || (i_f < 0.0f && end < 0.0f)) return p->ts;
+    float t_x = p->ts * i_f / (i_f - end); /* |i_f - end| >= |i_f| > i_zero: no division by ~0 */
+    return clampf(t_x, 0.0f, p->ts);
+}
+
+void bc_lu_predict(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan *plan, float i_next[3])
+{
+    if (plan->kind != BC_LU_PAIR && plan->kind != BC_LU_DO) { /* SAFE: all legs off, the diodes conduct */
+        bc_lu_predict_ordered(p, x, plan, 1, i_next);
+        return;
+    }
+    for (int k = 0; k < 3; ++k) i_next[k] = x->i[k];
+    int P = plan->pos, N = plan->neg, F = plan->off;
+    float v = x->v_dc, w = x->omega_m, ts = p->ts, L = p->L, R = p->R;
+    float d = plan->duty;
+    if (plan->kind == BC_LU_PAIR) {
+        float t_x = bc_lu_extinction(p, x, P, N);
+        /* (6)/(7): L di_P/dt = V (2D - 1)/2 + c2,  c2 = w (f_N - f_P)/2 - R i_P                         (F open)
+         * (14)/(15): L di_P/dt = V (2D - 1)/2 + c3,  c3 = V/6 - v_F/3 + w sum f/3 - w f_P - R i_P    (F conducts)
+         * di_P = (T_s V (2D - 1)/2 + t_x c3 + (T_s - t_x) c2) / L;  di_F = s_F T_s, or -i_F if F opens at t_x */
+        float v_f = v_diode(x->i[F], v);
+        float c2 = w * (x->f[N] - x->f[P]) * 0.5f - R * x->i[P];
+        float c3 = v / 6.0f - v_f / 3.0f + w * sum3(x->f) / 3.0f - w * x->f[P] - R * x->i[P];
+        float di_p = (ts * v * (2.0f * d - 1.0f) * 0.5f + t_x * c3 + (ts - t_x) * c2) / L;
+        float di_f = 0.0f;
+        if (t_x > 0.0f) di_f = t_x < ts ? -x->i[F] : slope_off(p, x, F) * ts;
+        i_next[P] = x->i[P] + di_p;
+        i_next[F] = x->i[F] + di_f;
+        i_next[N] = x->i[N] - di_p - di_f;
+        return;
+    }
+    /* (22): di_x = T_s (v_x - v_n - w f_x - R i_x) / L, v_P = V, v_N = 0, v_F = D_o V (sig > 0) or (1 - D_o) V,
+     * v_n = (sum v - w sum f) / 3 */
+    float vt[3];
+    vt[P] = v;
+    vt[N] = 0.0f;
+    vt[F] = plan->sig > 0 ? d * v : (1.0f - d) * v;
+    float v_n = (vt[0] + vt[1] + vt[2] - w * sum3(x->f)) / 3.0f;
+    for (int k = 0; k < 3; ++k) i_next[k] = x->i[k] + ts * (vt[k] - v_n - w * x->f[k] - R * x->i[k]) / L;
+    /* past its zero F would open: (22) does not hold there; stop F at 0 and give the difference to the
+     * non-commutated phase (the pair phase of the other sign) */
+    float sig = plan->sig > 0 ? 1.0f : -1.0f;
+    if (sig * i_next[F] < 0.0f) {
+        int nc = plan->sig > 0 ? N : P;
+        i_next[nc] += i_next[F];
+        i_next[F] = 0.0f;
+    }
+}
+
+/* Leg states within a part of the half period. */
+#define SEG_OFF 0 /* both switches off: a diode carries the current, if any */
+#define SEG_HI 1  /* upper switch on: terminal at V whatever the current's sign */
+#define SEG_LO 2  /* lower switch on: terminal at 0 */
+
+/* Advance the currents over tau seconds with the legs in fixed states: the connected phases C (switched, or off
+ * with current through a diode) obey L di_x/dt = u_x - w f_x - R i_x(0) - v_n, v_n = mean_C (u_x - w f_x - R i_x(0)),
+ * a diode-only phase opens when its current reaches zero (the part is split there), open phases keep i = 0.
+ * r_drop[x] = R i_x at the start of the step (as in the averaged models). */
+static void segment(const bc_lu_params *p, const bc_lu_point *x, const float r_drop[3], const int leg[3], float tau,
+                    float i[3])
+{
+    float v = x->v_dc, w = x->omega_m;
+    float eps = 1e-6f * p->i_max;
+    for (int ev = 0; ev < 4 && tau > 0.0f; ++ev) {
+        float u[3], slope[3];
+        int conn[3], diode[3], n = 0;
+        for (int k = 0; k < 3; ++k) {
+            diode[k] = 0;
+            conn[k] = 1;
+            if (leg[k] == SEG_HI) {
+                u[k] = v;
+            } else if (leg[k] == SEG_LO) {
+                u[k] = 0.0f;
+            } else if (i[k] > eps) {
+                u[k] = 0.0f; /* lower diode */
+                diode[k] = 1;
+            } else if (i[k] < -eps) {
+                u[k] = v; /* upper diode */
+                diode[k] = 1;
+            } else {
+                u[k] = 0.0f;
+                conn[k] = 0; /* open */
+                i[k] = 0.0f;
+            }
+            n += conn[k];
+        }
+        if (n < 2) { /* no circuit: no current */
+            for (int k = 0; k < 3; ++k) i[k] = 0.0f;
+            return;
+        }
+        float v_n = 0.0f;
+        for (int k = 0; k < 3; ++k) {
+            if (conn[k]) v_n += u[k] - w * x->f[k] - r_drop[k];
+        }
+        v_n /= (float)n;
+        for (int k = 0; k < 3; ++k) slope[k] = conn[k] ? (u[k] - w * x->f[k] - r_drop[k] - v_n) / p->L : 0.0f;
+        /* the first diode current to reach zero ends the part early */
+        float t_ev = tau;
+        int who = -1;
+        for (int k = 0; k < 3; ++k) {
+            if (diode[k] && i[k] * slope[k] < 0.0f) {
+                float t = -i[k] / slope[k];
+                if (t < t_ev) {
+                    t_ev = t;
+                    who = k;
+                }
+            }
+        }
+        for (int k = 0; k < 3; ++k) i[k] += slope[k] * t_ev;
+        if (who >= 0) {
+            float r = i[who]; /* rounding residue: keep the sum zero */
+            i[who] = 0.0f;
+            int other = who == 0 ? 1 : 0;
+            i[other] += r;
+        }
+        tau -= t_ev;
+        if (who < 0) break;
+    }
+}
+
+void bc_lu_predict_ordered(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan *plan, int rising,
+                           float i_next[3])
+{
+    float r_drop[3];
+    for (int k = 0; k < 3; ++k) {
+        i_next[k] = x->i[k];
+        r_drop[k] = p->R * x->i[k];
+    }
+    int on[3] = {SEG_OFF, SEG_OFF, SEG_OFF}, off[3] = {SEG_OFF, SEG_OFF, SEG_OFF};
+    float d = 0.0f;
+    if (plan->kind == BC_LU_PAIR || plan->kind == BC_LU_DO) {
+        d = clampf(plan->duty, 0.0f, 1.0f);
+        on[plan->pos] = SEG_HI; /* S = +1 */
+        on[plan->neg] = SEG_LO;
+        if (plan->kind == BC_LU_DO) {
+            off[plan->pos] = SEG_HI; /* D_o: P and N stay on, F's switch chops */
+            off[plan->neg] = SEG_LO;
+            on[plan->off] = plan->sig > 0 ? SEG_HI : SEG_LO;
+        }
+    }
+    /* centre-aligned PWM: the on part is next to the carrier peak, so a rising half period starts off */
+    float t_on = d * p->ts, t_off = p->ts - t_on;
+    if (rising) {
+        segment(p, x, r_drop, off, t_off, i_next);
+        segment(p, x, r_drop, on, t_on, i_next);
+    } else {
+        segment(p, x, r_drop, on, t_on, i_next);
+        segment(p, x, r_drop, off, t_off, i_next);
+    }
+}
+
+float bc_lu_solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
+                       float d0, float tol)
+{
+    /* g(d) = sgn (T(k+1; d) - T*), increasing in d (sgn: the sign of the pair's lever f_P - f_N) */
+    float sgn = x->f[pos] - x->f[neg] >= 0.0f ? 1.0f : -1.0f;
+    bc_lu_plan plan = {BC_LU_PAIR, pos, neg, 3 - pos - neg, 0, 0.0f};
+    bc_lu_point y = *x;
+#define G_OF(dd, out)                                       \
+    do {                                                    \
+        plan.duty = (dd);                                   \
+        bc_lu_predict_ordered(p, x, &plan, rising, y.i);    \
+        (out) = sgn * (bc_lu_torque(&y) - t_ref);           \
+    } while (0)
+    float g;
+    if (d0 >= 0.0f && d0 <= 1.0f) {
+        G_OF(d0, g);
+        if (fabsf(g) <= tol) return d0; /* the averaged model holds */
+    }
+    float a = 0.0f, b = 1.0f, ga, gb;
+    G_OF(0.0f, ga);
+    G_OF(1.0f, gb);
+    float range = fmaxf(gb - ga, 1e-30f);
+    if (gb < 0.0f) return d0 > 1.0f ? d0 : 1.0f - gb / range; /* out of reach at full duty */
+    if (ga > 0.0f) return d0 < 0.0f ? d0 : -ga / range;        /* too much even at zero duty */
+    /* Illinois (modified regula falsi) on the bracket [a, b], g(a) <= 0 <= g(b) */
+    float d = (d0 > 0.0f && d0 < 1.0f) ? d0 : a - ga * (b - a) / range;
+    int side = 0;
+    for (int it = 0; it < 40; ++it) {
+        G_OF(d, g);
+        if (fabsf(g) <= tol || b - a < 1e-7f) break;
+        if (g < 0.0f) {
+            a = d;
+            ga = g;
+            if (side == -1) gb *= 0.5f;
+            side = -1;
+        } else {
+            b = d;
+            gb = g;
+            if (side == 1) ga *= 0.5f;
+            side = 1;
+        }
+        d = a - ga * (b - a) / fmaxf(gb - ga, 1e-30f);
+        d = clampf(d, a, b);
+    }
+#undef G_OF
+    return d;
+}
+
+/* ---- the laws -------------------------------------------------------------------------------------------- */
+
+float bc_lu_dn(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, float lever_min)
+{
+    /* (9')  D_n = 1/2 + (T* - T) L / (V T_s lam) + w lam / (2 V) + R i_P / V,   lam = f_P - f_N */
+    float v = x->v_dc;
+    float lam = x->f[pos] - x->f[neg];
+    float t = bc_lu_torque(x);
+    return 0.5f + (t_ref - t) * p->L / (v * p->ts * guard(lam, lever_min)) + x->omega_m * lam / (2.0f * v) +
+           p->R * x->i[pos] / v;
+}
+
+float bc_lu_dc(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, float lever_min)
+{
+    /* (17')  D_c = [(T* - T) L / T_s + w g / 3 + R T - V (f_N - fbar) - v_F (f_F - fbar)] / (V lam) */
+    int off = 3 - pos - neg;
+    float v = x->v_dc;
+    float fbar = sum3(x->f) / 3.0f;
+    float t = bc_lu_torque(x);
+    float v_f = v_diode(x->i[off], v);
+    float num = (t_ref - t) * p->L / p->ts + x->omega_m * g_of(x->f) / 3.0f + p->R * t - v * (x->f[neg] - fbar) -
+                v_f * (x->f[off] - fbar);
+    return num / (v * guard(x->f[pos] - x->f[neg], lever_min));
+}
+
+float bc_lu_ds(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, float lever_min)
+{
+    /* D_s = D_n + i_F L (2 f_F - f_P - f_N) / (2 V T_s lam) + R t_x i_F / (2 V T_s)   (F opens at t_x < T_s) */
+    int off = 3 - pos - neg;
+    float v = x->v_dc, i_f = x->i[off];
+    float lam = guard(x->f[pos] - x->f[neg], lever_min);
+    float t_x = bc_lu_extinction(p, x, pos, neg);
+    return bc_lu_dn(p, x, pos, neg, t_ref, lever_min) +
+           i_f * p->L * (2.0f * x->f[off] - x->f[pos] - x->f[neg]) / (2.0f * v * p->ts * lam) +
+           p->R * t_x * i_f / (2.0f * v * p->ts);
+}
+
+float bc_lu_do(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, float lever_min)
+{
+    /* (24')  D_o = [(T* - T) L / T_s + w g / 3 + R T - B] / (sig V (f_F - fbar)),
+     *        B = V (f_P - fbar) (i_F > 0),  -V (f_N - fbar) (i_F < 0) */
+    int off = 3 - pos - neg;
+    float v = x->v_dc;
+    float fbar = sum3(x->f) / 3.0f;
+    float t = bc_lu_torque(x);
+    float sig = x->i[off] >= 0.0f ? 1.0f : -1.0f;
+    float b = sig > 0.0f ? v * (x->f[pos] - fbar) : -v * (x->f[neg] - fbar);
+    float num = (t_ref - t) * p->L / p->ts + x->omega_m * g_of(x->f) / 3.0f + p->R * t - b;
+    return num / (v * guard(sig * (x->f[off] - fbar), lever_min));
+}
+
+void bc_lu_do_bounds(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float *d_zero, float *d_hold)
+{
+    /* (22) for F: di_F = T_s ((2/3) v_F - V/3 - w (f_F - fbar) - R i_F) / L with v_P + v_N = V. Solving
+     * i_F + di_F = 0 and di_F = 0 for v_F:  v_F = (3/2) (V/3 + w (f_F - fbar) + R i_F - i_F L / T_s)  and  the same
+     * without the last term;  D_o = v_F / V (sig > 0) or 1 - v_F / V (sig < 0) */
+    int off = 3 - pos - neg;
+    float v = x->v_dc, i_f = x->i[off];
+    float fbar = sum3(x->f) / 3.0f;
+    float a = v / 3.0f + x->omega_m * (x->f[off] - fbar) + p->R * i_f;
+    float vz = 1.5f * (a - i_f * p->L / p->ts);
+    float vh = 1.5f * a;
+    if (i_f >= 0.0f) {
+        *d_zero = vz / v;
+        *d_hold = vh / v;
+    } else {
+        *d_zero = 1.0f - vz / v;
+        *d_hold = 1.0f - vh / v;
+    }
+}
+
+/* ---- init and step --------------------------------------------------------------------------------------- */
+
+int bc_lu_init(const bc_lu_params *p, bc_lu_state *s)
+{
+    if (p == 0 || s == 0) return BC_ERR_PARAM;
+    if (p->n < 3 || p->f[0] == 0 || p->f[1] == 0 || p->f[2] == 0) return BC_ERR_PARAM;
+    if (p->p < 1 || p->method < BC_LU_TORQUE || p->method > BC_LU_RECT || (p->delay != 0 && p->delay != 1) ||
+        (p->order != 0 && p->order != 1))
+        return BC_ERR_PARAM;
+    const float v[] = {p->L, p->R, p->ts, p->i_max, p->i_zero, p->v_max, p->k_phi, p->kp, p->ki, p->f_tick,
+                       p->omega_min, p->theta_offset};
+    for (unsigned j = 0; j < sizeof v / sizeof v[0]; ++j) {
+        if (!isfinite(v[j])) return BC_ERR_PARAM;
+    }
+    if (!(p->L > 0.0f) || p->R < 0.0f || !(p->ts > 0.0f) || !(p->i_max > 0.0f) || p->i_zero < 0.0f ||
+        !(p->i_zero < p->i_max) || !(p->v_max > 0.0f) || !(p->k_phi > 0.0f) || p->kp < 0.0f || p->ki < 0.0f)
+        return BC_ERR_PARAM;
+    float f_max = 0.0f;
+    for (int x = 0; x < 3; ++x) {
+        for (int32_t j = 0; j < p->n; ++j) {
+            float f = p->f[x][j];
+            if (!isfinite(f)) return BC_ERR_PARAM;
+            if (fabsf(f) > f_max) f_max = fabsf(f);
+        }
+    }
+    if (!(f_max > 0.0f)) return BC_ERR_PARAM; /* no back-EMF: no torque lever */
+    s->hall_p.f_tick = p->f_tick;
+    s->hall_p.omega_min = p->omega_min;
+    s->hall_p.theta_offset = p->theta_offset;
+    if (bc_hall_init(&s->hall_p, &s->hall) != BC_OK) return BC_ERR_PARAM;
+    s->pi_p.kp = p->kp;
+    s->pi_p.ki = p->ki;
+    s->pi_p.ts = p->ts;
+    s->pi_p.u_min = -p->v_max;
+    s->pi_p.u_max = p->v_max;
+    if (bc_pi_init(&s->pi_p, &s->pi) != BC_OK) return BC_ERR_PARAM;
+    s->lever_min = 1e-3f * f_max;
+    s->tol = 1e-4f * f_max * p->i_max;
+    s->parity = 0;
+    s->applied.kind = BC_LU_SAFE;
+    s->applied.pos = 0;
+    s->applied.neg = 1;
+    s->applied.off = 2;
+    s->applied.sig = 0;
+    s->applied.duty = 0.0f;
+    s->oc_latched = 0;
+    s->dir = 0;
+    return BC_OK;
+}
+
+/* All legs off, the reason in the flags; RECT's integrator is reset; the delay-1 prediction sees SAFE. */
+static void go_safe(bc_lu_state *s, bc_ctrl_out *out, uint32_t why)
+{
+    bc_legs_off(out);
+    out->flags |= why;
+    out->diag[0] = -1.0f;
+    out->diag[7] = -1.0f;
+    s->applied.kind = BC_LU_SAFE;
+    s->applied.duty = 0.0f;
+    bc_pi_reset(&s->pi_p, &s->pi, 0.0f);
+}
+
+/* The measured currents, the unmeasured one reconstructed (sum zero); 0 if fewer than two are measured or a
+ * measured one is not finite. */
+static int currents(const bc_ctrl_in *in, float i[3])
+{
+    uint32_t m = in->i_mask & 7u;
+    int n = 0, missing = -1;
+    for (int x = 0; x < 3; ++x) {
+        if (m & (1u << x)) {
+            if (!isfinite(in->i_abc[x])) return 0;
+            i[x] = in->i_abc[x];
+            ++n;
+        } else {
+            i[x] = 0.0f;
+            missing = x;
+        }
+    }
+    if (n < 2) return 0;
+    if (n == 2) i[missing] = -(i[0] + i[1] + i[2]); /* i_a + i_b + i_c = 0 */
+    return 1;
+}
+
+/* The one-step model the parameters ask for: ordered (order = 1) or averaged. */
+static void model_step(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan *plan, int rising, float i[3])
+{
+    if (p->order) {
+        bc_lu_predict_ordered(p, x, plan, rising, i);
+    } else {
+        bc_lu_predict(p, x, plan, i);
+    }
+}
+
+/* RECT: PI on the pair current. Returns the unclamped duty, updates the integrator with the realised output. */
+static float rect_duty(const bc_lu_params *p, bc_lu_state *s, const bc_lu_point *x, int pos, int neg, float t_ref)
+{
+    /* a reversed torque swaps the pair, whose back-EMF changes sign: bumpless, the integrator changes sign too */
+    int dir = t_ref < 0.0f ? -1 : 1;
+    if (dir != s->dir) {
+        if (s->dir != 0) bc_pi_reset(&s->pi_p, &s->pi, -s->pi.x);
+        s->dir = dir;
+    }
+    /* I* = min(|T*| / (2 k_phi), i_max);  i_m = the current of the non-commutated phase in the pair's direction:
+     * -i_N while F's current is >= 0 (the positive side commutates), i_P while it is < 0 (= i_P = -i_N when F is open) */
+    int off = 3 - pos - neg;
+    float i_ref = fminf(fabsf(t_ref) / (2.0f * p->k_phi), p->i_max);
+    float i_m = x->i[off] >= 0.0f ? -x->i[neg] : x->i[pos];
+    float e = i_ref - i_m;
+    /* u = k_p e + x (pair voltage, V);  D = 1/2 + u / (2 V);  realised u = (2 D - 1) V (anti-windup) */
+    float u = bc_pi_output(&s->pi_p, &s->pi, e, 0.0f);
+    float d = 0.5f + u / (2.0f * x->v_dc);
+    float u_real = (2.0f * clampf(d, 0.0f, 1.0f) - 1.0f) * x->v_dc;
+    bc_pi_update(&s->pi_p, &s->pi, e, u, u_real);
+    return d;
+}
+
+void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_ctrl_out *out)
+{
+    /* this sample is at a carrier valley (parity 0) or peak; the half period after it rises or falls */
+    int rising_now = s->parity == 0;
+    s->parity ^= 1;
+    for (int j = 0; j < BC_DIAG_N; ++j) out->diag[j] = 0.0f;
+    out->flags = 0u;
+    for (int x = 0; x < 3; ++x) {
+        out->leg[x].mode = BC_LEG_OFF;
+        out->leg[x].duty = 0.0f;
+    }
+
+    /* angle and speed: Hall sector, edge timing, interpolation (bc_hall) */
+    bc_hall_out h;
+    bc_hall_step(&s->hall_p, &s->hall, in, &h);
+    out->diag[4] = h.theta;
+    out->diag[5] = h.omega_e;
+    if (!h.valid) {
+        go_safe(s, out, BC_FLAG_HALL_INVALID);
+        return;
+    }
+
+    /* measurements */
+    bc_lu_point x0;
+    float v = in->v_dc, t_ref = in->ref;
+    if (!currents(in, x0.i) || !isfinite(v) || !(v > 0.0f) || !(v <= p->v_max) || !isfinite(t_ref)) {
+        go_safe(s, out, BC_FLAG_BAD_INPUT);
+        return;
+    }
+    float i_peak = fmaxf(fabsf(x0.i[0]), fmaxf(fabsf(x0.i[1]), fabsf(x0.i[2])));
+    if (s->oc_latched && i_peak < 0.5f * p->i_max) s->oc_latched = 0;
+    if (!(i_peak <= p->i_max)) s->oc_latched = 1;
+    if (s->oc_latched) {
+        go_safe(s, out, BC_FLAG_OVERCURRENT);
+        return;
+    }
+    x0.v_dc = v;
+    x0.omega_m = h.omega_e / (float)p->p; /* 0 without a speed estimate (standstill) */
+    bc_lu_shapes(p, h.theta, x0.f);
+    float t0 = bc_lu_torque(&x0);
+    out->diag[2] = t0;
+
+    /* the state at the start of the interval the new output applies to */
+    bc_lu_point x1 = x0;
+    float i_pred[3];
+    if (p->delay == 1) {
+        /* i(k+1) from i(k) under the output in force over [k, k+1]; theta(k+1) = theta(k) + Omega_e T_s */
+        model_step(p, &x0, &s->applied, rising_now, x1.i);
+        bc_lu_shapes(p, h.theta + h.omega_e * p->ts, x1.f);
+        for (int k = 0; k < 3; ++k) i_pred[k] = x1.i[k];
+    }
+
+    /* the pair: sector's pos/neg, swapped for a negative torque; F the third phase */
+    int pos = 0, neg = 1;
+    (void)bc_sector_phases(h.sector, &pos, &neg);
+    if (t_ref < 0.0f) {
+        int t = pos;
+        pos = neg;
+        neg = t;
+    }
+    int off = 3 - pos - neg;
+    int conducting = fabsf(x1.i[off]) > p->i_zero;
+
+    bc_lu_plan plan = {BC_LU_PAIR, pos, neg, off, 0, 0.0f};
+    int rising_out = p->delay == 1 ? !rising_now : rising_now; /* the half period the new output applies to */
+    float d;
+    float mode = conducting ? 1.0f : 0.0f;
+    if (p->method == BC_LU_RECT) {
+        d = rect_duty(p, s, &x0, pos, neg, t_ref);
+    } else if (!conducting) {
+        d = bc_lu_dn(p, &x1, pos, neg, t_ref, s->lever_min); /* normal conduction (9') */
+        if (p->order) d = bc_lu_solve_pair(p, &x1, pos, neg, t_ref, rising_out, d, s->tol);
+    } else {
+        /* commutation: (17') if F conducts the whole sample, D_s if it opens inside it */
+        float t_x = bc_lu_extinction(p, &x1, pos, neg);
+        d = t_x >= p->ts ? bc_lu_dc(p, &x1, pos, neg, t_ref, s->lever_min)
+                         : bc_lu_ds(p, &x1, pos, neg, t_ref, s->lever_min);
+        if (p->order) d = bc_lu_solve_pair(p, &x1, pos, neg, t_ref, rising_out, d, s->tol);
+        if (p->method == BC_LU_TORQUE && d > 1.0f) {
+            /* torque still short at full duty: D_o mode if F's switch acts in the torque's direction */
+            float fbar = sum3(x1.f) / 3.0f;
+            float sig = x1.i[off] >= 0.0f ? 1.0f : -1.0f;
+            float lam = x1.f[pos] - x1.f[neg];
+            float lever = sig * (x1.f[off] - fbar) * (lam >= 0.0f ? 1.0f : -1.0f);
+            if (lever > s->lever_min) {
+                float d_zero, d_hold;
+                bc_lu_do_bounds(p, &x1, pos, neg, &d_zero, &d_hold);
+                d = clampf(bc_lu_do(p, &x1, pos, neg, t_ref, s->lever_min), d_zero, d_hold);
+                plan.kind = BC_LU_DO;
+                plan.sig = sig > 0.0f ? 1 : -1;
+                mode = 2.0f;
+            }
+        }
+    }
+    if (isnan(d)) { /* only a degenerate measurement (e.g. v_dc ~ 1e-38) gets here */
+        go_safe(s, out, BC_FLAG_BAD_INPUT);
+        return;
+    }
+    if (d < 0.0f || d > 1.0f) out->flags |= BC_FLAG_SATURATED;
+    plan.duty = clampf(d, 0.0f, 1.0f);
+
+    if (plan.kind == BC_LU_PAIR) {
+        out->leg[pos].mode = BC_LEG_HIGH; /* S = +1: P's upper and N's lower switch on; S = -1: both off */
+        out->leg[pos].duty = plan.duty;
+        out->leg[neg].mode = BC_LEG_LOW;
+        out->leg[neg].duty = plan.duty;
+    } else {
+        out->leg[pos].mode = BC_LEG_HIGH; /* incoming and non-commutated switches on, F chops with D_o */
+        out->leg[pos].duty = 1.0f;
+        out->leg[neg].mode = BC_LEG_LOW;
+        out->leg[neg].duty = 1.0f;
+        out->leg[off].mode = plan.sig > 0 ? BC_LEG_HIGH : BC_LEG_LOW;
+        out->leg[off].duty = plan.duty;
+    }
+
+    /* the model's torque at the next sample, shapes frozen at theta(k) as in the paper's (8), (16), (23) */
+    if (p->delay == 0) model_step(p, &x0, &plan, rising_now, i_pred);
+    bc_lu_point xp = x0;
+    for (int k = 0; k < 3; ++k) xp.i[k] = i_pred[k];
+    s->applied = plan;
+
+    out->diag[0] = mode;
+    out->diag[1] = plan.duty;
+    out->diag[3] = bc_lu_torque(&xp);
+    out->diag[6] = x1.i[off];
+    out->diag[7] = (float)h.sector;
+}

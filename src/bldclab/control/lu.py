@@ -1,0 +1,191 @@
+"""Paper 2's torque controller and its two comparison methods (``core/include/bldc/bc_lu.h``).
+
+H. Lu, L. Zhang, W. Qu, *A New Torque Control Method for Torque Ripple Minimization of BLDC Motors With Un-Ideal
+Back EMF*, IEEE Trans. Power Electron. 2008. Two-phase conduction with bipolar chopping; the duties ``D_n``
+(normal conduction), ``D_c`` (commutation) and ``D_o`` (the outgoing phase slowed when ``D_c`` saturates) are
+computed from the back-EMF shape functions, the measured DC bus and the torque estimated from the measured
+currents. Theory, conventions and results: ``docs/theory-paper2.md``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, ClassVar, Literal
+
+import numpy as np
+
+from ..analytic import r_total
+from ..design import pi_gains
+from ..errors import BldclabError
+from ..motor import TWO_PI
+from .base import Control
+
+if TYPE_CHECKING:
+    from .._core import Core
+    from ..motor import Drive
+
+__all__ = ["Lu"]
+
+_METHOD = {"lu": 0, "lu-no-do": 1, "rect": 2}
+
+#: Meaning of the controller's diagnostic channels (``SimResult`` signal names).
+DIAG = ("mode", "duty", "tau_est", "tau_pred", "theta_est", "omega_est", "i_off", "sector")
+
+
+def _positive(name: str, v: object, *, allow_zero: bool = False, allow_none: bool = False) -> None:
+    """Check an optional non-negative (or positive) finite number, naming the field on failure."""
+    if v is None and allow_none:
+        return
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v < 0 or (
+            v == 0 and not allow_zero):
+        raise BldclabError(f"control.{name}", f"must be a finite number {'>=' if allow_zero else '>'} 0, got {v!r}")
+
+
+@dataclass(frozen=True)
+class Lu(Control):
+    """Paper 2's torque control (``"lu"``), without ``D_o`` (``"lu-no-do"``), or rectangular current (``"rect"``).
+
+    The reference (``Scenario.ref``) is the torque in N m; a negative torque swaps the two conducting phases. The
+    controller's diagnostics appear in the result as ``mode`` (-1 safe, 0 normal conduction, 1 commutation with
+    ``D_c``, 2 ``D_o`` mode), ``duty`` (the duty computed), ``tau_est`` (torque from the measured currents and the
+    shapes, N m), ``tau_pred`` (its model's torque at the next sample, N m), ``theta_est`` (Hall-interpolated
+    electrical angle, rad), ``omega_est`` (electrical speed, rad/s), ``i_off`` (current of the phase whose leg is
+    off, A: the outgoing current during a commutation) and ``sector``.
+
+    Parameters
+    ----------
+    method : {"lu", "lu-no-do", "rect"}
+        ``lu``: paper 2's method, ``D_n`` / ``D_c`` / ``D_o``; ``lu-no-do``: the same without the ``D_o`` mode
+        (paper 2's "torque control neglecting finite dc bus supply voltage", its Figs 11 and 14); ``rect``:
+        conventional rectangular current control with the same commutation and bipolar chopping, a PI (no back-EMF
+        feed-forward) holding the pair current at ``|T_ref| / (2 k_phi)`` (its Figs 10 and 13).
+    delay : int
+        Samples between computing and applying an output, 0 or 1; :func:`bldclab.simulate` sets it from
+        ``Scenario.delay``. With 1 the laws start from the state predicted for the next sample under the output
+        already in force.
+    model_R : bool
+        Include the winding resistance ``R + R_on`` in the one-step models (the paper neglects it: ``False``).
+    switching_order : bool
+        Follow the order of the off and on parts of each centre-aligned half period in the one-step model, so that
+        a pair phase at zero current (the incoming phase at the start of a commutation, discontinuous conduction)
+        stays open in the off part, and solve the laws on that model (``False``: the paper's averaged models only).
+    shape_points : int
+        Points per shape table handed to the controller, uniform over the phase's local angle (a table shape on
+        this grid is reproduced exactly).
+    i_max : float, optional
+        Over-current trip (A); default ``3 I_N`` (bipolar chopping at 10 kHz has a large current ripple).
+    i_zero : float, optional
+        An outgoing current at or below this is zero: the commutation is over (A); default ``0.01 I_N``.
+    bandwidth_hz, phase_margin_deg : float
+        ``rect``: PI design for the line ``(2 (R + R_on), 2 L)`` with the loop delay ``(delay + 1/2) T_s``
+        (:func:`bldclab.design.pi_gains`).
+    kp, ki : float, optional
+        ``rect``: PI gains (V/A, V/(A s)) overriding the design.
+    omega_min : float, optional
+        Slowest speed the Hall estimate reports (electrical rad/s); default ``0.01 p Omega_0``.
+    theta_offset : float
+        Hall angle correction (electrical rad).
+    """
+
+    method: Literal["lu", "lu-no-do", "rect"] = "lu"
+    delay: int = 1
+    model_R: bool = True
+    switching_order: bool = True
+    shape_points: int = 360
+    i_max: float | None = None
+    i_zero: float | None = None
+    bandwidth_hz: float = 1000.0
+    phase_margin_deg: float = 60.0
+    kp: float | None = None
+    ki: float | None = None
+    omega_min: float | None = None
+    theta_offset: float = 0.0
+    c_name: ClassVar[str] = "lu"
+    ref_meaning: ClassVar[str] = "torque, N m"
+
+    def __post_init__(self) -> None:
+        if self.method not in _METHOD:
+            raise BldclabError("control.method", f"must be one of {', '.join(_METHOD)}, got {self.method!r}")
+        if isinstance(self.delay, bool) or self.delay not in (0, 1):
+            raise BldclabError("control.delay", f"must be 0 or 1 sample, got {self.delay!r}")
+        for name in ("model_R", "switching_order"):
+            if not isinstance(getattr(self, name), bool):
+                raise BldclabError(f"control.{name}", f"must be True or False, got {getattr(self, name)!r}")
+        if isinstance(self.shape_points, bool) or not isinstance(self.shape_points, int) or self.shape_points < 12:
+            raise BldclabError("control.shape_points", f"must be an integer >= 12, got {self.shape_points!r}")
+        _positive("bandwidth_hz", self.bandwidth_hz)
+        _positive("phase_margin_deg", self.phase_margin_deg)
+        for name in ("i_max", "omega_min"):
+            _positive(name, getattr(self, name), allow_none=True)
+        for name in ("i_zero", "kp", "ki"):
+            _positive(name, getattr(self, name), allow_zero=True, allow_none=True)
+        if isinstance(self.theta_offset, bool) or not isinstance(self.theta_offset, int | float) or not math.isfinite(
+                self.theta_offset):
+            raise BldclabError("control.theta_offset", f"must be a finite number, got {self.theta_offset!r}")
+
+    def gains(self, drive: Drive) -> tuple[float, float]:
+        """Return ``rect``'s PI gains ``(k_p, k_i)`` of the pair-current loop (V/A, V/(A s)).
+
+        Parameters
+        ----------
+        drive : Drive
+            Its ``R + R_on``, ``L`` and ``f_pwm`` give the line plant ``exp(-s (delay + 1/2) T_s) / (2 R + s 2 L)``.
+
+        Returns
+        -------
+        tuple of float
+            The given gains, else :func:`bldclab.design.pi_gains` at ``bandwidth_hz`` and ``phase_margin_deg``.
+        """
+        ts = 0.5 / drive.inverter.f_pwm
+        kp, ki = pi_gains(2.0 * r_total(drive), 2.0 * drive.motor.L, self.bandwidth_hz, self.phase_margin_deg,
+                          delay=(self.delay + 0.5) * ts)
+        return (kp if self.kp is None else float(self.kp)), (ki if self.ki is None else float(self.ki))
+
+    def shape_tables(self, drive: Drive) -> np.ndarray:
+        """Return the shape tables the controller reads: ``f_x`` at ``2 pi j / n`` of phase x's local angle.
+
+        Parameters
+        ----------
+        drive : Drive
+            Its ``motor.emf`` shapes (V s/rad).
+
+        Returns
+        -------
+        ndarray, shape (3, shape_points), float32
+            ``f_a, f_b, f_c`` in V s/rad (the controller's single precision).
+        """
+        n = self.shape_points
+        theta = TWO_PI * np.arange(n) / n
+        return np.ascontiguousarray(np.stack([np.asarray(s(theta), dtype=float) for s in drive.motor.emf.shapes]),
+                                    dtype=np.float32)
+
+    def with_delay(self, delay: int) -> Control:  # noqa: D102 - Control.with_delay
+        return self if delay == self.delay else dataclasses.replace(self, delay=delay)
+
+    def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:  # noqa: D102
+        m, inv = drive.motor, drive.inverter
+        tables = self.shape_tables(drive)
+        keep.append(tables)
+        kp, ki = self.gains(drive) if self.method == "rect" else (0.0, 0.0)
+        rec = core.record("bc_lu_params")
+        rec["f"][0] = [tables.ctypes.data + x * tables.strides[0] for x in range(3)]
+        rec["n"] = tables.shape[1]
+        rec["p"] = m.p
+        rec["method"] = _METHOD[self.method]
+        rec["delay"] = self.delay
+        rec["order"] = int(self.switching_order)
+        rec["L"] = m.L
+        rec["R"] = r_total(drive) if self.model_R else 0.0
+        rec["ts"] = 0.5 / inv.f_pwm
+        rec["i_max"] = 3.0 * m.I_N if self.i_max is None else self.i_max
+        rec["i_zero"] = 0.01 * m.I_N if self.i_zero is None else self.i_zero
+        rec["v_max"] = 2.0 * inv.V_dc
+        rec["k_phi"] = m.k_phi
+        rec["kp"] = kp
+        rec["ki"] = ki
+        rec["f_tick"] = drive.sensors.f_tick
+        rec["omega_min"] = 0.01 * m.p * drive.Omega_0 if self.omega_min is None else self.omega_min
+        rec["theta_offset"] = self.theta_offset
+        return rec
