@@ -29,6 +29,7 @@ import numpy as np
 
 from . import __version__, analytic
 from .catalog import load, names
+from .cli_sim import configure_compare, configure_simulate, run_compare, run_simulate
 from .errors import BldclabError
 from .identify import configure_cli as _configure_identify
 from .identify import run_cli as _run_identify
@@ -265,6 +266,10 @@ COMMANDS: tuple[Command, ...] = (
     Command("analyze", "paper 1 closed forms for a motor: Table I, characteristics, Figs 7-8",
             _configure_analyze, _run_analyze),
     Command("identify", "back-EMF tables from a constant-speed waveform (paper 2)", _configure_identify, _run_identify),
+    Command("simulate", "one switching-level simulation: square, sine, sixv, lu, lu-no-do or rect control",
+            configure_simulate, run_simulate),
+    Command("compare", "square-wave vs sinusoidal supply: closed forms and simulation over speed (paper 1)",
+            configure_compare, run_compare),
 )
 
 

@@ -20,7 +20,7 @@ from matplotlib.figure import Figure
 
 from .errors import BldclabError
 
-__all__ = ["plot_ripple", "plot_torque_speed"]
+__all__ = ["plot_efficiency", "plot_ripple", "plot_torque_speed"]
 
 #: Marker style per supply, as in paper 1: x for sinusoidal, o for real square-wave.
 _STYLE = {
@@ -163,4 +163,39 @@ def plot_ripple(df: pd.DataFrame, ax: Axes | None = None, *,
     _curve(ax, df, "TR_q_pu", "q")
     _overlay(ax, overlays, {"TR_s_pu": "s", "TR_q_pu": "q"})
     _finish(ax, r"torque ripple $TR_{pu}$ (per unit of $T_N$)", title)
+    return fig, ax
+
+
+def plot_efficiency(df: pd.DataFrame, simulated: Mapping[str, pd.DataFrame] | None = None, ax: Axes | None = None, *,
+                    title: str | None = "Efficiency") -> tuple[Figure, Axes]:
+    """Plot efficiency against speed: paper 1's (38)/(39) and simulated points (shaft power over DC power).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Output of :func:`bldclab.analytic.characteristic`: columns ``Omega_pu``, ``eta_s``, ``eta_q``.
+    simulated : mapping of str to pandas.DataFrame, optional
+        Simulated points by supply label (``"sinusoidal"``, ``"square-wave"``), with ``Omega_pu`` and ``eta``.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new figure if omitted.
+    title : str or None
+        Axes title.
+
+    Returns
+    -------
+    tuple of (matplotlib.figure.Figure, matplotlib.axes.Axes)
+    """
+    _check(df, ("eta_s", "eta_q"), "characteristic")
+    fig, ax = _axes(ax)
+    _curve(ax, df, "eta_s", "s")
+    _curve(ax, df, "eta_q", "q")
+    for j, (label, d) in enumerate((simulated or {}).items()):
+        if "eta" not in d.columns:
+            raise BldclabError(f"simulated {label}: column eta", "is missing")
+        supply = "s" if label.startswith("sin") else "q"
+        ax.plot(d["Omega_pu"].to_numpy(dtype=float), d["eta"].to_numpy(dtype=float), linestyle="none",
+                marker=_OVERLAY_MARKERS[j % len(_OVERLAY_MARKERS)], markerfacecolor="none",
+                color=_STYLE[supply]["color"], label=f"simulated, {label}")
+    _finish(ax, "efficiency (shaft / DC power)", title)
+    ax.set_ylim(bottom=0.0, top=1.0)
     return fig, ax

@@ -1,0 +1,255 @@
+"""CLI subcommands that simulate: ``bldclab simulate`` (one run) and ``bldclab compare`` (paper 1 end to end)."""
+
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import math
+import re
+import sys
+from dataclasses import asdict
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from . import analytic
+from .catalog import load
+from .control import Control, Lu, Sine, SixStep, SixStepVoltage
+from .errors import BldclabError
+from .experiments import electrical_period
+from .motor import Drive
+from .sim import Scenario, simulate
+from .units import to_si
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["configure_compare", "configure_simulate", "parse_speed", "run_compare", "run_simulate"]
+
+CONTROLS = ("square", "sine", "sixv", "lu", "lu-no-do", "rect")
+
+
+def parse_speed(text: str, drive: Drive) -> float:
+    """Read a speed: ``"0.5 pu"`` (of ``Omega_0``), ``"300 rpm"``, ``"31.4 rad/s"`` or a number in rad/s."""
+    m = re.fullmatch(r"\s*([-+]?[\d.]+(?:[eE][-+]?\d+)?)\s*pu\s*", text)
+    if m:
+        return float(m.group(1)) * drive.Omega_0
+    return to_si(text, "speed", "--speed")
+
+
+def _control(name: str, drive: Drive, handoff: float | None = None) -> tuple[Control, float, str]:
+    """Return the controller for a --control name, its default reference and what the reference means."""
+    if name == "square":
+        return SixStep(), drive.motor.I_N, "A"
+    if name == "sine":
+        ctl = Sine() if handoff is None else Sine(handoff_speed=handoff)
+        return ctl, analytic.t_sN(drive), "N m"
+    if name == "sixv":
+        return SixStepVoltage("high"), 0.5, "duty"
+    if name in ("lu", "lu-no-do", "rect"):
+        return Lu(method=name), drive.T_N, "N m"
+    raise BldclabError("--control", f"must be one of {', '.join(CONTROLS)}, got {name!r}")
+
+
+def _figure_bytes(fig: Figure, fmt: str) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format=fmt, dpi=120)
+    return buf.getvalue()
+
+
+def _write(out: Path, files: dict[str, bytes]) -> list[Path]:
+    from .cli import write_files
+
+    return write_files(out, files)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# simulate
+
+
+def configure_simulate(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``bldclab simulate``."""
+    p.add_argument("motor", metavar="MOTOR", help="built-in drive name or motor TOML file")
+    p.add_argument("--control", choices=CONTROLS, default="square", help="controller (default square)")
+    p.add_argument("--speed", default="0.5 pu",
+                   help='imposed speed: "0.5 pu", "300 rpm", "31.4 rad/s" (default 0.5 pu); with --mechanics: the '
+                        "rotor starts from standstill and this is ignored")
+    p.add_argument("--mechanics", action="store_true", help="rotor dynamics from standstill instead of a dynamometer")
+    ref = p.add_mutually_exclusive_group()
+    ref.add_argument("--torque", help='torque reference, e.g. "20 N m" (sine, lu, rect)')
+    ref.add_argument("--current", help='current reference, e.g. "50 A" (square)')
+    ref.add_argument("--duty", type=float, help="duty in [-1, 1] (sixv)")
+    p.add_argument("--load", default="0", help='load torque with --mechanics, e.g. "10 N m"')
+    p.add_argument("--periods", type=float, default=6.0, help="simulated electrical periods (imposed speed)")
+    p.add_argument("--duration", help='simulated time, e.g. "0.2 s" (overrides --periods)')
+    p.add_argument("--trace-sub", type=int, default=4, help="trace rows per sample (PWM ripple visible)")
+    p.add_argument("--out", type=Path, help="write result.npz, trace.csv, metrics.json (and figures) here")
+    p.add_argument("--plot", action="store_true", help="write waveforms.png and .svg (currents, torque, voltages)")
+    p.add_argument("--format", choices=("table", "json"), default="table", help="terminal output")
+
+
+def _reference(args: argparse.Namespace, default: float, unit: str) -> float:
+    if args.torque is not None:
+        if unit != "N m":
+            raise BldclabError("--torque", f"--control {args.control} takes its reference in {unit}")
+        return to_si(args.torque, "torque", "--torque")
+    if args.current is not None:
+        if unit != "A":
+            raise BldclabError("--current", f"--control {args.control} takes its reference in {unit}")
+        return to_si(args.current, "current", "--current")
+    if args.duty is not None:
+        if unit != "duty" or not -1.0 <= args.duty <= 1.0 or math.isnan(args.duty):
+            raise BldclabError("--duty", f"needs --control sixv and a value in [-1, 1], got {args.duty}")
+        return float(args.duty)
+    return default
+
+
+def run_simulate(args: argparse.Namespace) -> int:
+    """Run ``bldclab simulate``."""
+    drive = load(args.motor)
+    if args.trace_sub < 1:
+        raise BldclabError("--trace-sub", f"must be >= 1, got {args.trace_sub}")
+    ctl, default_ref, unit = _control(args.control, drive)
+    ref = _reference(args, default_ref, unit)
+    if args.mechanics:
+        duration = to_si(args.duration or "0.5 s", "time", "--duration")
+        load_t = to_si(args.load, "torque", "--load")
+        sc = Scenario(duration=duration, ref=ref, load_torque=load_t, trace_sub=args.trace_sub,
+                      window=(0.5 * duration, duration))
+        speed = None
+    else:
+        speed = parse_speed(args.speed, drive)
+        if speed == 0:
+            raise BldclabError("--speed", "an imposed speed of 0: use --mechanics to start from standstill")
+        Te = electrical_period(drive, speed)
+        duration = to_si(args.duration, "time", "--duration") if args.duration else args.periods * Te
+        if not math.isfinite(duration) or duration <= 0:
+            raise BldclabError("--duration", f"must be positive, got {duration}")
+        n_meas = min(2.0, max(duration / Te - 1.0, 0.0))
+        t0 = duration - n_meas * Te if n_meas >= 1 else 0.5 * duration
+        sc = Scenario(duration=duration, speed=speed, ref=ref, trace_sub=args.trace_sub, window=(t0, duration))
+    res = simulate(drive, ctl, sc)
+    m = res.metrics
+    assert m is not None
+    summary: dict[str, Any] = {
+        "motor": drive.name, "control": args.control, "reference": ref, "reference_unit": unit,
+        "speed_rad_s": m.omega_mean, "speed_pu": m.omega_mean / drive.Omega_0, "window_s": [m.t0, m.t1],
+        "tau_mean_N_m": m.tau_mean, "tau_mean_pu": m.tau_mean / drive.T_N, "ripple_N_m": m.ripple,
+        "ripple_pwm_averaged_N_m": m.ripple_ma, "ripple_pct_of_mean": 100 * m.ripple / abs(m.tau_mean)
+        if m.tau_mean else math.nan, "tau_rms_deviation_N_m": m.tau_std, "efficiency": m.efficiency,
+        "p_dc_W": m.p_src, "p_copper_W": m.p_cu, "p_inverter_W": m.p_sw + m.p_diode + m.p_Rsrc,
+        "i_rms_A": list(m.i_rms), "i_peak_A": list(m.i_peak), "energy_balance_residue": m.balance_electrical,
+        "controller_flags": int(np.bitwise_or.reduce(res.flags.astype(np.int64))) if len(res) else 0,
+    }
+    if args.format == "json":
+        print(json.dumps(summary, indent=2))
+    else:
+        print(f"{drive.name}, {args.control} control, reference {ref:.4g} {unit}, "
+              f"{'dynamometer' if speed is not None else 'rotor dynamics'}")
+        for key, value in summary.items():
+            if key in ("motor", "control", "reference", "reference_unit"):
+                continue
+            text = ", ".join(f"{v:.4g}" for v in value) if isinstance(value, list) else (
+                f"{value:.5g}" if isinstance(value, float) else str(value))
+            print(f"  {key:<28} {text}")
+    if args.out is not None:
+        files: dict[str, bytes] = {}
+        buf = io.BytesIO()
+        res.to_pandas().to_csv(buf)
+        files["trace.csv"] = buf.getvalue()
+        files["metrics.json"] = (json.dumps({**summary, "metrics": asdict(m)}, indent=2) + "\n").encode()
+        if args.plot:
+            fig = res.plot()
+            files["waveforms.png"] = _figure_bytes(fig, "png")
+            files["waveforms.svg"] = _figure_bytes(fig, "svg")
+        written = _write(args.out, files)
+        res.save(args.out / "result.npz")
+        for path in [*written, args.out / "result.npz"]:
+            print(f"wrote {path}")
+    elif args.plot:
+        raise BldclabError("--plot", "needs --out DIR to write the figures into")
+    return 0
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# compare
+
+
+def configure_compare(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``bldclab compare``."""
+    p.add_argument("motor", metavar="MOTOR", help="built-in drive name or motor TOML file")
+    p.add_argument("--out", type=Path, help="directory for CSV, figures and the report (default out/<motor>)")
+    p.add_argument("--speeds", type=int, default=32, help="speeds per supply (default 32)")
+    p.add_argument("--min-speed", type=float, default=0.05, help="lowest speed, p.u. of Omega_0 (default 0.05)")
+    p.add_argument("--max-speed", type=float, default=0.98, help="highest speed, p.u. of Omega_0 (default 0.98)")
+    p.add_argument("--workers", type=int, default=0, help="processes (default: all cores; 1: serial)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (it is shown on a terminal only)")
+
+
+def comparison_figures(res: Any) -> dict[str, Figure]:
+    """Torque, ripple and efficiency vs speed: analytic curves of paper 1 and simulated points, both supplies."""
+    from . import plots
+
+    sim = res.simulated
+    sq = sim[sim.supply == "square"]
+    si = sim[sim.supply == "sine"]
+    over_t = {"simulated, sinusoidal": si.rename(columns={"T_pu": "T_s_pu"})[["Omega_pu", "T_s_pu"]],
+              "simulated, square-wave": sq.rename(columns={"T_pu": "T_q_pu"})[["Omega_pu", "T_q_pu"]]}
+    over_r = {"simulated, sinusoidal": si.rename(columns={"TR_pu": "TR_s_pu"})[["Omega_pu", "TR_s_pu"]],
+              "simulated, square-wave": sq.rename(columns={"TR_pu": "TR_q_pu"})[["Omega_pu", "TR_q_pu"]]}
+    fig_t, _ = plots.plot_torque_speed(res.analytic, overlays=over_t, title=f"{res.drive.name}: torque vs speed")
+    fig_r, _ = plots.plot_ripple(res.analytic, overlays=over_r, title=f"{res.drive.name}: torque ripple vs speed")
+    fig_e, _ = plots.plot_efficiency(res.analytic, {"sinusoidal": si, "square-wave": sq},
+                                     title=f"{res.drive.name}: efficiency vs speed")
+    return {"torque_speed": fig_t, "ripple_speed": fig_r, "efficiency_speed": fig_e}
+
+
+def run_compare(args: argparse.Namespace) -> int:
+    """Run ``bldclab compare``."""
+    from .compare import compare, speed_grid
+
+    drive = load(args.motor)
+    if args.speeds < 2:
+        raise BldclabError("--speeds", f"needs at least 2, got {args.speeds}")
+    if not 0 < args.min_speed < args.max_speed < 1.5:
+        raise BldclabError("--min-speed", "needs 0 < min-speed < max-speed < 1.5 (p.u. of Omega_0)")
+    if args.workers < 0:
+        raise BldclabError("--workers", f"must be >= 0, got {args.workers}")
+    w = speed_grid(args.speeds, args.min_speed, args.max_speed)
+    out = args.out if args.out is not None else Path("out") / drive.name
+    res = compare(drive, w, workers=args.workers or None, progress=not args.no_progress and sys.stderr.isatty())
+    t1 = res.table1
+    sim = res.simulated
+    print(f"{drive.name}: square-wave (SixStep, I_N = {drive.motor.I_N:g} A) vs sinusoidal (Sine, "
+          f"T_sN = {analytic.t_sN(drive):.4g} N m), {args.speeds} speeds x 2 supplies in {res.seconds:.1f} s")
+    print(f"  Theta_m {t1.Theta_m * 1e3:.2f} mrad; base speed (21) sine {t1.Omega_sB_pu:.3f} p.u., (30) square "
+          f"{t1.Omega_qB_pu:.3f} p.u.; with R: {t1.Omega_sB_R_pu:.3f} / {t1.Omega_qB_R_pu:.3f} p.u.")
+    print(f"  {'Omega [pu]':>10} {'T sine':>8} {'T square':>9} {'(13)/(24)':>10} {'(26)-(32)':>10} {'TR sine':>8} "
+          f"{'TR square':>10} {'eta sine':>9} {'eta sq':>7}")
+    an = res.analytic.set_index("Omega_pu")
+    for wp in w[:: max(1, len(w) // 12)]:
+        a = sim[(sim.supply == "sine") & (sim.Omega_pu == wp)].iloc[0]
+        b = sim[(sim.supply == "square") & (sim.Omega_pu == wp)].iloc[0]
+        r = an.loc[wp]
+        print(f"  {wp:>10.3f} {a.T_pu:>8.3f} {b.T_pu:>9.3f} {r.T_s_pu:>10.3f} {r.T_q_pu:>10.3f} {a.TR_pu:>8.3f} "
+              f"{b.TR_pu:>10.3f} {a.eta:>9.3f} {b.eta:>7.3f}")
+    print("  (torque and ripple without PWM in p.u. of T_N; columns (13)/(24) and (26)-(32): paper 1, R neglected)")
+    print("verdict:")
+    for line in res.verdict:
+        print(f"  - {line}")
+    files: dict[str, bytes] = {}
+    files["simulated.csv"] = sim.to_csv(index=False).encode()
+    files["analytic.csv"] = res.analytic.to_csv(index=False).encode()
+    from .cli import table1_text
+
+    files["table1.csv"] = table1_text(t1, "csv").encode()
+    files["table1.json"] = table1_text(t1, "json").encode()
+    files["verdict.txt"] = ("\n".join(res.verdict) + "\n").encode()
+    for name, fig in comparison_figures(res).items():
+        files[f"{name}.png"] = _figure_bytes(fig, "png")
+        files[f"{name}.svg"] = _figure_bytes(fig, "svg")
+    for path in _write(out, files):
+        print(f"wrote {path}")
+    return 0

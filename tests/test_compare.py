@@ -1,0 +1,89 @@
+"""bldclab compare and bldclab simulate: paper 1 end to end through the CLI and the Python API."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import bldclab as bl
+from bldclab import analytic as an
+from bldclab.cli import main
+from bldclab.compare import compare
+
+
+def test_compare_ideal_drive_follows_the_closed_forms():
+    """With R = 0 the simulated characteristics follow paper 1 within the issue's tolerances."""
+    drive = bl.load("htm-48v").replace(motor__R=0.0)
+    w = np.array([0.1, 0.3, 0.6, 0.9])
+    res = compare(drive, w, workers=1)
+    th = an.theta_m(drive)
+    sq = res.simulated[res.simulated.supply == "square"].set_index("Omega_pu")
+    si = res.simulated[res.simulated.supply == "sine"].set_index("Omega_pu")
+    for x in w:
+        assert sq.loc[x, "T_pu"] == pytest.approx(an.t_q_pu(x, th), abs=0.005)
+        assert si.loc[x, "T_pu"] == pytest.approx(an.t_s_pu(x, th), abs=0.005)
+        assert sq.loc[x, "TR_pu"] == pytest.approx(an.tr_q_pu(x, th), abs=0.02)
+        assert si.loc[x, "TR_pu"] == pytest.approx(an.tr_s_pu(x, th), abs=0.02)
+        assert abs(sq.loc[x, "balance"]) < 1e-5 and abs(si.loc[x, "balance"]) < 1e-5
+    # the verdict names the speed ranges: sinusoidal torque higher everywhere, ripple higher around half speed
+    assert any(v.startswith("mean torque: sinusoidal better for Omega in [0.10, 0.90]") for v in res.verdict)
+    assert any(v.startswith("torque ripple: square-wave better") for v in res.verdict)
+
+
+def test_compare_cli_writes_everything(tmp_path):
+    out = tmp_path / "cmp"
+    rc = main(["compare", "htm-48v", "--out", str(out), "--speeds", "6", "--workers", "2"])
+    assert rc == 0
+    for name in ("simulated.csv", "analytic.csv", "table1.csv", "table1.json", "verdict.txt",
+                 "torque_speed.png", "torque_speed.svg", "ripple_speed.png", "efficiency_speed.svg"):
+        assert (out / name).stat().st_size > 100, name
+    sim = pd.read_csv(out / "simulated.csv")
+    assert len(sim) == 12 and set(sim.supply) == {"square", "sine"}
+    assert np.all(sim.eta.between(0.2, 1.0))
+    t1 = json.loads((out / "table1.json").read_text())
+    assert "quantities" in t1
+
+
+def test_compare_uses_processes_deterministically():
+    drive = bl.load("htm-48v")
+    w = [0.2, 0.7]
+    a = compare(drive, w, workers=1).simulated
+    b = compare(drive, w, workers=2).simulated
+    pd.testing.assert_frame_equal(a, b)
+
+
+@pytest.mark.parametrize("argv, field", [
+    (["compare", "nosuch"], "MOTOR"),
+    (["compare", "htm-48v", "--speeds", "1"], "--speeds"),
+    (["compare", "htm-48v", "--min-speed", "0.9", "--max-speed", "0.5"], "--min-speed"),
+    (["simulate", "htm-48v", "--control", "square", "--torque", "10 N m"], "--torque"),
+    (["simulate", "htm-48v", "--speed", "12 V"], "--speed"),
+    (["simulate", "htm-48v", "--speed", "0 rpm"], "--speed"),
+])
+def test_bad_arguments_exit_2_with_one_line(argv, field, tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "bldclab.cli", *argv, "--out", str(tmp_path / "o")],
+                          capture_output=True, text=True, cwd=tmp_path)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and field in lines[0] and "Traceback" not in proc.stderr
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("control, extra", [("square", []), ("sine", ["--torque", "20 N m"]),
+                                            ("sixv", ["--duty", "0.4"]), ("lu", [])])
+def test_simulate_cli(control, extra, tmp_path):
+    motor = "lu-4kw" if control == "lu" else "htm-48v"
+    out = tmp_path / control
+    rc = main(["simulate", motor, "--control", control, "--speed", "0.4 pu", *extra, "--out", str(out), "--plot",
+               "--format", "json"])
+    assert rc == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["tau_mean_N_m"] > 0 and abs(metrics["energy_balance_residue"]) < 1e-5
+    assert (out / "waveforms.png").stat().st_size > 10_000
+    res = bl.SimResult.load(out / "result.npz")
+    assert res.metrics is not None and len(res) > 100
