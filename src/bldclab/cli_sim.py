@@ -247,7 +247,14 @@ def run_compare(args: argparse.Namespace) -> int:
     files["table1.csv"] = table1_text(t1, "csv").encode()
     files["table1.json"] = table1_text(t1, "json").encode()
     files["verdict.txt"] = ("\n".join(res.verdict) + "\n").encode()
-    for name, fig in comparison_figures(res).items():
+    figures = comparison_figures(res)
+    from . import paper1
+
+    figures["fig9_torque_0.8pu"] = paper1.fig9(drive)
+    figures["fig11_currents"] = paper1.fig11(drive)
+    figures["fig12_dynamometer"], dyno = paper1.fig12(drive)
+    files["dynamometer.csv"] = dyno.to_csv(index=False).encode()
+    for name, fig in figures.items():
         files[f"{name}.png"] = _figure_bytes(fig, "png")
         files[f"{name}.svg"] = _figure_bytes(fig, "svg")
     for path in _write(out, files):
