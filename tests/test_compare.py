@@ -87,3 +87,20 @@ def test_simulate_cli(control, extra, tmp_path):
     assert (out / "waveforms.png").stat().st_size > 10_000
     res = bl.SimResult.load(out / "result.npz")
     assert res.metrics is not None and len(res) > 100
+
+
+def test_torque_control_cli(tmp_path, capsys):
+    rc = main(["torque-control", "lu-4kw", "--torques", "100%", "--speeds", "3000 rpm", "--out", str(tmp_path)])
+    assert rc == 0
+    table = pd.read_csv(tmp_path / "methods.csv").set_index("method")
+    assert table.loc["rect", "ripple_ma_pp"] > table.loc["lu-no-do", "ripple_ma_pp"] > table.loc["lu", "ripple_ma_pp"]
+    assert table.loc["lu", "dip_A"] < table.loc["lu-no-do", "dip_A"] < table.loc["rect", "dip_A"]
+    assert (tmp_path / "methods_compared.svg").exists()
+    out = capsys.readouterr().out
+    assert "lu-no-do" in out
+
+
+def test_torque_control_cli_bad_torque(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "bldclab.cli", "torque-control", "lu-4kw", "--torques", "x%"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2 and "--torques" in proc.stderr

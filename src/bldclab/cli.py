@@ -29,7 +29,14 @@ import numpy as np
 
 from . import __version__, analytic
 from .catalog import load, names
-from .cli_sim import configure_compare, configure_simulate, run_compare, run_simulate
+from .cli_sim import (
+    configure_compare,
+    configure_simulate,
+    configure_torque_control,
+    run_compare,
+    run_simulate,
+    run_torque_control,
+)
 from .errors import BldclabError
 from .identify import configure_cli as _configure_identify
 from .identify import run_cli as _run_identify
@@ -270,6 +277,8 @@ COMMANDS: tuple[Command, ...] = (
             configure_simulate, run_simulate),
     Command("compare", "square-wave vs sinusoidal supply: closed forms and simulation over speed (paper 1)",
             configure_compare, run_compare),
+    Command("torque-control", "paper 2's torque control vs its baselines over a load x speed grid",
+            configure_torque_control, run_torque_control),
 )
 
 
