@@ -39,6 +39,7 @@ static const bc_field_desc FIELDS[] = {
     F(bc_plant_params, V_f, "f8"),
     F(bc_plant_params, r_d, "f8"),
     F(bc_plant_params, R_src, "f8"),
+    F(bc_plant_params, i_trip, "f8"),
     F(bc_plant_params, mech, "i4"),
     F(bc_plant_params, J, "f8"),
     F(bc_plant_params, B, "f8"),
@@ -116,6 +117,8 @@ static const bc_field_desc FIELDS[] = {
     F(bc_plant_state, n_steps, "i8"),
     F(bc_plant_state, n_events, "i8"),
     F(bc_plant_state, e_fault, "f8"),
+    F(bc_plant_state, tripped, "i4"),
+    F(bc_plant_state, t_trip, "f8"),
 
     F(bc_sim_state, plant, "bc_plant_state"),
     F(bc_sim_state, k, "i8"),
@@ -132,6 +135,7 @@ static const bc_field_desc FIELDS[] = {
     F(bc_ctrl_in, omega_enc, "f4"),
     F(bc_ctrl_in, ref, "f4"),
     F(bc_ctrl_in, omega_ref, "f4"),
+    F(bc_ctrl_in, fault_pin, "u4"),
 
     F(bc_ctrl_out, leg, "bc_leg_cmd"),
     F(bc_ctrl_out, diag, "f4"),

@@ -486,6 +486,10 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
         go_safe(s, out, BC_FLAG_BAD_INPUT);
         return;
     }
+    if (in->fault_pin) { /* the inverter's hardware protection has tripped: its gates are off; stay safe */
+        go_safe(s, out, BC_FLAG_OVERCURRENT);
+        return;
+    }
     float i_peak = fmaxf(fabsf(x0.i[0]), fmaxf(fabsf(x0.i[1]), fabsf(x0.i[2])));
     if (s->oc_latched && i_peak < 0.5f * p->i_max) s->oc_latched = 0;
     if (!(i_peak <= p->i_max)) s->oc_latched = 1;

@@ -592,6 +592,7 @@ static void resolve(const bc_plant_params *p, bc_plant_state *s)
 #define W_PAIR 9   /* all open: no pair can conduct */
 #define W_OMEGA 10 /* moving: omega keeps its sign */
 #define W_STICK 11 /* stuck: |tau_net| <= tau_c */
+#define W_TRIP 12  /* + phase: |i_x| below the hardware trip level */
 #define NW BC_PLANT_NW
 
 static void watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
@@ -620,6 +621,9 @@ static void watch_eval(const bc_plant_params *p, const bc_plant_state *s, const 
         }
         if (emax > emin) g[W_PAIR] = a->vbus + 2.0 * p->V_f - (emax - emin);
     }
+    if (p->i_trip > 0.0 && !s->tripped) {
+        for (int x = 0; x < 3; ++x) g[W_TRIP + x] = p->i_trip - fabs(y[Y_I + x]);
+    }
     if (p->mech == BC_MECH_DYNAMIC) {
         if (s->stuck) {
             g[W_STICK] = p->tau_c - fabs(a->tau_net);
@@ -639,6 +643,9 @@ static double watch_tol(const bc_plant_params *p, const bc_plant_state *s, int w
     }
     if (w == W_OMEGA) {
         return 1e-12 * (1.0 + fabs(s->omega));
+    }
+    if (w >= W_TRIP) {
+        return 1e-9 * (1.0 + p->i_trip);
     }
     return 1e-10 * (1.0 + p->tau_c);
 }
@@ -794,6 +801,16 @@ static void apply_event(const bc_plant_params *p, bc_plant_state *s, int w, cons
                 pieces_locate(p, s);
             }
         }
+    } else if (w >= W_TRIP) {
+        s->tripped = 1; /* every gate off from now on: the diodes carry the currents to zero */
+        s->t_trip = s->t;
+        for (int x = 0; x < 3; ++x) {
+            s->des[x] = BC_GATE_O;
+            s->edge_to[x] = -1;
+            if (s->gate[x] == BC_GATE_U) s->t_off_u[x] = s->t;
+            if (s->gate[x] == BC_GATE_L) s->t_off_l[x] = s->t;
+            s->gate[x] = BC_GATE_O;
+        }
     } else if (w == W_STICK) {
         s->stuck = 0;
         int nd = a->tau_net > 0.0 ? 1 : -1;
@@ -829,7 +846,8 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     }
     if (!(isfinite(p->f_pwm) && p->f_pwm > 0.0)) return BC_ERR_PARAM;
     if (!finite_nonneg(p->t_dead) || p->t_dead >= 0.25 / p->f_pwm) return BC_ERR_PARAM;
-    if (!finite_nonneg(p->R_on) || !finite_nonneg(p->V_f) || !finite_nonneg(p->r_d) || !finite_nonneg(p->R_src))
+    if (!finite_nonneg(p->R_on) || !finite_nonneg(p->V_f) || !finite_nonneg(p->r_d) || !finite_nonneg(p->R_src) ||
+        !finite_nonneg(p->i_trip))
         return BC_ERR_PARAM;
     if (p->mech != BC_MECH_IMPOSED && p->mech != BC_MECH_DYNAMIC) return BC_ERR_PARAM;
     if (p->mech == BC_MECH_DYNAMIC && !(isfinite(p->J) && p->J > 0.0)) return BC_ERR_PARAM;
@@ -926,6 +944,10 @@ void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg
         } else if (d > 1.0f) {
             d = 1.0f;
             s->flags |= BC_PLANT_BAD_DUTY;
+        }
+        if (s->tripped) {
+            mode = BC_LEG_OFF; /* the hardware protection holds the gates off */
+            d = 0.0f;
         }
         s->cmd[x].mode = mode;
         s->cmd[x].duty = d;

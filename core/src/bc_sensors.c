@@ -92,4 +92,5 @@ void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_p
     in->theta_enc = (float)ps->theta;
     if (in->theta_enc >= BC_TWO_PI_F) in->theta_enc = 0.0f;
     in->omega_enc = (float)ps->omega;
+    in->fault_pin = ps->tripped ? 1u : 0u;
 }

@@ -68,6 +68,7 @@ static void row_open(const bc_sim_config *cfg, bc_sim_state *s)
     r->d6 = (double)s->last.diag[6];
     r->d7 = (double)s->last.diag[7];
     r->flags = (double)s->last.flags;
+    r->hw_trip = (double)ps->tripped;
     memcpy(s->row_acc0, ps->acc, sizeof s->row_acc0);
     s->row_tmin = po.tau_e;
     s->row_tmax = po.tau_e;

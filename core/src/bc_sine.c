@@ -150,8 +150,8 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     }
     out->flags = 0u;
 
-    /* 1. safety */
-    if (s->tripped) {
+    /* 1. safety (fault_pin: the inverter's hardware protection has tripped, its gates are off) */
+    if (s->tripped || in->fault_pin) {
         go_safe(p, s, out, BC_FLAG_OVERCURRENT);
         return;
     }

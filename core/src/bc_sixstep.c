@@ -325,6 +325,12 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
         return;
     }
 
+    /* the inverter's hardware protection has tripped: its gates are off; stay safe */
+    if (in->fault_pin) {
+        safe(s, out, BC_FLAG_OVERCURRENT);
+        return;
+    }
+
     /* over-current: trip above i_max, latched until every |i| < i_max / 2 */
     float i_abs = 0.0f;
     for (int x = 0; x < 3; ++x) i_abs = fabsf(i[x]) > i_abs ? fabsf(i[x]) : i_abs;

@@ -138,5 +138,22 @@ int main(void)
     f.p.fault[0].phase = 3;
     f.p.fault[0].t_off = 1.0;
     CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, om, I0, 48.0) == BC_ERR_PARAM, "fault on phase 3 rejected");
+    /* hardware over-current trip: a DC step at standstill heads for V/2R = 480 A; the trip at 100 A switches every
+     * gate off at the exact instant of the RL response, and the current decays through the diodes */
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.i_trip = 100.0;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, 0.0, I0, 48.0) == BC_OK, "init");
+    bc_leg_cmd dc[3] = {{BC_LEG_HIGH, 1.0f}, {BC_LEG_LOW, 1.0f}, {BC_LEG_OFF, 0.0f}};
+    double th = bc_plant_t_half(&f.p), peak = 0.0;
+    for (long k = 0; k < 400; ++k) {
+        bc_plant_set_half(&f.p, &s, dc, (k % 2) == 0);
+        bc_plant_advance(&f.p, &s, (double)(k + 1) * th);
+        if (fabs(s.i[0]) > peak) peak = fabs(s.i[0]);
+    }
+    double tau = f.p.L / f.p.R, t_exact = -tau * log(1.0 - 100.0 / 480.0);
+    CHECK(s.tripped == 1, "tripped");
+    CHECK(fabs(s.t_trip - t_exact) < 1e-9, "trip at %.9f s, RL response reaches 100 A at %.9f s", s.t_trip, t_exact);
+    CHECK(peak <= 100.0 + 1e-6, "current never above the trip level: %.6f A", peak);
+    CHECK(fabs(s.i[0]) < 1e-6, "freewheeled to zero: %.3g A", s.i[0]);
     return bc_test_summary("test_faults");
 }

@@ -31,9 +31,11 @@ from . import __version__, analytic
 from .catalog import load, names
 from .cli_sim import (
     configure_compare,
+    configure_faults,
     configure_simulate,
     configure_torque_control,
     run_compare,
+    run_faults,
     run_simulate,
     run_torque_control,
 )
@@ -279,6 +281,8 @@ COMMANDS: tuple[Command, ...] = (
             configure_compare, run_compare),
     Command("torque-control", "paper 2's torque control vs its baselines over a load x speed grid",
             configure_torque_control, run_torque_control),
+    Command("faults", "inject sensor, bus and phase faults: detection, time to safe state, peak current",
+            configure_faults, run_faults),
 )
 
 

@@ -322,3 +322,36 @@ def run_torque_control(args: argparse.Namespace) -> int:
         for path in _write(args.out, files):
             print(f"wrote {path}")
     return 0
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# faults
+
+
+def configure_faults(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``bldclab faults``."""
+    p.add_argument("motor", metavar="MOTOR", help="built-in drive name or motor TOML file")
+    p.add_argument("--control", choices=("square", "sine", "lu"), default="square", help="controller")
+    p.add_argument("--speed", default="0.5 pu", help='imposed speed (default "0.5 pu")')
+    p.add_argument("--out", type=Path, help="write faults.csv here")
+
+
+def run_faults(args: argparse.Namespace) -> int:
+    """Run ``bldclab faults``: each injected fault, detection, time to the safe state, peak current."""
+    from .faults import fault_table
+
+    drive = load(args.motor)
+    speed = parse_speed(args.speed, drive)
+    ctl, ref, _ = _control(args.control, drive, handoff=0.02 * drive.Omega_0)
+    i_max = float(getattr(ctl, "i_max", None) or 2.0 * drive.motor.I_N)
+    if args.control == "lu" and getattr(ctl, "i_max", None) is None:
+        i_max = 3.0 * drive.motor.I_N
+    table = fault_table(drive, ctl, ref, speed, i_max=i_max)
+    trip = f", hardware trip {drive.inverter.i_trip:g} A" if drive.inverter.i_trip > 0 else ", no hardware trip"
+    print(f"{drive.name}, {args.control} control at {speed / drive.Omega_0:.2f} p.u.: firmware over-current trip "
+          f"{i_max:g} A{trip}; times from the fault in ms")
+    print(table.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    if args.out is not None:
+        for path in _write(args.out, {"faults.csv": table.to_csv(index=False).encode()}):
+            print(f"wrote {path}")
+    return 0

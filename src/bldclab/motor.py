@@ -547,6 +547,9 @@ class Inverter:
         Diode slope resistance (Ohm), >= 0.
     R_src : float
         DC source internal resistance (Ohm), >= 0.
+    i_trip : float
+        Hardware over-current protection (A): a phase current reaching it switches every gate off, latched, as the
+        comparators of a gate driver do, whatever the firmware does. 0 (default): none.
 
     """
 
@@ -557,6 +560,7 @@ class Inverter:
     V_f: float = 0.0
     r_d: float = 0.0
     R_src: float = 0.0
+    i_trip: float = 0.0
 
     def __post_init__(self) -> None:
         _num("V_dc", self.V_dc, lo=0.0, lo_open=True)
@@ -565,7 +569,7 @@ class Inverter:
         if self.t_dead >= 0.25 / self.f_pwm:
             raise BldclabError("t_dead", f"must be below a quarter PWM period ({0.25 / self.f_pwm:g} s at "
                                f"f_pwm = {self.f_pwm:g} Hz), got {self.t_dead:g} s")
-        for name in ("R_on", "V_f", "r_d", "R_src"):
+        for name in ("R_on", "V_f", "r_d", "R_src", "i_trip"):
             _num(name, getattr(self, name), lo=0.0)
 
 
@@ -952,7 +956,8 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
                      t_dead=inv_s.quantity("t_dead", "time", 0.0),
                      R_on=inv_s.quantity("R_on", "resistance", 0.0),
                      V_f=inv_s.quantity("V_f", "voltage", 0.0), r_d=inv_s.quantity("r_d", "resistance", 0.0),
-                     R_src=inv_s.quantity("R_src", "resistance", 0.0))
+                     R_src=inv_s.quantity("R_src", "resistance", 0.0),
+                     i_trip=inv_s.quantity("i_trip", "current", 0.0))
     inv_s.finish()
 
     mech = Mechanics()

@@ -232,6 +232,7 @@ def _plant_params(drive: Drive, mech: int, h_max: float, keep: list[object]) -> 
     rec["V_f"] = inv.V_f
     rec["r_d"] = inv.r_d
     rec["R_src"] = inv.R_src
+    rec["i_trip"] = inv.i_trip
     rec["mech"] = mech
     rec["J"] = mech_p.J
     rec["B"] = mech_p.B
@@ -396,7 +397,8 @@ def simulate(drive: Drive, control: Control, scenario: Scenario) -> SimResult:
         "scenario": _describe_scenario(scenario),
         "samples": n,
         "stats": {"steps": int(plant_st["n_steps"]), "events": int(plant_st["n_events"]),
-                  "plant_flags": int(plant_st["flags"]), "e_fault": float(plant_st["e_fault"])},
+                  "plant_flags": int(plant_st["flags"]), "e_fault": float(plant_st["e_fault"]),
+                  "hw_trip": float(plant_st["t_trip"]) if int(plant_st["tripped"]) else None},
         "final": {"t": float(plant_st["t"]), "i": [float(v) for v in plant_st["i"]],
                   "theta_e": float(plant_st["theta"]), "omega_m": float(plant_st["omega"])},
     }

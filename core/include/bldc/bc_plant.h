@@ -77,7 +77,7 @@ enum {
 };
 
 #define BC_HALL_QUEUE 8
-#define BC_PLANT_NW 12 /* functions watched for sign changes inside a step (diodes, open phases, speed) */
+#define BC_PLANT_NW 15 /* functions watched for sign changes inside a step (diodes, open phases, speed, trip) */
 
 /* Faults the plant injects (bc_plant_params.fault): each active on [t_on, t_off). */
 #define BC_FAULT_MAX 4
@@ -119,6 +119,8 @@ typedef struct {
     double V_f;             /* diode forward voltage, V */
     double r_d;             /* diode slope resistance, Ohm */
     double R_src;           /* DC source resistance, Ohm */
+    double i_trip;          /* hardware over-current trip, A: |i_x| reaching it switches every gate off, latched
+                               (a comparator on the phase shunts, as gate drivers have); 0: none */
     /* mechanics */
     int32_t mech;           /* BC_MECH_IMPOSED or BC_MECH_DYNAMIC */
     double J;               /* inertia, kg m^2 */
@@ -192,6 +194,8 @@ typedef struct {
     int32_t hall_out;       /* Hall code the controller sees (after the delay and the sensor faults) */
     int32_t open_fault;     /* bit x: phase x disconnected now */
     int32_t has_faults;     /* any fault configured (checked once at init) */
+    int32_t tripped;        /* the hardware over-current trip has switched the inverter off (latched) */
+    double t_trip;          /* when, s */
     double e_fault;         /* magnetic energy lost when a phase with current was disconnected, J */
     uint32_t n_edges;       /* edges seen by the controller */
     double t_edge;          /* time of the last edge seen, s */

@@ -64,7 +64,8 @@
     X(d5, "-", "controller diagnostic 5")                                                           \
     X(d6, "-", "controller diagnostic 6")                                                           \
     X(d7, "-", "controller diagnostic 7")                                                           \
-    X(flags, "-", "controller flags")
+    X(flags, "-", "controller flags")                                                               \
+    X(hw_trip, "-", "1 once the inverter's hardware over-current trip has switched it off")
 
 typedef struct {
 #define BC_TRACE_MEMBER(name, unit, doc) double name;

@@ -61,6 +61,7 @@ typedef struct {
     float omega_enc;     /* encoder mechanical speed, rad/s (reference sensor) */
     float ref;           /* primary reference: torque N m, current A or duty, per controller */
     float omega_ref;     /* speed reference, rad/s (controllers with a speed loop) */
+    uint32_t fault_pin;  /* 1: the inverter's hardware protection has tripped (its gates are off, latched) */
 } bc_ctrl_in;
 
 /* What a controller returns at one sample. */

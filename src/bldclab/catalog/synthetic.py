@@ -293,12 +293,13 @@ def lu4kw_drive() -> Drive:
         "Hann window and a flat top rising by 8 %, phases a, b, c scaled by 1.00/0.97/1.025 and delayed by "
         "0/+2/-1.5 deg, scaled to k_phi = 0.4 V s/rad (assumed), 360 points per phase. Also assumed: "
         "I_N = 4 kW / (3000 rpm * 2 k_phi) = 15.92 A, J, B, tau_c, f_pwm = 10 kHz, f_tick = 20 MHz, "
-        "ideal inverter; reasons in bldclab.catalog.synthetic.lu4kw_drive. Regenerate with "
+        "ideal inverter with a hardware over-current trip at 4 I_N = 64 A (assumed); reasons in "
+        "bldclab.catalog.synthetic.lu4kw_drive. Regenerate with "
         "tools/make_lu4kw.py; do not edit by hand."
     )
     return Drive(
         motor=Motor(p=2, R=0.059, L=0.29e-3, emf=lu4kw_emf(), V_N=300.0, I_N=I_N, Omega_N=Omega_N),
-        inverter=Inverter(V_dc=300.0, f_pwm=10e3),
+        inverter=Inverter(V_dc=300.0, f_pwm=10e3, i_trip=64.0),
         mechanics=Mechanics(J=5e-3, B=2e-4, tau_c=0.06),
         sensors=Sensors(current_phases="ac", f_tick=20e6),
         name="lu-4kw",
