@@ -409,10 +409,10 @@ def test_cli_writes_a_drive_that_loads_and_simulates(tmp_path: Path, capsys: pyt
     for x, y in (("a", "b"), ("b", "c"), ("c", "a")):
         ea, eb = a[f"e_{x}"] - a[f"e_{y}"], b[f"e_{x}"] - b[f"e_{y}"]
         assert np.max(np.abs(ea - eb)) < 0.01 * np.max(np.abs(ea))
-    # and it runs a six-step drive
-    res = bldclab.simulate(d, bldclab.SixStepVoltage("high"),
-                           bldclab.Scenario(duration=3 * T_e, speed=LU_SPEED, ref=0.5, window=(T_e, 3 * T_e)))
-    assert res.metrics is not None and res.metrics.tau_mean > 0.0
+    # and it runs a drive: paper 2's torque control on the identified shapes holds the rated torque
+    res = bldclab.simulate(d, bldclab.Lu(),
+                           bldclab.Scenario(duration=3 * T_e, speed=LU_SPEED, ref=d.T_N, window=(T_e, 3 * T_e)))
+    assert res.metrics is not None and res.metrics.tau_mean == pytest.approx(d.T_N, rel=0.02)
 
 
 def test_cli_json_and_warnings_on_stderr(capsys: pytest.CaptureFixture[str], sample: Identification) -> None:
