@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import __version__, analytic
+from . import sweep as _sweep
 from .catalog import load, names
 from .cli_sim import (
     configure_compare,
@@ -274,6 +275,8 @@ def _run_analyze(args: argparse.Namespace) -> int:
 COMMANDS: tuple[Command, ...] = (
     Command("analyze", "paper 1 closed forms for a motor: Table I, characteristics, Figs 7-8",
             _configure_analyze, _run_analyze),
+    Command("sweep", "run many simulations (grid or list of cases) on processes or Dask into a resumable store",
+            _sweep.configure_command, _sweep.run_command),
     Command("identify", "back-EMF tables from a constant-speed waveform (paper 2)", _configure_identify, _run_identify),
     Command("simulate", "one switching-level simulation: square, sine, sixv, lu, lu-no-do or rect control",
             configure_simulate, run_simulate),
