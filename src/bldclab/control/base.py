@@ -2,15 +2,33 @@
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
+
+from ..errors import BldclabError
 
 if TYPE_CHECKING:
     from .._core import Core
     from ..motor import Drive
 
-__all__ = ["Control"]
+__all__ = ["Control", "check_number"]
+
+
+def check_number(name: str, v: object, *, allow_zero: bool = False, allow_none: bool = False) -> None:
+    """Check a controller setting: a finite number > 0 (>= 0 with ``allow_zero``; ``None`` with ``allow_none``).
+
+    Raises
+    ------
+    BldclabError
+        Naming the field as ``control.<name>``.
+    """
+    if v is None and allow_none:
+        return
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v < 0 or (
+            v == 0 and not allow_zero):
+        raise BldclabError(f"control.{name}", f"must be a finite number {'>=' if allow_zero else '>'} 0, got {v!r}")
 
 
 class Control:

@@ -20,7 +20,7 @@ from ..analytic import r_total
 from ..design import pi_gains
 from ..errors import BldclabError
 from ..motor import TWO_PI
-from .base import Control
+from .base import Control, check_number
 
 if TYPE_CHECKING:
     from .._core import Core
@@ -32,15 +32,6 @@ _METHOD = {"lu": 0, "lu-no-do": 1, "rect": 2}
 
 #: Meaning of the controller's diagnostic channels (``SimResult`` signal names).
 DIAG = ("mode", "duty", "tau_est", "tau_pred", "theta_est", "omega_est", "i_off", "sector")
-
-
-def _positive(name: str, v: object, *, allow_zero: bool = False, allow_none: bool = False) -> None:
-    """Check an optional non-negative (or positive) finite number, naming the field on failure."""
-    if v is None and allow_none:
-        return
-    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v < 0 or (
-            v == 0 and not allow_zero):
-        raise BldclabError(f"control.{name}", f"must be a finite number {'>=' if allow_zero else '>'} 0, got {v!r}")
 
 
 @dataclass(frozen=True)
@@ -115,12 +106,12 @@ class Lu(Control):
                 raise BldclabError(f"control.{name}", f"must be True or False, got {getattr(self, name)!r}")
         if isinstance(self.shape_points, bool) or not isinstance(self.shape_points, int) or self.shape_points < 12:
             raise BldclabError("control.shape_points", f"must be an integer >= 12, got {self.shape_points!r}")
-        _positive("bandwidth_hz", self.bandwidth_hz)
-        _positive("phase_margin_deg", self.phase_margin_deg)
+        check_number("bandwidth_hz", self.bandwidth_hz)
+        check_number("phase_margin_deg", self.phase_margin_deg)
         for name in ("i_max", "omega_min"):
-            _positive(name, getattr(self, name), allow_none=True)
+            check_number(name, getattr(self, name), allow_none=True)
         for name in ("i_zero", "kp", "ki"):
-            _positive(name, getattr(self, name), allow_zero=True, allow_none=True)
+            check_number(name, getattr(self, name), allow_zero=True, allow_none=True)
         if isinstance(self.theta_offset, bool) or not isinstance(self.theta_offset, int | float) or not math.isfinite(
                 self.theta_offset):
             raise BldclabError("control.theta_offset", f"must be a finite number, got {self.theta_offset!r}")

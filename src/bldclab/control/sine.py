@@ -17,7 +17,7 @@ import numpy as np
 from ..analytic import i_sN, r_total
 from ..design import pi_gains
 from ..errors import BldclabError
-from .base import Control
+from .base import Control, check_number
 from .sixstep import SixStep
 
 if TYPE_CHECKING:
@@ -50,12 +50,6 @@ def fundamental_k1(drive: Drive) -> float:
         a, b = shape.fourier(1)
         amps.append(math.hypot(float(a[1]), float(b[1])))
     return float(np.mean(amps))
-
-
-def _pos(name: str, v: object, allow_zero: bool = False) -> None:
-    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v < 0 or (
-            v == 0 and not allow_zero):
-        raise BldclabError(f"control.{name}", f"must be a finite number {'>=' if allow_zero else '>'} 0, got {v!r}")
 
 
 @dataclass(frozen=True)
@@ -158,16 +152,16 @@ class Sine(Control):
         for name in ("emf_feedforward", "decoupling", "overmodulation", "speed_limit", "speed_loop", "flying_start"):
             if not isinstance(getattr(self, name), bool):
                 raise BldclabError(f"control.{name}", f"must be True or False, got {getattr(self, name)!r}")
-        _pos("advance", self.advance, allow_zero=True)
+        check_number("advance", self.advance, allow_zero=True)
         if self.advance > 4:
             raise BldclabError("control.advance", f"must be within [0, 4] samples, got {self.advance!r}")
-        _pos("bandwidth_hz", self.bandwidth_hz)
-        _pos("phase_margin_deg", self.phase_margin_deg)
+        check_number("bandwidth_hz", self.bandwidth_hz)
+        check_number("phase_margin_deg", self.phase_margin_deg)
         for name in ("R_design", "handoff_speed", "i_max", "tau_max"):
             v = getattr(self, name)
             if v is not None:
-                _pos(name, v, allow_zero=name == "R_design")
-        _pos("handoff_hysteresis", self.handoff_hysteresis, allow_zero=True)
+                check_number(name, v, allow_zero=name == "R_design")
+        check_number("handoff_hysteresis", self.handoff_hysteresis, allow_zero=True)
         if self.handoff_hysteresis >= 1:
             raise BldclabError("control.handoff_hysteresis", f"must be in [0, 1), got {self.handoff_hysteresis!r}")
         if isinstance(self.emf_points, bool) or not isinstance(self.emf_points, int) or not 3 <= self.emf_points \
@@ -175,10 +169,10 @@ class Sine(Control):
             raise BldclabError("control.emf_points", f"must be an integer in [3, 4096], got {self.emf_points!r}")
         if not isinstance(self.start, SixStep):
             raise BldclabError("control.start", f"must be a bldclab.SixStep, got {type(self.start).__name__}")
-        _pos("speed_bandwidth_hz", self.speed_bandwidth_hz)
+        check_number("speed_bandwidth_hz", self.speed_bandwidth_hz)
         for name in ("speed_kp", "speed_ki"):
             if getattr(self, name) is not None:
-                _pos(name, getattr(self, name), allow_zero=True)
+                check_number(name, getattr(self, name), allow_zero=True)
 
     def gains(self, drive: Drive) -> tuple[float, float]:
         """Return the d,q current PI gains ``(k_p, k_i)`` (V/A, V/(A s)) for a drive.

@@ -17,7 +17,7 @@ import numpy as np
 from ..analytic import r_total
 from ..design import pi_gains
 from ..errors import BldclabError
-from .base import Control
+from .base import Control, check_number
 
 if TYPE_CHECKING:
     from .._core import Core
@@ -28,14 +28,6 @@ __all__ = ["SixStep"]
 _REG = {"pi": 0, "hysteresis": 1, "predictive": 2}
 _CHOP = {"bipolar": 0, "high": 1, "pwm-on-pwm": 2, "sync": 3}
 _REF = {"current": 0, "torque": 1}
-
-
-def _number(name: str, v: object, *, allow_zero: bool = False, allow_none: bool = False) -> None:
-    if v is None and allow_none:
-        return
-    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v < 0 or (
-            v == 0 and not allow_zero):
-        raise BldclabError(f"control.{name}", f"must be a finite number {'>=' if allow_zero else '>'} 0, got {v!r}")
 
 
 @dataclass(frozen=True)
@@ -115,12 +107,12 @@ class SixStep(Control):
         for name in ("advance", "emf_feedforward", "regen"):
             if not isinstance(getattr(self, name), bool):
                 raise BldclabError(f"control.{name}", f"must be True or False, got {getattr(self, name)!r}")
-        _number("bandwidth_hz", self.bandwidth_hz)
-        _number("phase_margin_deg", self.phase_margin_deg)
-        _number("kp", self.kp, allow_zero=True, allow_none=True)
-        _number("ki", self.ki, allow_zero=True, allow_none=True)
+        check_number("bandwidth_hz", self.bandwidth_hz)
+        check_number("phase_margin_deg", self.phase_margin_deg)
+        check_number("kp", self.kp, allow_zero=True, allow_none=True)
+        check_number("ki", self.ki, allow_zero=True, allow_none=True)
         for name in ("band", "i_max", "omega_min"):
-            _number(name, getattr(self, name), allow_none=True)
+            check_number(name, getattr(self, name), allow_none=True)
         if isinstance(self.theta_offset, bool) or not isinstance(self.theta_offset, int | float) or not math.isfinite(
                 self.theta_offset):
             raise BldclabError("control.theta_offset", f"must be a finite number, got {self.theta_offset!r}")
