@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import tomllib
+from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -90,11 +91,12 @@ def _array(name: str, values: object, *, min_len: int = 1) -> NDArray[np.float64
 # back-EMF shapes
 
 
-class Shape:
+class Shape(ABC):
     """Base of the back-EMF shapes: ``k(theta)`` in V s/rad of the phase's local electrical angle."""
 
     kind: ClassVar[str] = ""
 
+    @abstractmethod
     def __call__(self, theta: ArrayLike) -> NDArray[np.float64]:
         """Evaluate the shape.
 
@@ -109,26 +111,25 @@ class Shape:
             ``k(theta)`` in V s/rad.
 
         """
-        raise NotImplementedError  # pragma: no cover - abstract
 
     def breakpoints(self) -> NDArray[np.float64]:
         """Return the angles in [0, 2 pi) where the shape has corners (empty for smooth shapes)."""
         return np.empty(0)
 
+    @abstractmethod
     def c_form(self) -> tuple[int, NDArray[np.float64], NDArray[np.float64]]:
         """Return the C core's form (kind code, x, y): table (0): angles, values; Fourier (1): a, b."""
-        raise NotImplementedError  # pragma: no cover - abstract
 
+    @abstractmethod
     def fourier(self, n_max: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Return the Fourier coefficients ``a_n, b_n``, n = 0..n_max, of ``k = sum a_n cos nx + b_n sin nx``.
 
         Computed exactly for piecewise-linear and Fourier shapes.
         """
-        raise NotImplementedError  # pragma: no cover - abstract
 
+    @abstractmethod
     def to_toml_dict(self) -> dict[str, Any]:
         """Return the TOML table describing this shape (SI numbers)."""
-        raise NotImplementedError  # pragma: no cover - abstract
 
 
 def _pwl_fourier(x: NDArray[np.float64], y: NDArray[np.float64], n_max: int

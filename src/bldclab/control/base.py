@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
@@ -31,15 +32,15 @@ def check_number(name: str, v: object, *, allow_zero: bool = False, allow_none: 
         raise BldclabError(f"control.{name}", f"must be a finite number {'>=' if allow_zero else '>'} 0, got {v!r}")
 
 
-class Control:
+class Control(ABC):
     """Base class: the C registry name and how to fill the parameter struct."""
 
     c_name: ClassVar[str] = ""
     ref_meaning: ClassVar[str] = ""
 
+    @abstractmethod
     def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:
         """Return the filled C parameter record; arrays it points to are appended to ``keep``."""
-        raise NotImplementedError  # pragma: no cover - abstract
 
     def with_delay(self, delay: int) -> Control:
         """Return the controller configured for the runner's computation delay (samples, 0 or 1).
