@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import __version__, analytic
+from . import report as _report
 from . import sweep as _sweep
 from .catalog import load, names
 from .cli_sim import (
@@ -286,6 +287,8 @@ COMMANDS: tuple[Command, ...] = (
             configure_torque_control, run_torque_control),
     Command("faults", "inject sensor, bus and phase faults: detection, time to safe state, peak current",
             configure_faults, run_faults),
+    Command("report", "one self-contained HTML report of a comparison (a results directory, or a motor to run)",
+            _report.configure_command, _report.run_command),
 )
 
 

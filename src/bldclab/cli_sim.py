@@ -186,6 +186,7 @@ def configure_compare(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-speed", type=float, default=0.98, help="highest speed, p.u. of Omega_0 (default 0.98)")
     p.add_argument("--workers", type=int, default=0, help="processes (default: all cores; 1: serial)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (it is shown on a terminal only)")
+    p.add_argument("--no-report", action="store_true", help="do not write report.html (docs/report.md)")
 
 
 def comparison_figures(res: Any) -> dict[str, Figure]:
@@ -257,6 +258,10 @@ def run_compare(args: argparse.Namespace) -> int:
     for name, fig in figures.items():
         files[f"{name}.png"] = _figure_bytes(fig, "png")
         files[f"{name}.svg"] = _figure_bytes(fig, "svg")
+    from .report import compare_command, compare_outputs  # waveforms.csv, manifest.json, report.html
+
+    files.update(compare_outputs(res, files, command=compare_command(args, out), motor_source=args.motor,
+                                 report=not args.no_report))
     for path in _write(out, files):
         print(f"wrote {path}")
     return 0

@@ -189,10 +189,42 @@ class SimResult:
         return f"<SimResult {self.meta.get('drive', {}).get('name', '')} {ctrl}: {len(self)} rows{m}>"
 
     def _repr_html_(self) -> str:
-        """Jupyter: metadata and metrics as a table."""
-        rows = "".join(f"<tr><td>{k}</td><td>{v:.6g}</td></tr>" for k, v in asdict(self.metrics).items()
-                       if isinstance(v, float)) if self.metrics else ""
-        return f"<p>{self!r}</p><table>{rows}</table>"
+        """Jupyter: the description, currents and torque as small inline SVG plots, and the metrics with units.
+
+        The plots show the metric window (the whole run if there is none); nothing is fetched, so the notebook
+        displays offline and keeps the plots when saved.
+        """
+        import html
+
+        from .report import Series, svg_plot
+
+        parts = [f"<p><b>{html.escape(repr(self))}</b></p>"]
+        t = self.signals.get("t")
+        if t is not None and len(t) > 1:
+            sel = np.ones(len(t), dtype=bool)
+            if self.metrics is not None:
+                sel = (t >= self.metrics.t0) & (t <= self.metrics.t1)
+                sel = sel if np.count_nonzero(sel) > 1 else np.ones(len(t), dtype=bool)
+            t_ms = t[sel] * 1e3
+            plots = []
+            for names, colors, ylabel in ((("i_a", "i_b", "i_c"), ("#1f77b4", "#ff7f0e", "#2ca02c"), "current [A]"),
+                                          (("tau_e", "tau_mean"), ("#888888", "#d62728"), "torque [N m]")):
+                present = [(n, c) for n, c in zip(names, colors, strict=True) if n in self.signals]
+                if present:
+                    svg = svg_plot([Series(n, t_ms, self.signals[n][sel], c) for n, c in present], title=ylabel,
+                                   xlabel="t [ms]", ylabel=ylabel, width=520, height=280, max_points=700)
+                    plots.append(f'<div style="flex: 0 1 460px; min-width: 280px">{svg}</div>')
+            if plots:
+                parts.append(f'<div style="display: flex; flex-wrap: wrap; gap: 8px">{"".join(plots)}</div>')
+        if self.metrics is not None:
+            rows = []
+            for k, v in asdict(self.metrics).items():
+                text = ", ".join(f"{x:.6g}" for x in v) if isinstance(v, list | tuple) else f"{v:.6g}"
+                rows.append(f"<tr><td>{k}</td><td style=\"text-align: right\">{text}</td><td>{_metric_unit(k)}</td>"
+                            "</tr>")
+            parts.append("<table><thead><tr><th>metric</th><th>value</th><th>unit</th></tr></thead><tbody>"
+                         + "".join(rows) + "</tbody></table>")
+        return "".join(parts)
 
     def to_pandas(self) -> Any:
         """Return the signals as a pandas DataFrame indexed by time ``t`` (s)."""
@@ -290,6 +322,23 @@ class SimResult:
                     kw[f.name] = tuple(kw[f.name])
             metrics = Metrics(**kw)
         return cls(signals, header["units"], header["docs"], metrics, header["meta"])
+
+
+def _metric_unit(name: str) -> str:
+    """Return the SI unit of a :class:`Metrics` field."""
+    if name in ("t0", "t1"):
+        return "s"
+    if name.startswith(("tau_", "ripple")):
+        return "N m"
+    if name == "omega_mean":
+        return "rad/s"
+    if name.startswith("p_"):
+        return "W"
+    if name.startswith("dW_"):
+        return "J"
+    if name.startswith("i_"):
+        return "A"
+    return "-"
 
 
 def _json_default(obj: object) -> object:

@@ -37,6 +37,7 @@ import multiprocessing
 import os
 import shutil
 import signal
+import sqlite3
 import sys
 import tempfile
 import threading
@@ -1359,6 +1360,77 @@ class SweepRun:
         name = f" {self.sweep.name}" if self.sweep.name else ""
         return (f"sweep{name}: {self.total} cases: {self.computed} computed, {self.skipped} already in the store, "
                 f"{self.failed} failed; {self.wall:.1f} s on {self.executor}; store {self.store.path}")
+
+    def _repr_html_(self) -> str:
+        """Jupyter: the summary, the results as a table (first rows) and a small plot.
+
+        The plot shows the first numeric result that varies (speeds echoing the case's inputs skipped) against the
+        first axis, one line per value of the second axis (up to eight); a non-numeric first axis is plotted at
+        positions 0, 1, ... named in the axis label.
+        """
+        import html
+
+        from .report import svg_plot
+
+        parts = [f"<p><b>{html.escape(self.summary())}</b></p>"]
+        try:
+            df = self.to_pandas()
+        except (BldclabError, sqlite3.Error) as exc:
+            return parts[0] + f"<p>(results not readable: {html.escape(' '.join(str(exc).split()))})</p>"
+        if len(df) == 0:
+            return parts[0] + "<p>(no results stored yet)</p>"
+        axes = [a for a in self.sweep.axes if a in df.columns]
+        plot = _sweep_plot(df, axes)
+        if plot is not None:
+            series, xlabel, ylabel = plot
+            svg = svg_plot(series, title=f"{ylabel} vs {xlabel}", xlabel=xlabel, ylabel=ylabel, width=560,
+                           height=320)
+            parts.append(f'<div style="max-width: 560px">{svg}</div>')
+        shown = df.drop(columns=["key"], errors="ignore")
+        parts.append(shown.head(20).to_html(index=False, float_format=lambda v: f"{v:.6g}"))
+        if len(df) > 20:
+            parts.append(f"<p>(first 20 of {len(df)} rows; <code>.to_pandas()</code> for all)</p>")
+        return "".join(parts)
+
+
+def _sweep_plot(df: Any, axes: Sequence[str]) -> tuple[list[Any], str, str] | None:
+    """Return the series and labels of a sweep's notebook plot: first varying numeric result vs the first axis."""
+    import pandas as pd
+
+    from .report import Series
+
+    echo = {*axes, *_SPEEDS}
+    skip = {"case", "key", *echo, *(f"{n}_result" for n in echo)}
+    results = [c for c in df.columns if c not in skip and pd.api.types.is_numeric_dtype(df[c])
+               and not pd.api.types.is_bool_dtype(df[c]) and df[c].nunique(dropna=True) > 1]
+    if not results:
+        return None
+    y_name = results[0]
+    if axes:
+        x_raw = df[axes[0]]
+        if pd.api.types.is_numeric_dtype(x_raw) and not pd.api.types.is_bool_dtype(x_raw):
+            x, xlabel = x_raw.to_numpy(dtype=float), axes[0]
+        else:
+            labels = list(dict.fromkeys(str(v) for v in x_raw))
+            x = np.array([labels.index(str(v)) for v in x_raw], dtype=float)
+            names = ", ".join(f"{j}: {v}" for j, v in enumerate(labels[:6]))
+            xlabel = f"{axes[0]} ({names}{', ...' if len(labels) > 6 else ''})"
+    else:
+        x, xlabel = df["case"].to_numpy(dtype=float), "case"
+    y = df[y_name].to_numpy(dtype=float)
+    colors = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f")
+    groups = list(dict.fromkeys(str(v) for v in df[axes[1]])) if len(axes) > 1 else []
+    if len(axes) > 1 and len(groups) <= len(colors):
+        key = df[axes[1]].astype(str).to_numpy()
+        series = []
+        for g, color in zip(groups, colors, strict=False):
+            sel = key == g
+            order = np.argsort(x[sel], kind="stable")
+            series.append(Series(f"{axes[1]} = {g}", x[sel][order], y[sel][order], color, marker="o"))
+        return series, xlabel, y_name
+    order = np.argsort(x, kind="stable")
+    line = len(axes) == 1
+    return [Series(y_name, x[order], y[order], colors[0], line=line, marker="o")], xlabel, y_name
 
 
 class _Chunker:
