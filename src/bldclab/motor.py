@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -22,6 +21,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._files import read_toml
 from .errors import BldclabError
 from .units import to_si
 
@@ -763,16 +763,7 @@ class Drive:
 
         """
         p = Path(path)
-        try:
-            text = p.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise BldclabError("file", f"cannot read: {exc.strerror}", str(p)) from None
-        except UnicodeDecodeError:
-            raise BldclabError("file", "not a text (UTF-8) file, so not a TOML motor file", str(p)) from None
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise BldclabError("file", f"not valid TOML ({exc})", str(p)) from None
+        data = read_toml(p, "motor file")
         return cls.from_dict(data, source=str(p), default_name=p.stem)
 
     @classmethod

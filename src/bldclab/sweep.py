@@ -45,6 +45,7 @@ import time
 import tomllib
 import types
 import typing
+from abc import ABC, abstractmethod
 from collections import OrderedDict
 from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -55,6 +56,7 @@ from typing import Any, ClassVar, Literal, NamedTuple, TextIO
 import numpy as np
 
 from . import __version__, catalog
+from ._files import read_toml
 from .control import Control
 from .errors import BldclabError
 from .experiments import steady_state
@@ -300,7 +302,7 @@ def _numbers(name: str, v: object, n: int) -> tuple[float, ...]:
     return tuple(float(x) for x in v)
 
 
-class Experiment:
+class Experiment(ABC):
     """Base of what one case measures: a frozen dataclass of plain settings (SI) with :meth:`run`.
 
     Subclasses set :attr:`kind` (the name used by the ``experiment`` setting) and :attr:`dimensions` (the unit
@@ -311,9 +313,9 @@ class Experiment:
     kind: ClassVar[str] = ""
     dimensions: ClassVar[dict[str, str]] = {}
 
+    @abstractmethod
     def run(self, drive: Drive, control: Control) -> dict[str, float | int]:
         """Run the experiment and return its result row (names to numbers)."""
-        raise NotImplementedError  # pragma: no cover - abstract
 
     @classmethod
     def from_settings(cls, settings: Mapping[str, Any], Omega_0: float) -> Experiment:
@@ -691,16 +693,7 @@ class Sweep:
             For an unreadable file, a TOML syntax error, or an unknown or malformed setting (named).
         """
         p = Path(path)
-        try:
-            text = p.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise BldclabError("file", f"cannot read: {exc.strerror or exc}", str(p)) from None
-        except UnicodeDecodeError:
-            raise BldclabError("file", "not a text (UTF-8) file, so not a TOML sweep file", str(p)) from None
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise BldclabError("file", f"not valid TOML ({exc})", str(p)) from None
+        data = read_toml(p, "sweep file")
         return cls.from_dict(data, source=str(p), root=p.parent, default_name=p.stem)
 
     @classmethod
@@ -1026,29 +1019,33 @@ class _ChunkLostError(Exception):
     """A chunk's cases could not be run (worker lost); they are recorded as failed and retried on a rerun."""
 
 
-class _Backend:
+class _Backend(ABC):
     """An open executor: submit chunks, wait for some, fetch their outcomes."""
 
     slots = 1
 
+    @abstractmethod
     def submit(self, chunk: list[tuple[int, str, dict[str, Any]]]) -> Any:
-        raise NotImplementedError  # pragma: no cover - abstract
+        """Start a chunk of cases; return a handle."""
 
+    @abstractmethod
     def wait(self, handles: Collection[Any]) -> Iterable[Any]:
-        raise NotImplementedError  # pragma: no cover - abstract
+        """Block until some of the handles are done; return those."""
 
+    @abstractmethod
     def result(self, handle: Any) -> list[_Outcome]:
-        raise NotImplementedError  # pragma: no cover - abstract
+        """Return the outcomes of a finished chunk."""
 
-    def close(self, abort: bool) -> None:
+    def close(self, abort: bool) -> None:  # noqa: B027 - a backend without workers has nothing to release
         """Release the workers; ``abort``: stop running work as soon as possible."""
 
 
-class Executor:
+class Executor(ABC):
     """Where the cases run: :class:`Serial`, :class:`Processes` or :class:`Dask`."""
 
+    @abstractmethod
     def _open(self) -> _Backend:
-        raise NotImplementedError  # pragma: no cover - abstract
+        """Start the workers and return the open backend."""
 
     def describe(self) -> str:
         """Return a short description for messages."""
