@@ -20,14 +20,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import BldclabError
 from .motor import TWO_PI, Drive
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "CHARACTERISTIC_COLUMNS",
@@ -1691,4 +1693,6 @@ def characteristic(drive: Drive, speeds_pu: ArrayLike) -> pd.DataFrame:
         "region_q": region_q(w, th),
         "T_blac_pu": np.asarray(t_blac_pu(w, th)),
     }
+    import pandas as pd  # imported here: `import bldclab` (and every sweep worker) starts 0.3 s faster without it
+
     return pd.DataFrame(data, columns=list(CHARACTERISTIC_COLUMNS))

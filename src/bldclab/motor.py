@@ -11,6 +11,7 @@ own electrical angle ``theta_x = theta_e - x 2 pi/3`` (``docs/conventions.md``).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
@@ -385,7 +386,14 @@ class BackEmf:
         return np.stack([s(th - x * TWO_PI / 3.0) for x, s in enumerate(self.shapes)])
 
     def line_peak(self) -> float:
-        """Return ``max |k_x - k_y|`` over angles and phase pairs (V s/rad); exact for piecewise-linear."""
+        """Return ``max |k_x - k_y|`` over angles and phase pairs (V s/rad); exact for piecewise-linear.
+
+        Computed once per back-EMF (the shapes are immutable) and cached.
+        """
+        return self._line_peak
+
+    @functools.cached_property
+    def _line_peak(self) -> float:
         pts = [np.linspace(0.0, TWO_PI, 4097)]
         for x, s in enumerate(self.shapes):
             pts.append(np.mod(s.breakpoints() + x * TWO_PI / 3.0, TWO_PI))

@@ -386,7 +386,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario) -> SimResult:
             if not label:
                 continue
             out_name = label
-        signals[out_name] = np.ascontiguousarray(rows[name])
+        signals[out_name] = rows[name]  # a strided view of the record array: no copy
         units[out_name] = unit
         docs[out_name] = doc
     plant_st = st["plant"]
