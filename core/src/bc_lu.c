@@ -367,15 +367,11 @@ int bc_lu_init(const bc_lu_params *p, bc_lu_state *s)
         }
     }
     if (!(f_max > 0.0f)) return BC_ERR_PARAM; /* no back-EMF: no torque lever */
-    s->hall_p.f_tick = p->f_tick;
-    s->hall_p.omega_min = p->omega_min;
-    s->hall_p.theta_offset = p->theta_offset;
+    s->hall_p = (bc_hall_params){.f_tick = p->f_tick, .omega_min = p->omega_min,
+                                 .theta_offset = p->theta_offset};
     if (bc_hall_init(&s->hall_p, &s->hall) != BC_OK) return BC_ERR_PARAM;
-    s->pi_p.kp = p->kp;
-    s->pi_p.ki = p->ki;
-    s->pi_p.ts = p->ts;
-    s->pi_p.u_min = -p->v_max;
-    s->pi_p.u_max = p->v_max;
+    s->pi_p = (bc_pi_params){.kp = p->kp, .ki = p->ki, .ts = p->ts,
+                             .u_min = -p->v_max, .u_max = p->v_max};
     if (bc_pi_init(&s->pi_p, &s->pi) != BC_OK) return BC_ERR_PARAM;
     s->lever_min = 1e-3f * f_max;
     s->tol = 1e-4f * f_max * p->i_max;

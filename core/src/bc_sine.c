@@ -37,15 +37,11 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     if (!is_flag(p->flying_start)) return BC_ERR_PARAM;
     if (p->six.ref_torque != 1 || bc_sixstep_init(&p->six, &s->six) != BC_OK) return BC_ERR_PARAM;
 
-    s->hall_p.f_tick = p->f_tick;
-    s->hall_p.omega_min = p->omega_min;
-    s->hall_p.theta_offset = p->theta_offset;
+    s->hall_p = (bc_hall_params){.f_tick = p->f_tick, .omega_min = p->omega_min,
+                                 .theta_offset = p->theta_offset};
     if (bc_hall_init(&s->hall_p, &s->hall) != BC_OK) return BC_ERR_PARAM;
-    s->pi_p.kp = p->kp;
-    s->pi_p.ki = p->ki;
-    s->pi_p.ts = p->ts;
-    s->pi_p.u_min = -p->v_max;
-    s->pi_p.u_max = p->v_max;
+    s->pi_p = (bc_pi_params){.kp = p->kp, .ki = p->ki, .ts = p->ts,
+                             .u_min = -p->v_max, .u_max = p->v_max};
     if (bc_pi_init(&s->pi_p, &s->pi_d) != BC_OK || bc_pi_init(&s->pi_p, &s->pi_q) != BC_OK) return BC_ERR_PARAM;
     s->piw_p.kp = p->speed_loop ? p->kp_w : 0.0f;
     s->piw_p.ki = p->speed_loop ? p->ki_w : 0.0f;

@@ -27,15 +27,11 @@ int bc_sixstep_init(const bc_sixstep_params *p, bc_sixstep_state *s)
     if (!(p->ts > 0.0f) || p->R < 0.0f || !(p->L > 0.0f) || !(p->k_e > 0.0f) || p->kp < 0.0f || p->ki < 0.0f ||
         !(p->band > 0.0f) || !(p->i_max > 0.0f) || !(p->v_max > 0.0f))
         return BC_ERR_PARAM;
-    s->hall_p.f_tick = p->f_tick;
-    s->hall_p.omega_min = p->omega_min;
-    s->hall_p.theta_offset = p->theta_offset;
+    s->hall_p = (bc_hall_params){.f_tick = p->f_tick, .omega_min = p->omega_min,
+                                 .theta_offset = p->theta_offset};
     if (bc_hall_init(&s->hall_p, &s->hall) != BC_OK) return BC_ERR_PARAM;
-    s->pi_p.kp = p->kp;
-    s->pi_p.ki = p->ki;
-    s->pi_p.ts = p->ts;
-    s->pi_p.u_min = -1.0f;
-    s->pi_p.u_max = 1.0f;
+    s->pi_p = (bc_pi_params){.kp = p->kp, .ki = p->ki, .ts = p->ts,
+                             .u_min = -1.0f, .u_max = 1.0f};
     if (bc_pi_init(&s->pi_p, &s->pi) != BC_OK) return BC_ERR_PARAM;
     for (int x = 0; x < 3; ++x) {
         s->applied[x].mode = BC_LEG_OFF;
