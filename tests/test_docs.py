@@ -18,20 +18,19 @@ from pathlib import Path
 
 import pytest
 
+from conftest import require_module
+
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 EXAMPLES = sorted((ROOT / "examples").glob("*.py"))
 REFERENCE_MODULES = ("motor", "catalog", "sim", "control", "results", "experiments", "compare", "analytic", "paper1",
-                     "paper2", "identify", "sweep", "store", "faults", "design", "plots", "units", "errors", "cli")
+                     "paper2", "identify", "sweep", "store", "faults", "report", "design", "plots", "units", "errors",
+                     "cli")
 
 
 def _require_mkdocs() -> None:
     """Skip without the docs tools (``pip install ".[docs]"``); under CI (BLDCLAB_CI=1) fail instead."""
-    if importlib.util.find_spec("mkdocs") is None or importlib.util.find_spec("mkdocstrings_handlers") is None:
-        msg = "the docs tools are not installed (pip install \".[docs]\")"
-        if os.environ.get("BLDCLAB_CI") == "1":
-            pytest.fail(msg)
-        pytest.skip(msg)
+    require_module("mkdocs", "mkdocstrings_handlers", install='pip install ".[docs]"')
 
 
 @pytest.fixture(scope="module")

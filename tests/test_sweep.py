@@ -29,6 +29,7 @@ from bldclab import sweep as sw
 from bldclab.cli import main
 from bldclab.errors import BldclabError
 from bldclab.store import Store
+from conftest import require_module
 
 # Short cases: htm-48v at high per-unit speed (electrical period ~12 ms), few periods, six-step voltage mode.
 FAST = {"drive": "htm-48v", "controller": "SixStepVoltage", "ref": 0.8, "settle_periods": 2, "measure_periods": 1,
@@ -189,7 +190,8 @@ def test_processes_give_the_same_bits_as_serial(serial_results, tmp_path):
 
 
 def test_dask_gives_the_same_bits_as_serial(serial_results, tmp_path):
-    distributed = pytest.importorskip("distributed")
+    require_module("distributed")
+    import distributed
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                                   dashboard_address=None) as cluster:
         run = sw.run(MIXED, tmp_path / "d.sqlite", executor=sw.Dask(cluster.scheduler_address), progress=False)
@@ -199,7 +201,7 @@ def test_dask_gives_the_same_bits_as_serial(serial_results, tmp_path):
 
 
 def test_unreachable_scheduler_is_a_clear_error():
-    pytest.importorskip("distributed")
+    require_module("distributed")
     with pytest.raises(BldclabError, match="scheduler: cannot connect"):
         sw.run(fast_sweep(), executor=sw.Dask("tcp://127.0.0.1:9", timeout=1.0), progress=False)
 
