@@ -200,3 +200,12 @@ def test_python_tour_code_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) 
             exec(compile(block, f"python.md block {j + 1}", "exec"), namespace)
         except Exception as exc:  # pragma: no cover - the message names the block
             pytest.fail(f"python.md block {j + 1} failed: {exc!r}\n{block}")
+
+
+def test_user_facing_text_cites_papers_by_reference_not_by_workspace_path() -> None:
+    """Users have only the repository: README, docs, examples and the package never point outside it."""
+    files = [ROOT / "README.md", *DOCS.rglob("*.md"), *EXAMPLES, *(ROOT / "src" / "bldclab").rglob("*.py")]
+    offenders = [f"{f.relative_to(ROOT)}:{n}" for f in files
+                 for n, line in enumerate(f.read_text(encoding="utf-8").splitlines(), 1)
+                 if "shared/papers" in line or "/work/shared" in line or "../shared" in line]
+    assert offenders == []
