@@ -60,7 +60,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import BldclabError
-from ..motor import TWO_PI, BackEmf, Drive, Inverter, Mechanics, Motor, Sensors, Table
+from ..motor import TWO_PI, BackEmf, Drive, Inverter, Mechanics, Motor, Sensors, Table, Trapezoid
 
 __all__ = [
     "LU4KW_AMPLITUDE",
@@ -72,6 +72,7 @@ __all__ = [
     "LU4KW_TILT",
     "lu4kw_drive",
     "lu4kw_emf",
+    "paper1_drive",
     "rounded_trapezoid",
 ]
 
@@ -303,5 +304,69 @@ def lu4kw_drive() -> Drive:
         mechanics=Mechanics(J=5e-3, B=2e-4, tau_c=0.06),
         sensors=Sensors(current_phases="ac", f_tick=20e6),
         name="lu-4kw",
+        description=description,
+    )
+
+
+def paper1_drive(Theta_m: float, *, p: int = 4, V_N: float = 48.0, I_N: float = 10.0, Omega_0: float = 100.0,
+                 R: float = 0.0, f_pwm: float | None = None, pwm_per_commutation: float = 50.0,
+                 f_tick: float = 100e6, name: str = "paper1-synthetic") -> Drive:
+    """Return a drive on paper 1's premises with a chosen motor-specific parameter ``Theta_m``.
+
+    Paper 1's per-unit results (torque, ripple, base speeds) depend on the motor only through
+    ``Theta_m = p L I_N / (2 k_phi)`` (its (22)) when ``R = 0``, the back-EMF is the ideal 120-degree trapezoid,
+    and the DC bus equals the nominal voltage. This builds such a drive from per-unit choices, so that studies and
+    tests can range over motors of any size: ``k_phi = V_N / (2 Omega_0)`` (paper 1 (2)), ``L = 2 k_phi Theta_m /
+    (p I_N)``, an ideal inverter (no dead time, on-resistance or diode drop) with a hardware trip at ``4 I_N``.
+
+    Parameters
+    ----------
+    Theta_m : float
+        Motor-specific parameter (rad, electrical), > 0 (0.047 for paper 1's study case).
+    p : int
+        Pole pairs.
+    V_N : float
+        DC bus = nominal voltage (V).
+    I_N : float
+        Nominal current (A).
+    Omega_0 : float
+        No-load speed ``V_N / (2 k_phi)`` (rad/s, mechanical).
+    R : float
+        Phase resistance (Ohm); the closed forms assume 0.
+    f_pwm : float, optional
+        Carrier frequency (Hz). Default: ``pwm_per_commutation`` PWM periods per commutation interval (a sixth of
+        the electrical period) at ``Omega_0``.
+    pwm_per_commutation : float
+        PWM periods per commutation interval at ``Omega_0`` when ``f_pwm`` is not given.
+    f_tick : float
+        Hall capture-timer frequency (Hz).
+    name : str
+        Drive name.
+
+    Returns
+    -------
+    Drive
+        The drive (its ``motor.L`` and ``motor.emf`` follow from the arguments).
+
+    """
+    if not (math.isfinite(Theta_m) and Theta_m > 0.0):
+        raise BldclabError("Theta_m", f"must be a positive number of radians, got {Theta_m!r}")
+    if not (math.isfinite(Omega_0) and Omega_0 > 0.0):
+        raise BldclabError("Omega_0", f"must be a positive speed in rad/s, got {Omega_0!r}")
+    if not (math.isfinite(pwm_per_commutation) and pwm_per_commutation > 0.0):
+        raise BldclabError("pwm_per_commutation", f"must be positive, got {pwm_per_commutation!r}")
+    k_phi = V_N / (2.0 * Omega_0)
+    L = 2.0 * k_phi * Theta_m / (p * I_N)
+    if f_pwm is None:
+        f_pwm = pwm_per_commutation * 6.0 * p * Omega_0 / TWO_PI
+    description = (f"Synthetic drive on paper 1's premises: Theta_m = {Theta_m:.4g} rad, p = {p}, V_N = {V_N:.4g} V, "
+                   f"I_N = {I_N:.4g} A, Omega_0 = {Omega_0:.4g} rad/s, R = {R:.4g} Ohm, f_pwm = {f_pwm:.4g} Hz "
+                   "(bldclab.catalog.synthetic.paper1_drive).")
+    return Drive(
+        motor=Motor(p=p, R=R, L=L, emf=BackEmf.symmetric(Trapezoid(k_phi)), V_N=V_N, I_N=I_N),
+        inverter=Inverter(V_dc=V_N, f_pwm=f_pwm, i_trip=4.0 * I_N),
+        mechanics=Mechanics(),
+        sensors=Sensors(f_tick=f_tick),
+        name=name,
         description=description,
     )
