@@ -132,7 +132,7 @@ def test_normal_result_has_no_finding(normal_result):
     assert plausibility.check_result(HTM, normal_result) == []
 
 
-@pytest.mark.parametrize(("residue", "level"), [(3e-5, "warning"), (0.01, "error"), (-0.13, "error")])
+@pytest.mark.parametrize(("residue", "level"), [(3e-4, "warning"), (0.05, "error"), (-0.13, "error")])
 def test_energy_residue_graded(normal_result, residue, level):
     (f,) = plausibility.check_result(HTM, _with_metrics(normal_result, balance_electrical=residue))
     assert (f.level, f.cause) == (level, "result.energy_balance")

@@ -20,14 +20,19 @@ Thresholds and why (``T_pwm = 1 / f_pwm``, ``tau_el = L / R``, ``f_e = p |Omega|
 * Imposed speed vs the no-load speed ``Omega_0 = V_dc / (2 k_phi)`` (at the highest bus voltage of the run): above
   it the line back-EMF peak exceeds the bus, the diodes conduct and no controller here (none weakens the field)
   can drive motoring current: warning above ``Omega_0``; error above ``10 Omega_0``, beyond the constant-power
-  speed range of any practical permanent-magnet drive (3 to 5, rarely 10).
+  speed range of any practical permanent-magnet drive (3 to 5, rarely 10). (With a sinusoidal back-EMF, six-step
+  voltage, whose fundamental is ``2 sqrt(3) / pi = 1.10`` times the bus, can still motor up to ``1.10 Omega_0``:
+  there the warning flags a regime outside the paper-1 comparison rather than a wrong result.)
 * Reference vs the drive's limit: the controller's over-current trip ``i_max`` (its default is a multiple of
   ``I_N``), for a torque reference also the motor's ``T_peak`` if larger: warning above the limit (the reference
   cannot be reached without tripping; a reference above the continuous rating ``I_N`` alone is a legitimate short
   test and is not flagged); error above 10 times the limit.
-* Energy balance ``Metrics.balance_electrical`` (and ``balance_mechanical`` with rotor dynamics): the plant
-  integrates exactly between switching events and closes it to about 1e-8 on every catalog drive; warning above
-  1e-5, error above 1e-3 (the integration did not resolve the run: the powers and torques are not trustworthy).
+* Energy balance ``Metrics.balance_electrical`` (and ``balance_mechanical`` with rotor dynamics): the plant closes
+  it to 1e-9 to 1e-7 on the catalog drives; the residue grows with the electrical frequency per integration step
+  (about as ``(omega_e h)^4``), the largest measured on a legitimate run being 4.6e-5 (sinusoidal supply at
+  0.995 ``Omega_0`` of a drive with 28 PWM periods per electrical period). Warning above 1e-4 (the energy
+  bookkeeping is off by more than 0.01 %); error above 1e-2 (efficiencies wrong by a percent, the size of the
+  differences the comparisons resolve: the integration did not resolve the run).
 * Non-finite metrics, states or traced currents/torques/speeds: error.
 * Currents after the inverter's hardware trip ``Inverter.i_trip`` (all legs off): they can only decay unless the
   back-EMF drives them through the diodes. Warning above 1.01 ``i_trip``; error above 2 ``i_trip`` (beyond the
@@ -68,8 +73,8 @@ PWM_PER_PERIOD_WARN = 12.0
 PWM_PER_PERIOD_ERROR = 3.0
 SPEED_ERROR_PU = 10.0
 REF_ERROR_FACTOR = 10.0
-BALANCE_WARN = 1e-5
-BALANCE_ERROR = 1e-3
+BALANCE_WARN = 1e-4
+BALANCE_ERROR = 1e-2
 TRIP_WARN = 1.01
 TRIP_ERROR = 2.0
 CURRENT_ERROR_IN = 100.0
@@ -272,7 +277,8 @@ def check_result(drive: Drive, res: SimResult) -> list[Finding]:
                 out.append(Finding(level, "result.energy_balance",
                                    f"{name} residue {getattr(m, name):.3g} over the window [{m.t0:.4g}, {m.t1:.4g}] "
                                    f"s (limit {BALANCE_WARN:g} for a warning, {BALANCE_ERROR:g} for an error; the "
-                                   f"plant closes it to ~1e-8): the integration did not resolve the run"))
+                                   f"plant closes it to 1e-7 or better when the PWM resolves the electrical "
+                                   f"period): the integration did not resolve the run"))
     peaks = [abs(v) for v in res.meta.get("final", {}).get("i", [])]
     if m is not None:
         peaks += list(m.i_peak)
