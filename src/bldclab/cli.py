@@ -20,6 +20,7 @@ import math
 import os
 import sys
 import tempfile
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,7 +42,7 @@ from .cli_sim import (
     run_simulate,
     run_torque_control,
 )
-from .errors import BldclabError
+from .errors import BldclabError, PlausibilityWarning
 from .identify import configure_cli as _configure_identify
 from .identify import run_cli as _run_identify
 
@@ -315,6 +316,15 @@ def _one_line(text: str) -> str:
     return " ".join(str(text).split())
 
 
+def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                  file: object = None, line: str | None = None) -> None:
+    """Show a plausibility warning as one line ``bldclab: warning: <message>`` on stderr; others as usual."""
+    if issubclass(category, PlausibilityWarning):
+        sys.stderr.write(f"{PROG}: warning: {_one_line(str(message))}\n")
+    else:
+        sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line.
 
@@ -326,13 +336,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     int
-        Exit status: 0 on success, 2 for a bad argument or bad input (one line on stderr), 130 if interrupted.
+        Exit status: 0 on success, 2 for a bad argument or bad input (one line on stderr), including a simulation
+        whose result would be physically meaningless (:class:`~bldclab.errors.PlausibilityError`), 130 if
+        interrupted. Plausibility warnings go to stderr, one line each.
 
     """
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
-        return int(args.run(args))
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", PlausibilityWarning)
+            warnings.showwarning = _show_warning
+            return int(args.run(args))
     except SystemExit as exc:  # --help, --version
         return exc.code if isinstance(exc.code, int) else 0  # argparse exits 0 after printing help
     except (_UsageError, BldclabError) as exc:

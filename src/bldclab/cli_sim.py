@@ -8,6 +8,7 @@ import json
 import math
 import re
 import sys
+import warnings
 from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -15,9 +16,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from . import analytic
+from . import plausibility as _plaus
 from .catalog import load
 from .control import Control, Lu, Sine, SixStep, SixStepVoltage
-from .errors import BldclabError
+from .errors import BldclabError, PlausibilityWarning
 from .experiments import electrical_period
 from .motor import Drive
 from .sim import Scenario, simulate
@@ -57,6 +59,13 @@ def _figure_bytes(fig: Figure, fmt: str) -> bytes:
     buf = io.BytesIO()
     fig.savefig(buf, format=fmt, dpi=120)
     return buf.getvalue()
+
+
+def _summarise(caught: list[str], runs: int) -> None:
+    """Issue one plausibility warning for the many an experiment collected (count and first message)."""
+    line = _plaus.summary(caught, runs)
+    if line:
+        warnings.warn(line, PlausibilityWarning, stacklevel=2)
 
 
 def _write(out: Path, files: dict[str, bytes]) -> list[Path]:
@@ -142,6 +151,7 @@ def run_simulate(args: argparse.Namespace) -> int:
         "p_dc_W": m.p_src, "p_copper_W": m.p_cu, "p_inverter_W": m.p_sw + m.p_diode + m.p_Rsrc,
         "i_rms_A": list(m.i_rms), "i_peak_A": list(m.i_peak), "energy_balance_residue": m.balance_electrical,
         "controller_flags": int(np.bitwise_or.reduce(res.flags.astype(np.int64))) if len(res) else 0,
+        "warnings": list(res.meta.get("warnings", [])),
     }
     if args.format == "json":
         print(json.dumps(summary, indent=2))
@@ -149,7 +159,7 @@ def run_simulate(args: argparse.Namespace) -> int:
         print(f"{drive.name}, {args.control} control, reference {ref:.4g} {unit}, "
               f"{'dynamometer' if speed is not None else 'rotor dynamics'}")
         for key, value in summary.items():
-            if key in ("motor", "control", "reference", "reference_unit"):
+            if key in ("motor", "control", "reference", "reference_unit", "warnings"):  # warnings: on stderr
                 continue
             text = ", ".join(f"{v:.4g}" for v in value) if isinstance(value, list) else (
                 f"{value:.5g}" if isinstance(value, float) else str(value))
@@ -310,7 +320,9 @@ def run_torque_control(args: argparse.Namespace) -> int:
     else:
         speeds = list(paper2.default_grid(drive)[1])
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
-    table = paper2.compare_methods(drive, torques, speeds, methods)
+    with _plaus.collect() as caught:
+        table = paper2.compare_methods(drive, torques, speeds, methods)
+    _summarise(caught, len(table))
     print(f"{drive.name}: torque control methods (paper 2); ripple in % of the mean torque, dip of the "
           "non-commutated current")
     cols = ["method", "torque_pct", "speed_rpm", "tau_mean_pct_ref", "ripple_pp", "ripple_rms", "ripple_ma_pp",
@@ -351,7 +363,9 @@ def run_faults(args: argparse.Namespace) -> int:
     i_max = float(getattr(ctl, "i_max", None) or 2.0 * drive.motor.I_N)
     if args.control == "lu" and getattr(ctl, "i_max", None) is None:
         i_max = 3.0 * drive.motor.I_N
-    table = fault_table(drive, ctl, ref, speed, i_max=i_max)
+    with _plaus.collect() as caught:
+        table = fault_table(drive, ctl, ref, speed, i_max=i_max)
+    _summarise(caught, len(table))
     trip = f", hardware trip {drive.inverter.i_trip:g} A" if drive.inverter.i_trip > 0 else ", no hardware trip"
     print(f"{drive.name}, {args.control} control at {speed / drive.Omega_0:.2f} p.u.: firmware over-current trip "
           f"{i_max:g} A{trip}; times from the fault in ms")

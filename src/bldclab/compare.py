@@ -15,6 +15,7 @@ from __future__ import annotations
 import os
 import sys
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
@@ -24,8 +25,9 @@ import numpy as np
 import pandas as pd
 
 from . import analytic
+from . import plausibility as _plaus
 from .control import Control, Sine, SixStep
-from .errors import BldclabError
+from .errors import BldclabError, PlausibilityWarning
 from .experiments import steady_state
 from .motor import Drive
 
@@ -60,14 +62,16 @@ def speed_grid(n: int, lo: float = 0.05, hi: float = 0.98) -> np.ndarray:
 
 def _run_point(args: tuple[Drive, str, Control, float, float]) -> dict[str, Any]:
     drive, supply, control, ref, w_pu = args
-    point, _ = steady_state(drive, control, w_pu * drive.Omega_0, ref)
+    with _plaus.collect() as caught:  # recorded here, in the worker, and summarised once by compare()
+        point, _ = steady_state(drive, control, w_pu * drive.Omega_0, ref)
     m = point.metrics
     return {"supply": supply, "Omega_pu": w_pu, "Omega": point.speed, "T_pu": point.tau_mean_pu,
             "TR_pu": point.ripple_sampled_pu, "TR_inst_pu": point.ripple_pu, "TR_ma_pu": point.ripple_ma_pu,
             "T": point.tau_mean, "TR": point.ripple_sampled, "tau_std_pu": m.tau_std / drive.T_N,
             "eta": point.efficiency,
             "p_src": m.p_src, "p_cu": m.p_cu, "p_inv": m.p_sw + m.p_diode + m.p_Rsrc, "i_rms": float(np.mean(m.i_rms)),
-            "i_peak": float(max(m.i_peak)), "balance": m.balance_electrical}
+            "i_peak": float(max(m.i_peak)), "balance": m.balance_electrical,
+            "_warnings": [f"{supply} at {w_pu:.3g} p.u.: {text}" for text in caught]}
 
 
 @dataclass
@@ -89,6 +93,9 @@ class CompareResult:
         Where each supply wins and by how much.
     seconds : float
         Wall time of the simulations.
+    warnings : list of str
+        Plausibility warnings of the runs (:mod:`bldclab.plausibility`), each prefixed by its supply and speed;
+        :func:`compare` issues one :class:`~bldclab.errors.PlausibilityWarning` summarising them.
     """
 
     drive: Drive
@@ -97,6 +104,7 @@ class CompareResult:
     table1: Any
     verdict: list[str] = field(default_factory=list)
     seconds: float = 0.0
+    warnings: list[str] = field(default_factory=list)
 
 
 def _progress(total: int, enabled: bool) -> Callable[[int], None]:
@@ -155,10 +163,15 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
                 rows.append(row)
                 show(j + 1)
     seconds = time.perf_counter() - t0
+    caught = [text for row in rows for text in row.pop("_warnings")]
     sim = pd.DataFrame(rows)
     an = analytic.characteristic(drive, w)
     res = CompareResult(drive=drive, simulated=sim, analytic=an, table1=analytic.table1(drive), seconds=seconds)
     res.verdict = _verdict(sim)
+    res.warnings = caught
+    line = _plaus.summary(caught, len(jobs))
+    if line:
+        warnings.warn(line, PlausibilityWarning, stacklevel=2)
     return res
 
 

@@ -1,8 +1,8 @@
-"""One error type for bad input: it names the field and the problem."""
+"""Error and warning types: bad input names the field and the problem; implausible runs name the cause."""
 
 from __future__ import annotations
 
-__all__ = ["BldclabError"]
+__all__ = ["BldclabError", "PlausibilityError", "PlausibilityWarning"]
 
 
 class BldclabError(ValueError):
@@ -25,3 +25,23 @@ class BldclabError(ValueError):
         self.source = source
         where = f"{source}: " if source else ""
         super().__init__(f"{where}{field}: {problem}")
+
+    def __reduce__(self) -> tuple[type, tuple[str, str, str | None]]:
+        """Pickle with the constructor's arguments (errors raised in worker processes reach the parent)."""
+        return (type(self), (self.field, self.problem, self.source))
+
+
+class PlausibilityError(BldclabError):
+    """A simulation whose result would be physically meaningless (see :mod:`bldclab.plausibility`).
+
+    ``field`` names the cause (``"inverter.f_pwm"``, ``"scenario.speed"``, ``"result.energy_balance"``, ...),
+    ``problem`` the numbers and the threshold crossed.
+    """
+
+
+class PlausibilityWarning(UserWarning):
+    """A simulation that ran but whose result is questionable (see :mod:`bldclab.plausibility`).
+
+    Issued through :mod:`warnings`; silence or escalate it with the usual filters, e.g.
+    ``warnings.simplefilter("error", PlausibilityWarning)``.
+    """

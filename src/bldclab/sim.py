@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import __version__
+from . import plausibility as _plaus
 from ._core import core
 from .control import Control
 from .errors import BldclabError
@@ -266,8 +267,15 @@ def samples_of(drive: Drive, duration: float) -> int:
     return max(1, math.ceil(n - 1e-9))
 
 
-def simulate(drive: Drive, control: Control, scenario: Scenario) -> SimResult:
+def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str = "error") -> SimResult:
     """Simulate the drive in closed loop with a C controller.
+
+    Plausibility guards (:mod:`bldclab.plausibility`) run before the run (PWM frequency against ``L/R`` and the
+    electrical frequency, imposed speed against the no-load speed, reference against the controller's current
+    limit) and after it (finite values, energy balance, currents after a hardware trip, steady state of the metric
+    window with rotor dynamics). A questionable run issues a :class:`~bldclab.errors.PlausibilityWarning`; a
+    physically meaningless one raises :class:`~bldclab.errors.PlausibilityError` unless ``check`` says otherwise.
+    The warnings issued are kept in ``result.meta["warnings"]``.
 
     Parameters
     ----------
@@ -277,6 +285,9 @@ def simulate(drive: Drive, control: Control, scenario: Scenario) -> SimResult:
         The controller (e.g. :class:`~bldclab.control.SixStepVoltage`).
     scenario : Scenario
         Duration, speed or mechanics, references, trace and metric window.
+    check : {"error", "warn", "off"}
+        ``"error"`` (default): warnings for questionable runs, an exception for meaningless ones; ``"warn"``: only
+        warnings (for runs that go there on purpose, e.g. a fault driving hundreds of amps); ``"off"``: no guards.
 
     Returns
     -------
@@ -286,7 +297,12 @@ def simulate(drive: Drive, control: Control, scenario: Scenario) -> SimResult:
     ------
     BldclabError
         For invalid scenario inputs (NaN in a profile, wrong length) or parameters the C core rejects.
+    PlausibilityError
+        With ``check="error"``, for a run whose result would be physically meaningless (a subclass of
+        :class:`~bldclab.errors.BldclabError` naming the cause and the numbers).
     """
+    if check not in _plaus.CHECK_MODES:
+        raise BldclabError("check", f"must be one of {', '.join(_plaus.CHECK_MODES)}, got {check!r}")
     if not isinstance(drive, Drive):
         raise BldclabError("drive", f"expected a Drive, got {type(drive).__name__}")
     if not isinstance(control, Control):
@@ -322,6 +338,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario) -> SimResult:
     inputs = c.record("bc_sim_inputs")
     v_dc = drive.inverter.V_dc if scenario.v_dc is None else scenario.v_dc
     first: dict[str, float] = {}
+    peak: dict[str, float] = {}
     for field, name, value in (("ref", "scenario.ref", scenario.ref),
                                ("omega_ref", "scenario.omega_ref", scenario.omega_ref),
                                ("omega", "scenario.speed", scenario.speed),
@@ -331,12 +348,15 @@ def simulate(drive: Drive, control: Control, scenario: Scenario) -> SimResult:
         if arr is None:
             inputs[f"{field}_c"] = const
             first[field] = const
+            peak[field] = abs(const)
         else:
             keep.append(arr)
             inputs[field] = arr.ctypes.data
             first[field] = float(arr[0])
+            peak[field] = float(np.max(np.abs(arr)))
     omega0 = scenario.omega0 if scenario.omega0 is not None else (first["omega"] if imposed else 0.0)
     v0 = first["v_src"]
+    issued = _guards_before(drive, control, cparams, imposed, peak, check)
 
     cfg = c.record("bc_sim_config")
     cfg["plant"] = plant.ctypes.data
@@ -402,7 +422,37 @@ def simulate(drive: Drive, control: Control, scenario: Scenario) -> SimResult:
         "final": {"t": float(plant_st["t"]), "i": [float(v) for v in plant_st["i"]],
                   "theta_e": float(plant_st["theta"]), "omega_m": float(plant_st["omega"])},
     }
-    return SimResult(signals, units, docs, metrics, meta)
+    res = SimResult(signals, units, docs, metrics, meta)
+    meta["warnings"] = issued + _guards_after(drive, res, imposed, check)
+    return res
+
+
+def _guards_before(drive: Drive, control: Control, cparams: np.ndarray, imposed: bool, peak: dict[str, float],
+                   check: str) -> list[str]:
+    """Plausibility checks on the inputs (:mod:`bldclab.plausibility`); return the warnings issued."""
+    if check == "off":
+        return []
+    findings = _plaus.check_speed(drive, peak["omega"], peak["v_src"]) if imposed else []
+    findings += _plaus.check_pwm(drive, peak["omega"] if imposed else None)
+    names = cparams.dtype.names or ()
+    i_limit = float(np.ravel(cparams["i_max"])[0]) if "i_max" in names else None
+    findings += _plaus.check_reference(drive, control, peak["ref"], i_limit)
+    return _plaus.apply(findings, check, stacklevel=4)
+
+
+def _guards_after(drive: Drive, res: SimResult, imposed: bool, check: str) -> list[str]:
+    """Plausibility checks on the result; return the warnings issued."""
+    if check == "off":
+        return []
+    findings = _plaus.check_result(drive, res)
+    if not imposed:
+        w = [abs(res.meta["final"]["omega_m"])]
+        if "omega_m" in res.signals and len(res):
+            w.append(float(np.max(np.abs(res.signals["omega_m"]))))
+        findings += _plaus.check_pwm(drive, max(w), time_constant=False)
+        if res.metrics is not None:
+            findings += _plaus.check_steady(drive, res)
+    return _plaus.apply(findings, check, stacklevel=4)
 
 
 def _omega_integral(st: np.void, rows: np.ndarray, scenario: Scenario, imposed: bool) -> float:

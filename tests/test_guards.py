@@ -1,0 +1,244 @@
+"""Plausibility guards (bldclab.plausibility): nonsense runs fail or warn with their cause; normal runs stay quiet."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import pickle
+import warnings
+
+import numpy as np
+import pytest
+
+import bldclab as bl
+from bldclab import paper2, plausibility
+from bldclab.cli import main
+from bldclab.compare import compare
+from bldclab.errors import BldclabError, PlausibilityError, PlausibilityWarning
+from bldclab.experiments import electrical_period, steady_state
+
+HTM = bl.load("htm-48v")
+LU = bl.load("lu-4kw")
+RPM = 2 * math.pi / 60
+
+
+def _imposed(drive, speed, ref, periods=6, **kw):
+    Te = electrical_period(drive, speed)
+    return bl.Scenario(duration=periods * Te, speed=speed, ref=ref, window=((periods - 2) * Te, periods * Te), **kw)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# the cases of the issue, through the API
+
+
+def test_pwm_far_too_slow_for_l_over_r_is_an_error():
+    drive = HTM.replace(inverter__f_pwm=16.0)
+    with pytest.raises(PlausibilityError, match=r"inverter\.f_pwm: the PWM period .* 41\.7 times .* L/R") as exc:
+        bl.simulate(drive, bl.SixStep(), _imposed(drive, 0.5 * drive.Omega_0, drive.motor.I_N))
+    assert exc.value.field == "inverter.f_pwm"
+
+
+def test_pwm_too_slow_with_check_warn_runs_and_names_the_broken_energy_balance():
+    drive = HTM.replace(inverter__f_pwm=16.0, inverter__i_trip=0.0)
+    with pytest.warns(PlausibilityWarning) as rec:
+        res = bl.simulate(drive, bl.SixStep(), _imposed(drive, 0.5 * drive.Omega_0, drive.motor.I_N), check="warn")
+    texts = [str(w.message) for w in rec]
+    assert any(t.startswith("inverter.f_pwm") for t in texts)
+    assert abs(res.metrics.balance_electrical) > plausibility.BALANCE_ERROR  # the nonsense the guard stops
+    assert any(t.startswith("result.energy_balance") and "[error ignored" in t for t in texts)
+    assert res.meta["warnings"] == texts  # the result carries what it warned
+
+
+def test_check_off_is_silent_and_bad_check_value_rejected():
+    drive = HTM.replace(inverter__f_pwm=16.0)
+    sc = _imposed(drive, 0.5 * drive.Omega_0, drive.motor.I_N)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PlausibilityWarning)
+        res = bl.simulate(drive, bl.SixStep(), sc, check="off")
+    assert res.meta["warnings"] == []
+    with pytest.raises(BldclabError, match="check"):
+        bl.simulate(HTM, bl.SixStep(), sc, check="maybe")
+
+
+def test_speed_four_times_no_load_warns_and_diode_currents_beyond_the_trip_are_an_error():
+    sc = _imposed(HTM, 300.0, HTM.motor.I_N)
+    with pytest.warns(PlausibilityWarning, match=r"scenario\.speed: 300 rad/s .* 4 times the no-load speed"), \
+            pytest.raises(PlausibilityError, match=r"result\.currents: .* hardware trip i_trip = 150 A"):
+        bl.simulate(HTM, bl.SixStep(), sc)
+
+
+def test_absurd_speed_is_an_error():
+    sc = _imposed(HTM, 1e9 * RPM, HTM.motor.I_N)
+    with pytest.raises(PlausibilityError, match=r"scenario\.speed: .* times the no-load speed") as exc:
+        bl.simulate(HTM, bl.SixStep(), sc)
+    assert exc.value.field == "scenario.speed"
+
+
+def test_few_pwm_periods_per_electrical_period_warn():
+    speed = 0.9 * LU.Omega_0  # 107 Hz electrical; 1 kHz PWM gives 9.3 periods
+    drive = LU.replace(inverter__f_pwm=1000.0)
+    with pytest.warns(PlausibilityWarning, match=r"inverter\.f_pwm: f_pwm = 1000 Hz gives 9\.3\d* PWM periods"):
+        bl.simulate(drive, bl.SixStepVoltage("high"), _imposed(drive, speed, 0.5), check="warn")
+
+
+@pytest.mark.parametrize(("ref", "level"), [(5000.0, "error"), (150.0, "warning")])
+def test_current_reference_beyond_the_limit(ref, level):
+    sc = _imposed(HTM, 0.5 * HTM.Omega_0, ref)
+    pattern = rf"scenario\.ref: the current reference {ref:g} A is .* i_max = 100 A"
+    if level == "error":
+        with pytest.raises(PlausibilityError, match=pattern):
+            bl.simulate(HTM, bl.SixStep(), sc)
+    else:
+        with pytest.warns(PlausibilityWarning, match=pattern):
+            bl.simulate(HTM, bl.SixStep(), sc)
+
+
+def test_torque_reference_beyond_peak_torque_is_an_error():
+    sc = _imposed(LU, 0.5 * LU.Omega_0, 50 * LU.T_N)
+    with pytest.raises(PlausibilityError, match=r"scenario\.ref: the torque reference"):
+        bl.simulate(LU, bl.Lu(), sc)
+
+
+def test_metric_window_in_the_run_up_warns():
+    sc = bl.Scenario(duration=0.1, ref=HTM.motor.I_N, window=(0.05, 0.1))
+    with pytest.warns(PlausibilityWarning, match=r"scenario\.window: the speed changes by .* run-up") as rec:
+        res = bl.simulate(HTM, bl.SixStep(), sc)
+    assert len(res.meta["warnings"]) == len(rec)
+
+
+def test_steady_window_of_a_settled_run_is_quiet():
+    sc = bl.Scenario(duration=0.5, ref=HTM.motor.I_N, window=(0.4, 0.5))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PlausibilityWarning)
+        bl.simulate(HTM, bl.SixStep(), sc)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# the result checks as pure functions
+
+
+@pytest.fixture(scope="module")
+def normal_result():
+    _, res = steady_state(HTM, bl.SixStep(), 0.5 * HTM.Omega_0, HTM.motor.I_N, trace=True)
+    return res
+
+
+def _with_metrics(res, **changes):
+    return bl.SimResult(res.signals, res.units, res.docs, dataclasses.replace(res.metrics, **changes), res.meta)
+
+
+def test_normal_result_has_no_finding(normal_result):
+    assert abs(normal_result.metrics.balance_electrical) < 1e-7
+    assert plausibility.check_result(HTM, normal_result) == []
+
+
+@pytest.mark.parametrize(("residue", "level"), [(3e-4, "warning"), (0.05, "error"), (-0.13, "error")])
+def test_energy_residue_graded(normal_result, residue, level):
+    (f,) = plausibility.check_result(HTM, _with_metrics(normal_result, balance_electrical=residue))
+    assert (f.level, f.cause) == (level, "result.energy_balance")
+    assert f"{residue:.3g}" in f.message
+
+
+def test_non_finite_values_are_an_error(normal_result):
+    (f,) = plausibility.check_result(HTM, _with_metrics(normal_result, tau_mean=math.nan))
+    assert (f.level, f.cause) == ("error", "result.finite")
+    assert "tau_mean = nan" in f.message
+    signals = dict(normal_result.signals, i_a=np.where(np.arange(len(normal_result)) == 5, 1e308 * 10, 0.0))
+    bad = bl.SimResult(signals, normal_result.units, normal_result.docs, normal_result.metrics, normal_result.meta)
+    (f,) = plausibility.check_result(HTM, bad)
+    assert "i_a at t =" in f.message
+
+
+def test_currents_without_hardware_trip_beyond_100_in_are_an_error(normal_result):
+    drive = HTM.replace(inverter__i_trip=0.0)
+    (f,) = plausibility.check_result(drive, _with_metrics(normal_result, i_peak=(1e35, 0.0, 0.0)))
+    assert (f.level, f.cause) == ("error", "result.currents")
+
+
+def test_plausibility_error_survives_pickling():
+    err = PlausibilityError("scenario.speed", "too fast")
+    back = pickle.loads(pickle.dumps(err))
+    assert isinstance(back, PlausibilityError) and str(back) == str(err) and back.field == "scenario.speed"
+
+
+def test_collect_and_summary():
+    with plausibility.collect() as caught:
+        warnings.warn("a", PlausibilityWarning, stacklevel=1)
+        warnings.warn("b", PlausibilityWarning, stacklevel=1)
+    assert caught == ["a", "b"]
+    assert plausibility.summary(caught, 7) == "2 plausibility warnings in 7 runs; first: a"
+    assert plausibility.summary([], 7) is None
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# no crying wolf: normal runs of both catalog drives
+
+
+@pytest.mark.parametrize("drive", [HTM, LU], ids=["htm-48v", "lu-4kw"])
+def test_normal_runs_raise_no_plausibility_warning(drive):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PlausibilityWarning)
+        for w in (0.05, 0.5, 0.98):
+            for ctl, ref in ((bl.SixStep(), drive.motor.I_N), (bl.Sine(handoff_speed=0.02 * drive.Omega_0),
+                                                              drive.T_N), (bl.Lu(), drive.T_N)):
+                _, res = steady_state(drive, ctl, w * drive.Omega_0, ref)
+                assert res.meta["warnings"] == []
+
+
+@pytest.mark.parametrize("drive", [HTM, LU], ids=["htm-48v", "lu-4kw"])
+def test_compare_and_torque_control_raise_no_plausibility_warning(drive):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PlausibilityWarning)
+        res = compare(drive, [0.1, 0.6, 0.95], workers=1)
+        assert res.warnings == []
+        paper2.compare_methods(drive, [0.5 * drive.T_N, drive.T_N], [0.5 * drive.motor.Omega_nominal], ["rect", "lu"])
+
+
+def test_compare_collects_warnings_into_one():
+    with pytest.warns(PlausibilityWarning, match=r"^2 plausibility warnings in 4 runs; first: square at 1\.2 p\.u\."):
+        res = compare(HTM, [0.5, 1.2], workers=1)
+    assert len(res.warnings) == 2 and all("no-load speed" in t for t in res.warnings)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# command line: one line each, exit 2 on errors, nothing written
+
+
+@pytest.fixture(scope="module")
+def slow_pwm_file(tmp_path_factory):
+    text = (bl.catalog.load("htm-48v").to_toml().replace("f_pwm = 14000.0", "f_pwm = 16.0"))
+    assert "f_pwm = 16.0" in text
+    path = tmp_path_factory.mktemp("guards") / "slow-pwm.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(("args", "cause"), [
+    (["{slow}"], "inverter.f_pwm"),
+    (["htm-48v", "--speed", "300"], "result.currents"),
+    (["htm-48v", "--speed", "1e9 rpm"], "scenario.speed"),
+    (["htm-48v", "--current", "5000 A"], "scenario.ref"),
+])
+def test_cli_nonsense_exits_2_with_the_cause_and_writes_nothing(args, cause, slow_pwm_file, tmp_path, capsys):
+    out = tmp_path / "out"
+    argv = ["simulate", *[a.format(slow=slow_pwm_file) for a in args], "--out", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    errors = [line for line in err.splitlines() if line.startswith("bldclab: error:")]
+    assert len(errors) == 1 and f"bldclab: error: {cause}:" in errors[0]
+    assert all(line.startswith(("bldclab: error:", "bldclab: warning:")) for line in err.splitlines())
+    assert not out.exists()
+
+
+def test_cli_warning_is_one_line_and_run_completes(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["simulate", "htm-48v", "--mechanics", "--duration", "0.1 s", "--out", str(out)]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("bldclab: warning: scenario.window: the speed changes by")
+    assert (out / "metrics.json").exists()
+    assert "scenario.window" in (out / "metrics.json").read_text()
+
+
+def test_cli_normal_simulate_is_quiet(capsys):
+    assert main(["simulate", "lu-4kw", "--control", "lu", "--speed", "0.9 pu"]) == 0
+    assert capsys.readouterr().err == ""
