@@ -7,13 +7,18 @@ crossover) keeps it. Full tables and the measurements behind them: docs/sine.md.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, assume, example, given, settings
+from hypothesis import strategies as st
 
 import bldclab as bl
 from bldclab import analytic as an
+from bldclab.catalog.synthetic import paper1_drive
+from bldclab.compare import default_controls
 from bldclab.control.sine import fundamental_k1
 from bldclab.errors import BldclabError
 from bldclab.experiments import steady_state
@@ -65,11 +70,13 @@ def test_gains_are_paper_design():
 
 
 def test_without_integral_action_a_steady_error_remains():
-    """Why the design floor: with R = 0 the exact 90-degree design is P only, and the current misses I_s,N."""
-    pt, *_ = point(HTM0, sine(R_design=0.0), 0.5)
-    assert abs(pt.tau_mean_pu - an.T_SN_PU) > 0.005
-    pt, *_ = point(HTM0, sine(), 0.5)
-    assert abs(pt.tau_mean_pu - an.T_SN_PU) < 1e-3
+    """Why the design floor: with R = 0 the exact 90-degree design is P only. The feed-forwards (back-EMF, measured
+    decoupling) are then the whole steady-state voltage, exact for an ideal inverter, but whatever the model lacks
+    (here 1 us of dead time, 1.4 % of the PWM period) stays as a current error; the floor's integral removes most."""
+    assert abs(point(HTM0, sine(R_design=0.0), 0.5)[0].tau_mean_pu - an.T_SN_PU) < 1e-4  # ideal inverter
+    dead = HTM0.replace(inverter__t_dead=1e-6)
+    assert abs(point(dead, sine(R_design=0.0), 0.5)[0].tau_mean_pu - an.T_SN_PU) > 0.02
+    assert abs(point(dead, sine(), 0.5)[0].tau_mean_pu - an.T_SN_PU) < 0.005
 
 
 @pytest.mark.parametrize("kw", [{"angle": "gyro"}, {"limit": "square"}, {"advance": -1.0}, {"advance": 5.0},
@@ -229,3 +236,71 @@ def test_sampled_ripple_within_002_of_the_paper(w):
     drive = bl.load("htm-48v").replace(motor__R=0.0)
     pt, _ = steady_state(drive, bl.Sine(handoff_speed=0.01 * drive.Omega_0), w * drive.Omega_0, an.t_sN(drive))
     assert pt.ripple_sampled_pu == pytest.approx(an.tr_s_pu(w, an.theta_m(drive)), abs=0.02)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# any drive on paper 1's premises: the current is regulated, the mean torque is (13)
+
+# the drive of issue 11: a fast 13-pole-pair motor whose omega_e L (1.25 Ohm at 0.78 Omega_0) dwarfs k_p (0.47 V/A)
+FAST = {"Theta_m": 0.1071, "p": 13, "V_N": 454.8, "I_N": 30.4, "Omega_0": 1642.9, "ppc": 20.0, "w": 0.782}
+
+
+def drive_point(Theta_m: float, p: int, V_N: float, I_N: float, Omega_0: float, ppc: float, w: float,
+                **control: object) -> tuple[float, float, float]:
+    """Sinusoidal supply asked for T_sN at w Omega_0: (mean torque p.u., mean i_q / mean i_q,ref - 1, |(13) error|)."""
+    d = paper1_drive(Theta_m, p=p, V_N=V_N, I_N=I_N, Omega_0=Omega_0, pwm_per_commutation=ppc)
+    ctl, ref = default_controls(d, 0.05)["sine"]
+    ctl = dataclasses.replace(ctl, **control)
+    pt, res = steady_state(d, ctl, w * Omega_0, ref, trace=True)
+    sel = res.t >= pt.metrics.t0
+    iq_err = float(np.mean(res["i_q"][sel]) / np.mean(res["i_q_ref"][sel]) - 1.0)
+    return pt.tau_mean_pu, iq_err, abs(pt.tau_mean_pu - an.t_s_pu(w, Theta_m))
+
+
+drives = st.fixed_dictionaries({
+    "Theta_m": st.floats(0.01, 0.2), "p": st.integers(1, 20), "V_N": st.floats(12.0, 600.0),
+    "I_N": st.floats(1.0, 200.0), "Omega_0": st.floats(20.0, 2000.0), "ppc": st.floats(5.0, 200.0),
+    "w": st.floats(0.05, 0.85)})
+
+
+def check_drive(case: dict) -> None:
+    # below the base speed (21) with a margin: the region of (13)
+    assume(case["w"] <= an.omega_sB_pu(case["Theta_m"]) - 0.03)
+    # sinusoidal currents need a PWM ripple well below I_N: V_N T_pwm / (L I_N) = pi / (3 ppc Theta_m) <= 1
+    # (paper 1's study case: 0.91); coarser PWM trips the square-wave start (ripple over 2 I_N)
+    assume(math.pi / (3.0 * case["ppc"] * case["Theta_m"]) <= 1.0)
+    tau, iq_err, err = drive_point(**case)
+    assert err < 0.005, (case, tau)
+    assert abs(iq_err) < 0.01, (case, iq_err)
+
+
+@settings(max_examples=6, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.filter_too_much])
+@given(drives)
+@example(FAST)
+def test_any_drive_regulates_its_current(case):
+    """Drives drawn at random on paper 1's premises (R = 0, ideal trapezoid): the mean torque of the sinusoidal
+    supply is (13) to 0.005 p.u. and i_q its reference to 1 %, whatever the motor's size, poles and speed."""
+    check_drive(case)
+
+
+@pytest.mark.slow
+@settings(max_examples=150, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.filter_too_much])
+@given(drives)
+def test_any_drive_regulates_its_current_many(case):
+    check_drive(case)
+
+
+def test_fast_drive_needs_the_measured_decoupling():
+    """Issue 11's drive: the cross-coupling omega_e L = 1.25 Ohm against k_p = 0.47 V/A. With the decoupling the
+    torque is (13); without it the PI's slow mode k_i / (k_p + j omega_e L) (time constant 13 ms) has not settled
+    after the hand-off, and the torque is off by more than 0.1 p.u. (the failure the issue reported, at 0.22)."""
+    assert drive_point(**FAST)[2] < 0.001
+    assert drive_point(**FAST, decoupling=False)[2] > 0.1
+
+
+def test_default_bandwidth_is_paper_1_unless_the_pwm_is_slow():
+    assert bl.Sine().bandwidth(HTM) == 1000.0  # 14 kHz PWM
+    assert bl.Sine().bandwidth(bl.load("lu-4kw")) == 1000.0  # 10 kHz PWM
+    slow = paper1_drive(0.05, p=4, Omega_0=50.0, pwm_per_commutation=20.0)  # 764 Hz PWM
+    assert bl.Sine().bandwidth(slow) == pytest.approx(slow.inverter.f_pwm / 10.0)
+    assert bl.Sine(bandwidth_hz=300.0).bandwidth(slow) == 300.0

@@ -244,8 +244,10 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     /* 6. current PIs with the R-L feed-forward */
     float ff_d = 0.0f, ff_q = 0.0f;
     if (p->decouple) {
-        ff_d = p->R * id_ref - omega_e * p->L * iq_ref; /* ff_d = R i_d,ref - omega_e L i_q,ref */
-        ff_q = p->R * iq_ref + omega_e * p->L * id_ref; /* ff_q = R i_q,ref + omega_e L i_d,ref */
+        /* the rotational voltage from the measured currents: it cancels the plant's d,q cross-coupling, so each
+         * PI sees R + s L (a feed-forward from the references would leave it in the error dynamics) */
+        ff_d = p->R * id_ref - omega_e * p->L * idq.q; /* ff_d = R i_d,ref - omega_e L i_q */
+        ff_q = p->R * iq_ref + omega_e * p->L * idq.d; /* ff_q = R i_q,ref + omega_e L i_d */
     }
     if (was == BC_SINE_MODE_START) {
         /* bumpless hand-off: integrators from the voltage the present state needs */

@@ -447,6 +447,45 @@ static void test_limits_and_handoff(void)
     }
 }
 
+/* Decoupling from the measured currents: two controllers in the same state, given currents that differ only in
+ * i_q by di, differ in v_d by -omega_e L di (the rotational voltage the motor's own d,q coupling adds) and in v_q by
+ * -k_p di (the PI). A feed-forward from the references alone (v_d unchanged) leaves the coupling in the error
+ * dynamics: with k_p << omega_e L a slow, lightly damped mode (k_i / (k_p + j omega_e L)) results. */
+static void test_decoupling_measured(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    bc_sine_params p;
+    static bc_sine_state s, s2;
+    sine_params(&p, &f);
+    p.emf_ff = 0;
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    double L = 75e-6, Ts = (double)p.ts, we = 8.0 * 37.5, di = 2.0;
+    rotor r = {0.3, we, i_sn(), 0.0, f.sp.f_tick};
+    rotor r2 = r;
+    r2.I += di; /* phi = 0: the current is on q, so only i_q differs */
+    float tau_n = (float)(1.5 * k1_trap() * i_sn());
+    bc_ctrl_in in, in2;
+    bc_ctrl_out out, out2;
+    int k = 0;
+    for (; k < 2000 && s.mode != BC_SINE_MODE_SINE; ++k) {
+        rotor_in(&r, k * Ts, tau_n, &in);
+        bc_sine_step(&p, &s, &in, &out);
+    }
+    CHECK(s.mode == BC_SINE_MODE_SINE, "sine mode");
+    for (int j = 0; j < 50; ++j, ++k) {
+        rotor_in(&r, k * Ts, tau_n, &in);
+        rotor_in(&r2, k * Ts, tau_n, &in2);
+        s2 = s;
+        bc_sine_step(&p, &s2, &in2, &out2);
+        bc_sine_step(&p, &s, &in, &out);
+        CHECK(!(out.flags & BC_FLAG_SATURATED) && !(out2.flags & BC_FLAG_SATURATED), "unsaturated");
+        CHECK_NEAR(out2.diag[1] - out.diag[1], di, 1e-3, "measured i_q differs by di");
+        CHECK_NEAR(out2.diag[3] - out.diag[3], -we * L * di, 2e-4, "v_d: -omega_e L di (decoupling)");
+        CHECK_NEAR(out2.diag[4] - out.diag[4], -(double)p.kp * di, 2e-4, "v_q: -k_p di (PI)");
+    }
+}
+
 /* Flying start: coast until the rotor is known to be slower than omega_on. */
 static void test_flying_start(void)
 {
@@ -603,6 +642,7 @@ int main(void)
     test_safe_states();
     test_fuzz();
     test_limits_and_handoff();
+    test_decoupling_measured();
     test_flying_start();
     test_closed_loop_imposed();
     test_closed_loop_start();

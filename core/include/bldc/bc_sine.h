@@ -39,8 +39,13 @@
  *     holds; for R = 0 it is (20), and I_s,sat = (23)). Where 2 k_phi |omega_m| >= v_dc, I_s,sat = 0.
  *  6. Current PIs (bc_pi), output first:
  *
- *         u_d = k_p e_d + x_d + ff_d,   e_d = i_d,ref - i_d,   ff_d = R i_d,ref - omega_e L i_q,ref   (decouple)
- *         u_q = k_p e_q + x_q + ff_q,   e_q = i_q,ref - i_q,   ff_q = R i_q,ref + omega_e L i_d,ref   (decouple)
+ *         u_d = k_p e_d + x_d + ff_d,   e_d = i_d,ref - i_d,   ff_d = R i_d,ref - omega_e L i_q   (decouple)
+ *         u_q = k_p e_q + x_q + ff_q,   e_q = i_q,ref - i_q,   ff_q = R i_q,ref + omega_e L i_d   (decouple)
+ *
+ *     The rotational voltages use the measured currents: they cancel the motor's d,q coupling (v_d = R i_d +
+ *     L di_d/dt - omega_e L i_q, v_q = R i_q + L di_q/dt + omega_e L i_d + e_q), so each PI sees R + s L at any
+ *     speed. From the references instead, the coupling stays in the error dynamics and, with R = 0, the loop
+ *     L s^2 + (k_p + j omega_e L) s + k_i = 0 has a slow root near -k_i / (k_p + j omega_e L) when omega_e L >> k_p.
  *
  *  7. Voltage angle with delay compensation: the output is applied one sample later and held for one sample, so
  *     it acts on average 1.5 T_s after the measurement: theta_v = theta + advance Omega_e T_s (advance = 1.5).

@@ -28,6 +28,7 @@ __all__ = ["Sine", "fundamental_k1"]
 
 _ANGLE = {"hall": 0, "encoder": 1}
 _LIMIT = {"hexagon": 0, "circle": 1}
+PAPER1_BANDWIDTH_HZ = 1000.0  # paper 1's current-loop crossover (Hz)
 
 
 def fundamental_k1(drive: Drive) -> float:
@@ -69,8 +70,6 @@ class Sine(Control):
     emf_feedforward : bool
         Add the back-EMF ``omega_m k_x(theta)`` from the motor's own shapes (tables of ``emf_points`` points) to the
         phase voltage references, so the trapezoid's harmonics do not distort the currents.
-    decoupling : bool
-        Add the R-L steady-state voltages ``R i_ref + omega_e L J i_ref`` to the PI outputs.
     advance : float
         Voltage angle advance in samples (half PWM periods): 1.5 compensates one sample of computation delay and
         half a sample of PWM; 0 switches the compensation off.
@@ -82,8 +81,16 @@ class Sine(Control):
     speed_limit : bool
         Reduce the current amplitude above the base speed ((23) with R). Off: the current stays at the reference
         and the voltage limit does the rest (for measuring the base speed).
-    bandwidth_hz, phase_margin_deg : float
-        Current-loop design (paper 1: 1 kHz, 90 deg), :func:`bldclab.design.pi_gains` without delay.
+    decoupling : bool
+        Add the R-L voltages ``R i_ref + omega_e L J i`` to the PI outputs, the rotational part from the *measured*
+        currents: it cancels the d,q cross-coupling of the motor, so each PI sees ``R + s L`` at any speed. Off, a
+        PI whose ``k_p`` is small against ``omega_e L`` leaves a slow, lightly damped mode (``docs/sine.md``).
+    bandwidth_hz : float, optional
+        Current-loop crossover (Hz). Default: paper 1's 1 kHz, lowered to ``f_pwm / 10`` on a drive whose carrier
+        is slower than 10 kHz (the loop delay of 1.5 samples then costs 27 deg of phase margin at most). Given,
+        it is used as is.
+    phase_margin_deg : float
+        Current-loop phase margin (paper 1: 90 deg), :func:`bldclab.design.pi_gains` without delay.
     R_design : float, optional
         Resistance (Ohm) the PI gains are designed for. Default: the drive's ``R + R_on``, but at least
         ``omega_c L / 10``: the 90-degree design cancels the R-L pole (``k_i = omega_c R``), so with a small R
@@ -127,7 +134,7 @@ class Sine(Control):
     limit: Literal["hexagon", "circle"] = "hexagon"
     overmodulation: bool = False
     speed_limit: bool = True
-    bandwidth_hz: float = 1000.0
+    bandwidth_hz: float | None = None
     phase_margin_deg: float = 90.0
     R_design: float | None = None
     handoff_speed: float | None = None
@@ -155,7 +162,8 @@ class Sine(Control):
         check_number("advance", self.advance, allow_zero=True)
         if self.advance > 4:
             raise BldclabError("control.advance", f"must be within [0, 4] samples, got {self.advance!r}")
-        check_number("bandwidth_hz", self.bandwidth_hz)
+        if self.bandwidth_hz is not None:
+            check_number("bandwidth_hz", self.bandwidth_hz)
         check_number("phase_margin_deg", self.phase_margin_deg)
         for name in ("R_design", "handoff_speed", "i_max", "tau_max"):
             v = getattr(self, name)
@@ -187,13 +195,30 @@ class Sine(Control):
         tuple of float
             ``k_p`` (V/A) and ``k_i`` (V/(A s)).
         """
-        return pi_gains(self._r_design(drive, 1.0), drive.motor.L, self.bandwidth_hz, self.phase_margin_deg)
+        return pi_gains(self._r_design(drive, 1.0), drive.motor.L, self.bandwidth(drive), self.phase_margin_deg)
+
+    def bandwidth(self, drive: Drive) -> float:
+        """Return the current-loop crossover (Hz) for a drive.
+
+        Parameters
+        ----------
+        drive : Drive
+            Uses its carrier frequency when ``bandwidth_hz`` is not given.
+
+        Returns
+        -------
+        float
+            ``bandwidth_hz`` if given, else ``min(1000, f_pwm / 10)`` (Hz).
+        """
+        if self.bandwidth_hz is not None:
+            return float(self.bandwidth_hz)
+        return min(PAPER1_BANDWIDTH_HZ, drive.inverter.f_pwm / 10.0)
 
     def _r_design(self, drive: Drive, scale: float) -> float:
         """Design resistance of a loop of ``scale`` phases in series (Ohm)."""
         if self.R_design is not None:
             return scale * float(self.R_design)
-        wc = 2.0 * math.pi * self.bandwidth_hz
+        wc = 2.0 * math.pi * self.bandwidth(drive)
         return scale * max(r_total(drive), wc * drive.motor.L / 10.0)
 
     def describe(self) -> dict[str, object]:  # noqa: D102
