@@ -16,8 +16,9 @@ import numpy as np
 import pytest
 
 import bldclab as bl
+from bldclab import analytic as an
 from bldclab.compare import default_controls
-from bldclab.experiments import steady_state
+from bldclab.experiments import base_speed, base_speed_margin, steady_state
 
 HTM = bl.load("htm-48v")
 LU = bl.load("lu-4kw")
@@ -142,3 +143,67 @@ def test_short_commutation_dip_is_caught_by_the_moving_average_and_missed_by_the
     edges = res.t[np.nonzero(np.diff(res.hall))[0] + 1]
     centre = t[int(np.argmin(ma))] - T / 2
     assert np.min(np.abs(edges - centre)) < 0.25 * T
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# PWM-grid phase
+
+
+def locked_speed(drive: bl.Drive, n: int) -> float:
+    """Mechanical speed (rad/s) at which an electrical period is exactly n PWM periods (the grid locks to the rotor)."""
+    return 2 * math.pi * drive.inverter.f_pwm / (n * drive.motor.p)
+
+
+def test_pwm_phase_matters_where_the_grid_locks_to_the_rotor():
+    """htm-48v, square wave just above its base speed with exactly 165 PWM periods per electrical period: where the
+    carrier falls relative to the rotor moves the mean torque by several percent; the phases' mean is reported with
+    the range, and phase 0 is the plain run."""
+    control, ref = default_controls(HTM)["square"]
+    om = locked_speed(HTM, 165)
+    pt, _ = steady_state(HTM, control, om, ref, pwm_phases=4)
+    lo, hi = pt.tau_mean_range
+    assert pt.pwm_phases == 4
+    assert (hi - lo) / HTM.T_N > 0.02
+    assert lo <= pt.tau_mean <= hi
+    single, _ = steady_state(HTM, control, om, ref)
+    assert single.tau_mean_range == (single.tau_mean, single.tau_mean)
+    assert pt.metrics.tau_mean == single.tau_mean  # phase 0 is the default run
+    # off the locked ratio the measured periods sweep the phase themselves: a small spread
+    pt2, _ = steady_state(HTM, control, 0.89 * HTM.Omega_0, ref, pwm_phases=4)
+    assert pt2.spread_pu("tau_mean", HTM.T_N) < 0.002
+
+
+def test_pwm_phases_must_be_a_positive_integer():
+    control, ref = default_controls(HTM)["square"]
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(bl.BldclabError, match="pwm_phases"):
+            steady_state(HTM, control, 0.5 * HTM.Omega_0, ref, pwm_phases=bad)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# simulated base speed (htm-48v's own checks against (21), (30) and the numeric values are in test_sixstep.py and
+# test_sine.py, which use the same function)
+
+
+@pytest.mark.parametrize("supply", ["square", "sine"])
+def test_simulated_base_speed_of_htm_is_the_r_aware_numeric_one(supply):
+    num = an.omega_qB_numeric_pu(HTM) if supply == "square" else an.omega_sB_numeric_pu(HTM)
+    closed = an.omega_qB_pu(an.theta_m(HTM)) if supply == "square" else an.omega_sB_pu(an.theta_m(HTM))
+    wb = base_speed(HTM, supply)
+    assert wb == pytest.approx(num, abs=0.003)
+    assert closed - wb > 0.07  # R = 50 mOhm costs 0.08 p.u. against (21) / (30)
+    # the margin changes sign across it
+    assert base_speed_margin(HTM, supply, wb - 0.01) >= 0.0 > base_speed_margin(HTM, supply, wb + 0.01)
+
+
+@pytest.mark.parametrize("supply", ["square", "sine"])
+def test_simulated_base_speed_of_lu4kw_is_at_the_no_load_speed(supply):
+    """lu-4kw (0.29 mH, 300 V): Theta_m is small and the rounded back-EMF reaches its line peak at isolated angles,
+    so both supplies hold their current up to about Omega_0, as the numeric computation says."""
+    num = an.omega_qB_numeric_pu(LU) if supply == "square" else an.omega_sB_numeric_pu(LU)
+    assert base_speed(LU, supply) == pytest.approx(num, abs=0.005)
+
+
+def test_base_speed_bad_supply_is_named():
+    with pytest.raises(bl.BldclabError, match="supply"):
+        base_speed(HTM, "trapezoid")

@@ -26,10 +26,10 @@ import pandas as pd
 from . import analytic
 from .control import Control, Sine, SixStep
 from .errors import BldclabError
-from .experiments import steady_state
+from .experiments import base_speed, steady_state
 from .motor import Drive
 
-__all__ = ["CompareResult", "compare", "default_controls", "speed_grid"]
+__all__ = ["CompareResult", "base_speed_table", "compare", "default_controls", "speed_grid"]
 
 SUPPLIES = ("square", "sine")
 
@@ -58,16 +58,57 @@ def speed_grid(n: int, lo: float = 0.05, hi: float = 0.98) -> np.ndarray:
     return np.linspace(lo, hi, n)
 
 
-def _run_point(args: tuple[Drive, str, Control, float, float]) -> dict[str, Any]:
-    drive, supply, control, ref, w_pu = args
-    point, _ = steady_state(drive, control, w_pu * drive.Omega_0, ref)
+def _run_point(args: tuple[Drive, str, Control, float, float, int]) -> dict[str, Any]:
+    drive, supply, control, ref, w_pu, pwm_phases = args
+    point, _ = steady_state(drive, control, w_pu * drive.Omega_0, ref, pwm_phases=pwm_phases)
     m = point.metrics
-    return {"supply": supply, "Omega_pu": w_pu, "Omega": point.speed, "T_pu": point.tau_mean_pu,
-            "TR_pu": point.ripple_sampled_pu, "TR_inst_pu": point.ripple_pu, "TR_ma_pu": point.ripple_ma_pu,
-            "T": point.tau_mean, "TR": point.ripple_sampled, "tau_std_pu": m.tau_std / drive.T_N,
-            "eta": point.efficiency,
-            "p_src": m.p_src, "p_cu": m.p_cu, "p_inv": m.p_sw + m.p_diode + m.p_Rsrc, "i_rms": float(np.mean(m.i_rms)),
-            "i_peak": float(max(m.i_peak)), "balance": m.balance_electrical}
+    T_N = drive.T_N
+    row = {"supply": supply, "Omega_pu": w_pu, "Omega": point.speed, "T_pu": point.tau_mean_pu,
+           "TR_pu": point.ripple_sampled_pu, "TR_inst_pu": point.ripple_pu, "TR_ma_pu": point.ripple_ma_pu,
+           "T": point.tau_mean, "TR": point.ripple_sampled, "tau_std_pu": m.tau_std / T_N,
+           "eta": point.efficiency,
+           "p_src": m.p_src, "p_cu": m.p_cu, "p_inv": m.p_sw + m.p_diode + m.p_Rsrc, "i_rms": float(np.mean(m.i_rms)),
+           "i_peak": float(max(m.i_peak)), "balance": m.balance_electrical}
+    if pwm_phases > 1:
+        for key, rng in (("T_pu", point.tau_mean_range), ("TR_pu", point.ripple_sampled_range),
+                         ("TR_ma_pu", point.ripple_ma_range)):
+            row[f"{key}_min"], row[f"{key}_max"] = rng[0] / T_N, rng[1] / T_N
+    return row
+
+
+def _run_base_speed(args: tuple[Drive, str]) -> float:
+    drive, supply = args
+    try:
+        return base_speed(drive, supply)
+    except BldclabError:
+        return float("nan")  # the condition fails down to 0.05 p.u.: no base speed in the searched range
+
+
+def base_speed_table(drive: Drive, simulated: dict[str, float], table1: Any) -> pd.DataFrame:
+    """Return the base speeds side by side: closed form (R = 0), numeric with R, simulated (p.u. of Omega_0).
+
+    Parameters
+    ----------
+    drive : Drive
+    simulated : dict
+        ``{"square": ..., "sine": ...}`` from :func:`bldclab.experiments.base_speed`.
+    table1 : analytic.Table1
+        The drive's Table I (:func:`bldclab.analytic.table1`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``supply``, ``closed_form_pu`` ((21) sinusoidal, (30) square wave), ``equation``, ``numeric_R_pu``
+        (:func:`bldclab.analytic.omega_sB_numeric_pu` / :func:`~bldclab.analytic.omega_qB_numeric_pu`),
+        ``simulated_pu`` and ``simulated_rpm`` (nan where the search found none).
+    """
+    rows = []
+    for supply, eq, cf, num in (("sine", "(21)", table1.Omega_sB_pu, table1.Omega_sB_R_pu),
+                                ("square", "(30)", table1.Omega_qB_pu, table1.Omega_qB_R_pu)):
+        w = simulated[supply]
+        rows.append({"supply": supply, "equation": eq, "closed_form_pu": cf, "numeric_R_pu": num,
+                     "simulated_pu": w, "simulated_rpm": w * drive.Omega_0 * 60.0 / (2.0 * np.pi)})
+    return pd.DataFrame(rows)
 
 
 @dataclass
@@ -85,6 +126,12 @@ class CompareResult:
         Paper 1's closed forms on the same speeds (:func:`bldclab.analytic.characteristic`).
     table1 : analytic.Table1
         Paper 1's Table I for the drive (with the R-aware numeric base speeds).
+    base_speeds : pandas.DataFrame or None
+        :func:`base_speed_table`: (21)/(30), the numeric values with R and the simulated base speeds
+        (:func:`bldclab.experiments.base_speed`); None if not asked for.
+    pwm_phases : int
+        PWM-grid phases per point (:func:`bldclab.experiments.steady_state`); with more than one, ``simulated`` has
+        ``T_pu_min``, ``T_pu_max``, ``TR_pu_min``, ``TR_pu_max``, ``TR_ma_pu_min``, ``TR_ma_pu_max`` too.
     verdict : list of str
         Where each supply wins and by how much.
     seconds : float
@@ -95,6 +142,8 @@ class CompareResult:
     simulated: pd.DataFrame
     analytic: pd.DataFrame
     table1: Any
+    base_speeds: pd.DataFrame | None = None
+    pwm_phases: int = 1
     verdict: list[str] = field(default_factory=list)
     seconds: float = 0.0
 
@@ -117,7 +166,8 @@ def _progress(total: int, enabled: bool) -> Callable[[int], None]:
 
 
 def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls: dict[str, tuple[Control, float]]
-            | None = None, workers: int | None = None, progress: bool = False) -> CompareResult:
+            | None = None, workers: int | None = None, progress: bool = False, pwm_phases: int = 1,
+            base_speeds: bool = True) -> CompareResult:
     """Compare square-wave and sinusoidal supply of a drive over speed.
 
     Parameters
@@ -131,6 +181,12 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
         Processes; default all cores (1: in this process).
     progress : bool
         Show a progress bar on stderr.
+    pwm_phases : int
+        PWM-grid phases per point (>= 1): each point is the mean over that many offsets of the rotor's initial
+        angle within one PWM period's travel, with its range (:func:`bldclab.experiments.steady_state`).
+    base_speeds : bool
+        Also search the simulated base speed of each supply (:func:`bldclab.experiments.base_speed`, with the
+        default controllers of paper 1's definitions).
 
     Returns
     -------
@@ -139,27 +195,43 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
     w = np.asarray(speed_grid(32) if speeds_pu is None else speeds_pu, dtype=float)
     if w.ndim != 1 or not np.all(np.isfinite(w)) or np.any(w <= 0):
         raise BldclabError("speeds", "per-unit speeds must be positive and finite")
+    if not isinstance(pwm_phases, int) or isinstance(pwm_phases, bool) or pwm_phases < 1:
+        raise BldclabError("pwm_phases", f"must be an integer >= 1, got {pwm_phases!r}")
     controls = controls or default_controls(drive, float(np.min(w)))
-    jobs = [(drive, s, controls[s][0], controls[s][1], float(x)) for s in SUPPLIES for x in w]
+    jobs = [(drive, s, controls[s][0], controls[s][1], float(x), pwm_phases) for s in SUPPLIES for x in w]
+    bs_jobs = [(drive, s) for s in SUPPLIES] if base_speeds else []
     show = _progress(len(jobs), progress)
     t0 = time.perf_counter()
     rows: list[dict[str, Any]] = []
+    bs: list[float] = []
     n_workers = workers or os.cpu_count() or 1
     if n_workers <= 1:
         for j, job in enumerate(jobs):
             rows.append(_run_point(job))
             show(j + 1)
+        bs = [_run_base_speed(job) for job in bs_jobs]
     else:
         with ProcessPoolExecutor(max_workers=n_workers) as pool:
+            bs_futures = [pool.submit(_run_base_speed, job) for job in bs_jobs]  # the longest jobs first
             for j, row in enumerate(pool.map(_run_point, jobs, chunksize=max(1, len(jobs) // (4 * n_workers)))):
                 rows.append(row)
                 show(j + 1)
+            bs = [f.result() for f in bs_futures]
     seconds = time.perf_counter() - t0
     sim = pd.DataFrame(rows)
     an = analytic.characteristic(drive, w)
-    res = CompareResult(drive=drive, simulated=sim, analytic=an, table1=analytic.table1(drive), seconds=seconds)
-    res.verdict = _verdict(sim)
+    t1 = analytic.table1(drive)
+    bst = base_speed_table(drive, dict(zip(SUPPLIES, bs, strict=True)), t1) if base_speeds else None
+    res = CompareResult(drive=drive, simulated=sim, analytic=an, table1=t1, base_speeds=bst,
+                        pwm_phases=pwm_phases, seconds=seconds)
+    res.verdict = _verdict(sim) + (_base_speed_verdict(bst) if bst is not None else [])
     return res
+
+
+def _base_speed_verdict(bst: pd.DataFrame) -> list[str]:
+    names = {"sine": "sinusoidal", "square": "square-wave"}
+    return [f"base speed, {names[r.supply]}: {r.simulated_pu:.3f} p.u. simulated, {r.numeric_R_pu:.3f} numeric with "
+            f"R, {r.closed_form_pu:.3f} by {r.equation} (R neglected)" for r in bst.itertuples()]
 
 
 def _ranges(mask: np.ndarray, w: np.ndarray) -> list[tuple[float, float]]:
