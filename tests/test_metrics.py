@@ -128,6 +128,19 @@ def test_continuous_moving_average_is_the_brute_force_one_and_bounds_the_grid(dr
     assert m.ma_lost == 0
 
 
+def test_history_overflow_is_counted_not_hidden():
+    """A step 1/2400 of a PWM period puts more step ends in one period than the runner keeps (BC_SIM_HIST = 1024):
+    the evaluations whose past is gone are skipped and counted; with none left the average is nan, not a guess."""
+    control, ref = default_controls(HTM)["square"]
+    T = 1.0 / HTM.inverter.f_pwm
+    sc = {"duration": 0.004, "speed": 0.3 * HTM.Omega_0, "ref": ref, "window": (0.002, 0.004), "trace": False}
+    ok = bl.simulate(HTM, control, bl.Scenario(**sc, h_max=T / 400)).metrics
+    lost = bl.simulate(HTM, control, bl.Scenario(**sc, h_max=T / 1200)).metrics
+    assert ok.ma_lost == 0 and math.isfinite(ok.ripple_ma)
+    assert lost.ma_lost > 1000 and math.isnan(lost.ripple_ma)
+    assert lost.ripple_ma_grid == pytest.approx(ok.ripple_ma_grid, rel=1e-6)  # the sample-grid average is unaffected
+
+
 def test_short_commutation_dip_is_caught_by_the_moving_average_and_missed_by_the_samples():
     """lu-4kw (300 V, 0.29 mH, 10 kHz) at 0.5 p.u.: the commutation lasts under one PWM period. Its torque dip falls
     between the controller samples; the continuous average sees it, at a Hall edge, as does the brute force."""

@@ -53,7 +53,9 @@ class Metrics:
         ``tau_ma_grid_max - tau_ma_grid_min`` (N m).
     ma_lost : int
         Continuous moving-average evaluations skipped because one PWM period held more integration steps than the
-        runner's history (``BC_SIM_HIST`` = 1024 step ends); 0 in every run bldclab makes by default.
+        runner's history (``BC_SIM_HIST`` = 1024 step ends; ``h_max`` below about 1/500 of a PWM period); 0 in
+        every run bldclab makes by default. When positive the moving-average extremes cover only part of the window
+        (nan if no evaluation was left).
     tau_s_min, tau_s_max : float
         Extremes of the torque at the controller samples (carrier valleys and peaks), N m. There the phase currents
         cross their PWM-period averages, so these samples carry no PWM ripple while keeping the sampling
