@@ -71,6 +71,19 @@ def test_compare_pwm_phases_and_base_speeds(tmp_path, capsys):
     assert "base speed, square-wave: 0.877 p.u. simulated" in verdict
 
 
+def test_compare_notes_where_the_samples_miss_the_commutation():
+    """lu-4kw's square-wave commutation lasts under one PWM period mid-range: the verdict says the ripple at the samples
+    misses it there; the sinusoidal supply and htm-48v get no such note."""
+    res = compare(bl.load("lu-4kw"), [0.1, 0.5, 0.68], workers=1, base_speeds=False)
+    notes = [v for v in res.verdict if v.startswith("note")]
+    assert len(notes) == 1 and notes[0].startswith("note, square-wave: for Omega in [0.50, 0.68] p.u.")
+    sq = res.simulated[res.simulated.supply == "square"].set_index("Omega_pu")
+    assert sq.loc[0.68, "TR_ma_pu"] - sq.loc[0.68, "TR_pu"] > 0.05
+    res = compare(bl.load("htm-48v"), [0.2, 0.5, 0.8], workers=1, base_speeds=False)
+    assert not any(v.startswith("note") for v in res.verdict)
+    assert res.base_speeds is None
+
+
 def test_compare_uses_processes_deterministically():
     drive = bl.load("htm-48v")
     w = [0.2, 0.7]

@@ -133,7 +133,8 @@ class CompareResult:
         PWM-grid phases per point (:func:`bldclab.experiments.steady_state`); with more than one, ``simulated`` has
         ``T_pu_min``, ``T_pu_max``, ``TR_pu_min``, ``TR_pu_max``, ``TR_ma_pu_min``, ``TR_ma_pu_max`` too.
     verdict : list of str
-        Where each supply wins and by how much.
+        Where each supply wins and by how much; notes where the ripple at the samples misses part of the
+        commutation (``TR_ma_pu`` above ``TR_pu`` by more than :data:`SAMPLING_GAP_PU` and 20 %); the base speeds.
     seconds : float
         Wall time of the simulations.
     """
@@ -224,8 +225,29 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
     bst = base_speed_table(drive, dict(zip(SUPPLIES, bs, strict=True)), t1) if base_speeds else None
     res = CompareResult(drive=drive, simulated=sim, analytic=an, table1=t1, base_speeds=bst,
                         pwm_phases=pwm_phases, seconds=seconds)
-    res.verdict = _verdict(sim) + (_base_speed_verdict(bst) if bst is not None else [])
+    res.verdict = _verdict(sim) + _sampling_notes(sim) + (_base_speed_verdict(bst) if bst is not None else [])
     return res
+
+
+#: A point's ripple at the samples is flagged as missing part of the commutation when the continuous one-PWM-period
+#: average's ripple exceeds it by more than this (p.u. of T_N) and by more than 20 %.
+SAMPLING_GAP_PU = 0.02
+
+
+def _sampling_notes(sim: pd.DataFrame) -> list[str]:
+    names = {"sine": "sinusoidal", "square": "square-wave"}
+    lines = []
+    for supply in SUPPLIES:
+        s = sim[sim.supply == supply].sort_values("Omega_pu")
+        gap = (s.TR_ma_pu - s.TR_pu).to_numpy()
+        mask = (gap > SAMPLING_GAP_PU) & (s.TR_ma_pu.to_numpy() > 1.2 * s.TR_pu.to_numpy())
+        w = s.Omega_pu.to_numpy()
+        for lo, hi in _ranges(mask, w):
+            sel = (w >= lo) & (w <= hi)
+            lines.append(f"note, {names[supply]}: for Omega in [{lo:.2f}, {hi:.2f}] p.u. the commutation falls between "
+                         f"controller samples: the torque ripple at the samples (TR) is below the continuous "
+                         f"one-PWM-period average's (TR_ma) by up to {float(np.max(gap[sel])):.3f} p.u.")
+    return lines
 
 
 def _base_speed_verdict(bst: pd.DataFrame) -> list[str]:
