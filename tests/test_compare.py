@@ -49,6 +49,41 @@ def test_compare_cli_writes_everything(tmp_path):
     assert "quantities" in t1
 
 
+def test_compare_pwm_phases_and_base_speeds(tmp_path, capsys):
+    """--pwm-phases adds each point's range over the PWM-grid phases; the simulated base speeds stand beside (21),
+    (30) and the numeric values with R in the terminal, the verdict and base_speeds.csv."""
+    out = tmp_path / "cmp"
+    rc = main(["compare", "htm-48v", "--out", str(out), "--speeds", "3", "--pwm-phases", "2", "--workers", "1",
+               "--no-report"])
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "simulated: 0.869 / 0.877 p.u." in text and "over 2 PWM-grid phases" in text
+    sim = pd.read_csv(out / "simulated.csv")
+    for key in ("T_pu", "TR_pu", "TR_ma_pu"):
+        assert np.all(sim[f"{key}_min"] <= sim[key] + 1e-12) and np.all(sim[key] <= sim[f"{key}_max"] + 1e-12)
+    bs = pd.read_csv(out / "base_speeds.csv").set_index("supply")
+    t1 = an.table1(bl.load("htm-48v"))
+    assert bs.loc["sine", "closed_form_pu"] == pytest.approx(t1.Omega_sB_pu)
+    assert bs.loc["square", "numeric_R_pu"] == pytest.approx(t1.Omega_qB_R_pu)
+    assert bs.loc["square", "simulated_pu"] == pytest.approx(t1.Omega_qB_R_pu, abs=0.003)
+    assert bs.loc["sine", "simulated_pu"] == pytest.approx(t1.Omega_sB_R_pu, abs=0.003)
+    verdict = (out / "verdict.txt").read_text()
+    assert "base speed, square-wave: 0.877 p.u. simulated" in verdict
+
+
+def test_compare_notes_where_the_samples_miss_the_commutation():
+    """lu-4kw's square-wave commutation lasts under one PWM period mid-range: the verdict says the ripple at the samples
+    misses it there; the sinusoidal supply and htm-48v get no such note."""
+    res = compare(bl.load("lu-4kw"), [0.1, 0.5, 0.68], workers=1, base_speeds=False)
+    notes = [v for v in res.verdict if v.startswith("note")]
+    assert len(notes) == 1 and notes[0].startswith("note, square-wave: for Omega in [0.50, 0.68] p.u.")
+    sq = res.simulated[res.simulated.supply == "square"].set_index("Omega_pu")
+    assert sq.loc[0.68, "TR_ma_pu"] - sq.loc[0.68, "TR_pu"] > 0.05
+    res = compare(bl.load("htm-48v"), [0.2, 0.5, 0.8], workers=1, base_speeds=False)
+    assert not any(v.startswith("note") for v in res.verdict)
+    assert res.base_speeds is None
+
+
 def test_compare_uses_processes_deterministically():
     drive = bl.load("htm-48v")
     w = [0.2, 0.7]
@@ -61,6 +96,7 @@ def test_compare_uses_processes_deterministically():
     (["compare", "nosuch"], "MOTOR"),
     (["compare", "htm-48v", "--speeds", "1"], "--speeds"),
     (["compare", "htm-48v", "--min-speed", "0.9", "--max-speed", "0.5"], "--min-speed"),
+    (["compare", "htm-48v", "--pwm-phases", "0"], "--pwm-phases"),
     (["simulate", "htm-48v", "--control", "square", "--torque", "10 N m"], "--torque"),
     (["simulate", "htm-48v", "--speed", "12 V"], "--speed"),
     (["simulate", "htm-48v", "--speed", "0 rpm"], "--speed"),

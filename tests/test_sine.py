@@ -21,7 +21,7 @@ from bldclab.catalog.synthetic import paper1_drive
 from bldclab.compare import default_controls
 from bldclab.control.sine import fundamental_k1
 from bldclab.errors import BldclabError
-from bldclab.experiments import steady_state
+from bldclab.experiments import base_speed, steady_state
 
 HTM = bl.load("htm-48v")
 HTM0 = HTM.replace(motor__R=0.0)
@@ -119,28 +119,13 @@ def test_plain_pi_distorts_currents_and_ripple(w):
     assert harmonic(res, sel, we, 5) > 0.01 * harmonic(res, sel, we, 1)
 
 
-def _base_speed(drive: bl.Drive, lo: float, hi: float) -> float:
-    """Highest speed (p.u.) at which the controller holds I_s,N without reaching the linear-modulation limit."""
-    control = sine(speed_limit=False)
-
-    def holds(w: float) -> bool:
-        pt, _res, _sel, sat = point(drive, control, w)
-        return sat == 0.0 and pt.tau_mean_pu > an.T_SN_PU - 0.001
-
-    assert holds(lo) and not holds(hi)
-    while hi - lo > 2e-4:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if holds(mid) else (lo, mid)
-    return 0.5 * (lo + hi)
-
-
 def test_base_speed_R0_is_paper_21():
-    w_b = _base_speed(HTM0, 0.94, 0.97)
+    w_b = base_speed(HTM0, "sine", sine(speed_limit=False), lo=0.94, hi=0.97, tol=2e-4)
     assert w_b == pytest.approx(an.omega_sB_pu(THETA_M), abs=0.003)
 
 
 def test_base_speed_with_R_is_the_numeric_one():
-    w_b = _base_speed(HTM, 0.85, 0.89)
+    w_b = base_speed(HTM, "sine", sine(speed_limit=False), lo=0.85, hi=0.89, tol=2e-4)
     assert w_b == pytest.approx(an.omega_sB_numeric_pu(HTM), abs=0.003)
     # the drop against Table I: the paper says about 0.9 times
     assert w_b / an.omega_sB_pu(THETA_M) == pytest.approx(0.91, abs=0.005)

@@ -16,7 +16,7 @@ import bldclab as bl
 from bldclab import analytic as an
 from bldclab.design import pi_gains
 from bldclab.errors import BldclabError
-from bldclab.experiments import PointResult, steady_state
+from bldclab.experiments import PointResult, base_speed, steady_state
 
 HTM = bl.load("htm-48v")
 HTM0 = HTM.replace(motor__R=0.0)
@@ -119,44 +119,8 @@ def test_ripple_converges_to_the_paper_with_pwm_frequency():
         assert pt.tau_mean_pu == pytest.approx(an.t_q_pu(w, TH), abs=1e-4)
 
 
-def injected_margin(drive: bl.Drive, w: float, control: bl.SixStep) -> float:
-    """Smallest (largest injected current within pi/3 of its Hall corner) - I_N over the commutations of a period (A).
-
-    Paper 1's definition of the base speed: the injected current must reach I_N by half of its 120-degree conduction
-    interval, where the next commutation starts. Measured from the trace (4 rows per sample, exact angle).
-    """
-    om = w * drive.Omega_0
-    pt, res = steady_state(drive, control, om, I_N, settle_periods=3, measure_periods=1, trace=True, trace_sub=4)
-    t, m = res.t, pt.metrics
-    th = np.unwrap(res.theta_e)
-    cur = np.stack([res.i_a, res.i_b, res.i_c])
-    we = drive.motor.p * om
-    worst = math.inf
-    n = math.ceil((th[t >= m.t0][0] - math.pi / 6) / (math.pi / 3))
-    while True:
-        tc = float(np.interp(math.pi / 6 + n * math.pi / 3, th, t))
-        te = tc + (math.pi / 3) / we
-        if te > m.t1:
-            return worst
-        x, sg = INCOMING[n % 6]
-        sel = (t >= tc) & (t <= te)
-        peak = max(float(np.max(sg * cur[x][sel])), sg * float(np.interp(te, t, cur[x])))
-        worst = min(worst, peak - I_N)
-        n += 1
-
-
-def base_speed(drive: bl.Drive, control: bl.SixStep, lo: float, hi: float, tol: float = 2e-4) -> float:
-    """Highest speed (p.u.) at which the injected current reaches I_N by mid-conduction, by bisection."""
-    ok = lambda w: injected_margin(drive, w, control) >= -1e-3 * I_N  # noqa: E731
-    assert ok(lo) and not ok(hi)
-    while hi - lo > tol:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
-    return 0.5 * (lo + hi)
-
-
 def test_base_speed_matches_30():
-    wb = base_speed(HTM0, bl.SixStep(), 0.93, 0.99)
+    wb = base_speed(HTM0, "square", bl.SixStep(), lo=0.93, hi=0.99, tol=2e-4)
     assert wb == pytest.approx(an.omega_qB_pu(TH), abs=0.003)
     assert wb == pytest.approx(0.9570, abs=5e-4)  # measured: (30) gives 0.95716
 
@@ -164,13 +128,13 @@ def test_base_speed_matches_30():
 def test_base_speed_without_commutation_advance_is_later_by_the_delay():
     """Commutating on the Hall edge seen costs (delay + 1/2) samples on average: about 1.5 samples of the
     sector (pi/3) near the base speed, predicted to lower it by 0.0013-0.0018 p.u."""
-    wb = base_speed(HTM0, bl.SixStep(advance=False), 0.93, 0.99)
+    wb = base_speed(HTM0, "square", bl.SixStep(advance=False), lo=0.93, hi=0.99, tol=2e-4)
     assert an.omega_qB_pu(TH) - 0.003 < wb < an.omega_qB_pu(TH) - 0.0008
 
 
 def test_base_speed_with_resistance():
     """R = 50 mOhm: the base speed drops to the R-aware numeric value, 0.916 of Table I's."""
-    wb = base_speed(HTM, bl.SixStep(), 0.85, 0.92)
+    wb = base_speed(HTM, "square", bl.SixStep(), lo=0.85, hi=0.92, tol=2e-4)
     assert wb == pytest.approx(an.omega_qB_numeric_pu(HTM), abs=0.002)
     assert an.omega_qB_pu(TH) - wb > 0.075
 

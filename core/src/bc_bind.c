@@ -97,10 +97,14 @@ static const bc_field_desc FIELDS[] = {
     F(bc_sim_metrics, tau_max, "f8"),
     F(bc_sim_metrics, tau_ma_min, "f8"),
     F(bc_sim_metrics, tau_ma_max, "f8"),
+    F(bc_sim_metrics, tau_ma_grid_min, "f8"),
+    F(bc_sim_metrics, tau_ma_grid_max, "f8"),
     F(bc_sim_metrics, tau_s_min, "f8"),
     F(bc_sim_metrics, tau_s_max, "f8"),
     F(bc_sim_metrics, i_peak, "f8"),
     F(bc_sim_metrics, n_ma, "i4"),
+    F(bc_sim_metrics, n_ma_grid, "i4"),
+    F(bc_sim_metrics, ma_lost, "i4"),
     F(bc_sim_metrics, state, "i4"),
 
     /* the part of the plant state the host reads */

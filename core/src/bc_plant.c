@@ -1065,14 +1065,105 @@ static void ensure_k1(const bc_plant_params *p, bc_plant_state *s)
     s->k1_valid = 1;
 }
 
-static void track_extremes(bc_plant_state *s)
+/* ---------------------------------------------------------------------------------------------------------- */
+/* torque extremes inside a step                                                                              */
+
+/* d tau_e/dt at state y with derivative dy, inside the current angle pieces:
+ *     sum_x k_x di_x/dt + p omega sum_x i_x dk_x/dtheta + omega sum_j amp_j order_j cos(order_j theta_m + phase_j)
+ * (tables: the piece's slope; Fourier: the series differentiated term by term). */
+static double tau_rate(const bc_plant_params *p, const bc_plant_state *s, const double *y, const double *dy)
 {
-    if (s->aux_tau < s->tau_min) s->tau_min = s->aux_tau;
-    if (s->aux_tau > s->tau_max) s->tau_max = s->aux_tau;
+    const double th = y[Y_TH], om = y[Y_OM];
+    double k[3], dk[3];
+    shapes_at(p, s, th, k);
+    int trig = 0;
+    double c = 0.0, sn = 0.0;
+    for (int x = 0; x < 3; ++x) {
+        const bc_emf_shape *sh = &p->emf[x];
+        if (sh->kind == BC_EMF_TABLE) {
+            dk[x] = s->piece[x].slope;
+            continue;
+        }
+        if (!trig) {
+            c = cos(th);
+            sn = sin(th);
+            trig = 1;
+        }
+        double c1 = c * COS_PHI[x] + sn * SIN_PHI[x];
+        double s1 = sn * COS_PHI[x] - c * SIN_PHI[x];
+        double cm = 1.0, sm = 0.0, acc = 0.0;
+        for (int32_t m = 0; m < sh->n; ++m) {
+            acc += (double)m * (sh->y[m] * cm - sh->x[m] * sm);
+            double cn = cm * c1 - sm * s1;
+            sm = sm * c1 + cm * s1;
+            cm = cn;
+        }
+        dk[x] = acc;
+    }
+    double r = 0.0;
+    for (int x = 0; x < 3; ++x) r += k[x] * dy[Y_I + x] + (double)p->p * om * dk[x] * y[Y_I + x];
+    if (p->n_cog > 0) {
+        double th_m = (th + BC_TWO_PI * (double)s->turns) / (double)p->p;
+        double d = 0.0;
+        for (int32_t j = 0; j < p->n_cog; ++j) {
+            d += p->cog_amp[j] * p->cog_order[j] * cos(p->cog_order[j] * th_m + p->cog_phase[j]);
+        }
+        r += om * d;
+    }
+    return r;
+}
+
+/* Fold the turning points of the cubic Hermite interpolant through (0, f0, d0) and (h, f1, d1) into [*lo, *hi]:
+ *     q(u) = f0 + m0 u + (3 D - 2 m0 - m1) u^2 + (m0 + m1 - 2 D) u^3,  u in (0, 1),  m = h d,  D = f1 - f0. */
+static void hermite_extremes(double h, double f0, double f1, double d0, double d1, double *lo, double *hi)
+{
+    double m0 = h * d0, m1 = h * d1, D = f1 - f0;
+    double c2 = 3.0 * D - 2.0 * m0 - m1, c3 = m0 + m1 - 2.0 * D;
+    /* q'(u) = m0 + 2 c2 u + 3 c3 u^2 */
+    double a = 3.0 * c3, b = 2.0 * c2, c = m0;
+    double u[2];
+    int n = 0;
+    double scale = fabs(a) + fabs(b) + fabs(c);
+    if (!(scale > 0.0) || !isfinite(scale)) return;
+    if (fabs(a) <= 1e-12 * scale) {
+        if (b != 0.0) u[n++] = -c / b;
+    } else {
+        double disc = b * b - 4.0 * a * c;
+        if (disc < 0.0) return;
+        double sq = sqrt(disc);
+        double qq = -0.5 * (b + (b >= 0.0 ? sq : -sq));
+        if (qq != 0.0) {
+            u[n++] = qq / a;
+            u[n++] = c / qq;
+        } else {
+            u[n++] = 0.0;
+        }
+    }
+    for (int j = 0; j < n; ++j) {
+        double v = u[j];
+        if (!(v > 0.0 && v < 1.0)) continue;
+        double f = f0 + v * (m0 + v * (c2 + v * c3));
+        if (f < *lo) *lo = f;
+        if (f > *hi) *hi = f;
+    }
+}
+
+/* After a step of length h from (y0, k0 = f(y0), tau0) to the current state (y1, k1 = f(y1), tau_e in aux_tau):
+ * update the extremes, including the torque's turning points inside the step, and tell the observer. */
+static void track_extremes(const bc_plant_params *p, bc_plant_state *s, double h, const double *y0,
+                           const double *k0, double tau0, const double *y1, const double *k1)
+{
+    double tau1 = s->aux_tau;
+    if (tau1 < s->tau_min) s->tau_min = tau1;
+    if (tau1 > s->tau_max) s->tau_max = tau1;
+    if (h > 0.0) {
+        hermite_extremes(h, tau0, tau1, tau_rate(p, s, y0, k0), tau_rate(p, s, y1, k1), &s->tau_min, &s->tau_max);
+    }
     for (int x = 0; x < 3; ++x) {
         double v = fabs(s->i[x]);
         if (v > s->i_peak[x]) s->i_peak[x] = v;
     }
+    if (s->on_step) s->on_step(s->on_step_ctx, s->t, s->acc, tau1);
 }
 
 void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
@@ -1161,11 +1252,12 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                 rk4(p, s, y0, s->k1, h_hit, y1);
                 rhs(p, s, y1, k1n, &a1);
             }
+            double tau0 = s->aux_tau;
             unpack(s, y1);
             s->t = (h_hit < h) ? s->t + h_hit : t_stop;
             if (p->mech == BC_MECH_IMPOSED) s->omega = y0[Y_OM];
             s->aux_tau = a1.tau;
-            track_extremes(s);
+            track_extremes(p, s, h_hit < h ? h_hit : h, y0, s->k1, tau0, y1, k1n);
             apply_event(p, s, w_hit, &a1);
             s->n_events += 1;
             s->n_steps += 1;
@@ -1186,16 +1278,17 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             wrap_angle(p, s);
             continue;
         }
+        double tau0 = s->aux_tau;
         unpack(s, y1);
         s->t = t_stop;
+        s->aux_tau = a1.tau;
+        track_extremes(p, s, h, y0, s->k1, tau0, y1, k1n);
         memcpy(s->k1, k1n, sizeof k1n);
         memcpy(s->wcache, g1, sizeof g1);
         s->k1_valid = 1;
-        s->aux_tau = a1.tau;
         s->n_steps += 1;
         zero_len = 0;
         s->hold_open = 0;
-        track_extremes(s);
         if (angle_step) {
             angles_cross(p, s, th_ev); /* the shapes are continuous: the cached derivative stays valid */
         }

@@ -4,6 +4,8 @@
 #include <math.h>
 #include <string.h>
 
+static void sim_on_step(void *ctx, double t, const double *acc, double tau);
+
 static int config_ok(const bc_sim_config *c)
 {
     if (c == 0 || c->plant == 0 || c->sensors == 0 || c->ctrl.step == 0) return 0;
@@ -27,6 +29,8 @@ int bc_sim_init(const bc_sim_config *cfg, bc_sim_state *s, double theta0, double
         s->pending[x].mode = BC_LEG_OFF;
         s->pending[x].duty = 0.0f;
     }
+    s->t_pwm = 2.0 * bc_plant_t_half(cfg->plant);
+    sim_on_step(s, s->plant.t, s->plant.acc, s->plant.tau_min); /* the first history node (tau_min: tau_e now) */
     return BC_OK;
 }
 
@@ -104,6 +108,78 @@ static void row_close(bc_sim_state *s, bc_trace_row *rows, int64_t cap, int64_t 
     s->row_open = 0;
 }
 
+/* ---- continuous moving average ------------------------------------------------------------------------- */
+
+/* A at tq inside history segment [a, a+1] (absolute indices): cubic Hermite through the node values of A and their
+ * derivatives tau_e. */
+static double hist_interp(const bc_sim_state *s, int64_t a, double tq)
+{
+    int ja = (int)(a % BC_SIM_HIST), jb = (int)((a + 1) % BC_SIM_HIST);
+    double h = s->h_t[jb] - s->h_t[ja];
+    if (!(h > 0.0)) return s->h_a[jb];
+    double u = (tq - s->h_t[ja]) / h;
+    if (u < 0.0) u = 0.0;
+    if (u > 1.0) u = 1.0;
+    double u2 = u * u, u3 = u2 * u;
+    return (2.0 * u3 - 3.0 * u2 + 1.0) * s->h_a[ja] + (u3 - 2.0 * u2 + u) * h * s->h_tau[ja] +
+           (3.0 * u2 - 2.0 * u3) * s->h_a[jb] + (u3 - u2) * h * s->h_tau[jb];
+}
+
+static void ma_fold(bc_sim_state *s, double ma)
+{
+    if (ma < s->m.tau_ma_min) s->m.tau_ma_min = ma;
+    if (ma > s->m.tau_ma_max) s->m.tau_ma_max = ma;
+    s->m.n_ma += 1;
+}
+
+/* Every accepted plant step ends here (bc_plant_step_fn): push (t, A, tau_e) into the history and, inside the metric
+ * window, evaluate MA(t) = (A(t) - A(t - T)) / T at the new node and at the older nodes shifted by T that fall in
+ * the step just ended. */
+static void sim_on_step(void *ctx, double t, const double *acc, double tau)
+{
+    bc_sim_state *s = (bc_sim_state *)ctx;
+    double A = acc[BC_ACC_TAU];
+    if (s->h_n > 0) {
+        int jl = (int)((s->h_n - 1) % BC_SIM_HIST);
+        if (!(t > s->h_t[jl])) { /* a zero-length step (an event at this instant): same node */
+            s->h_a[jl] = A;
+            s->h_tau[jl] = tau;
+            return;
+        }
+    }
+    int jn = (int)(s->h_n % BC_SIM_HIST);
+    s->h_t[jn] = t;
+    s->h_a[jn] = A;
+    s->h_tau[jn] = tau;
+    s->h_n += 1;
+    int64_t oldest = s->h_n - BC_SIM_HIST;
+    int in = s->m.state == 1;
+    double T = s->t_pwm;
+    double eps = 1e-9 * T;
+    if (s->h_lag < oldest) {
+        if (in && s->h_t[(int)(oldest % BC_SIM_HIST)] - T > s->m.t0 - eps) s->m.ma_lost += 1;
+        s->h_lag = oldest;
+    }
+    if (s->h_n < 2) return;
+    int64_t prev = s->h_n - 2;
+    double t_prev = s->h_t[(int)(prev % BC_SIM_HIST)];
+    /* older nodes j whose t_j + T lies in (t_prev, t]: A(t_j + T) from the step just ended, A(t_j) exact */
+    while (s->h_lag + 1 < s->h_n - 1) {
+        int j = (int)((s->h_lag + 1) % BC_SIM_HIST);
+        double ts = s->h_t[j] + T;
+        if (ts > t) break;
+        if (in && ts > t_prev && s->h_t[j] >= s->m.t0 - eps) {
+            ma_fold(s, (hist_interp(s, prev, ts) - s->h_a[j]) / T);
+        }
+        s->h_lag += 1;
+    }
+    /* the new node: A(t - T) from the history segment holding t - T */
+    double tq = t - T;
+    if (in && tq >= s->m.t0 - eps && s->h_t[(int)(s->h_lag % BC_SIM_HIST)] <= tq + eps) {
+        ma_fold(s, (A - hist_interp(s, s->h_lag, tq)) / T);
+    }
+}
+
 /* ---- metrics ------------------------------------------------------------------------------------------- */
 
 static double w_kin(const bc_plant_params *p, const bc_plant_state *ps)
@@ -129,10 +205,14 @@ static void metric_start(const bc_sim_config *cfg, bc_sim_state *s)
     s->m.tau_max = po.tau_e;
     s->m.tau_ma_min = HUGE_VAL;
     s->m.tau_ma_max = -HUGE_VAL;
+    s->m.tau_ma_grid_min = HUGE_VAL;
+    s->m.tau_ma_grid_max = -HUGE_VAL;
     s->m.tau_s_min = HUGE_VAL;
     s->m.tau_s_max = -HUGE_VAL;
     for (int x = 0; x < 3; ++x) s->m.i_peak[x] = fabs(ps->i[x]);
     s->m.n_ma = 0;
+    s->m.n_ma_grid = 0;
+    s->m.ma_lost = 0;
     s->ma_have = 0;
     s->m.state = 1;
 }
@@ -177,6 +257,8 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
     int has_window = cfg->metric_t1 > cfg->metric_t0;
     int overflow = 0;
     *rows_written = 0;
+    s->plant.on_step = sim_on_step; /* set on every call: the state may have been copied */
+    s->plant.on_step_ctx = s;
 
     for (int64_t j = 0; j < n; ++j) {
         int64_t k = s->k;
@@ -251,14 +333,14 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         }
         ps->t = t_next;
 
-        /* moving average over one PWM period of the half-period means, halves fully inside the window */
+        /* sample-grid moving average over one PWM period of the half-period means, halves fully inside the window */
         if (s->half_in && s->m.state == 1) {
             double mean = (ps->acc[BC_ACC_TAU] - s->half_tau0) / th;
             if (s->ma_have) {
                 double ma = 0.5 * (mean + s->ma_prev);
-                if (ma < s->m.tau_ma_min) s->m.tau_ma_min = ma;
-                if (ma > s->m.tau_ma_max) s->m.tau_ma_max = ma;
-                s->m.n_ma += 1;
+                if (ma < s->m.tau_ma_grid_min) s->m.tau_ma_grid_min = ma;
+                if (ma > s->m.tau_ma_grid_max) s->m.tau_ma_grid_max = ma;
+                s->m.n_ma_grid += 1;
             }
             s->ma_prev = mean;
             s->ma_have = 1;

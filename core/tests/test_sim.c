@@ -65,6 +65,11 @@ static void test_imposed_speed_metrics(void)
     CHECK(tau_mean > 0.0, "motoring, %.3f N m", tau_mean);
     CHECK(s.m.tau_min <= s.m.tau_ma_min && s.m.tau_ma_max <= s.m.tau_max, "moving average within extremes");
     CHECK(s.m.n_ma > 100, "moving-average values %d", s.m.n_ma);
+    CHECK(s.m.n_ma > s.m.n_ma_grid && s.m.n_ma_grid > 100, "continuous average evaluated more often than the grid's");
+    CHECK(s.m.tau_ma_min <= s.m.tau_ma_grid_min + 1e-12 && s.m.tau_ma_grid_max <= s.m.tau_ma_max + 1e-12,
+          "continuous moving average bounds the sample-grid one");
+    CHECK(s.m.ma_lost == 0, "history ring large enough: %d lost", s.m.ma_lost);
+    CHECK(s.m.tau_min <= s.m.tau_s_min && s.m.tau_s_max <= s.m.tau_max, "samples within the exact extremes");
     /* rows: window means integrate to the same total */
     double sum = 0.0;
     for (int64_t j = 0; j < nw; ++j) {

@@ -1,11 +1,18 @@
-"""Experiments on a drive: steady-state operating points at imposed speed, speed sweeps, paper figures.
+"""Experiments on a drive: steady-state operating points at imposed speed, speed sweeps, the simulated base speed.
 
 An operating point is measured as on a dynamometer test bench: the speed is imposed, the controller runs from
 rest until the transients have died out, then the torque is averaged over whole electrical periods. Ripple is
-reported three ways: max - min of the instantaneous torque; of its moving average over one PWM period; and of its
-values at the controller samples (carrier valleys and peaks, where the currents cross their PWM-period averages):
-the last removes the PWM component without flattening commutation spikes a few PWM periods wide, and is the one to
-compare with closed forms that assume ideal current regulation.
+reported three ways (:class:`~bldclab.results.Metrics`): max - min of the exact instantaneous torque; of its
+moving average over one PWM period, evaluated continuously; and of its values at the controller samples (carrier
+valleys and peaks, where the currents cross their PWM-period averages). The last removes the PWM component without
+flattening commutation spikes a few PWM periods wide and is the one to compare with closed forms that assume ideal
+current regulation, as long as the commutation lasts several PWM periods; when it lasts one or two, the spike can
+fall between samples and the moving average is the safer measure.
+
+The PWM grid is fixed in time and the rotor starts at angle ``theta0``: where the carrier falls relative to the
+rotor is an arbitrary choice of the run, and with few PWM periods per commutation it moves the results.
+:func:`steady_state` with ``pwm_phases = N`` runs N evenly spaced offsets of the initial angle within one PWM
+period's rotor travel and reports their mean and range.
 """
 
 from __future__ import annotations
@@ -13,13 +20,17 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .control import Control
+import numpy as np
+
+from . import analytic, plausibility
+from .control import Control, Sine, SixStep
+from .control.sine import fundamental_k1
 from .errors import BldclabError
 from .motor import Drive
 from .results import Metrics, SimResult
 from .sim import Profile, Scenario, simulate
 
-__all__ = ["PointResult", "steady_state"]
+__all__ = ["PointResult", "base_speed", "base_speed_margin", "steady_state"]
 
 
 @dataclass(frozen=True)
@@ -40,7 +51,12 @@ class PointResult:
     efficiency : float
         Shaft power over DC power (-).
     metrics : Metrics
-        Everything measured over the window (energies, currents, ...).
+        Everything measured over the window (energies, currents, ...), of the first PWM-grid phase (offset 0).
+    pwm_phases : int
+        PWM-grid phases run (1: one run; the scalar fields above are then means over the phases).
+    tau_mean_range, ripple_range, ripple_ma_range, ripple_sampled_range : tuple of float
+        ``(min, max)`` over the PWM-grid phases of the mean torque and of the three ripples (N m); both equal to the
+        value when ``pwm_phases == 1``.
     """
 
     speed: float
@@ -55,6 +71,16 @@ class PointResult:
     ripple_sampled_pu: float
     efficiency: float
     metrics: Metrics
+    pwm_phases: int = 1
+    tau_mean_range: tuple[float, float] = (math.nan, math.nan)
+    ripple_range: tuple[float, float] = (math.nan, math.nan)
+    ripple_ma_range: tuple[float, float] = (math.nan, math.nan)
+    ripple_sampled_range: tuple[float, float] = (math.nan, math.nan)
+
+    def spread_pu(self, name: str, T_N: float) -> float:
+        """Return ``max - min`` over the PWM-grid phases of ``tau_mean`` or a ripple (``name``), in p.u. of ``T_N``."""
+        lo, hi = getattr(self, f"{name}_range")
+        return (hi - lo) / T_N
 
 
 def electrical_period(drive: Drive, speed: float) -> float:
@@ -65,7 +91,7 @@ def electrical_period(drive: Drive, speed: float) -> float:
 
 
 def steady_state(drive: Drive, control: Control, speed: float, ref: Profile, *, settle_periods: int = 3,
-                 measure_periods: int = 2, settle_time: float = 0.01, trace: bool = False,
+                 measure_periods: int = 2, settle_time: float = 0.01, trace: bool = False, pwm_phases: int = 1,
                  **scenario: object) -> tuple[PointResult, SimResult]:
     """Run the drive at an imposed speed until steady state and measure whole electrical periods.
 
@@ -85,8 +111,13 @@ def steady_state(drive: Drive, control: Control, speed: float, ref: Profile, *, 
         Minimum settling time (s).
     trace : bool
         Keep the trace (for waveforms).
+    pwm_phases : int
+        PWM-grid phases (>= 1): run with the rotor's initial angle ``theta0 + j p |speed| T / N``, ``j = 0 .. N-1``
+        (``T = 1/f_pwm``, ``N = pwm_phases``): N evenly spaced positions of the PWM carrier relative to the rotor
+        within one PWM period. The point's scalars are the means over the phases, the ``*_range`` fields their
+        extremes; the returned simulation is the first phase's.
     **scenario
-        Further :class:`~bldclab.sim.Scenario` fields (``delay``, ``trace_sub``, ``omega_ref``, ...).
+        Further :class:`~bldclab.sim.Scenario` fields (``delay``, ``trace_sub``, ``omega_ref``, ``theta0``, ...).
 
     Returns
     -------
@@ -95,16 +126,167 @@ def steady_state(drive: Drive, control: Control, speed: float, ref: Profile, *, 
     SimResult
         The simulation (its trace if ``trace``).
     """
+    if not isinstance(pwm_phases, int) or isinstance(pwm_phases, bool) or pwm_phases < 1:
+        raise BldclabError("pwm_phases", f"must be an integer >= 1, got {pwm_phases!r}")
     Te = electrical_period(drive, speed)
     t_settle = max(settle_periods * Te, math.ceil(settle_time / Te) * Te)
     t_end = t_settle + measure_periods * Te
-    sc = Scenario(duration=t_end, speed=speed, ref=ref, trace=trace, window=(t_settle, t_end), **scenario)  # type: ignore[arg-type]
-    res = simulate(drive, control, sc)
-    m = res.metrics
-    assert m is not None
+    theta0 = float(scenario.pop("theta0", 0.0))  # type: ignore[arg-type]
+    travel = drive.motor.p * abs(speed) / drive.inverter.f_pwm  # electrical angle over one PWM period, rad
+    runs: list[tuple[Metrics, SimResult]] = []
+    for j in range(pwm_phases):
+        sc = Scenario(duration=t_end, speed=speed, ref=ref, trace=trace and j == 0, window=(t_settle, t_end),
+                      theta0=theta0 + travel * j / pwm_phases, **scenario)  # type: ignore[arg-type]
+        res = simulate(drive, control, sc)
+        assert res.metrics is not None
+        runs.append((res.metrics, res))
+    ms = [m for m, _ in runs]
     T_N = drive.T_N
-    point = PointResult(speed=speed, speed_pu=speed / drive.Omega_0, tau_mean=m.tau_mean, ripple=m.ripple,
-                        ripple_ma=m.ripple_ma, ripple_sampled=m.ripple_sampled, tau_mean_pu=m.tau_mean / T_N,
-                        ripple_pu=m.ripple / T_N, ripple_ma_pu=m.ripple_ma / T_N,
-                        ripple_sampled_pu=m.ripple_sampled / T_N, efficiency=m.efficiency, metrics=m)
-    return point, res
+
+    def mean(name: str) -> float:
+        return float(np.mean([getattr(m, name) for m in ms]))
+
+    def span(name: str) -> tuple[float, float]:
+        v = [getattr(m, name) for m in ms]
+        return (float(min(v)), float(max(v)))
+
+    tau, rip, rma, rs = mean("tau_mean"), mean("ripple"), mean("ripple_ma"), mean("ripple_sampled")
+    point = PointResult(speed=speed, speed_pu=speed / drive.Omega_0, tau_mean=tau, ripple=rip, ripple_ma=rma,
+                        ripple_sampled=rs, tau_mean_pu=tau / T_N, ripple_pu=rip / T_N, ripple_ma_pu=rma / T_N,
+                        ripple_sampled_pu=rs / T_N, efficiency=mean("efficiency"), metrics=ms[0],
+                        pwm_phases=pwm_phases, tau_mean_range=span("tau_mean"), ripple_range=span("ripple"),
+                        ripple_ma_range=span("ripple_ma"), ripple_sampled_range=span("ripple_sampled"))
+    return point, runs[0][1]
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# the simulated base speed (paper 1's definitions, with the drive's R)
+
+#: Incoming phase (0 = a) and the sign of its current when forward rotation enters sector s (docs/conventions.md).
+_INCOMING = ((0, 1), (2, -1), (1, 1), (0, -1), (2, 1), (1, -1))
+#: Highest speed :func:`base_speed` searches (p.u. of Omega_0): returned when the condition holds up to it. A
+#: rounded back-EMF reaches its line-to-line peak at isolated angles only, so a drive can hold its current slightly
+#: above ``Omega_0``.
+W_MAX = 1.1
+_FLAG_SATURATED = 0x10  # BC_FLAG_SATURATED: the sinusoidal controller's voltage demand left the linear SVM range
+
+
+def _square_margin(drive: Drive, w_pu: float, control: Control) -> float:
+    """Worst (largest incoming current within its sector) - 0.999 I_N over one electrical period, p.u. of I_N."""
+    I_N = drive.motor.I_N
+    om = w_pu * drive.Omega_0
+    pt, res = steady_state(drive, control, om, I_N, settle_periods=3, measure_periods=1, trace=True, trace_sub=4)
+    t, m = res.t, pt.metrics
+    th = np.unwrap(res.theta_e)
+    cur = np.stack([res.i_a, res.i_b, res.i_c])
+    we = drive.motor.p * om
+    worst = math.inf
+    n = math.ceil((th[t >= m.t0][0] - math.pi / 6) / (math.pi / 3))
+    while True:
+        tc = float(np.interp(math.pi / 6 + n * math.pi / 3, th, t))  # the sector's commutation (its Hall corner)
+        te = tc + (math.pi / 3) / we  # the next commutation
+        if te > m.t1:
+            return worst / I_N + 1e-3  # 0.1 %: the regulation's own steady error near I_N
+        x, sg = _INCOMING[n % 6]
+        sel = (t >= tc) & (t <= te)
+        peak = max(float(np.max(sg * cur[x][sel])), sg * float(np.interp(te, t, cur[x])))
+        worst = min(worst, peak - I_N)
+        n += 1
+
+
+def _sine_margin(drive: Drive, w_pu: float, control: Control) -> float:
+    """Return minus the fraction of samples with the voltage demand beyond linear SVM, currents of peak I_s,N."""
+    ref = 1.5 * fundamental_k1(drive) * analytic.i_sN(drive)  # (45): the torque of i_q = I_s,N
+    pt, res = steady_state(drive, control, w_pu * drive.Omega_0, ref, trace=True)
+    sel = res.t >= pt.metrics.t0
+    return -float(np.mean((res["flags"][sel].astype(int) & _FLAG_SATURATED) > 0))
+
+
+def base_speed_margin(drive: Drive, supply: str, w_pu: float, control: Control | None = None) -> float:
+    """Return how far a supply is from its base-speed condition at one speed (>= 0: at or below the base speed).
+
+    Parameters
+    ----------
+    drive : Drive
+    supply : {"square", "sine"}
+        ``"square"``: :class:`~bldclab.control.SixStep` regulating ``I_N``; the margin is the smallest, over the six
+        commutations of an electrical period, of the largest incoming-phase current within its sector (before the
+        next commutation) minus ``0.999 I_N``, in p.u. of ``I_N``, read from a trace of 4 rows per sample (paper 1's
+        definition: the injected current reaches ``I_N`` by half of its 120-degree conduction interval).
+        ``"sine"``: :class:`~bldclab.control.Sine` asked for the current ``I_s,N`` (the torque ``1.5 k_1 I_s,N``
+        of (45)) with its speed limit off; the margin is minus the fraction of the measured samples at which its
+        voltage demand left the linear SVM range (0: the currents are held with linear modulation).
+    w_pu : float
+        Speed, p.u. of ``Omega_0``.
+    control : Control, optional
+        The controller (default: ``SixStep()`` or ``Sine(speed_limit=False, handoff_speed=0.02 Omega_0)``).
+
+    Returns
+    -------
+    float
+        The margin (-).
+    """
+    if supply == "square":
+        return _square_margin(drive, w_pu, control or SixStep())
+    if supply == "sine":
+        return _sine_margin(drive, w_pu, control or Sine(speed_limit=False, handoff_speed=0.02 * drive.Omega_0))
+    raise BldclabError("supply", f"must be 'square' or 'sine', got {supply!r}")
+
+
+def base_speed(drive: Drive, supply: str, control: Control | None = None, *, lo: float | None = None,
+               hi: float | None = None, tol: float = 1e-3) -> float:
+    """Return the simulated base speed of a supply: paper 1's definitions, the drive's R (p.u. of Omega_0).
+
+    Square wave: the highest speed at which the incoming phase current still reaches ``I_N`` within its sector,
+    i.e. before the next commutation (paper 1, IV.A; the closed form is (30) with R = 0). Sinusoidal: the highest
+    speed at which the controller still holds the current ``I_s,N`` with its voltage demand inside the linear SVM
+    range (the linear-modulation limit) (paper 1, IV.B; (21) with R = 0). Both by bisection on
+    :func:`base_speed_margin`: the whole switching-level drive (PWM, commutation, controller delay), where
+    :func:`bldclab.analytic.omega_sB_numeric_pu` and :func:`~bldclab.analytic.omega_qB_numeric_pu` solve the
+    circuit with ideal regulation.
+
+    Parameters
+    ----------
+    drive : Drive
+    supply : {"square", "sine"}
+    control : Control, optional
+        As in :func:`base_speed_margin`.
+    lo, hi : float, optional
+        A bracket (p.u.) with the condition met at ``lo`` and not at ``hi``; default the R-aware numeric base speed
+        -0.03 / +0.02, widened by 0.05 steps until it brackets (up to :data:`W_MAX`).
+    tol : float
+        Width of the final bracket (p.u.); the midpoint is returned.
+
+    Returns
+    -------
+    float
+        Base speed (p.u. of ``Omega_0``); :data:`W_MAX` if the condition holds up to it.
+    """
+    if supply not in ("square", "sine"):
+        raise BldclabError("supply", f"must be 'square' or 'sine', got {supply!r}")
+    if not tol > 0:
+        raise BldclabError("tol", f"must be positive, got {tol}")
+
+    def ok(w: float) -> bool:
+        # the bracket may reach beyond the no-load speed on purpose: the speed warnings it raises there are
+        # part of the search, not a questionable result, and are not shown
+        with plausibility.collect():
+            return base_speed_margin(drive, supply, w, control) >= 0.0
+
+    guess = analytic.omega_qB_numeric_pu(drive) if supply == "square" else analytic.omega_sB_numeric_pu(drive)
+    a = guess - 0.03 if lo is None else lo
+    b = min(guess + 0.02, W_MAX) if hi is None else hi
+    if not 0 < a < b:
+        raise BldclabError("lo", f"needs 0 < lo < hi, got {a}, {b}")
+    while not ok(a):
+        if a <= 0.05:
+            raise BldclabError("supply", f"{supply}: no base speed above 0.05 p.u. (the condition fails there)")
+        a, b = max(a - 0.05, 0.05), a
+    while ok(b):
+        if b >= W_MAX:
+            return W_MAX  # the condition still holds there
+        a, b = b, min(b + 0.05, W_MAX)
+    while b - a > tol:
+        mid = 0.5 * (a + b)
+        a, b = (mid, b) if ok(mid) else (a, mid)
+    return 0.5 * (a + b)

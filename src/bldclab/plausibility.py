@@ -173,7 +173,7 @@ def check_speed(drive: Drive, omega_max: float, v_dc_max: float | None = None) -
     if not level:
         return []
     return [Finding(level, "scenario.speed",
-                    f"{omega_max:.4g} rad/s ({omega_max * 30 / math.pi:.4g} rpm) is {pu:.3g} times the no-load speed "
+                    f"{omega_max:.4g} rad/s ({omega_max * 30 / math.pi:.4g} rpm) is {pu:.4g} times the no-load speed "
                     f"Omega_0 = V_dc / (2 k_phi) = {omega_0:.4g} rad/s at V_dc = {v:.4g} V: the back-EMF exceeds the "
                     f"bus (error above {SPEED_ERROR_PU:g} Omega_0)")]
 

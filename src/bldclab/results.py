@@ -29,21 +29,41 @@ class Metrics:
     tau_mean : float
         Mean electromagnetic torque (N m).
     tau_min, tau_max : float
-        Extremes of the instantaneous torque (N m).
+        Extremes of the instantaneous torque (N m) over every integration step and event of the window: the step
+        ends and, inside each step, the turning points of the cubic Hermite interpolant of the torque through its
+        end values and exact time derivatives (the interpolant's error is of the order of the RK4 step's, h^4;
+        the step is at most half a PWM period and lands on every gate edge and diode event). Includes the PWM
+        ripple.
     ripple : float
-        ``tau_max - tau_min`` (N m).
+        ``tau_max - tau_min`` (N m): the peak-to-peak instantaneous torque, PWM ripple included.
     tau_ma_min, tau_ma_max : float
-        Extremes of the torque averaged over one PWM period (N m); nan if the window is under two samples.
+        Extremes of the torque's moving average over one PWM period ``T = 1/f_pwm`` (N m), evaluated continuously:
+        ``MA(t) = (A(t) - A(t - T)) / T`` with ``A`` the torque's integral, for every ``t`` in ``[t0 + T, t1]``
+        that is an integration step end or a step end shifted by ``T`` (between those nodes ``MA`` is smooth; a
+        cubic Hermite of ``A`` gives its values off the nodes). nan if the window is shorter than one PWM period.
     ripple_ma : float
-        ``tau_ma_max - tau_ma_min`` (N m). A moving average removes the PWM component but also flattens features
-        shorter than a few PWM periods, such as commutation spikes.
+        ``tau_ma_max - tau_ma_min`` (N m): the torque ripple with the PWM component averaged out exactly (a
+        one-period average of a periodic PWM ripple is its mean), wherever it falls relative to the samples. It
+        also flattens features shorter than a PWM period: a commutation spike of width ``w < T`` is reduced to
+        about ``w/T`` of its height.
+    tau_ma_grid_min, tau_ma_grid_max : float
+        The same moving average evaluated only at the controller samples (the mean of two consecutive half
+        periods), N m; always inside ``[tau_ma_min, tau_ma_max]``. nan if the window is under two samples.
+    ripple_ma_grid : float
+        ``tau_ma_grid_max - tau_ma_grid_min`` (N m).
+    ma_lost : int
+        Continuous moving-average evaluations skipped because one PWM period held more integration steps than the
+        runner's history (``BC_SIM_HIST`` = 1024 step ends; ``h_max`` below about 1/500 of a PWM period); 0 in
+        every run bldclab makes by default. When positive the moving-average extremes cover only part of the window
+        (nan if no evaluation was left).
     tau_s_min, tau_s_max : float
         Extremes of the torque at the controller samples (carrier valleys and peaks), N m. There the phase currents
         cross their PWM-period averages, so these samples carry no PWM ripple while keeping the sampling
-        resolution.
+        resolution ``1/(2 f_pwm)``: a feature narrower than a half period (a commutation spike lasting one or two
+        PWM periods) can fall between samples and be missed.
     ripple_sampled : float
         ``tau_s_max - tau_s_min`` (N m): the torque ripple without its PWM component (the measure to compare with
-        closed forms that assume ideal current regulation).
+        closed forms that assume ideal current regulation, as long as the commutation lasts several PWM periods).
     tau_std : float
         Root-mean-square deviation of the torque from its mean (N m).
     omega_mean : float
@@ -73,6 +93,10 @@ class Metrics:
     tau_ma_min: float
     tau_ma_max: float
     ripple_ma: float
+    tau_ma_grid_min: float
+    tau_ma_grid_max: float
+    ripple_ma_grid: float
+    ma_lost: int
     tau_s_min: float
     tau_s_max: float
     ripple_sampled: float
@@ -114,11 +138,15 @@ class Metrics:
         ma_min, ma_max = float(m["tau_ma_min"]), float(m["tau_ma_max"])
         if int(m["n_ma"]) == 0:
             ma_min = ma_max = math.nan
+        mg_min, mg_max = float(m["tau_ma_grid_min"]), float(m["tau_ma_grid_max"])
+        if int(m["n_ma_grid"]) == 0:
+            mg_min = mg_max = math.nan
         shaft = p["emf"] + p["cog"] - p["fric"]
         return cls(
             t0=float(m["t0"]), t1=float(m["t1"]), tau_mean=tau_mean, tau_min=float(m["tau_min"]),
             tau_max=float(m["tau_max"]), ripple=float(m["tau_max"] - m["tau_min"]), tau_ma_min=ma_min,
-            tau_ma_max=ma_max, ripple_ma=ma_max - ma_min, tau_s_min=float(m["tau_s_min"]),
+            tau_ma_max=ma_max, ripple_ma=ma_max - ma_min, tau_ma_grid_min=mg_min, tau_ma_grid_max=mg_max,
+            ripple_ma_grid=mg_max - mg_min, ma_lost=int(m["ma_lost"]), tau_s_min=float(m["tau_s_min"]),
             tau_s_max=float(m["tau_s_max"]), ripple_sampled=float(m["tau_s_max"] - m["tau_s_min"]),
             tau_std=math.sqrt(max(E["tau2"] / dt - tau_mean**2, 0.0)), omega_mean=omega_integral / dt,
             p_src=p["src"], p_Rsrc=p["Rsrc"], p_cu=p["cu"], p_sw=p["sw"], p_diode=p["diode"], p_emf=p["emf"],

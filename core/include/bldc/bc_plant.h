@@ -153,6 +153,10 @@ typedef struct {
     double lo, hi; /* bounds of the constant-state interval of a Hall sensor, in the plant's angle frame */
 } bc_hall_seg;
 
+/* Observer of every accepted integration step, called at its end with the time (s), acc[] and tau_e (N m) there.
+ * The runner (bc_sim) uses it for the continuous PWM-period moving average of the torque. */
+typedef void (*bc_plant_step_fn)(void *ctx, double t, const double *acc, double tau);
+
 typedef struct {
     double t;               /* time, s */
     double i[3];            /* phase currents, A */
@@ -204,8 +208,12 @@ typedef struct {
     int32_t hq_code[BC_HALL_QUEUE];
     /* integrals and trackers */
     double acc[BC_ACC_N];
-    double tau_min, tau_max; /* extreme tau_e since the last bc_plant_reset_extremes */
+    double tau_min, tau_max; /* extreme tau_e since the last bc_plant_reset_extremes: at every step end and, inside
+                                a step, at the turning points of the cubic Hermite interpolant of tau_e through
+                                its end values and exact time derivatives (error O(h^4), as the RK4 step) */
     double i_peak[3];        /* largest |i_x| since then */
+    bc_plant_step_fn on_step; /* NULL or called after every accepted step (not copied meaningfully: a runner sets it) */
+    void *on_step_ctx;
     /* integrator cache */
     int32_t k1_valid;
     double k1[5 + BC_ACC_N];

@@ -73,21 +73,41 @@ typedef struct {
 #undef BC_TRACE_MEMBER
 } bc_trace_row;
 
-/* Metrics over [t0, t1]. */
+/* Metrics over [t0, t1]. Three views of the torque's extremes (docs/plant.md, "Metrics"):
+ *
+ *   tau_min, tau_max        the instantaneous torque over every integration step and event: step ends, and the
+ *                           turning points inside a step of the cubic Hermite interpolant of tau_e (bc_plant.h)
+ *   tau_ma_min, tau_ma_max  the one-PWM-period moving average MA(t) = (A(t) - A(t - T)) / T, T = 1/f_pwm,
+ *                           A = integral of tau_e (acc[BC_ACC_TAU]), for t in [t0 + T, t1], evaluated continuously:
+ *                           at every step end t and at every history node shifted by T (A(t - T) and A(t + T)
+ *                           from the cubic Hermite of A through its node values and derivatives tau_e)
+ *   tau_s_min, tau_s_max    the torque at the controller samples (carrier valleys and peaks)
+ *
+ * and the former sample-grid moving average (the mean of two consecutive half periods, at the samples only) as
+ * tau_ma_grid_min/max. The history of step ends is a ring of BC_SIM_HIST nodes; when one PWM period holds more steps
+ * than that, the evaluations whose past fell out of it are skipped and counted in ma_lost. */
 typedef struct {
     double t0, t1;           /* window, s */
     double E[BC_ACC_N];      /* integrals of bc_plant.h's acc[] over the window */
     double w_l0, w_l1;       /* magnetic energy at t0, t1, J */
     double w_kin0, w_kin1;   /* J omega^2 / 2 at t0, t1, J (dynamic mechanics) */
     double tau_min, tau_max; /* extremes of the instantaneous torque, N m */
-    double tau_ma_min;       /* extremes of the one-PWM-period moving average of the torque, N m */
+    double tau_ma_min;       /* extremes of the continuous one-PWM-period moving average of the torque, N m */
     double tau_ma_max;
+    double tau_ma_grid_min;     /* extremes of the moving average on the sample grid (two half-period means), N m */
+    double tau_ma_grid_max;
     double tau_s_min;        /* extremes of the torque at the samples (carrier valleys and peaks), N m: there the */
     double tau_s_max;        /* currents cross their PWM-period average, so this is the ripple without PWM */
     double i_peak[3];        /* largest |i_x|, A */
-    int32_t n_ma;            /* moving-average values seen */
+    int32_t n_ma;            /* continuous moving-average values seen */
+    int32_t n_ma_grid;       /* sample-grid moving-average values seen */
+    int32_t ma_lost;         /* continuous moving-average evaluations skipped (history ring too short) */
     int32_t state;           /* 0 not started, 1 running, 2 done */
 } bc_sim_metrics;
+
+/* Step ends kept for the continuous moving average: more than the steps of one PWM period in any run bldclab
+ * makes (gate and dead-time edges, events, h_max steps, trace sub-rows: typically 10 - 100). */
+#define BC_SIM_HIST 1024
 
 typedef struct {
     const bc_plant_params *plant;
@@ -119,8 +139,14 @@ typedef struct {
     bc_ctrl_in last_in;        /* last measurements */
     bc_sim_metrics m;
     double m_acc0[BC_ACC_N];   /* acc[] at the metric window start */
-    double ma_prev;            /* previous half-period mean torque in the window */
+    double ma_prev;            /* previous half-period mean torque in the window (sample-grid average) */
     int32_t ma_have;
+    double t_pwm;              /* PWM period, s */
+    int64_t h_n;               /* step ends pushed into the history ring so far */
+    int64_t h_lag;             /* history node at or before t - t_pwm (absolute index) */
+    double h_t[BC_SIM_HIST];   /* history ring: time, s */
+    double h_a[BC_SIM_HIST];   /* acc[BC_ACC_TAU], N m s */
+    double h_tau[BC_SIM_HIST]; /* tau_e, N m */
     double half_tau0;          /* acc[TAU] at the start of the current half period */
     int32_t half_in;           /* current half period started inside the window */
     int32_t row_open;          /* a trace row is being accumulated */
