@@ -76,13 +76,14 @@ void bc_hall_step(const bc_hall_params *p, bc_hall_state *s, const bc_ctrl_in *i
     out->dir = s->dir;
     float since = (float)(uint32_t)(in->tick_now - s->tick_edge) / p->f_tick; /* s, wrap-safe */
     float omega = 0.0f;
-    int speed_valid = 0;
+    int speed_valid = 0, overdue = 0;
     if (s->n_run >= 2) {
         float interval = (float)(uint32_t)(s->tick_edge - s->tick_prev) / p->f_tick;
         if (interval > 0.0f) {
             omega = (BC_PI_F / 3.0f) / interval;
-            if (since > interval) {
+            if (since >= interval) {
                 omega = (BC_PI_F / 3.0f) / since; /* no edge yet: at most this fast */
+                overdue = 1;
             }
             speed_valid = omega >= p->omega_min;
         }
@@ -95,8 +96,9 @@ void bc_hall_step(const bc_hall_params *p, bc_hall_state *s, const bc_ctrl_in *i
     }
     float dir = (float)s->dir;
     float edge_angle = dir > 0.0f ? bc_sector_angle(sector) : bc_sector_angle(sector) + BC_PI_F / 3.0f;
-    float travel = omega * since;
-    if (travel > BC_PI_F / 3.0f) travel = BC_PI_F / 3.0f; /* never beyond the next edge */
+    /* never beyond the next edge; once the edge is overdue exactly at it (omega since would round either side) */
+    float travel = overdue ? BC_PI_F / 3.0f : omega * since;
+    if (travel > BC_PI_F / 3.0f) travel = BC_PI_F / 3.0f;
     out->speed_valid = 1;
     out->omega_e = dir * omega;
     out->theta = wrap_2pi(edge_angle + dir * travel + p->theta_offset);

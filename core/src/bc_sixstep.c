@@ -38,6 +38,7 @@ int bc_sixstep_init(const bc_sixstep_params *p, bc_sixstep_state *s)
         s->applied[x].duty = 0.0f;
     }
     s->sector = -1;
+    s->seen = -1;
     s->incoming = -1;
     s->hyst_on = 0;
     s->oc_latched = 0;
@@ -200,6 +201,7 @@ static void safe(bc_sixstep_state *s, bc_ctrl_out *out, uint32_t flags)
     bc_pi_reset(&s->pi_p, &s->pi, 0.0f);
     s->hyst_on = 0;
     s->sector = -1;
+    s->seen = -1;
     s->incoming = -1;
 }
 
@@ -337,22 +339,27 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
         return;
     }
 
-    /* commutation: the sector seen, or the next one when its Hall edge is due within the first half of the
-     * interval this output applies to (advance) */
+    /* commutation: the sector seen, or the next one when its Hall edge is due by the middle of the interval this
+     * output applies to (advance). A sector once commanded ahead of the sector seen is held until the Hall code
+     * moves: only a Hall edge ends it (forward: the sector seen catches up; backward: the rotor reversed). */
     float ts = p->ts;
     float lead = ((float)p->delay + 0.5f) * ts;
     float w_abs = fabsf(h.omega_e);
     float travel = -1.0f; /* angle travelled since the edge at the middle of that interval; < 0 unknown */
     int sector = h.sector;
+    int held = !h.edge && h.sector == s->seen && s->sector >= 0 && s->sector != h.sector;
     if (h.speed_valid) {
         float since = (float)(uint32_t)(in->tick_now - in->tick_edge) / p->f_tick;
-        float now = w_abs * since;
         travel = w_abs * (since + lead);
-        if (p->advance && h.dir != 0 && now < PI3_F && travel >= PI3_F) {
-            sector = (sector + (h.dir > 0 ? 1 : 5)) % 6;
-            travel -= PI3_F;
-        }
     }
+    if (held) {
+        sector = s->sector;
+        travel = travel >= PI3_F ? travel - PI3_F : -1.0f;
+    } else if (p->advance && h.speed_valid && h.dir != 0 && travel >= PI3_F) {
+        sector = (sector + (h.dir > 0 ? 1 : 5)) % 6;
+        travel -= PI3_F;
+    }
+    s->seen = h.sector;
     if (sector != s->sector) {
         int inc = -1;
         if (s->sector >= 0) {

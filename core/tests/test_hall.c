@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "bc_test.h"
+#include "bldc/bc_commutation.h"
 #include "bldc/bc_hall.h"
 #include "bldc/bc_plant.h"
 #include "bldc/bc_sensors.h"
@@ -59,6 +60,55 @@ static void spin(double omega, double t0, long n, double *err_th, double *err_om
     }
 }
 
+/* The interpolated angle never steps back while the rotor turns one way: from an edge until long after the next
+ * edge is overdue (the speed estimate then decays as (pi/3)/(time since the edge)), sampled at every capture tick
+ * in both directions, it rises (falls, backward) to the next edge angle and stays exactly there; the speed
+ * estimate never rises. */
+static void test_monotone_angle(void)
+{
+    const uint32_t D = 100003u; /* edge interval, ticks: 10 ms at 10 MHz */
+    bc_hall_params hp = {10e6f, 5.0f, 0.0f};
+    for (int dir = -1; dir <= 1; dir += 2) {
+        bc_hall_state hs;
+        CHECK(bc_hall_init(&hp, &hs) == BC_OK, "init");
+        bc_ctrl_in in;
+        memset(&in, 0, sizeof in);
+        bc_hall_out ho;
+        int s0 = 2; /* sectors s0, s0 + dir, s0 + 2 dir: edges at D, 2 D */
+        in.hall = bc_sector_code(s0);
+        bc_hall_step(&hp, &hs, &in, &ho);
+        for (uint32_t k = 1u; k <= 2u; ++k) {
+            in.hall = bc_sector_code((s0 + dir * (int)k + 6) % 6);
+            in.n_edges = k;
+            in.tick_edge = in.tick_now = k * D;
+            bc_hall_step(&hp, &hs, &in, &ho);
+        }
+        CHECK(ho.speed_valid == 1 && ho.dir == dir, "speed from two edges");
+        int s2 = (s0 + 2 * dir + 6) % 6;
+        double next = dir > 0 ? (double)bc_sector_angle((s2 + 1) % 6) : (double)bc_sector_angle(s2);
+        double prev_th = ho.theta, prev_w = fabs((double)ho.omega_e);
+        long n_back = 0, n_rise = 0, n_off = 0, n_overdue = 0;
+        for (uint32_t t = 2u * D + 1u; t < 2u * D + 3u * D; ++t) {
+            in.tick_now = t;
+            bc_hall_step(&hp, &hs, &in, &ho);
+            if (!ho.speed_valid) break;
+            double step = angle_diff((double)ho.theta, prev_th) * (double)dir;
+            n_back += step < 0.0;
+            n_rise += fabs((double)ho.omega_e) > prev_w;
+            if (t - 2u * D >= D) {
+                ++n_overdue;
+                n_off += fabs(angle_diff((double)ho.theta, next)) > 0.0;
+            }
+            prev_th = ho.theta;
+            prev_w = fabs((double)ho.omega_e);
+        }
+        CHECK(n_overdue > 100000, "dir %d: %ld overdue ticks checked", dir, n_overdue);
+        CHECK(n_back == 0, "dir %d: the angle stepped back at %ld ticks", dir, n_back);
+        CHECK(n_rise == 0, "dir %d: the speed estimate rose at %ld ticks", dir, n_rise);
+        CHECK(n_off == 0, "dir %d: overdue angle off the next edge at %ld ticks", dir, n_off);
+    }
+}
+
 int main(void)
 {
     double e_th, e_om;
@@ -109,5 +159,6 @@ int main(void)
     CHECK(ho.speed_valid == 0, "skipped edge: no speed");
     bc_hall_params bad = {0.0f, 5.0f, 0.0f};
     CHECK(bc_hall_init(&bad, &hs) == BC_ERR_PARAM, "f_tick = 0 rejected");
+    test_monotone_angle();
     return bc_test_summary("test_hall");
 }

@@ -3,6 +3,7 @@
  * random and extreme inputs, the average model and the predictive law against hand-solved R-L cases, and closed
  * loops with the htm-48v plant through bc_sim_run (PWM-on-PWM predictive, PI, hysteresis, braking, start-up). */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "bc_test.h"
@@ -421,6 +422,127 @@ static void test_predictive_two_phase(void)
 }
 
 /* ------------------------------------------------------------------------------------------------------------ */
+/* commutation advance: no back-steps */
+
+/* Hall input at capture tick `now` for edges at ticks e[0..n-1] (increasing) in direction dir, from sector s0
+ * before the first edge: sector, edge count, tick of the last edge. */
+static void hall_edges(uint32_t now, const uint32_t *e, int n, int s0, int dir, bc_ctrl_in *in)
+{
+    int k = 0;
+    while (k < n && e[k] <= now) ++k;
+    in->hall = bc_sector_code(((s0 + dir * k) % 6 + 6) % 6);
+    in->n_edges = (uint32_t)k;
+    in->tick_edge = k > 0 ? e[k - 1] : 0u;
+    in->tick_now = now;
+}
+
+/* Step of the commanded sector between two samples in the direction dir: 0 same, 1 ahead, -1 back, 2 other. */
+static int sector_step(int from, int to, int dir)
+{
+    int d = ((to - from) * dir % 6 + 6) % 6;
+    return d == 0 ? 0 : (d == 1 ? 1 : (d == 5 ? -1 : 2));
+}
+
+/* A Hall edge that comes a little later than the speed predicts (the rotor slows by a few capture ticks per
+ * sector, or tick rounding): the advance commands the next sector at the sample before the predicted edge; at the
+ * next sample the edge is overdue and bc_hall's speed estimate has decayed to (pi/3)/(time since the edge), so the
+ * angle "travelled" is pi/3 while the Hall code still shows the old sector. The commanded sector must stay the
+ * next one (it used to fall back to the sector seen for a sample: a back-step), in both directions of rotation,
+ * for a range of lateness (the decayed estimate times the time since the edge rounds either side of pi/3). Then
+ * the rotor stops before the edge: the advanced sector is held even after the speed estimate has timed out, until
+ * a Hall edge backward (the rotor reversed) proves it wrong. */
+static void test_no_back_step(void)
+{
+    const double tick_per_sample = TS * F_TICK; /* 357.14 */
+    const uint32_t D = 3571u;                   /* edge interval, about ten samples */
+    bc_sixstep_params p = params(BC_SIXSTEP_PRED, BC_SIXSTEP_PWMPWM);
+    int n_cases = 0, n_advanced = 0, n_overdue = 0, n_held = 0, n_end = 0, n_safe = 0, n_back = 0, n_other = 0;
+    char first[160] = "";
+    for (int dir = -1; dir <= 1; dir += 2) {
+        for (uint32_t early = 1u; early <= 40u; ++early) {
+            for (uint32_t late = 1u; late <= 40u; late += 13u) {
+                bc_sixstep_state s;
+                CHECK(bc_sixstep_init(&p, &s) == BC_OK, "init");
+                /* sample 40 comes `early` ticks after the edge predicted from the interval D; the real edge is
+                 * `late` ticks after that sample */
+                uint32_t t40 = (uint32_t)llround(40.0 * tick_per_sample);
+                uint32_t e3 = t40 - early - D;
+                uint32_t e[4] = {e3 - 2u * D, e3 - D, e3, t40 + late};
+                int prev = -1;
+                for (int k = 0; k < 46; ++k) { /* the next edge, after sample 40, would be overdue at about 50 */
+                    uint32_t now = (uint32_t)llround((double)k * tick_per_sample);
+                    bc_ctrl_in in = input(0u, 0.0f, 0.0f, 48.0f, 30.0f);
+                    hall_edges(now, e, 4, 5, dir, &in);
+                    bc_ctrl_out o;
+                    bc_sixstep_step(&p, &s, &in, &o);
+                    int cmd = (int)o.diag[0];
+                    n_safe += (o.flags & BC_FLAG_SAFE) != 0u;
+                    if (prev >= 0) {
+                        int st = sector_step(prev, cmd, dir);
+                        n_back += st < 0;
+                        n_other += st == 2;
+                        if (st < 0 && first[0] == '\0')
+                            snprintf(first, sizeof first, "dir %d early %u late %u sample %d: sector %d -> %d", dir,
+                                     early, late, k, prev, cmd);
+                    }
+                    /* sample 39: the edge is predicted within 1.5 samples, the next sector is commanded */
+                    if (k == 39) n_advanced += cmd == (5 + 4 * dir) % 6 && bc_hall_sector(in.hall) == (5 + 3 * dir) % 6;
+                    if (k == 40) {
+                        /* the edge is overdue, not seen yet; the estimate has decayed below pi/3 over D */
+                        n_overdue += bc_hall_sector(in.hall) == (5 + 3 * dir) % 6 &&
+                                     (double)o.diag[4] * (double)dir < (BC_PI / 3.0) / ((double)D / F_TICK);
+                        n_held += cmd == (5 + 4 * dir) % 6;
+                    }
+                    prev = cmd;
+                }
+                ++n_cases;
+                n_end += prev == (5 + 4 * dir) % 6;
+            }
+        }
+    }
+    CHECK(n_safe == 0, "safe state in %d samples", n_safe);
+    CHECK(n_advanced == n_cases, "the advance fired before the edge in %d of %d cases", n_advanced, n_cases);
+    CHECK(n_overdue == n_cases, "overdue edge with a decayed estimate in %d of %d cases", n_overdue, n_cases);
+    CHECK(n_back == 0 && n_other == 0, "%d back-steps (first: %s), %d other jumps, in %d cases", n_back, first,
+          n_other, n_cases);
+    CHECK(n_held == n_cases, "advanced sector held at the overdue sample in %d of %d cases", n_held, n_cases);
+    CHECK(n_end == n_cases, "ends in the sector after the late edge in %d of %d cases", n_end, n_cases);
+
+    /* the rotor stops just before the edge after the advance: held through the speed time-out, then a Hall edge
+     * backward (a real reversal) takes it back */
+    bc_sixstep_state s;
+    CHECK(bc_sixstep_init(&p, &s) == BC_OK, "init");
+    uint32_t t40 = (uint32_t)llround(40.0 * tick_per_sample);
+    uint32_t e3 = t40 - 5u - D;
+    uint32_t e[3] = {e3 - 2u * D, e3 - D, e3};
+    bc_ctrl_out o;
+    int k = 0;
+    for (; k < 40; ++k) {
+        bc_ctrl_in in = input(0u, 0.0f, 0.0f, 48.0f, 30.0f);
+        hall_edges((uint32_t)llround((double)k * tick_per_sample), e, 3, 5, 1, &in);
+        bc_sixstep_step(&p, &s, &in, &o);
+    }
+    CHECK((int)o.diag[0] == 3, "advanced to sector 3 before the edge (%d)", (int)o.diag[0]);
+    /* omega_min = 6 rad/s: the estimate times out (pi/3)/6 = 0.17 s after the edge; run 0.3 s */
+    int n_moved = 0;
+    for (; k < 40 + (int)(0.3 / TS); ++k) {
+        bc_ctrl_in in = input(0u, 0.0f, 0.0f, 48.0f, 30.0f);
+        hall_edges((uint32_t)llround((double)k * tick_per_sample), e, 3, 5, 1, &in);
+        bc_sixstep_step(&p, &s, &in, &o);
+        n_moved += (int)o.diag[0] != 3;
+    }
+    CHECK(n_moved == 0, "stopped rotor: the advanced sector left in %d samples", n_moved);
+    CHECK(o.diag[4] == 0.0f, "the speed estimate has timed out");
+    /* the rotor goes back into sector 1: edge backward */
+    bc_ctrl_in in = input(bc_sector_code(1), 0.0f, 0.0f, 48.0f, 30.0f);
+    in.n_edges = 4u;
+    in.tick_now = (uint32_t)llround((double)k * tick_per_sample);
+    in.tick_edge = in.tick_now - 10u;
+    bc_sixstep_step(&p, &s, &in, &o);
+    CHECK((int)o.diag[0] == 1, "a Hall edge backward: the sector seen (%d)", (int)o.diag[0]);
+}
+
+/* ------------------------------------------------------------------------------------------------------------ */
 /* closed loop with the htm-48v plant */
 
 typedef struct {
@@ -621,6 +743,7 @@ int main(void)
     test_fuzz();
     test_average_model();
     test_predictive_two_phase();
+    test_no_back_step();
     test_closed_loop_predictive();
     test_closed_loop_options();
     test_braking();

@@ -10,9 +10,13 @@
  *
  * theta_edge is the angle of the edge just crossed (docs/conventions.md: pi/6 + s pi/3 entering sector s forward,
  * pi/6 + (s+1) pi/3 entering it backward) plus theta_offset. The interpolation stops at the next edge angle. If no
- * edge follows within the previous interval, the speed estimate decays as (pi/3)/(time since the last edge); it is
- * zero (speed_valid = 0) after 1/omega_min-equivalent time or without two consecutive edges, and the angle is the
- * middle of the sector.
+ * edge follows within the previous interval (the edge is overdue: t - t_k >= t_k - t_(k-1)), the speed estimate
+ * decays as (pi/3)/(t - t_k), an upper bound, and the angle is exactly the next edge angle. So while the rotor turns
+ * one way the angle never steps back within a sector (it rises, then holds at the next edge; the edge itself moves
+ * it on) and the speed estimate never rises between edges. The speed is zero (speed_valid = 0) once the bound falls
+ * below omega_min, (pi/3)/omega_min after the last edge, or without two consecutive edges in the same direction;
+ * the angle is then the middle of the sector (the rotor is taken as stopped, anywhere in the sector: the angle
+ * moves back from the next edge to the middle when the speed times out).
  *
  * Invalid codes (000, 111) give valid = 0, sector = -1, speed_valid = 0: the caller goes to its safe state.
  */

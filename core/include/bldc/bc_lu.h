@@ -3,7 +3,8 @@
  * methods it is compared with: torque control neglecting the finite DC bus (no D_o) and conventional rectangular
  * current control (float). Derivations and conventions: docs/theory-paper2.md.
  *
- * Notation. The Hall sector gives the phase driven positive and the one driven negative (bc_commutation.h). With
+ * Notation. The Hall sector seen gives the phase driven positive and the one driven negative (bc_commutation.h;
+ * no advance: the pair changes only with the Hall code, so it never steps back unless the rotor does). With
  * T* = in.ref (N m) >= 0 the pair is P = pos, N = neg; with T* < 0 the roles swap (reverse torque). F is the third
  * phase, whose leg is off (in a commutation: the outgoing phase). V = measured v_dc; Omega_e from bc_hall,
  * w = Omega_e / p (mechanical); theta from bc_hall (angle interpolated between Hall edges, paper 2 Figs 8-9).

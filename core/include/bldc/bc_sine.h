@@ -13,7 +13,9 @@
  *     _BAD_INPUT) and back to the start mode. Only bc_sine_init clears the over-current trip.
  *  2. Angle and speed from bc_hall: theta(k) = theta_edge + Omega_e (t_k - t_edge), Omega_e = (pi/3) / (time
  *     between the last two edges) (paper 1 (46)); or theta = in->theta_enc (angle = BC_SINE_ANGLE_ENCODER, a
- *     reference for comparison). The speed is always bc_hall's. omega_m = Omega_e / p.
+ *     reference for comparison). The speed is always bc_hall's. omega_m = Omega_e / p. While the rotor turns one
+ *     way and the speed is valid, theta never steps back (it holds at the next edge angle once the edge is
+ *     overdue, bc_hall.h); a timed-out speed leaves the sine mode (3.).
  *  3. Mode. Start (square wave, bc_sixstep) until |Omega_e| >= omega_on with a valid speed; sine until
  *     |Omega_e| < omega_off (hysteresis) or the speed becomes invalid. With flying_start the start mode first
  *     coasts (legs off) until the rotor is known to be slower than omega_on (a valid speed below it, or no Hall

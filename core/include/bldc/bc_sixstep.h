@@ -11,12 +11,20 @@
  *     I_ref = min(|ref| / k_e, i_max)         (ref_torque = 1: ref is a torque, N m; k_e = 2 k_phi, T = k_e I)
  *
  * With `advance` = 1 the controller commutates at the sample nearest the Hall edge predicted from the speed: the
- * output applies over [t_(k+D), t_(k+D+1)] (D = delay), so the next sector is commanded when
+ * output applies over [t_(k+D), t_(k+D+1)] (D = delay), so the next sector s_seen + dir is commanded when
  *
- *     |Omega_e| (t_k - t_edge) < pi/3   and   |Omega_e| (t_k - t_edge + (D + 1/2) T_s) >= pi/3
+ *     |Omega_e| (t_k - t_edge + (D + 1/2) T_s) >= pi/3
  *
- * (the edge is due within the first half of the interval the output applies to, and is not overdue). With
- * advance = 0 the legs follow the Hall sector seen, (D + 1/2) T_s late on average.
+ * (the edge is due by the middle of the interval the output applies to; dir = direction of the last Hall edge).
+ * The advance is never taken back: once s_seen + dir is commanded it is held, whatever the speed estimate says,
+ * until the next Hall edge, which either confirms it (forward: s_seen catches up) or proves that the rotor reversed
+ * (backward: the sector seen, or the next one backward, is commanded). Without this rule a Hall edge a few capture
+ * ticks later than predicted made the sector fall back for a sample (bc_hall's estimate decays as (pi/3)/(t_k -
+ * t_edge) once the edge is overdue, so |Omega_e| (t_k - t_edge) reaches pi/3 while the code still shows s_seen),
+ * interrupting the incoming phase. The test above is monotone within a sector anyway (|Omega_e| is constant until
+ * the edge is overdue and (pi/3)/(t_k - t_edge) after, so the left side never falls below pi/3 once there), and the
+ * hold also covers the speed estimate timing out (a rotor stopped just before the edge). With advance = 0 the
+ * legs follow the Hall sector seen, (D + 1/2) T_s late on average.
  *
  * Regulated current. The phase x that entered the pair at the most recent commutation (the incoming phase: the
  * phase of the new pair that was not in the old one; the positive phase before the first commutation) is
@@ -141,6 +149,7 @@ typedef struct {
     bc_pi_state pi;
     bc_leg_cmd applied[3]; /* command in force over the current sample (the previous output when delay = 1) */
     int32_t sector;        /* sector commanded, -1 none */
+    int32_t seen;          /* Hall sector seen at the last sample, -1 none */
     int32_t incoming;      /* phase that entered at the last commutation, -1 none */
     int32_t hyst_on;       /* hysteresis: 1 switch on */
     int32_t oc_latched;    /* over-current trip latched */
