@@ -17,8 +17,9 @@ import pytest
 from bldclab import analytic, cli
 from bldclab.catalog import load, names
 from bldclab.compare import compare
-from bldclab.control import Sine, SixStep
-from bldclab.errors import PlausibilityWarning
+from bldclab.control import Lu, Sine, SixStep
+from bldclab.design import max_bandwidth, pi_gains
+from bldclab.errors import BldclabError, PlausibilityWarning
 from bldclab.experiments import PointResult, steady_state
 from bldclab.motor import Drive
 from bldclab.results import SimResult
@@ -158,6 +159,22 @@ def test_sine_torque_is_three_halves_k1_i(name: str) -> None:
         assert point.tau_mean == pytest.approx(1.5 * _k1(d) * i_peak, rel=0.01)
         # the controller's current for (13)'s torque is I_s,N, so the torque is 1.000 p.u., not (13)'s 1.053
         assert point.tau_mean_pu == pytest.approx(analytic.sine_torque_pu(d), rel=0.01)
+
+
+def test_torque_control_rect_design_adapts_to_slow_pwm() -> None:
+    """servo-2k2 at 8 kHz: 1 kHz with 60 deg is out of a PI's reach; the default design lowers the bandwidth."""
+    d = load("servo-2k2")
+    delay = 1.5 * 0.5 / d.inverter.f_pwm
+    with pytest.raises(BldclabError, match="a PI cannot give 60 deg at 1000 Hz"):
+        pi_gains(2 * d.motor.R, 2 * d.motor.L, 1000.0, 60.0, delay=delay)
+    bw = Lu(method="rect").bandwidth(d)
+    assert bw == pytest.approx(max_bandwidth(2 * d.motor.R, 2 * d.motor.L, 60.0, delay))
+    assert 500.0 < bw < 1000.0
+    kp, ki = Lu(method="rect").gains(d)
+    # the PI's zero sits a decade below the crossover: ki / kp = 0.1 w_c
+    assert ki / kp == pytest.approx(0.1 * 2 * math.pi * bw, rel=1e-6)
+    for other in ("htm-48v", "lu-4kw", "outrunner-24v"):  # where 1 kHz is reachable, it stays 1 kHz
+        assert Lu(method="rect").bandwidth(load(other)) == 1000.0
 
 
 def test_compare_labels_the_closed_forms() -> None:
