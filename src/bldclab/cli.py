@@ -180,7 +180,7 @@ def _json_value(value: float | bool) -> float | bool | None:
     return value
 
 
-def table1_text(t: analytic.Table1, fmt: str) -> str:
+def table1_text(t: analytic.Table1, fmt: str, not_applicable: Sequence[str] = ()) -> str:
     """Render a :class:`~bldclab.analytic.Table1` as ``table`` (aligned text), ``csv`` or ``json``.
 
     Parameters
@@ -189,6 +189,9 @@ def table1_text(t: analytic.Table1, fmt: str) -> str:
         The quantities.
     fmt : {"table", "csv", "json"}
         Output format.
+    not_applicable : sequence of str
+        Why the closed forms do not describe the drive (:func:`bldclab.analytic.applicability`): one line each
+        under the table, a ``not_applicable`` list in JSON (CSV: not written, the file stays one table).
 
     Returns
     -------
@@ -200,7 +203,8 @@ def table1_text(t: analytic.Table1, fmt: str) -> str:
     if fmt == "json":
         doc = {"motor": t.name,
                "quantities": [{"key": k, "description": d, "value": _json_value(v), "unit": u, "source": s}
-                              for k, d, v, u, s in rows]}
+                              for k, d, v, u, s in rows],
+               "not_applicable": list(not_applicable)}
         return json.dumps(doc, indent=2, allow_nan=False) + "\n"
     if fmt == "csv":
         buf = io.StringIO()
@@ -218,6 +222,9 @@ def table1_text(t: analytic.Table1, fmt: str) -> str:
     for r in [head, *body]:
         lines.append("  ".join(c.rjust(widths[j]) if j == 2 else c.ljust(widths[j])
                                for j, c in enumerate(r)).rstrip())
+    if not_applicable:
+        lines.append("The closed forms (sources (13) to (44)) are outside paper 1's premises for this drive:")
+        lines += [f"  - {reason}" for reason in not_applicable]
     return "\n".join(lines) + "\n"
 
 
@@ -247,7 +254,8 @@ def _run_analyze(args: argparse.Namespace) -> int:
         raise BldclabError("--out", f"{str(args.out)!r} exists and is not a directory")
     drive = load(args.motor)
     t = analytic.table1(drive)
-    text = table1_text(t, args.format)
+    reasons = analytic.applicability(drive)
+    text = table1_text(t, args.format, reasons)
     if args.out is not None:
         from . import plots  # matplotlib only when figures are asked for
 
@@ -256,7 +264,7 @@ def _run_analyze(args: argparse.Namespace) -> int:
         df = analytic.characteristic(drive, speeds)
         files: dict[str, bytes] = {
             "table1.csv": table1_text(t, "csv").encode(),
-            "table1.json": table1_text(t, "json").encode(),
+            "table1.json": table1_text(t, "json", reasons).encode(),
             "characteristic.csv": df.to_csv(index=False, lineterminator="\n").encode(),
         }
         title = f" - {drive.name}" if drive.name else ""

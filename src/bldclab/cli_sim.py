@@ -245,8 +245,9 @@ def run_compare(args: argparse.Namespace) -> int:
     print(f"  Theta_m {t1.Theta_m * 1e3:.2f} mrad; base speed (21) sine {t1.Omega_sB_pu:.3f} p.u., (30) square "
           f"{t1.Omega_qB_pu:.3f} p.u.; with R: {t1.Omega_sB_R_pu:.3f} / {t1.Omega_qB_R_pu:.3f} p.u.; simulated: "
           f"{bs['sine']:.3f} / {bs['square']:.3f} p.u.")
-    print(f"  {'Omega [pu]':>10} {'T sine':>8} {'T square':>9} {'(13)/(24)':>10} {'(26)-(32)':>10} {'TR sine':>8} "
-          f"{'TR square':>10} {'eta sine':>9} {'eta sq':>7}")
+    na = "*" if res.not_applicable else ""  # closed-form columns outside paper 1's premises: labelled, kept
+    print(f"  {'Omega [pu]':>10} {'T sine':>8} {'T square':>9} {'(13)/(24)' + na:>10} {'(26)-(32)' + na:>10} "
+          f"{'TR sine':>8} {'TR square':>10} {'eta sine':>9} {'eta sq':>7}")
     an = res.analytic.set_index("Omega_pu")
     for wp in w[:: max(1, len(w) // 12)]:
         a = sim[(sim.supply == "sine") & (sim.Omega_pu == wp)].iloc[0]
@@ -259,6 +260,10 @@ def run_compare(args: argparse.Namespace) -> int:
         spread = {k: float((sim[f"{k}_max"] - sim[f"{k}_min"]).max()) for k in ("T_pu", "TR_pu", "TR_ma_pu")}
         print(f"  over {args.pwm_phases} PWM-grid phases the largest spread is {spread['T_pu']:.4f} p.u. in torque, "
               f"{spread['TR_pu']:.4f} in ripple at the samples, {spread['TR_ma_pu']:.4f} in ripple_ma")
+    if res.not_applicable:
+        print("  * not applicable to this drive (paper 1's closed forms, shown for reference), because:")
+        for reason in res.not_applicable:
+            print(f"    - {reason}")
     print("verdict:")
     for line in res.verdict:
         print(f"  - {line}")
@@ -269,7 +274,7 @@ def run_compare(args: argparse.Namespace) -> int:
     from .cli import table1_text
 
     files["table1.csv"] = table1_text(t1, "csv").encode()
-    files["table1.json"] = table1_text(t1, "json").encode()
+    files["table1.json"] = table1_text(t1, "json", res.not_applicable).encode()
     files["verdict.txt"] = ("\n".join(res.verdict) + "\n").encode()
     figures = comparison_figures(res)
     from . import paper1

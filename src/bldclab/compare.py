@@ -144,6 +144,9 @@ class CompareResult:
     warnings : list of str
         Plausibility warnings of the runs (:mod:`bldclab.plausibility`), each prefixed by its supply and speed;
         :func:`compare` issues one :class:`~bldclab.errors.PlausibilityWarning` summarising them.
+    not_applicable : list of str
+        Why paper 1's closed forms (the ``analytic`` columns) do not describe this drive
+        (:func:`bldclab.analytic.applicability`); empty where their premises hold.
     """
 
     drive: Drive
@@ -155,6 +158,7 @@ class CompareResult:
     verdict: list[str] = field(default_factory=list)
     seconds: float = 0.0
     warnings: list[str] = field(default_factory=list)
+    not_applicable: list[str] = field(default_factory=list)
 
 
 def _progress(total: int, enabled: bool) -> Callable[[int], None]:
@@ -236,6 +240,7 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
                         pwm_phases=pwm_phases, seconds=seconds)
     res.verdict = _verdict(sim) + _sampling_notes(sim) + (_base_speed_verdict(bst) if bst is not None else [])
     res.warnings = caught
+    res.not_applicable = analytic.applicability(drive)
     line = _plaus.summary(caught, len(jobs))
     if line:
         warnings.warn(line, PlausibilityWarning, stacklevel=2)

@@ -702,7 +702,7 @@ def motor_results(drive: Drive, speeds_pu: Sequence[float], *, command: str, mot
     files: dict[str, bytes] = {
         "simulated.csv": res.simulated.to_csv(index=False).encode(),
         "analytic.csv": res.analytic.to_csv(index=False).encode(),
-        "table1.json": table1_text(res.table1, "json").encode(),
+        "table1.json": table1_text(res.table1, "json", res.not_applicable).encode(),
         "verdict.txt": ("\n".join(res.verdict) + "\n").encode(),
         "dynamometer.csv": paper1.fig12(drive)[1].to_csv(index=False).encode(),
     }
@@ -1051,12 +1051,26 @@ def _emf_text(d: Drive) -> str:
     return "; ".join(f"{x}: {one(s)}" for x, s in zip("abc", shapes, strict=True))
 
 
+def _not_applicable(r: Results) -> list[str]:
+    """Why paper 1's closed forms do not describe the report's drive (:func:`bldclab.analytic.applicability`)."""
+    from . import analytic
+
+    return analytic.applicability(r.drive)
+
+
 def _section_table1(r: Results) -> str:
     rows = [[q["key"], q["description"], q["value"], q["unit"], q["source"]] for q in r.table1]
+    reasons = _not_applicable(r)
+    note = ""
+    if reasons:
+        note = ('<p class="warning"><b>Not applicable to this drive:</b> the closed forms below are outside paper 1\'s '
+                "premises here (shown for reference, labelled <i>not applicable</i> in the figures):</p><ul>"
+                + "".join(f"<li>{html.escape(x)}</li>" for x in reasons) + "</ul>")
     return ('<section id="table1"><h2>2. Paper 1 Table I and derived quantities</h2>'
             "<p>Closed forms of paper 1 (R neglected; equation numbers as in the paper) and, marked <i>numeric</i>, "
             "the base speeds with the winding resistance R computed by bldclab from the drive's own back-EMF "
             "(docs/theory-paper1.md, section 6). <i>docs</i>: the consistent loss count of the same document.</p>"
+            + note
             + _html_table(["key", "quantity", "value", "unit", "equation"], rows, [False, False, True, False, False])
             + "</section>")
 
@@ -1097,8 +1111,10 @@ def _section_characteristics(r: Results, page: _Page) -> str:
     vl = _base_lines(t1)
     x = {"xlabel": "speed \u03a9 [p.u. of \u03a90]", "xname": "\u03a9 [p.u.]", "xmin": 0, "xmax": 1}
 
+    na = " (not applicable)" if _not_applicable(r) else ""  # outside paper 1's premises: labelled, kept
+
     def an(name: str, col: str, color: str, dash: str | None = None) -> dict[str, Any]:
-        return {"name": name, "table": "closed_forms", "x": "Omega_pu", "y": col, "color": color, "dash": dash}
+        return {"name": name + na, "table": "closed_forms", "x": "Omega_pu", "y": col, "color": color, "dash": dash}
 
     def sim(name: str, col: str, supply: str, marker: str, hidden: bool = False) -> dict[str, Any]:
         return {"name": name, "table": "simulated", "x": "Omega_pu", "y": col, "where": {"supply": supply},

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 import numpy as np
 
 from ..analytic import r_total
-from ..design import pi_gains
+from ..design import max_bandwidth, pi_gains
 from ..errors import BldclabError
 from ..motor import TWO_PI
 from .base import Control, check_number
@@ -29,6 +29,9 @@ if TYPE_CHECKING:
 __all__ = ["Lu"]
 
 _METHOD = {"lu": 0, "lu-no-do": 1, "rect": 2}
+
+#: ``rect``'s current-loop bandwidth when the drive allows it (Hz).
+DEFAULT_BANDWIDTH_HZ = 1000.0
 
 #: Meaning of the controller's diagnostic channels (``SimResult`` signal names).
 DIAG = ("mode", "duty", "tau_est", "tau_pred", "theta_est", "omega_est", "i_off", "sector")
@@ -69,9 +72,14 @@ class Lu(Control):
         Over-current trip (A); default ``3 I_N`` (bipolar chopping at 10 kHz has a large current ripple).
     i_zero : float, optional
         An outgoing current at or below this is zero: the commutation is over (A); default ``0.01 I_N``.
-    bandwidth_hz, phase_margin_deg : float
-        ``rect``: PI design for the line ``(2 (R + R_on), 2 L)`` with the loop delay ``(delay + 1/2) T_s``
-        (:func:`bldclab.design.pi_gains`).
+    bandwidth_hz : float, optional
+        ``rect``: crossover of the PI design for the line ``(2 (R + R_on), 2 L)`` with the loop delay
+        ``(delay + 1/2) T_s`` (:func:`bldclab.design.pi_gains`). Default: 1 kHz where a PI can give the margin
+        there; where the drive's PWM makes the delay too long for that, the highest bandwidth at which the PI keeps
+        its zero a decade below the crossover (:func:`bldclab.design.max_bandwidth`; 745 Hz for ``servo-2k2``:
+        51 mH at 8 kHz PWM). A bandwidth given here is used as it is (and refused if a PI cannot reach it).
+    phase_margin_deg : float
+        ``rect``: phase margin of that design.
     kp, ki : float, optional
         ``rect``: PI gains (V/A, V/(A s)) overriding the design.
     omega_min : float, optional
@@ -87,7 +95,7 @@ class Lu(Control):
     shape_points: int = 360
     i_max: float | None = None
     i_zero: float | None = None
-    bandwidth_hz: float = 1000.0
+    bandwidth_hz: float | None = None
     phase_margin_deg: float = 60.0
     kp: float | None = None
     ki: float | None = None
@@ -106,9 +114,8 @@ class Lu(Control):
                 raise BldclabError(f"control.{name}", f"must be True or False, got {getattr(self, name)!r}")
         if isinstance(self.shape_points, bool) or not isinstance(self.shape_points, int) or self.shape_points < 12:
             raise BldclabError("control.shape_points", f"must be an integer >= 12, got {self.shape_points!r}")
-        check_number("bandwidth_hz", self.bandwidth_hz)
         check_number("phase_margin_deg", self.phase_margin_deg)
-        for name in ("i_max", "omega_min"):
+        for name in ("bandwidth_hz", "i_max", "omega_min"):
             check_number(name, getattr(self, name), allow_none=True)
         for name in ("i_zero", "kp", "ki"):
             check_number(name, getattr(self, name), allow_zero=True, allow_none=True)
@@ -127,12 +134,39 @@ class Lu(Control):
         Returns
         -------
         tuple of float
-            The given gains, else :func:`bldclab.design.pi_gains` at ``bandwidth_hz`` and ``phase_margin_deg``.
+            The given gains, else :func:`bldclab.design.pi_gains` at :meth:`bandwidth` and ``phase_margin_deg``.
         """
         ts = 0.5 / drive.inverter.f_pwm
-        kp, ki = pi_gains(2.0 * r_total(drive), 2.0 * drive.motor.L, self.bandwidth_hz, self.phase_margin_deg,
+        kp, ki = pi_gains(2.0 * r_total(drive), 2.0 * drive.motor.L, self.bandwidth(drive), self.phase_margin_deg,
                           delay=(self.delay + 0.5) * ts)
         return (kp if self.kp is None else float(self.kp)), (ki if self.ki is None else float(self.ki))
+
+    def bandwidth(self, drive: Drive) -> float:
+        """Return ``rect``'s current-loop bandwidth (Hz): ``bandwidth_hz`` if given, else the default.
+
+        The default is :data:`DEFAULT_BANDWIDTH_HZ` if :func:`bldclab.design.pi_gains` can give ``phase_margin_deg``
+        there for the line ``(2 (R + R_on), 2 L)`` with the loop delay ``(delay + 1/2) T_s``, else
+        :func:`bldclab.design.max_bandwidth` of that loop (lower: the delay of a slow PWM takes the phase).
+
+        Parameters
+        ----------
+        drive : Drive
+            Its ``R + R_on``, ``L`` and ``f_pwm``.
+
+        Returns
+        -------
+        float
+            Bandwidth (Hz).
+        """
+        if self.bandwidth_hz is not None:
+            return float(self.bandwidth_hz)
+        delay = (self.delay + 0.5) * 0.5 / drive.inverter.f_pwm
+        r, ell = 2.0 * r_total(drive), 2.0 * drive.motor.L
+        try:
+            pi_gains(r, ell, DEFAULT_BANDWIDTH_HZ, self.phase_margin_deg, delay=delay)
+        except BldclabError:
+            return min(DEFAULT_BANDWIDTH_HZ, max_bandwidth(r, ell, self.phase_margin_deg, delay))
+        return DEFAULT_BANDWIDTH_HZ
 
     def shape_tables(self, drive: Drive) -> np.ndarray:
         """Return the shape tables the controller reads: ``f_x`` at ``2 pi j / n`` of phase x's local angle.
