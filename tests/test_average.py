@@ -60,11 +60,15 @@ def test_energy_balance_closes_with_every_loss(name, supply):
 @pytest.mark.parametrize("supply", SUPPLIES)
 @pytest.mark.parametrize("name", DRIVES)
 def test_losses_converge_to_the_switching_ones(name, supply):
-    """The averaged switch and diode losses are the switching plant's in the limit (R_src = 0: docs/plant.md)."""
-    drive = bl.load(name).replace(**LOSSY)
+    """The averaged switch, diode and source-resistance losses are the switching plant's in the limit (the
+    pulsed DC current's R_src loss too: the averaged plant uses the overlap of the legs' intervals)."""
+    drive = bl.load(name).replace(inverter__R_src=0.02, **LOSSY)
     sw, av = (run(drive, supply, 0.5, model, 80e3).metrics for model in ("switching", "average"))
     assert av.p_sw == pytest.approx(sw.p_sw, rel=0.005)
     assert av.p_diode == pytest.approx(sw.p_diode, rel=0.005, abs=1e-9)
+    assert av.p_Rsrc == pytest.approx(sw.p_Rsrc, rel=0.005)
+    # not the mean current's loss: R_src mean(i_dc)^2 is far below R_src mean(i_dc^2)
+    assert av.p_Rsrc > 1.2 * 0.02 * (av.p_src / drive.inverter.V_dc) ** 2
 
 
 # ---------------------------------------------------------------------------------------------------------------

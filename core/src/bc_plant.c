@@ -102,9 +102,23 @@ static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restric
     const double idc = s->tc_up[0] * i0 + s->tc_up[1] * i1 + s->tc_up[2] * i2;
     const double vbus = s->v_src - p->R_src * idc;
     const double r0 = s->tc_r[0], r1 = s->tc_r[1], r2 = s->tc_r[2];
-    const double v0 = s->tc_up[0] * vbus + s->tc_u0[0] - r0 * i0;
-    const double v1 = s->tc_up[1] * vbus + s->tc_u0[1] - r1 * i1;
-    const double v2 = s->tc_up[2] * vbus + s->tc_u0[2] - r2 * i2;
+    double v0, v1, v2, p_rsrc;
+    if (s->tc_msrc) {
+        /* averaged legs: leg x sees R_src times the mean over the half period of up_x(t) i_dc(t) */
+        const double *m = s->tc_msrc_m;
+        const double w0 = m[0] * i0 + m[1] * i1 + m[2] * i2;
+        const double w1 = m[3] * i0 + m[4] * i1 + m[5] * i2;
+        const double w2 = m[6] * i0 + m[7] * i1 + m[8] * i2;
+        v0 = s->tc_up[0] * s->v_src - p->R_src * w0 + s->tc_u0[0] - r0 * i0;
+        v1 = s->tc_up[1] * s->v_src - p->R_src * w1 + s->tc_u0[1] - r1 * i1;
+        v2 = s->tc_up[2] * s->v_src - p->R_src * w2 + s->tc_u0[2] - r2 * i2;
+        p_rsrc = p->R_src * (i0 * w0 + i1 * w1 + i2 * w2);
+    } else {
+        v0 = s->tc_up[0] * vbus + s->tc_u0[0] - r0 * i0;
+        v1 = s->tc_up[1] * vbus + s->tc_u0[1] - r1 * i1;
+        v2 = s->tc_up[2] * vbus + s->tc_u0[2] - r2 * i2;
+        p_rsrc = p->R_src * idc * idc;
+    }
     const double u0 = v0 - R * i0 - e0, u1 = v1 - R * i1 - e1, u2 = v2 - R * i2 - e2;
     const double c0 = s->tc_conn[0], c1 = s->tc_conn[1], c2 = s->tc_conn[2];
     const double vn = s->tc_n > 0 ? (c0 * u0 + c1 * u1 + c2 * u2) * s->tc_inv_n : 0.5 * vbus - (e0 + e1 + e2) / 3.0;
@@ -134,7 +148,7 @@ static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restric
 
     double *restrict d = &dy[Y_ACC];
     d[BC_ACC_SRC] = s->v_src * idc;
-    d[BC_ACC_RSRC] = p->R_src * idc * idc;
+    d[BC_ACC_RSRC] = p_rsrc;
     d[BC_ACC_CU] = R * (sq0 + sq1 + sq2);
     d[BC_ACC_SW] = p_sw;
     d[BC_ACC_DIODE] = p_d;
@@ -217,6 +231,31 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
     s->tc_n = n;
     s->tc_inv_n = n > 0 ? 1.0 / (double)n : 0.0;
     s->tc_gain = n >= 2 ? 1.0 / p->L : 0.0;
+    /* averaged legs with a source resistance: the half-period mean of up_x(t) up_y(t) (bc_plant.h) */
+    s->tc_msrc = (s->avg[0] | s->avg[1] | s->avg[2]) && p->R_src > 0.0;
+    if (s->tc_msrc) {
+        double d[3], ua[3], ui[3];
+        for (int x = 0; x < 3; ++x) {
+            if (s->tc_conn[x] == 0.0) {
+                d[x] = 1.0;
+                ua[x] = ui[x] = 0.0;
+            } else if (s->avg[x]) { /* active: upper (PWM, HIGH) or lower (LOW) switch; idle: lower switch or O */
+                ua[x] = s->fr_u[x] > 0.0 ? 1.0 : 0.0;
+                d[x] = s->fr_u[x] > 0.0 ? s->fr_u[x] : s->fr_l[x];
+                ui[x] = (s->fr_o[x] > 0.0 && s->cond[x] == BC_COND_D_U) ? 1.0 : 0.0;
+            } else {
+                d[x] = 1.0;
+                ua[x] = ui[x] = s->tc_up[x];
+            }
+        }
+        for (int x = 0; x < 3; ++x) {
+            for (int y = 0; y < 3; ++y) {
+                s->tc_msrc_m[3 * x + y] = ua[x] * ua[y] * fmin(d[x], d[y]) + ua[x] * ui[y] * fmax(0.0, d[x] - d[y]) +
+                                          ui[x] * ua[y] * fmax(0.0, d[y] - d[x]) +
+                                          ui[x] * ui[y] * fmin(1.0 - d[x], 1.0 - d[y]);
+            }
+        }
+    }
 }
 
 /* Outputs from the quantities computed with a derivative. */
@@ -1301,7 +1340,10 @@ double bc_plant_vbus(const bc_plant_params *p, const bc_plant_state *s)
     double idc = 0.0;
     for (int x = 0; x < 3; ++x) {
         if (s->avg[x]) {
-            idc += s->tc_up[x] * s->i[x]; /* an averaged leg's share of the + rail */
+            /* an averaged leg at the sample instant, as the switching legs are there: at the end of a rising half
+             * (carrier peak) in its active state, at the end of a falling half (valley) in its idle state */
+            int up = s->rising ? s->fr_u[x] > 0.0 : (s->fr_o[x] > 0.0 && s->cond[x] == BC_COND_D_U);
+            if (s->cond[x] != BC_COND_OPEN && up) idc += s->i[x];
         } else if (s->cond[x] == BC_COND_SW_U || s->cond[x] == BC_COND_D_U) {
             idc += s->i[x];
         }

@@ -228,9 +228,8 @@ static void test_average_model(void)
     (void)six_step(&f.p, &s, om, 0.7f, 4, &bal, &ev_av);
     CHECK(fabs(bal) < 1e-6, "averaged six-step energy balance %.3g relative", bal);
     CHECK(s.acc[BC_ACC_DIODE] > 0.0 && s.acc[BC_ACC_SW] > 0.0, "switch and diode losses booked");
-    /* without R_src (docs/plant.md) the averaged plant is the switching one's limit: same torque at 14 kHz to
-     * 1e-3 p.u., with about one step per half period and no PWM diode events */
-    f.p.R_src = 0.0;
+    /* the averaged plant is the switching one's limit: same torque at 14 kHz to 1e-3 p.u., with about one step per
+     * half period and no PWM diode events */
     f.p.inverter = BC_INV_SWITCHING;
     tau_sw = six_step(&f.p, &s, om, 0.7f, 4, &bal, &ev_sw);
     int64_t steps_sw = s.n_steps;

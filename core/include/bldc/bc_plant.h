@@ -34,7 +34,14 @@
  *
  * i_dc takes f_U i (+ f_O i through the upper diode), the switch loss is (f_U + f_L) R_on i^2 and the diode loss
  * f_O (V_f + r_d |i|) |i|: exactly the power the averaged sources and resistances take, so the energy balance
- * closes as in the switching model. The i > 0 and i < 0 states are the cond codes BC_COND_D_L / BC_COND_D_U of
+ * closes as in the switching model. With R_src > 0 the bus drop is averaged exactly too: leg x sees
+ * f_up,x V_src - R_src sum_y M_xy i_y and the source resistance takes R_src sum_xy i_x M_xy i_y, where
+ * M_xy = mean over the half period of up_x(t) up_y(t) (up: tied to the + rail); the active intervals of all legs
+ * are anchored at the same end of the half period (centre-aligned PWM), so with a_x the active fraction and
+ * A_x, I_x = 1 if the active / idle state ties the + rail:
+ *     M_xy = A_x A_y min(a_x, a_y) + A_x I_y max(0, a_x - a_y) + I_x A_y max(0, a_y - a_x)
+ *            + I_x I_y min(1 - a_x, 1 - a_y).
+ * The open-phase windows use the mean bus v_bus = V_src - R_src i_dc. The i > 0 and i < 0 states are the cond codes BC_COND_D_L / BC_COND_D_U of
  * the leg (BC_COND_SW_U for f_O = 0), so current zeros and re-conduction are the same located events. Exact for
  * continuous conduction over the half period; a current that would reach zero inside it (discontinuous
  * conduction) is approximated by an open phase (i = 0 while the terminal is inside the window): the neglected
@@ -217,6 +224,8 @@ typedef struct {
     double tc_dio[3];       /* diode fraction (1 if through a diode) */
     double tc_lo_a[3], tc_lo_b[3]; /* open phase conducts (i > 0) below U_lo = a v_bus + b, V */
     double tc_hi_a[3], tc_hi_b[3]; /* ... (i < 0) above U_hi = a v_bus + b, V */
+    int32_t tc_msrc;        /* averaged legs and R_src > 0: the source drop uses tc_msrc_m */
+    double tc_msrc_m[9];    /* M_xy = half-period mean of up_x(t) up_y(t), row-major */
     double tc_inv_n;        /* 1 / connected phases (0 if none) */
     double tc_gain;         /* 1/L if at least two phases conduct, else 0 */
     int32_t tc_n;           /* connected phases */
@@ -271,7 +280,9 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
 /* Instantaneous outputs at the current state. */
 void bc_plant_output(const bc_plant_params *p, const bc_plant_state *s, bc_plant_out *out);
 
-/* DC bus voltage at the inverter now, V (cheaper than bc_plant_output). */
+/* DC bus voltage at the inverter now, V (cheaper than bc_plant_output). Averaged legs count in the gate state they
+ * would have at this instant, the carrier peak or valley that ends the half period (active / idle), so the sensors
+ * read what they read on the switching plant. */
 double bc_plant_vbus(const bc_plant_params *p, const bc_plant_state *s);
 
 /* Restart the tau_min/tau_max/i_peak trackers from the current state. */
