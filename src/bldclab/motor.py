@@ -1072,7 +1072,10 @@ def _drive_to_toml(d: Drive) -> str:
         c = m.cogging
         out.append(_table("motor.cogging", {"orders": list(c.orders), "amplitudes": list(c.amplitudes),
                                             "phases": list(c.phases)}))
-    out.append(_table("inverter", dataclasses.asdict(d.inverter)))
+    inv = dataclasses.asdict(d.inverter)
+    if inv["model"] == "switching":
+        del inv["model"]  # the default: files written before the averaged inverter existed stay as they were
+    out.append(_table("inverter", inv))
     out.append(_table("mechanics", dataclasses.asdict(d.mechanics)))
     s = dataclasses.asdict(d.sensors)
     s["current_gain"] = list(s["current_gain"])
