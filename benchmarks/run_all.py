@@ -76,11 +76,20 @@ def plant_rows(seconds: float, repeats: int) -> list[Row]:
     ps = load("plant_speed")
     drive = bl.load("htm-48v")
     rows = []
+    walls = {}
     for trace in (False, True):
         r, info = ps.one(drive, 0.5, seconds, trace, repeats)
+        walls[trace] = (r, info)
         rows.append(Row(f"plant: htm-48v six-step 14 kHz, {'trace' if trace else 'no trace'}", f"{r:.4f}",
                         "s per sim s", f"<= {ps.TARGET:g}", verdict(r <= ps.TARGET),
                         f"0.5 Omega_0 imposed, {info['steps']:.0f} steps/s, {info['events']:.0f} events/s"))
+    r_sw, i_sw = walls[False]
+    r, info = ps.one(drive, 0.5, seconds, False, repeats, "average")
+    rows.append(Row("plant: htm-48v six-step 14 kHz, average inverter", f"{r:.4f}", "s per sim s", "", "",
+                    f"{info['steps']:.0f} steps/s, {info['events']:.0f} events/s, tau {info['tau']:.2f} N m "
+                    f"(switching {i_sw['tau']:.2f})"))
+    rows.append(Row("plant: six-step switching / average", f"{r_sw / r:.1f}", "x", f">= {ps.SPEEDUP_TARGET:g}",
+                    verdict(r_sw / r >= ps.SPEEDUP_TARGET), "no trace; docs/benchmarks.md says why"))
     return rows
 
 
@@ -92,18 +101,24 @@ def sine_rows(seconds: float, repeats: int) -> list[Row]:
     drive = bl.load("htm-48v")
     ctl = bl.Sine()
     rows = []
-    for trace in (False, True):
-        sc = bl.Scenario(duration=seconds, speed=0.5 * drive.Omega_0, ref=an.T_SN_PU * drive.T_N, trace=trace)
-        bl.simulate(drive, ctl, sc)
+    per_s = {}
+    for trace, model in ((False, "switching"), (True, "switching"), (False, "average")):
+        d = drive.replace(inverter__model=model)
+        sc = bl.Scenario(duration=seconds, speed=0.5 * d.Omega_0, ref=an.T_SN_PU * d.T_N, trace=trace)
+        bl.simulate(d, ctl, sc)
         walls = []
         for _ in range(repeats):
             t0 = time.perf_counter()
-            res = bl.simulate(drive, ctl, sc)
+            res = bl.simulate(d, ctl, sc)
             walls.append(time.perf_counter() - t0)
         r = min(walls) / seconds
-        rows.append(Row(f"plant: htm-48v Sine control 14 kHz, {'trace' if trace else 'no trace'}", f"{r:.4f}",
+        per_s[model, trace] = r
+        what = "average inverter" if model == "average" else ("trace" if trace else "no trace")
+        rows.append(Row(f"plant: htm-48v Sine control 14 kHz, {what}", f"{r:.4f}",
                         "s per sim s", "", "",
                         f"0.5 Omega_0 imposed, T_s,N, {res.meta['stats']['steps'] / seconds:.0f} steps/s"))
+    rows.append(Row("plant: Sine switching / average", f"{per_s['switching', False] / per_s['average', False]:.1f}",
+                    "x", "", "", "no trace"))
     return rows
 
 

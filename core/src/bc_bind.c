@@ -40,6 +40,7 @@ static const bc_field_desc FIELDS[] = {
     F(bc_plant_params, r_d, "f8"),
     F(bc_plant_params, R_src, "f8"),
     F(bc_plant_params, i_trip, "f8"),
+    F(bc_plant_params, inverter, "i4"),
     F(bc_plant_params, mech, "i4"),
     F(bc_plant_params, J, "f8"),
     F(bc_plant_params, B, "f8"),

@@ -32,10 +32,13 @@ static int faults_apply(const bc_plant_params *p, bc_plant_state *s);
 
 double bc_plant_t_half(const bc_plant_params *p) { return 0.5 / p->f_pwm; }
 
+/* The longest step. Half a PWM period by default, widened by 1e-9 of itself so that a step from the start of a
+ * half period reaches its end in one piece instead of leaving a sliver step of rounding size (k T/2 + T/2 is
+ * not always (k + 1) T/2 in floating point); a step never passes its target anyway. */
 static double h_max_of(const bc_plant_params *p)
 {
     double th = bc_plant_t_half(p);
-    return (p->h_max > 0.0 && p->h_max < th) ? p->h_max : th;
+    return (p->h_max > 0.0 && p->h_max < th) ? p->h_max : th * (1.0 + 1e-9);
 }
 
 /* ---------------------------------------------------------------------------------------------------------- */
@@ -99,9 +102,23 @@ static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restric
     const double idc = s->tc_up[0] * i0 + s->tc_up[1] * i1 + s->tc_up[2] * i2;
     const double vbus = s->v_src - p->R_src * idc;
     const double r0 = s->tc_r[0], r1 = s->tc_r[1], r2 = s->tc_r[2];
-    const double v0 = s->tc_up[0] * vbus + s->tc_u0[0] - r0 * i0;
-    const double v1 = s->tc_up[1] * vbus + s->tc_u0[1] - r1 * i1;
-    const double v2 = s->tc_up[2] * vbus + s->tc_u0[2] - r2 * i2;
+    double v0, v1, v2, p_rsrc;
+    if (s->tc_msrc) {
+        /* averaged legs: leg x sees R_src times the mean over the half period of up_x(t) i_dc(t) */
+        const double *m = s->tc_msrc_m;
+        const double w0 = m[0] * i0 + m[1] * i1 + m[2] * i2;
+        const double w1 = m[3] * i0 + m[4] * i1 + m[5] * i2;
+        const double w2 = m[6] * i0 + m[7] * i1 + m[8] * i2;
+        v0 = s->tc_up[0] * s->v_src - p->R_src * w0 + s->tc_u0[0] - r0 * i0;
+        v1 = s->tc_up[1] * s->v_src - p->R_src * w1 + s->tc_u0[1] - r1 * i1;
+        v2 = s->tc_up[2] * s->v_src - p->R_src * w2 + s->tc_u0[2] - r2 * i2;
+        p_rsrc = p->R_src * (i0 * w0 + i1 * w1 + i2 * w2);
+    } else {
+        v0 = s->tc_up[0] * vbus + s->tc_u0[0] - r0 * i0;
+        v1 = s->tc_up[1] * vbus + s->tc_u0[1] - r1 * i1;
+        v2 = s->tc_up[2] * vbus + s->tc_u0[2] - r2 * i2;
+        p_rsrc = p->R_src * idc * idc;
+    }
     const double u0 = v0 - R * i0 - e0, u1 = v1 - R * i1 - e1, u2 = v2 - R * i2 - e2;
     const double c0 = s->tc_conn[0], c1 = s->tc_conn[1], c2 = s->tc_conn[2];
     const double vn = s->tc_n > 0 ? (c0 * u0 + c1 * u1 + c2 * u2) * s->tc_inv_n : 0.5 * vbus - (e0 + e1 + e2) / 3.0;
@@ -111,9 +128,10 @@ static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restric
     dy[Y_I + 2] = c2 * (u2 - vn) * g;
     const double sq0 = i0 * i0, sq1 = i1 * i1, sq2 = i2 * i2;
     const double a0 = fabs(i0), a1 = fabs(i1), a2 = fabs(i2);
-    const double p_sw = s->tc_sw[0] * r0 * sq0 + s->tc_sw[1] * r1 * sq1 + s->tc_sw[2] * r2 * sq2;
-    const double p_d = s->tc_dio[0] * (V_f + r0 * a0) * a0 + s->tc_dio[1] * (V_f + r1 * a1) * a1 +
-                       s->tc_dio[2] * (V_f + r2 * a2) * a2;
+    const double r_d = p->r_d;
+    const double p_sw = s->tc_rsw[0] * sq0 + s->tc_rsw[1] * sq1 + s->tc_rsw[2] * sq2;
+    const double p_d = s->tc_dio[0] * (V_f + r_d * a0) * a0 + s->tc_dio[1] * (V_f + r_d * a1) * a1 +
+                       s->tc_dio[2] * (V_f + r_d * a2) * a2;
     const double tau_cog = p->n_cog > 0 ? cogging_at(p, s, th) : 0.0;
     const double tau = k[0] * i0 + k[1] * i1 + k[2] * i2 + tau_cog;
     const double tau_net = tau - s->tau_load;
@@ -130,7 +148,7 @@ static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restric
 
     double *restrict d = &dy[Y_ACC];
     d[BC_ACC_SRC] = s->v_src * idc;
-    d[BC_ACC_RSRC] = p->R_src * idc * idc;
+    d[BC_ACC_RSRC] = p_rsrc;
     d[BC_ACC_CU] = R * (sq0 + sq1 + sq2);
     d[BC_ACC_SW] = p_sw;
     d[BC_ACC_DIODE] = p_d;
@@ -174,25 +192,70 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
 {
     int n = 0;
     for (int x = 0; x < 3; ++x) {
-        double up = 0.0, u0 = 0.0, r = 0.0, conn = 1.0, sw = 0.0, dio = 0.0;
-        switch (s->cond[x]) {
-        case BC_COND_SW_U: up = 1.0; r = p->R_on; sw = 1.0; break;
-        case BC_COND_SW_L: r = p->R_on; sw = 1.0; break;
-        case BC_COND_D_U: up = 1.0; u0 = p->V_f; r = p->r_d; dio = 1.0; break;
-        case BC_COND_D_L: u0 = -p->V_f; r = p->r_d; dio = 1.0; break;
-        default: conn = 0.0; break;
+        double up = 0.0, u0 = 0.0, r = 0.0, conn = 1.0, rsw = 0.0, dio = 0.0;
+        if (s->avg[x]) {
+            /* averaged leg (bc_plant.h): the weighted mean of its gate states */
+            const double fu = s->fr_u[x], fo = s->fr_o[x], fs = s->fr_u[x] + s->fr_l[x];
+            switch (s->cond[x]) {
+            case BC_COND_SW_U: case BC_COND_SW_L: up = fu; r = p->R_on; rsw = p->R_on; break;
+            case BC_COND_D_U: up = fu + fo; u0 = fo * p->V_f; rsw = fs * p->R_on; dio = fo; break;
+            case BC_COND_D_L: up = fu; u0 = -fo * p->V_f; rsw = fs * p->R_on; dio = fo; break;
+            default: conn = 0.0; break;
+            }
+            if (s->cond[x] == BC_COND_D_U || s->cond[x] == BC_COND_D_L) r = rsw + fo * p->r_d;
+            s->tc_lo_a[x] = fu;
+            s->tc_lo_b[x] = -fo * p->V_f;
+            s->tc_hi_a[x] = fu + fo;
+            s->tc_hi_b[x] = fo * p->V_f;
+        } else {
+            switch (s->cond[x]) {
+            case BC_COND_SW_U: up = 1.0; r = p->R_on; rsw = p->R_on; break;
+            case BC_COND_SW_L: r = p->R_on; rsw = p->R_on; break;
+            case BC_COND_D_U: up = 1.0; u0 = p->V_f; r = p->r_d; dio = 1.0; break;
+            case BC_COND_D_L: u0 = -p->V_f; r = p->r_d; dio = 1.0; break;
+            default: conn = 0.0; break;
+            }
+            s->tc_lo_a[x] = 0.0; /* the diode window [-V_f, v_bus + V_f] */
+            s->tc_lo_b[x] = -p->V_f;
+            s->tc_hi_a[x] = 1.0;
+            s->tc_hi_b[x] = p->V_f;
         }
         s->tc_up[x] = up;
         s->tc_u0[x] = u0;
         s->tc_r[x] = r;
         s->tc_conn[x] = conn;
-        s->tc_sw[x] = sw;
+        s->tc_rsw[x] = rsw;
         s->tc_dio[x] = dio;
         n += conn != 0.0;
     }
     s->tc_n = n;
     s->tc_inv_n = n > 0 ? 1.0 / (double)n : 0.0;
     s->tc_gain = n >= 2 ? 1.0 / p->L : 0.0;
+    /* averaged legs with a source resistance: the half-period mean of up_x(t) up_y(t) (bc_plant.h) */
+    s->tc_msrc = (s->avg[0] | s->avg[1] | s->avg[2]) && p->R_src > 0.0;
+    if (s->tc_msrc) {
+        double d[3], ua[3], ui[3];
+        for (int x = 0; x < 3; ++x) {
+            if (s->tc_conn[x] == 0.0) {
+                d[x] = 1.0;
+                ua[x] = ui[x] = 0.0;
+            } else if (s->avg[x]) { /* active: upper (PWM, HIGH) or lower (LOW) switch; idle: lower switch or O */
+                ua[x] = s->fr_u[x] > 0.0 ? 1.0 : 0.0;
+                d[x] = s->fr_u[x] > 0.0 ? s->fr_u[x] : s->fr_l[x];
+                ui[x] = (s->fr_o[x] > 0.0 && s->cond[x] == BC_COND_D_U) ? 1.0 : 0.0;
+            } else {
+                d[x] = 1.0;
+                ua[x] = ui[x] = s->tc_up[x];
+            }
+        }
+        for (int x = 0; x < 3; ++x) {
+            for (int y = 0; y < 3; ++y) {
+                s->tc_msrc_m[3 * x + y] = ua[x] * ua[y] * fmin(d[x], d[y]) + ua[x] * ui[y] * fmax(0.0, d[x] - d[y]) +
+                                          ui[x] * ua[y] * fmax(0.0, d[y] - d[x]) +
+                                          ui[x] * ui[y] * fmin(1.0 - d[x], 1.0 - d[y]);
+            }
+        }
+    }
 }
 
 /* Outputs from the quantities computed with a derivative. */
@@ -479,6 +542,14 @@ static int gate_update(const bc_plant_params *p, bc_plant_state *s, int x, doubl
     return g != g0;
 }
 
+/* An averaged leg stops at time t: the switches it used count as turned off then (for the dead time). */
+static void leg_average_end(bc_plant_state *s, int x, double t)
+{
+    if (s->fr_u[x] > 0.0) s->t_off_u[x] = t;
+    if (s->fr_l[x] > 0.0) s->t_off_l[x] = t;
+    s->avg[x] = 0;
+}
+
 static double next_gate_time(const bc_plant_params *p, const bc_plant_state *s)
 {
     double tn = HUGE_VAL;
@@ -504,6 +575,8 @@ static void conduction_from_gates(const bc_plant_params *p, bc_plant_state *s)
     for (int x = 0; x < 3; ++x) {
         if (s->open_fault & (1 << x)) {
             s->cond[x] = BC_COND_OPEN; /* disconnected: neither switch nor diode can carry current */
+        } else if (s->avg[x] && s->fr_o[x] == 0.0) {
+            s->cond[x] = BC_COND_SW_U; /* averaged PWM leg: connected whatever the current */
         } else if (s->gate[x] == BC_GATE_U) {
             s->cond[x] = BC_COND_SW_U;
         } else if (s->gate[x] == BC_GATE_L) {
@@ -519,7 +592,43 @@ static void conduction_from_gates(const bc_plant_params *p, bc_plant_state *s)
     topology_set(p, s);
 }
 
-/* Open phases whose floating terminal leaves [-V_f, v_bus + V_f] conduct (fixed point, docs/plant.md). */
+/* All phases open: the pair (hi through its upper clamp, lo through its lower one) closest to conducting, and its
+ * margin (U_hi_hi - e_hi) - (U_lo_lo - e_lo): the pair conducts when it is negative. Switching legs: the largest
+ * and smallest back-EMF, margin v_bus + 2 V_f - (e_hi - e_lo). */
+static double pair_margin(const bc_plant_params *p, const bc_plant_state *s, const aux_t *a, int *hi, int *lo)
+{
+    double best = HUGE_VAL;
+    *hi = -1;
+    *lo = -1;
+    if (!(s->avg[0] | s->avg[1] | s->avg[2])) {
+        for (int x = 0; x < 3; ++x) {
+            if (s->open_fault & (1 << x)) continue;
+            if (*hi < 0 || a->e[x] > a->e[*hi]) *hi = x;
+            if (*lo < 0 || a->e[x] < a->e[*lo]) *lo = x;
+        }
+        if (*hi >= 0 && *lo >= 0 && *hi != *lo) {
+            best = a->vbus + 2.0 * p->V_f - (a->e[*hi] - a->e[*lo]);
+        }
+        return best;
+    }
+    for (int x = 0; x < 3; ++x) {
+        if (s->open_fault & (1 << x)) continue;
+        for (int y = 0; y < 3; ++y) {
+            if (y == x || (s->open_fault & (1 << y))) continue;
+            double m = (s->tc_hi_a[x] * a->vbus + s->tc_hi_b[x] - a->e[x]) -
+                       (s->tc_lo_a[y] * a->vbus + s->tc_lo_b[y] - a->e[y]);
+            if (m < best) {
+                best = m;
+                *hi = x;
+                *lo = y;
+            }
+        }
+    }
+    return best;
+}
+
+/* Open phases whose floating terminal leaves their window ([-V_f, v_bus + V_f] for a both-off leg) conduct
+ * (fixed point, docs/plant.md). */
 static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
 {
     int any_open = 0;
@@ -536,12 +645,11 @@ static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
         int changed = 0;
         if (a.n_conn == 0) {
             int hi = -1, lo = -1;
-            for (int x = 0; x < 3; ++x) {
-                if (s->open_fault & (1 << x)) continue;
-                if (hi < 0 || a.e[x] > a.e[hi]) hi = x;
-                if (lo < 0 || a.e[x] < a.e[lo]) lo = x;
-            }
-            if (hi >= 0 && lo >= 0 && hi != lo && a.e[hi] - a.e[lo] > a.vbus + 2.0 * p->V_f + tol) {
+            double margin = pair_margin(p, s, &a, &hi, &lo);
+            int conducts = (s->avg[0] | s->avg[1] | s->avg[2])
+                               ? margin < -tol
+                               : (hi >= 0 && lo >= 0 && hi != lo && a.e[hi] - a.e[lo] > a.vbus + 2.0 * p->V_f + tol);
+            if (hi >= 0 && lo >= 0 && hi != lo && conducts) {
                 s->cond[hi] = BC_COND_D_U;
                 s->cond[lo] = BC_COND_D_L;
                 changed = 1;
@@ -549,12 +657,12 @@ static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
         } else {
             for (int x = 0; x < 3; ++x) {
                 if (s->cond[x] != BC_COND_OPEN || ((s->hold_open | s->open_fault) & (1 << x))) continue;
-                if (a.v[x] < -p->V_f - tol) {
+                if (a.v[x] < s->tc_lo_a[x] * a.vbus + s->tc_lo_b[x] - tol) {
                     s->cond[x] = BC_COND_D_L;
                     changed = 1;
                     break; /* one at a time: the star point moves */
                 }
-                if (a.v[x] > a.vbus + p->V_f + tol) {
+                if (a.v[x] > s->tc_hi_a[x] * a.vbus + s->tc_hi_b[x] + tol) {
                     s->cond[x] = BC_COND_D_U;
                     changed = 1;
                     break;
@@ -605,21 +713,19 @@ static void watch_eval(const bc_plant_params *p, const bc_plant_state *s, const 
         case BC_COND_D_U: g[W_DIODE + x] = -y[Y_I + x]; break;
         case BC_COND_OPEN:
             if (a->n_conn > 0 && !(s->open_fault & (1 << x))) {
-                g[W_OPEN_LO + x] = a->v[x] + p->V_f;
-                g[W_OPEN_HI + x] = a->vbus + p->V_f - a->v[x];
+                g[W_OPEN_LO + x] = a->v[x] - (s->tc_lo_a[x] * a->vbus + s->tc_lo_b[x]);
+                g[W_OPEN_HI + x] = (s->tc_hi_a[x] * a->vbus + s->tc_hi_b[x]) - a->v[x];
             }
             break;
         default: break;
         }
     }
     if (a->n_conn == 0) {
-        double emax = -HUGE_VAL, emin = HUGE_VAL;
-        for (int x = 0; x < 3; ++x) {
-            if (s->open_fault & (1 << x)) continue;
-            if (a->e[x] > emax) emax = a->e[x];
-            if (a->e[x] < emin) emin = a->e[x];
+        int hi, lo;
+        double m = pair_margin(p, s, a, &hi, &lo);
+        if (hi >= 0 && lo >= 0 && hi != lo && (s->avg[0] | s->avg[1] | s->avg[2] || a->e[hi] > a->e[lo])) {
+            g[W_PAIR] = m;
         }
-        if (emax > emin) g[W_PAIR] = a->vbus + 2.0 * p->V_f - (emax - emin);
     }
     if (p->i_trip > 0.0 && !s->tripped) {
         for (int x = 0; x < 3; ++x) g[W_TRIP + x] = p->i_trip - fabs(y[Y_I + x]);
@@ -781,11 +887,7 @@ static void apply_event(const bc_plant_params *p, bc_plant_state *s, int w, cons
         s->cond[w - W_OPEN_HI] = BC_COND_D_U;
     } else if (w == W_PAIR) {
         int hi = -1, lo = -1;
-        for (int x = 0; x < 3; ++x) {
-            if (s->open_fault & (1 << x)) continue;
-            if (hi < 0 || a->e[x] > a->e[hi]) hi = x;
-            if (lo < 0 || a->e[x] < a->e[lo]) lo = x;
-        }
+        (void)pair_margin(p, s, a, &hi, &lo);
         if (hi >= 0 && lo >= 0 && hi != lo) {
             s->cond[hi] = BC_COND_D_U;
             s->cond[lo] = BC_COND_D_L;
@@ -805,6 +907,7 @@ static void apply_event(const bc_plant_params *p, bc_plant_state *s, int w, cons
         s->tripped = 1; /* every gate off from now on: the diodes carry the currents to zero */
         s->t_trip = s->t;
         for (int x = 0; x < 3; ++x) {
+            if (s->avg[x]) leg_average_end(s, x, s->t);
             s->des[x] = BC_GATE_O;
             s->edge_to[x] = -1;
             if (s->gate[x] == BC_GATE_U) s->t_off_u[x] = s->t;
@@ -849,6 +952,7 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     if (!finite_nonneg(p->R_on) || !finite_nonneg(p->V_f) || !finite_nonneg(p->r_d) || !finite_nonneg(p->R_src) ||
         !finite_nonneg(p->i_trip))
         return BC_ERR_PARAM;
+    if (p->inverter != BC_INV_SWITCHING && p->inverter != BC_INV_AVERAGE) return BC_ERR_PARAM;
     if (p->mech != BC_MECH_IMPOSED && p->mech != BC_MECH_DYNAMIC) return BC_ERR_PARAM;
     if (p->mech == BC_MECH_DYNAMIC && !(isfinite(p->J) && p->J > 0.0)) return BC_ERR_PARAM;
     if (!finite_nonneg(p->B) || !finite_nonneg(p->tau_c) || !finite_nonneg(p->hall_delay)) return BC_ERR_PARAM;
@@ -924,6 +1028,26 @@ void bc_plant_set_inputs(const bc_plant_params *p, bc_plant_state *s, double ome
     resolve_open(p, s);
 }
 
+/* Leg x applies the half-period average of `mode` at duty d in (0, 1) from time t (bc_plant.h). Returns 1 if the
+ * circuit changed. */
+static int leg_average(const bc_plant_params *p, bc_plant_state *s, int x, int32_t mode, double d, double t)
+{
+    double fu = 0.0, fl = 0.0, fo = 0.0;
+    switch (mode) {
+    case BC_LEG_PWM: fu = d; fl = 1.0 - d; break; /* dead time neglected */
+    case BC_LEG_HIGH: fu = d; fo = 1.0 - d; break;
+    default: fl = d; fo = 1.0 - d; break; /* BC_LEG_LOW */
+    }
+    int changed = !s->avg[x] || fu != s->fr_u[x] || fl != s->fr_l[x] || fo != s->fr_o[x];
+    s->avg[x] = 1;
+    s->fr_u[x] = fu;
+    s->fr_l[x] = fl;
+    s->fr_o[x] = fo;
+    s->des[x] = BC_GATE_O; /* the gate machinery rests; the fractions set the leg */
+    (void)gate_update(p, s, x, t);
+    return changed;
+}
+
 void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], int rising)
 {
     double th = bc_plant_t_half(p);
@@ -954,6 +1078,14 @@ void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg
         double dd = (double)d;
         int32_t act = mode_gate(mode, 1), idle = mode_gate(mode, 0);
         s->edge_to[x] = -1;
+        if (p->inverter == BC_INV_AVERAGE && act != idle && dd > 0.0 && dd < 1.0) {
+            changed |= leg_average(p, s, x, mode, dd, t0);
+            continue;
+        }
+        if (s->avg[x]) {
+            leg_average_end(s, x, t0);
+            changed = 1;
+        }
         if (rising) { /* idle, then active from t0 + (1 - d) T/2 */
             if (dd >= 1.0) {
                 s->des[x] = act;
@@ -1300,7 +1432,14 @@ double bc_plant_vbus(const bc_plant_params *p, const bc_plant_state *s)
 {
     double idc = 0.0;
     for (int x = 0; x < 3; ++x) {
-        if (s->cond[x] == BC_COND_SW_U || s->cond[x] == BC_COND_D_U) idc += s->i[x];
+        if (s->avg[x]) {
+            /* an averaged leg at the sample instant, as the switching legs are there: at the end of a rising half
+             * (carrier peak) in its active state, at the end of a falling half (valley) in its idle state */
+            int up = s->rising ? s->fr_u[x] > 0.0 : (s->fr_o[x] > 0.0 && s->cond[x] == BC_COND_D_U);
+            if (s->cond[x] != BC_COND_OPEN && up) idc += s->i[x];
+        } else if (s->cond[x] == BC_COND_SW_U || s->cond[x] == BC_COND_D_U) {
+            idc += s->i[x];
+        }
     }
     return s->v_src - p->R_src * idc;
 }

@@ -1,5 +1,6 @@
 /* test_plant.c - physics of the plant alone: standstill DC, Hall sequence both ways, open circuit,
- * diode freewheeling to an open phase, energy balance, step-size convergence, bad parameters. */
+ * diode freewheeling to an open phase, energy balance, step-size convergence, the averaged inverter, bad
+ * parameters. */
 #include <math.h>
 #include <string.h>
 
@@ -202,6 +203,89 @@ static void test_six_step_physics(void)
     CHECK(fabs(tau2 - tau8) / T_N < 1e-6, "quartering it again: %.3g p.u.", fabs(tau2 - tau8) / T_N);
 }
 
+/* Low-side chopping (LOW with duty, the other phase's upper switch on) and PWM legs, n half periods at omega. */
+static void run_fixed(bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd c[3], double om, long n)
+{
+    long k = 0;
+    CHECK(bc_plant_init(p, s, 0.0, 0.3, om, I0, 48.0) == BC_OK, "init");
+    run_halves(p, s, c, n, &k);
+}
+
+static void test_average_model(void)
+{
+    fixture f;
+    bc_plant_state s;
+    double bal, tau_sw, tau_av;
+    int ev_sw, ev_av;
+    double om = 0.5 * 75.0, T_N = 2.0 * 0.32 * 50.0;
+    /* six-step with every loss: the averaged sources and loss terms close the balance */
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.R_on = 0.004;
+    f.p.V_f = 0.7;
+    f.p.r_d = 0.002;
+    f.p.R_src = 0.01;
+    f.p.inverter = BC_INV_AVERAGE;
+    (void)six_step(&f.p, &s, om, 0.7f, 4, &bal, &ev_av);
+    CHECK(fabs(bal) < 1e-6, "averaged six-step energy balance %.3g relative", bal);
+    CHECK(s.acc[BC_ACC_DIODE] > 0.0 && s.acc[BC_ACC_SW] > 0.0, "switch and diode losses booked");
+    /* the averaged plant is the switching one's limit: same torque at 14 kHz to 1e-3 p.u., with about one step per
+     * half period and no PWM diode events */
+    f.p.inverter = BC_INV_SWITCHING;
+    tau_sw = six_step(&f.p, &s, om, 0.7f, 4, &bal, &ev_sw);
+    int64_t steps_sw = s.n_steps;
+    f.p.inverter = BC_INV_AVERAGE;
+    tau_av = six_step(&f.p, &s, om, 0.7f, 4, &bal, &ev_av);
+    CHECK(fabs(tau_av - tau_sw) / T_N < 1e-3, "averaged %.5f vs switching %.5f N m", tau_av, tau_sw);
+    CHECK(s.n_steps < steps_sw * 2 / 3, "steps %lld vs %lld", (long long)s.n_steps, (long long)steps_sw);
+    CHECK(ev_av * 10 < ev_sw, "events %d vs %d", ev_av, ev_sw);
+
+    /* a PWM leg is d v_bus on average, exactly: over a half period its terminal integrates to d V T/2 */
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.inverter = BC_INV_AVERAGE;
+    bc_leg_cmd c[3];
+    legs(c, BC_LEG_PWM, 0.625f, BC_LEG_PWM, 0.375f, BC_LEG_OFF, 0.0f);
+    run_fixed(&f.p, &s, c, 10.0, 40);
+    double va0 = s.acc[BC_ACC_VA], th = bc_plant_t_half(&f.p);
+    long k = 40;
+    run_halves(&f.p, &s, c, 1, &k);
+    CHECK(fabs(s.acc[BC_ACC_VA] - va0 - 0.625 * 48.0 * th) < 1e-9 * 48.0 * th, "PWM leg mean %.9g V",
+          (s.acc[BC_ACC_VA] - va0) / th);
+
+    /* low-side chopping: the lower switch chops phase a (negative current, upper diode in the off fraction);
+     * the switching plant at 20x the frequency is within 1 % of the averaged one at the base frequency */
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.R_on = 0.004;
+    f.p.V_f = 0.7;
+    f.p.r_d = 0.002;
+    double i_av[3], i_sw[3];
+    legs(c, BC_LEG_LOW, 0.6f, BC_LEG_HIGH, 1.0f, BC_LEG_OFF, 0.0f);
+    f.p.inverter = BC_INV_AVERAGE;
+    double e0 = 0.0;
+    run_fixed(&f.p, &s, c, 5.0, 2000);
+    for (int x = 0; x < 3; ++x) i_av[x] = s.i[x];
+    e0 = s.acc[BC_ACC_DIODE];
+    CHECK(s.i[0] < -1.0 && e0 > 0.0, "phase a sinks %.3g A, upper diode loss %.3g J", s.i[0], e0);
+    f.p.inverter = BC_INV_SWITCHING;
+    f.p.f_pwm = 20.0 * 14e3;
+    run_fixed(&f.p, &s, c, 5.0, 40000);
+    /* the switching current at a carrier peak/valley is its half-period average */
+    for (int x = 0; x < 3; ++x) i_sw[x] = s.i[x];
+    CHECK(fabs(i_sw[0] - i_av[0]) < 0.01 * fabs(i_av[0]), "phase a: switching %.5g A, averaged %.5g A", i_sw[0],
+          i_av[0]);
+    CHECK(fabs(i_sw[1] - i_av[1]) < 0.01 * fabs(i_av[1]), "phase b: switching %.5g A, averaged %.5g A", i_sw[1],
+          i_av[1]);
+
+    /* the trip works on averaged legs: every gate off, the diodes take the currents to zero */
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.inverter = BC_INV_AVERAGE;
+    f.p.i_trip = 30.0;
+    legs(c, BC_LEG_HIGH, 0.9f, BC_LEG_LOW, 1.0f, BC_LEG_OFF, 0.0f);
+    run_fixed(&f.p, &s, c, 5.0, 400);
+    CHECK(s.tripped && s.i[0] == 0.0 && s.i[1] == 0.0, "tripped at %.3g s, currents %.3g %.3g A", s.t_trip, s.i[0],
+          s.i[1]);
+    CHECK(s.avg[0] == 0 && s.avg[1] == 0, "no averaged leg after the trip");
+}
+
 static void test_bad_params(void)
 {
     fixture f;
@@ -224,6 +308,9 @@ static void test_bad_params(void)
     fixture_htm(&f, BC_MECH_IMPOSED);
     f.p.t_dead = 1.0 / 14e3;
     CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "dead time > T/4 rejected");
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.inverter = 2;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "unknown inverter model rejected");
     /* NaN duties are sanitised by the plant */
     fixture_htm(&f, BC_MECH_IMPOSED);
     CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 10.0, I0, 48.0) == BC_OK, "init");
@@ -241,6 +328,7 @@ int main(void)
     test_hall_both_directions();
     test_open_circuit();
     test_six_step_physics();
+    test_average_model();
     test_bad_params();
     return bc_test_summary("test_plant");
 }

@@ -21,7 +21,7 @@ from .catalog import load
 from .control import Control, Lu, Sine, SixStep, SixStepVoltage
 from .errors import BldclabError, PlausibilityWarning
 from .experiments import electrical_period
-from .motor import Drive
+from .motor import Drive, Inverter
 from .sim import Scenario, simulate
 from .units import to_si
 
@@ -53,6 +53,19 @@ def _control(name: str, drive: Drive, handoff: float | None = None) -> tuple[Con
     if name in ("lu", "lu-no-do", "rect"):
         return Lu(method=name), drive.T_N, "N m"
     raise BldclabError("--control", f"must be one of {', '.join(CONTROLS)}, got {name!r}")
+
+
+def add_inverter_option(p: argparse.ArgumentParser) -> None:
+    """Add ``--inverter switching|average`` (overrides the motor file's ``[inverter] model``)."""
+    p.add_argument("--inverter", choices=Inverter.MODELS,
+                   help="inverter model: switching (every gate edge) or average (half-period averages, faster, "
+                        "no PWM ripple); default: the motor file's [inverter] model")
+
+
+def load_drive(args: argparse.Namespace) -> Drive:
+    """Load ``args.motor`` with ``--inverter`` applied."""
+    drive = load(args.motor)
+    return drive if args.inverter is None else drive.replace(inverter__model=args.inverter)
 
 
 def _figure_bytes(fig: Figure, fmt: str) -> bytes:
@@ -97,6 +110,7 @@ def configure_simulate(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", type=Path, help="write result.npz, trace.csv, metrics.json (and figures) here")
     p.add_argument("--plot", action="store_true", help="write waveforms.png and .svg (currents, torque, voltages)")
     p.add_argument("--format", choices=("table", "json"), default="table", help="terminal output")
+    add_inverter_option(p)
 
 
 def _reference(args: argparse.Namespace, default: float, unit: str) -> float:
@@ -117,7 +131,7 @@ def _reference(args: argparse.Namespace, default: float, unit: str) -> float:
 
 def run_simulate(args: argparse.Namespace) -> int:
     """Run ``bldclab simulate``."""
-    drive = load(args.motor)
+    drive = load_drive(args)
     if args.trace_sub < 1:
         raise BldclabError("--trace-sub", f"must be >= 1, got {args.trace_sub}")
     ctl, default_ref, unit = _control(args.control, drive)
@@ -144,6 +158,7 @@ def run_simulate(args: argparse.Namespace) -> int:
     assert m is not None
     summary: dict[str, Any] = {
         "motor": drive.name, "control": args.control, "reference": ref, "reference_unit": unit,
+        "inverter": drive.inverter.model,
         "speed_rad_s": m.omega_mean, "speed_pu": m.omega_mean / drive.Omega_0, "window_s": [m.t0, m.t1],
         "tau_mean_N_m": m.tau_mean, "tau_mean_pu": m.tau_mean / drive.T_N, "ripple_N_m": m.ripple,
         "ripple_pwm_averaged_N_m": m.ripple_ma, "ripple_pct_of_mean": 100 * m.ripple / abs(m.tau_mean)
@@ -157,9 +172,9 @@ def run_simulate(args: argparse.Namespace) -> int:
         print(json.dumps(summary, indent=2))
     else:
         print(f"{drive.name}, {args.control} control, reference {ref:.4g} {unit}, "
-              f"{'dynamometer' if speed is not None else 'rotor dynamics'}")
+              f"{'dynamometer' if speed is not None else 'rotor dynamics'}, {drive.inverter.model} inverter")
         for key, value in summary.items():
-            if key in ("motor", "control", "reference", "reference_unit", "warnings"):  # warnings: on stderr
+            if key in ("motor", "control", "reference", "reference_unit", "inverter", "warnings"):  # warnings: stderr
                 continue
             text = ", ".join(f"{v:.4g}" for v in value) if isinstance(value, list) else (
                 f"{value:.5g}" if isinstance(value, float) else str(value))
@@ -200,6 +215,7 @@ def configure_compare(p: argparse.ArgumentParser) -> None:
     p.add_argument("--pwm-phases", type=int, default=1,
                    help="PWM-grid phases per point: offsets of the rotor's initial angle within one PWM period; "
                         "points report their mean and range (default 1)")
+    add_inverter_option(p)
 
 
 def comparison_figures(res: Any) -> dict[str, Figure]:
@@ -224,7 +240,7 @@ def run_compare(args: argparse.Namespace) -> int:
     """Run ``bldclab compare``."""
     from .compare import compare, speed_grid
 
-    drive = load(args.motor)
+    drive = load_drive(args)
     if args.speeds < 2:
         raise BldclabError("--speeds", f"needs at least 2, got {args.speeds}")
     if not 0 < args.min_speed < args.max_speed < 1.5:
@@ -309,6 +325,7 @@ def configure_torque_control(p: argparse.ArgumentParser) -> None:
                         "the rated speed")
     p.add_argument("--methods", default="rect,lu-no-do,lu", help="methods among rect, lu-no-do, lu")
     p.add_argument("--out", type=Path, help="write methods.csv and paper 2's Figs 10-12 here")
+    add_inverter_option(p)
 
 
 def _list(text: str, parse: Any, field: str) -> list[float]:
@@ -322,7 +339,7 @@ def run_torque_control(args: argparse.Namespace) -> int:
     """Run ``bldclab torque-control``: paper 2's methods compared over a load x speed grid."""
     from . import paper2
 
-    drive = load(args.motor)
+    drive = load_drive(args)
 
     def torque(t: str) -> float:
         if t.endswith("%"):

@@ -559,6 +559,11 @@ class Inverter:
     i_trip : float
         Hardware over-current protection (A): a phase current reaching it switches every gate off, latched, as the
         comparators of a gate driver do, whatever the firmware does. 0 (default): none.
+    model : str
+        ``"switching"`` (default): every gate edge, dead time and diode transition inside the PWM period.
+        ``"average"``: a leg that switches inside a half PWM period applies its half-period average (the
+        averaged inverter of motulator and gym-electric-motor, paper 1's ideal current limiter); diodes, the open
+        phase and the trip stay, dead time inside PWM is neglected. Faster, no PWM ripple (docs/plant.md).
 
     """
 
@@ -570,6 +575,9 @@ class Inverter:
     r_d: float = 0.0
     R_src: float = 0.0
     i_trip: float = 0.0
+    model: str = "switching"
+
+    MODELS: ClassVar[tuple[str, ...]] = ("switching", "average")
 
     def __post_init__(self) -> None:
         _num("V_dc", self.V_dc, lo=0.0, lo_open=True)
@@ -580,6 +588,8 @@ class Inverter:
                                f"f_pwm = {self.f_pwm:g} Hz), got {self.t_dead:g} s")
         for name in ("R_on", "V_f", "r_d", "R_src", "i_trip"):
             _num(name, getattr(self, name), lo=0.0)
+        if self.model not in self.MODELS:
+            raise BldclabError("model", f"must be one of {', '.join(self.MODELS)}, got {self.model!r}")
 
 
 @dataclass(frozen=True)
@@ -957,7 +967,8 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
                      R_on=inv_s.quantity("R_on", "resistance", 0.0),
                      V_f=inv_s.quantity("V_f", "voltage", 0.0), r_d=inv_s.quantity("r_d", "resistance", 0.0),
                      R_src=inv_s.quantity("R_src", "resistance", 0.0),
-                     i_trip=inv_s.quantity("i_trip", "current", 0.0))
+                     i_trip=inv_s.quantity("i_trip", "current", 0.0),
+                     model=inv_s.string("model", "switching"))
     inv_s.finish()
 
     mech = Mechanics()
@@ -1061,7 +1072,10 @@ def _drive_to_toml(d: Drive) -> str:
         c = m.cogging
         out.append(_table("motor.cogging", {"orders": list(c.orders), "amplitudes": list(c.amplitudes),
                                             "phases": list(c.phases)}))
-    out.append(_table("inverter", dataclasses.asdict(d.inverter)))
+    inv = dataclasses.asdict(d.inverter)
+    if inv["model"] == "switching":
+        del inv["model"]  # the default: files written before the averaged inverter existed stay as they were
+    out.append(_table("inverter", inv))
     out.append(_table("mechanics", dataclasses.asdict(d.mechanics)))
     s = dataclasses.asdict(d.sensors)
     s["current_gain"] = list(s["current_gain"])

@@ -122,6 +122,7 @@ PARAMETERS: dict[str, tuple[tuple[str, str, str], ...]] = {
         ("r_d", "diode slope resistance", "Ohm"),
         ("R_src", "DC source resistance", "Ohm"),
         ("i_trip", "hardware over-current trip (0: none)", "A"),
+        ("model", "inverter model: switching (every gate edge) or average (half-period averages)", "-"),
     ),
     "mechanics": (
         ("J", "inertia of rotor and load", "kg m^2"),

@@ -21,7 +21,7 @@ from . import plausibility as _plaus
 from ._core import core
 from .control import Control
 from .errors import BldclabError
-from .motor import Drive
+from .motor import Drive, Inverter
 from .results import Metrics, SimResult
 
 __all__ = ["Fault", "Scenario", "simulate"]
@@ -234,6 +234,7 @@ def _plant_params(drive: Drive, mech: int, h_max: float, keep: list[object]) -> 
     rec["r_d"] = inv.r_d
     rec["R_src"] = inv.R_src
     rec["i_trip"] = inv.i_trip
+    rec["inverter"] = Inverter.MODELS.index(inv.model)  # BC_INV_SWITCHING 0, BC_INV_AVERAGE 1
     rec["mech"] = mech
     rec["J"] = mech_p.J
     rec["B"] = mech_p.B

@@ -19,6 +19,36 @@
  * (i_x = 0, terminal floating at e_x + v_n) and conducts again when that voltage leaves [-V_f, v_bus + V_f].
  * These rules alone produce freewheeling, open phase, current dips and torque spikes: nothing is scripted.
  *
+ * Averaged inverter (params.inverter = BC_INV_AVERAGE): a leg commanded to switch inside the half period
+ * (BC_LEG_PWM, HIGH or LOW with 0 < d < 1) applies its half-period average instead of its gate edges. With f_U,
+ * f_L, f_O the fractions of the half period with the upper switch on, the lower switch on, both off
+ * (PWM: d, 1-d, 0; HIGH: d, 0, 1-d; LOW: 0, d, 1-d; dead time neglected), the leg is the weighted mean of its
+ * gate states, the both-off fraction conducting through the diode that the current's sign selects:
+ *
+ *     f_O = 0 (PWM, always connected):  U = f_U v_bus,                      r = R_on
+ *     i > 0 (lower diode in f_O):       U = f_U v_bus - f_O V_f,            r = (f_U + f_L) R_on + f_O r_d
+ *     i < 0 (upper diode in f_O):       U = (f_U + f_O) v_bus + f_O V_f,    r = (f_U + f_L) R_on + f_O r_d
+ *     i = 0: open while the floating terminal e_x + v_n stays in [U_lo, U_hi] =
+ *            [f_U v_bus - f_O V_f, (f_U + f_O) v_bus + f_O V_f] (the diode window of a both-off leg, narrowed
+ *            by the switch's share; f_O = 1 gives [-V_f, v_bus + V_f]); leaving it, the leg conducts as above.
+ *
+ * i_dc takes f_U i (+ f_O i through the upper diode), the switch loss is (f_U + f_L) R_on i^2 and the diode loss
+ * f_O (V_f + r_d |i|) |i|: exactly the power the averaged sources and resistances take, so the energy balance
+ * closes as in the switching model. With R_src > 0 the bus drop is averaged exactly too: leg x sees
+ * f_up,x V_src - R_src sum_y M_xy i_y and the source resistance takes R_src sum_xy i_x M_xy i_y, where
+ * M_xy = mean over the half period of up_x(t) up_y(t) (up: tied to the + rail); the active intervals of all legs
+ * are anchored at the same end of the half period (centre-aligned PWM), so with a_x the active fraction and
+ * A_x, I_x = 1 if the active / idle state ties the + rail:
+ *     M_xy = A_x A_y min(a_x, a_y) + A_x I_y max(0, a_x - a_y) + I_x A_y max(0, a_y - a_x)
+ *            + I_x I_y min(1 - a_x, 1 - a_y).
+ * The open-phase windows use the mean bus v_bus = V_src - R_src i_dc. The i > 0 and i < 0 states are the cond codes BC_COND_D_L / BC_COND_D_U of
+ * the leg (BC_COND_SW_U for f_O = 0), so current zeros and re-conduction are the same located events. Exact for
+ * continuous conduction over the half period; a current that would reach zero inside it (discontinuous
+ * conduction) is approximated by an open phase (i = 0 while the terminal is inside the window): the neglected
+ * pulses are bounded by |U - e_x - v_n| T/(2L) and vanish as f_pwm grows. Legs that are off or held at d = 0 or
+ * 1, dead time between such states, the open phase and the trip are those of the switching model. No gate edge
+ * falls inside a half period, so steps are as long as h_max (half a PWM period) allows.
+ *
  * Integration: RK4 between events; lands exactly on gate edges, back-EMF corners and Hall edges (predicted),
  * and on diode current zeros, re-conduction and speed zero crossings (root finding). Powers are integrated
  * as extra states (acc[]) so the energy balance closes to the integration accuracy. Full description:
@@ -40,7 +70,11 @@
 #define BC_GATE_U 1 /* upper on */
 #define BC_GATE_L 2 /* lower on */
 
-/* Conduction state of a phase. */
+/* Inverter model (bc_plant_params.inverter). */
+#define BC_INV_SWITCHING 0
+#define BC_INV_AVERAGE 1
+
+/* Conduction state of a phase (an averaged leg: D_L / D_U for i > 0 / i < 0, SW_U if it has no off fraction). */
 #define BC_COND_OPEN 0
 #define BC_COND_SW_U 1
 #define BC_COND_SW_L 2
@@ -121,6 +155,7 @@ typedef struct {
     double R_src;           /* DC source resistance, Ohm */
     double i_trip;          /* hardware over-current trip, A: |i_x| reaching it switches every gate off, latched
                                (a comparator on the phase shunts, as gate drivers have); 0: none */
+    int32_t inverter;       /* BC_INV_SWITCHING (gate edges) or BC_INV_AVERAGE (half-period averages) */
     /* mechanics */
     int32_t mech;           /* BC_MECH_IMPOSED or BC_MECH_DYNAMIC */
     double J;               /* inertia, kg m^2 */
@@ -179,14 +214,22 @@ typedef struct {
     double t_off_u[3];      /* last time the upper switch turned off, s */
     double t_off_l[3];      /* last time the lower switch turned off, s */
     int32_t cond[3];        /* BC_COND_* */
+    int32_t avg[3];         /* 1: leg x applies its half-period average (BC_INV_AVERAGE) */
+    double fr_u[3];         /* averaged leg: fraction with the upper switch on */
+    double fr_l[3];         /* ... with the lower switch on */
+    double fr_o[3];         /* ... with both off */
     int32_t hold_open;      /* bit x: phase x stays open until time advances (a spurious diode turn-on) */
     /* circuit coefficients of the present conduction states, set whenever they change (internal) */
     double tc_up[3];        /* 1 if tied to the + rail */
     double tc_u0[3];        /* constant part of the terminal source U_x, V */
     double tc_r[3];         /* device resistance in series, Ohm */
     double tc_conn[3];      /* 1 if connected */
-    double tc_sw[3];        /* 1 if through a switch */
-    double tc_dio[3];       /* 1 if through a diode */
+    double tc_rsw[3];       /* switch resistance in series (R_on times the switch fraction), Ohm */
+    double tc_dio[3];       /* diode fraction (1 if through a diode) */
+    double tc_lo_a[3], tc_lo_b[3]; /* open phase conducts (i > 0) below U_lo = a v_bus + b, V */
+    double tc_hi_a[3], tc_hi_b[3]; /* ... (i < 0) above U_hi = a v_bus + b, V */
+    int32_t tc_msrc;        /* averaged legs and R_src > 0: the source drop uses tc_msrc_m */
+    double tc_msrc_m[9];    /* M_xy = half-period mean of up_x(t) up_y(t), row-major */
     double tc_inv_n;        /* 1 / connected phases (0 if none) */
     double tc_gain;         /* 1/L if at least two phases conduct, else 0 */
     int32_t tc_n;           /* connected phases */
@@ -245,7 +288,9 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
 /* Instantaneous outputs at the current state. */
 void bc_plant_output(const bc_plant_params *p, const bc_plant_state *s, bc_plant_out *out);
 
-/* DC bus voltage at the inverter now, V (cheaper than bc_plant_output). */
+/* DC bus voltage at the inverter now, V (cheaper than bc_plant_output). Averaged legs count in the gate state they
+ * would have at this instant, the carrier peak or valley that ends the half period (active / idle), so the sensors
+ * read what they read on the switching plant. */
 double bc_plant_vbus(const bc_plant_params *p, const bc_plant_state *s);
 
 /* Restart the tau_min/tau_max/i_peak trackers from the current state. */
