@@ -16,6 +16,7 @@ from matplotlib.figure import Figure
 import bldclab as bl
 from bldclab import paper2
 from bldclab._core import core
+from bldclab.cli import main
 from bldclab.errors import BldclabError
 
 LU = bl.load("lu-4kw")
@@ -71,6 +72,18 @@ def test_mean_torque_holds_the_reference_in_discontinuous_conduction(load, rpm):
     assert np.mean(np.asarray(res["mode"]) == 3.0) > 0.5
     old = paper2.ripple_stats(paper2.operating_point(LU, "lu", tq, om, mean_law=False), LU)
     assert old.tau_mean / tq > 1.03, old
+
+
+def test_torque_control_warns_and_names_the_cause(capsys):
+    """rect at 25 % load (discontinuous current, sampled-current PI) misses its reference: the CLI says why; lu does
+    not get a warning; a saturated duty is named as the DC bus's limit."""
+    assert main(["torque-control", "lu-4kw", "--torques", "25%", "--speeds", "1000 rpm"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: rect at 25 % of T_N, 1000 rpm" in err and "discontinuous" in err
+    assert "warning: lu " not in err and "warning: lu-no-do" not in err
+    row = {"method": "lu", "tau_mean_pct_ref": 80.0, "sat_share": 0.2, "dcm_share": 0.3}
+    assert "DC bus cannot drive" in str(paper2.shortfall_cause(row))
+    assert paper2.shortfall_cause({**row, "tau_mean_pct_ref": 102.0}) is None
 
 
 def test_mean_law_leaves_continuous_conduction_alone():
@@ -247,7 +260,8 @@ def test_compare_methods_table_and_figures():
     df = paper2.compare_methods(LU, [0.5 * LU.T_N], [RATED])
     assert list(df["method"]) == list(paper2.METHODS)
     for col in ("torque_ref", "torque_pct", "speed_rpm", "tau_mean", "tau_mean_pct_ref", "ripple_pp", "ripple_rms",
-                "ripple_ma_pp", "ripple_ma_rms", "dip_A", "dip_pct", "n_commutations", "do_share", "dcm_share"):
+                "ripple_ma_pp", "ripple_ma_rms", "dip_A", "dip_pct", "n_commutations", "do_share", "dcm_share",
+                "sat_share"):
         assert col in df.columns
         assert df[col].notna().all(), col
     assert df["speed_rpm"].iloc[0] == pytest.approx(3000.0)
