@@ -130,7 +130,7 @@ void bc_lu_predict(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan
  * a diode-only phase opens when its current reaches zero (the part is split there), open phases keep i = 0.
  * r_drop[x] = R i_x at the start of the step (as in the averaged models). */
 static void segment(const bc_lu_params *p, const bc_lu_point *x, const float r_drop[3], const int leg[3], float tau,
-                    float i[3])
+                    float i[3], float *area, int *dry)
 {
     float v = x->v_dc, w = x->omega_m;
     float eps = 1e-6f * p->i_max;
@@ -157,8 +157,9 @@ static void segment(const bc_lu_params *p, const bc_lu_point *x, const float r_d
             }
             n += conn[k];
         }
-        if (n < 2) { /* no circuit: no current */
+        if (n < 2) { /* no circuit: no current (for the rest of the part: no torque) */
             for (int k = 0; k < 3; ++k) i[k] = 0.0f;
+            if (dry) *dry = 1;
             return;
         }
         float v_n = 0.0f;
@@ -179,6 +180,12 @@ static void segment(const bc_lu_params *p, const bc_lu_point *x, const float r_d
                 }
             }
         }
+        /* the currents are linear over the piece: its torque integral is t_ev T(mid-piece) (shapes frozen) */
+        if (area) {
+            float t_mid = 0.0f;
+            for (int k = 0; k < 3; ++k) t_mid += x->f[k] * (i[k] + 0.5f * slope[k] * t_ev);
+            *area += t_ev * t_mid;
+        }
         for (int k = 0; k < 3; ++k) i[k] += slope[k] * t_ev;
         if (who >= 0) {
             float r = i[who]; /* rounding residue: keep the sum zero */
@@ -186,13 +193,15 @@ static void segment(const bc_lu_params *p, const bc_lu_point *x, const float r_d
             int other = who == 0 ? 1 : 0;
             i[other] += r;
         }
+        if (dry && fabsf(i[0]) <= eps && fabsf(i[1]) <= eps && fabsf(i[2]) <= eps) *dry = 1; /* none left */
         tau -= t_ev;
         if (who < 0) break;
     }
 }
 
-void bc_lu_predict_ordered(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan *plan, int rising,
-                           float i_next[3])
+/* The ordered step; with area and dry non-null also the torque integral (N m s) and whether the current stops. */
+static void ordered(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan *plan, int rising, float i_next[3],
+                    float *area, int *dry)
 {
     float r_drop[3];
     for (int k = 0; k < 3; ++k) {
@@ -214,40 +223,92 @@ void bc_lu_predict_ordered(const bc_lu_params *p, const bc_lu_point *x, const bc
     /* centre-aligned PWM: the on part is next to the carrier peak, so a rising half period starts off */
     float t_on = d * p->ts, t_off = p->ts - t_on;
     if (rising) {
-        segment(p, x, r_drop, off, t_off, i_next);
-        segment(p, x, r_drop, on, t_on, i_next);
+        segment(p, x, r_drop, off, t_off, i_next, area, dry);
+        segment(p, x, r_drop, on, t_on, i_next, area, dry);
     } else {
-        segment(p, x, r_drop, on, t_on, i_next);
-        segment(p, x, r_drop, off, t_off, i_next);
+        segment(p, x, r_drop, on, t_on, i_next, area, dry);
+        segment(p, x, r_drop, off, t_off, i_next, area, dry);
     }
 }
 
-float bc_lu_solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
-                       float d0, float tol)
+void bc_lu_predict_ordered(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan *plan, int rising,
+                           float i_next[3])
 {
-    /* g(d) = sgn (T(k+1; d) - T*), increasing in d (sgn: the sign of the pair's lever f_P - f_N) */
+    ordered(p, x, plan, rising, i_next, 0, 0);
+}
+
+float bc_lu_mean_ordered(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan *plan, int rising,
+                         float i_next[3], int *dry)
+{
+    float area = 0.0f;
+    float eps = 1e-6f * p->i_max;
+    *dry = fabsf(x->i[0]) <= eps && fabsf(x->i[1]) <= eps && fabsf(x->i[2]) <= eps;
+    ordered(p, x, plan, rising, i_next, &area, dry);
+    return area / p->ts;
+}
+
+/* The ordered model's torque under a PAIR duty d: at the end of the step (mean = 0), its mean over the step
+ * (mean = 1), or its mean over the step and the next one under the same duty, the next half period the other
+ * direction (mean = 2: a whole PWM period when the step rises). */
+static float pair_torque(const bc_lu_params *p, const bc_lu_point *x, bc_lu_plan *plan, int rising, float d, int mean)
+{
+    bc_lu_point y = *x;
+    int dry;
+    plan->duty = d;
+    if (!mean) {
+        bc_lu_predict_ordered(p, x, plan, rising, y.i);
+        return bc_lu_torque(&y);
+    }
+    float t_mean = bc_lu_mean_ordered(p, x, plan, rising, y.i, &dry);
+    if (mean == 2) {
+        bc_lu_point z = y;
+        t_mean = 0.5f * (t_mean + bc_lu_mean_ordered(p, &y, plan, !rising, z.i, &dry));
+    }
+    return t_mean;
+}
+
+/* Root of sgn (pair_torque(d) - T*) on [0, 1] (see bc_lu_solve_pair). */
+static float solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
+                        float d0, float tol, int mean)
+{
+    /* g(d) = sgn (T(d) - T*), increasing in d (sgn: the sign of the pair's lever f_P - f_N) */
     float sgn = x->f[pos] - x->f[neg] >= 0.0f ? 1.0f : -1.0f;
     bc_lu_plan plan = {BC_LU_PAIR, pos, neg, 3 - pos - neg, 0, 0.0f};
-    bc_lu_point y = *x;
-#define G_OF(dd, out)                                       \
-    do {                                                    \
-        plan.duty = (dd);                                   \
-        bc_lu_predict_ordered(p, x, &plan, rising, y.i);    \
-        (out) = sgn * (bc_lu_torque(&y) - t_ref);           \
+#define G_OF(dd, out)                                                              \
+    do {                                                                           \
+        (out) = sgn * (pair_torque(p, x, &plan, rising, (dd), mean) - t_ref);      \
     } while (0)
     float g;
-    if (d0 >= 0.0f && d0 <= 1.0f) {
+    float a = 0.0f, b = 1.0f, ga, gb, d;
+    if (mean && d0 > 0.0f && d0 < 1.0f) {
+        /* the mean laws start from a good guess (the last period's duty): bracket on its side only */
         G_OF(d0, g);
-        if (fabsf(g) <= tol) return d0; /* the averaged model holds */
+        if (fabsf(g) <= tol) return d0;
+        if (g < 0.0f) {
+            a = d0;
+            ga = g;
+            G_OF(1.0f, gb);
+            if (gb < 0.0f) return 1.0f - gb * (1.0f - d0) / fmaxf(gb - ga, 1e-30f); /* out of reach */
+        } else {
+            b = d0;
+            gb = g;
+            G_OF(0.0f, ga);
+            if (ga > 0.0f) return -ga * d0 / fmaxf(gb - ga, 1e-30f); /* too much even at zero duty */
+        }
+        d = clampf(a - ga * (b - a) / fmaxf(gb - ga, 1e-30f), a, b);
+    } else {
+        if (d0 >= 0.0f && d0 <= 1.0f) {
+            G_OF(d0, g);
+            if (fabsf(g) <= tol) return d0; /* the averaged model holds */
+        }
+        G_OF(0.0f, ga);
+        G_OF(1.0f, gb);
+        float range = fmaxf(gb - ga, 1e-30f);
+        if (gb < 0.0f) return d0 > 1.0f ? d0 : 1.0f - gb / range; /* out of reach at full duty */
+        if (ga > 0.0f) return d0 < 0.0f ? d0 : -ga / range;        /* too much even at zero duty */
+        d = (d0 > 0.0f && d0 < 1.0f) ? d0 : a - ga * (b - a) / range;
     }
-    float a = 0.0f, b = 1.0f, ga, gb;
-    G_OF(0.0f, ga);
-    G_OF(1.0f, gb);
-    float range = fmaxf(gb - ga, 1e-30f);
-    if (gb < 0.0f) return d0 > 1.0f ? d0 : 1.0f - gb / range; /* out of reach at full duty */
-    if (ga > 0.0f) return d0 < 0.0f ? d0 : -ga / range;        /* too much even at zero duty */
     /* Illinois (modified regula falsi) on the bracket [a, b], g(a) <= 0 <= g(b) */
-    float d = (d0 > 0.0f && d0 < 1.0f) ? d0 : a - ga * (b - a) / range;
     int side = 0;
     for (int it = 0; it < 40; ++it) {
         G_OF(d, g);
@@ -268,6 +329,18 @@ float bc_lu_solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, int
     }
 #undef G_OF
     return d;
+}
+
+float bc_lu_solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
+                       float d0, float tol)
+{
+    return solve_pair(p, x, pos, neg, t_ref, rising, d0, tol, 0);
+}
+
+float bc_lu_solve_pair_mean(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
+                            float d0, float tol, int two)
+{
+    return solve_pair(p, x, pos, neg, t_ref, rising, d0, tol, two ? 2 : 1);
 }
 
 /* ---- the laws -------------------------------------------------------------------------------------------- */
@@ -341,6 +414,19 @@ void bc_lu_do_bounds(const bc_lu_params *p, const bc_lu_point *x, int pos, int n
     }
 }
 
+/* Whether the current stops at some instant of a PWM period (a rising half period from x, then a falling one)
+ * under the PAIR plan with duty d in both halves; *t_first: the model's mean torque over the first half (N m). */
+static int period_dry(const bc_lu_params *p, const bc_lu_point *x, bc_lu_plan *plan, float d, float *t_first)
+{
+    bc_lu_point y = *x;
+    float i_end[3];
+    int dry, dry2;
+    plan->duty = d;
+    *t_first = bc_lu_mean_ordered(p, x, plan, 1, y.i, &dry);
+    (void)bc_lu_mean_ordered(p, &y, plan, 0, i_end, &dry2);
+    return dry || dry2;
+}
+
 /* ---- init and step --------------------------------------------------------------------------------------- */
 
 int bc_lu_init(const bc_lu_params *p, bc_lu_state *s)
@@ -348,7 +434,7 @@ int bc_lu_init(const bc_lu_params *p, bc_lu_state *s)
     if (p == 0 || s == 0) return BC_ERR_PARAM;
     if (p->n < 3 || p->f[0] == 0 || p->f[1] == 0 || p->f[2] == 0) return BC_ERR_PARAM;
     if (p->p < 1 || p->method < BC_LU_TORQUE || p->method > BC_LU_RECT || (p->delay != 0 && p->delay != 1) ||
-        (p->order != 0 && p->order != 1))
+        p->order < 0 || p->order > 2)
         return BC_ERR_PARAM;
     const float v[] = {p->L, p->R, p->ts, p->i_max, p->i_zero, p->v_max, p->k_phi, p->kp, p->ki, p->f_tick,
                        p->omega_min, p->theta_offset};
@@ -384,6 +470,9 @@ int bc_lu_init(const bc_lu_params *p, bc_lu_state *s)
     s->applied.duty = 0.0f;
     s->oc_latched = 0;
     s->dir = 0;
+    s->dcm = 0;
+    s->t_first = 0.0f;
+    s->d_mean = 0.0f;
     return BC_OK;
 }
 
@@ -502,9 +591,15 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
     /* the state at the start of the interval the new output applies to */
     bc_lu_point x1 = x0;
     float i_pred[3];
+    float t_half = s->t_first; /* the model's mean torque over the half period in force (delay 0: predicted) */
     if (p->delay == 1) {
         /* i(k+1) from i(k) under the output in force over [k, k+1]; theta(k+1) = theta(k) + Omega_e T_s */
-        model_step(p, &x0, &s->applied, rising_now, x1.i);
+        if (p->order == 2) {
+            int dry;
+            t_half = bc_lu_mean_ordered(p, &x0, &s->applied, rising_now, x1.i, &dry);
+        } else {
+            model_step(p, &x0, &s->applied, rising_now, x1.i);
+        }
         bc_lu_shapes(p, h.theta + h.omega_e * p->ts, x1.f);
         for (int k = 0; k < 3; ++k) i_pred[k] = x1.i[k];
     }
@@ -522,13 +617,18 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
 
     bc_lu_plan plan = {BC_LU_PAIR, pos, neg, off, 0, 0.0f};
     int rising_out = p->delay == 1 ? !rising_now : rising_now; /* the half period the new output applies to */
+    if (rising_out) s->dcm = 0; /* set again below if the new period conducts discontinuously */
     float d;
+    int deferred = 0; /* the end-value solve of normal conduction is left to after the mean law's test */
     float mode = conducting ? 1.0f : 0.0f;
     if (p->method == BC_LU_RECT) {
         d = rect_duty(p, s, &x0, pos, neg, t_ref);
     } else if (!conducting) {
         d = bc_lu_dn(p, &x1, pos, neg, t_ref, s->lever_min); /* normal conduction (9') */
-        if (p->order) d = bc_lu_solve_pair(p, &x1, pos, neg, t_ref, rising_out, d, s->tol);
+        /* order 2 in a discontinuous period (the last one, or this one's first half, was): the mean law below
+         * comes first and the end-value solve only if it does not apply (it is costly where the end value is flat) */
+        deferred = p->order == 2 && (rising_out ? s->d_mean > 0.0f : s->dcm);
+        if (p->order && !deferred) d = bc_lu_solve_pair(p, &x1, pos, neg, t_ref, rising_out, d, s->tol);
     } else {
         /* commutation: (17') if F conducts the whole sample, D_s if it opens inside it */
         float t_x = bc_lu_extinction(p, &x1, pos, neg);
@@ -549,6 +649,39 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
                 plan.sig = sig > 0.0f ? 1 : -1;
                 mode = 2.0f;
             }
+        }
+    }
+    if (p->order == 2 && rising_out && plan.kind == BC_LU_PAIR && p->method != BC_LU_RECT) {
+        /* a PWM period starts: if under the duty that gives a mean of T* over the whole period the current
+         * stops at some instant (discontinuous conduction), the mean law replaces the end-value law. Where the
+         * current does not stop under the end-value duty either, the period is continuous: nothing to solve. */
+        bc_lu_plan trial = plan;
+        float t_first;
+        int dcm = deferred || period_dry(p, &x1, &trial, clampf(d, 0.0f, 1.0f), &t_first);
+        float guess = s->d_mean > 0.0f ? s->d_mean : d;
+        s->d_mean = 0.0f;
+        if (dcm) {
+            float d_m = bc_lu_solve_pair_mean(p, &x1, pos, neg, t_ref, 1, guess, s->tol, 1);
+            if (period_dry(p, &x1, &trial, clampf(d_m, 0.0f, 1.0f), &s->t_first)) {
+                d = d_m;
+                mode = 3.0f;
+                s->dcm = 1;
+                s->d_mean = clampf(d_m, 0.0f, 1.0f); /* the next period's first guess */
+            } else if (deferred) {
+                d = bc_lu_solve_pair(p, &x1, pos, neg, t_ref, 1, d, s->tol);
+            }
+        }
+    } else if (p->order == 2 && s->dcm && plan.kind == BC_LU_PAIR && p->method != BC_LU_RECT) {
+        /* the period's second half: its mean makes up for the first half's (the model's, from the
+         * measurements with delay 1) */
+        float d0 = s->applied.kind == BC_LU_PAIR ? s->applied.duty : d; /* the first half's: symmetric at rest */
+        float d_m = bc_lu_solve_pair_mean(p, &x1, pos, neg, 2.0f * t_ref - t_half, 0, d0, s->tol, 0);
+        if (d_m >= 0.0f && d_m <= 1.0f) {
+            d = d_m;
+            mode = 3.0f;
+        } else if (deferred) {
+            /* the make-up is out of reach (e.g. a commutation in this half): the end value at least */
+            d = bc_lu_solve_pair(p, &x1, pos, neg, t_ref, 0, d, s->tol);
         }
     }
     if (isnan(d)) { /* only a degenerate measurement (e.g. v_dc ~ 1e-38) gets here */

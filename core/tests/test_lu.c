@@ -309,9 +309,10 @@ static void test_hand_computed(void)
 /* Brute force: the same switching circuit integrated with 20000 explicit Euler steps per half period (R i frozen at
  * the start of the step, as in the models). legs: 0 off, 1 upper on, 2 lower on, for the off and on parts. */
 static void brute(const bc_lu_params *p, const bc_lu_point *x, const int off_leg[3], const int on_leg[3], float d,
-                  int rising, double i[3])
+                  int rising, double i[3], double *tq_mean)
 {
     const int nstep = 20000;
+    double tq = 0.0;
     double h = (double)p->ts / nstep, v = (double)x->v_dc, w = (double)x->omega_m, L = (double)p->L;
     for (int k = 0; k < 3; ++k) i[k] = (double)x->i[k];
     for (int j = 0; j < nstep; ++j) {
@@ -340,6 +341,7 @@ static void brute(const bc_lu_params *p, const bc_lu_point *x, const int off_leg
             i[0] = i[1] = i[2] = 0.0;
             continue;
         }
+        for (int k = 0; k < 3; ++k) tq += (double)x->f[k] * i[k] / nstep; /* left-point rule, 20000 steps */
         double vn = 0.0;
         for (int k = 0; k < 3; ++k) {
             if (conn[k]) vn += u[k] - w * (double)x->f[k] - (double)p->R * (double)x->i[k];
@@ -354,7 +356,7 @@ static void brute(const bc_lu_params *p, const bc_lu_point *x, const int off_leg
             i[k] += di[k];
             if (leg[k] == 0 && conn[k] && before * i[k] < 0.0) i[k] = 0.0; /* a diode stops at zero */
         }
-    }
+    }    if (tq_mean) *tq_mean = tq;
 }
 
 static void test_ordered_model(void)
@@ -383,7 +385,7 @@ static void test_ordered_model(void)
         float got[3];
         double ref[3];
         bc_lu_predict_ordered(&p, &x, &pl, rising, got);
-        brute(&p, &x, off_leg, on_leg, d, rising, ref);
+        brute(&p, &x, off_leg, on_leg, d, rising, ref, 0);
         for (int k = 0; k < 3; ++k) worst = fmax(worst, fabs((double)got[k] - ref[k]));
     }
     CHECK(worst < 0.01, "ordered model = brute-force integration: worst %.3g A", worst);
@@ -422,6 +424,77 @@ static void test_ordered_model(void)
     /* out of reach: > 1; too much at zero duty: < 0 */
     CHECK(bc_lu_solve_pair(&p, &c, 0, 1, 100.0f, 1, 2.0f, 1e-4f) > 1.0f, "saturated high");
     CHECK(bc_lu_solve_pair(&p, &c, 0, 1, -100.0f, 1, -2.0f, 1e-4f) < 0.0f, "saturated low");
+}
+
+/* ---- the mean law (order 2): discontinuous conduction ------------------------------------------------------ */
+
+static void test_mean_law(void)
+{
+    make_table();
+    bc_lu_params p;
+    make_params(&p, BC_LU_TORQUE, 0);
+    p.order = 2;
+    /* the mean torque over the step against a brute-force integration, the same cases as test_ordered_model */
+    double worst = 0.0;
+    int n_dry = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+        bc_lu_point x;
+        double f[3], i[3], w;
+        random_point(&x, f, i, &w);
+        int kind = trial % 4;
+        if (kind == 0) {
+            x.i[0] = 0.0f;
+            x.i[1] = -x.i[2];
+        } else if (kind == 1) {
+            x.i[0] = (float)urand(0.0, 3.0);
+            x.i[2] = 0.0f;
+            x.i[1] = -x.i[0];
+        }
+        float d = (float)urand(0.0, 1.0);
+        int rising = (trial / 4) % 2;
+        bc_lu_plan pl = {kind == 3 ? BC_LU_DO : BC_LU_PAIR, 0, 1, 2, kind == 3 ? 1 : 0, d};
+        int on_leg[3] = {1, 2, kind == 3 ? 1 : 0}, off_leg[3] = {kind == 3 ? 1 : 0, kind == 3 ? 2 : 0, 0};
+        float got[3];
+        double ref[3], tq_ref;
+        int dry;
+        float tq = bc_lu_mean_ordered(&p, &x, &pl, rising, got, &dry);
+        brute(&p, &x, off_leg, on_leg, d, rising, ref, &tq_ref);
+        worst = fmax(worst, fabs((double)tq - tq_ref));
+        n_dry += dry;
+    }
+    CHECK(worst < 5e-3, "mean torque over the step = brute-force integration: worst %.3g N m", worst);
+    CHECK(n_dry > 20 && n_dry < 380, "some steps conduct discontinuously: %d of 400", n_dry);
+
+    /* dry: 1 A pair current, 1000 rpm, a rising half period with a short on part stops; 16 A does not */
+    bc_lu_point x = {{1.0f, -1.0f, 0.0f}, {0.4f, -0.4f, 0.0f}, 104.7f, 300.0f};
+    bc_lu_plan pl = {BC_LU_PAIR, 0, 1, 2, 0, 0.3f};
+    float i_end[3];
+    int dry;
+    (void)bc_lu_mean_ordered(&p, &x, &pl, 1, i_end, &dry);
+    CHECK(dry == 1, "1 A, rising, D = 0.3: the current stops");
+    x.i[0] = 16.0f;
+    x.i[1] = -16.0f;
+    pl.duty = 0.64f;
+    (void)bc_lu_mean_ordered(&p, &x, &pl, 1, i_end, &dry);
+    CHECK(dry == 0, "16 A, rising, D = 0.64: continuous");
+
+    /* the solved duties meet their means: one half period, and a whole PWM period from no current */
+    x.i[0] = 4.0f;
+    x.i[1] = -4.0f;
+    float d1 = bc_lu_solve_pair_mean(&p, &x, 0, 1, 3.2f, 0, 0.5f, 1e-4f, 0);
+    pl.duty = d1;
+    bc_lu_point y = x;
+    CHECK_NEAR(bc_lu_mean_ordered(&p, &x, &pl, 0, y.i, &dry), 3.2, 2e-4, "falling half: mean = T*");
+    bc_lu_point z = {{0.0f, 0.0f, 0.0f}, {0.4f, -0.4f, 0.0f}, 104.7f, 300.0f};
+    float d2 = bc_lu_solve_pair_mean(&p, &z, 0, 1, 3.2f, 1, 0.5f, 1e-4f, 1);
+    pl.duty = d2;
+    y = z;
+    float m1 = bc_lu_mean_ordered(&p, &z, &pl, 1, y.i, &dry);
+    bc_lu_point y2 = y;
+    float m2 = bc_lu_mean_ordered(&p, &y, &pl, 0, y2.i, &dry);
+    CHECK(fabsf(0.5f * (m1 + m2) - 3.2f) < 2e-4f, "PWM period from 0 A: mean = T* (halves %g, %g N m)", (double)m1,
+          (double)m2);
+    CHECK(m1 < 3.2f && m2 > 3.2f, "the rising half (from no current) is below T*, the falling half above");
 }
 
 /* ---- the step: switching logic and safety ------------------------------------------------------------------ */
@@ -776,8 +849,8 @@ typedef struct {
 static void lu_slot(const void *p, void *s, const bc_ctrl_in *in, bc_ctrl_out *out) { bc_lu_step(p, s, in, out); }
 
 /* lu-4kw ratings with an ideal 120-degree trapezoid, imposed speed, currents a and c measured exactly */
-static void rig_run(rig *r, int method, int delay, double omega, double t_ref, int64_t n, bc_trace_row *rows,
-                    int64_t *nw)
+static void rig_run(rig *r, int method, int delay, int order, double omega, double t_ref, int64_t n,
+                    bc_trace_row *rows, int64_t *nw)
 {
     memset(r, 0, sizeof *r);
     make_table();
@@ -800,6 +873,7 @@ static void rig_run(rig *r, int method, int delay, double omega, double t_ref, i
     r->sp.f_tick = 20e6;
     r->sp.seed = 1u;
     make_params(&r->cp, method, delay);
+    r->cp.order = order;
     r->cp.kp = 0.55f; /* RECT: pi_gains(2R, 2L, 1 kHz, 60 deg, 1.5 T_s) */
     r->cp.ki = 1200.0f;
     CHECK(bc_lu_init(&r->cp, &r->cs) == BC_OK, "lu init");
@@ -830,7 +904,7 @@ static void test_closed_loop(void)
     const double omega = 2000.0 * BC_TWO_PI / 60.0, t_ref = 10.0;
     for (int delay = 0; delay < 2; ++delay) {
         int64_t nw = 0;
-        rig_run(&r, BC_LU_TORQUE, delay, omega, t_ref, NROWS, rows, &nw);
+        rig_run(&r, BC_LU_TORQUE, delay, 1, omega, t_ref, NROWS, rows, &nw);
         CHECK(nw == NROWS, "rows");
         double tau_mean = r.st.m.E[BC_ACC_TAU] / (r.st.m.t1 - r.st.m.t0);
         CHECK(fabs(tau_mean - t_ref) < 0.02 * t_ref, "delay %d: mean torque %.3f N m for %.1f", delay, tau_mean, t_ref);
@@ -849,12 +923,26 @@ static void test_closed_loop(void)
         CHECK(worst < 0.01, "delay %d: one-step torque prediction within %.3g %% of T* (limit 1 %%)", delay,
               100.0 * worst);
     }
+    /* light load (25 % of T_N, 1000 rpm): the current stops in every PWM period. The end-value law (order 1)
+     * holds T* at the samples but its mean is ~30 % high; the mean law (order 2) holds the mean */
+    const double om1 = 1000.0 * BC_TWO_PI / 60.0, t_low = 3.18;
+    double mean_order[2];
+    for (int order = 1; order <= 2; ++order) {
+        int64_t nw = 0;
+        rig_run(&r, BC_LU_NO_DO, 1, order, om1, t_low, NROWS, rows, &nw);
+        mean_order[order - 1] = r.st.m.E[BC_ACC_TAU] / (r.st.m.t1 - r.st.m.t0);
+    }
+    printf("light load: mean torque %.4f (order 1), %.4f (order 2) N m for %.2f\n", mean_order[0], mean_order[1],
+           t_low);
+    CHECK(mean_order[0] > 1.2 * t_low, "order 1 at light load: %.3f N m, > 120 %% of T*", mean_order[0]);
+    CHECK(fabs(mean_order[1] - t_low) < 0.03 * t_low, "order 2 at light load: %.3f N m within 3 %% of %.2f",
+          mean_order[1], t_low);
     /* the three methods at 3000 rpm (4E > V): torque ripple of the one-PWM-period moving average */
     double ripple[3];
     const double om3 = 3000.0 * BC_TWO_PI / 60.0;
     for (int m = 0; m < 3; ++m) {
         int64_t nw = 0;
-        rig_run(&r, m, 1, om3, 12.7, NROWS, rows, &nw);
+        rig_run(&r, m, 1, 2, om3, 12.7, NROWS, rows, &nw);
         ripple[m] = r.st.m.tau_ma_max - r.st.m.tau_ma_min;
         int n_do = 0;
         for (int64_t k = NROWS / 2; k < NROWS; ++k) n_do += rows[k].d0 == 2.0;
@@ -872,6 +960,7 @@ int main(void)
     test_laws_solve_models();
     test_hand_computed();
     test_ordered_model();
+    test_mean_law();
     test_switching_logic();
     test_safety();
     test_reversal();

@@ -363,6 +363,11 @@ def run_torque_control(args: argparse.Namespace) -> int:
     cols = ["method", "torque_pct", "speed_rpm", "tau_mean_pct_ref", "ripple_pp", "ripple_rms", "ripple_ma_pp",
             "ripple_ma_rms", "dip_A", "dip_pct"]
     print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.2f}"))
+    for _, row in table.iterrows():
+        cause = paper2.shortfall_cause(row)
+        if cause is not None:
+            print(f"warning: {row['method']} at {row['torque_pct']:.0f} % of T_N, {row['speed_rpm']:.0f} rpm: {cause}",
+                  file=sys.stderr)
     if args.out is not None:
         files = {"methods.csv": table.to_csv(index=False).encode()}
         tq, om = max(torques), max(speeds)

@@ -9,8 +9,9 @@ electrical periods:
   (the PWM component removed), in % of the mean torque;
 - the current dip of the non-commutated phase at each commutation (A and % of its level before the commutation),
   from the one-PWM-period moving average of its current;
-- the share of samples in ``D_o`` mode, and the share of time with no phase current at all (discontinuous
-  conduction, where the laws' averaged models do not hold).
+- the share of samples in ``D_o`` mode, the share of time with no phase current at all (discontinuous
+  conduction) and the share of samples whose duty saturated; :func:`shortfall_cause` names the likely cause when a
+  method misses its reference.
 
 :func:`compare_methods` returns the table (a ``DataFrame``), :func:`fig10`, :func:`fig11` and :func:`fig12`
 reproduce the paper's simulation figures (phase currents, the duty computed, the torque), :func:`fig_compare`
@@ -21,7 +22,7 @@ Results and discussion: ``docs/theory-paper2.md``.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -49,12 +50,14 @@ __all__ = [
     "operating_point",
     "prediction_error",
     "ripple_stats",
+    "shortfall_cause",
     "trapezoid_drive",
 ]
 
 #: The three methods, in the paper's order of presentation (Figs 10, 11, 12).
 METHODS = ("rect", "lu-no-do", "lu")
 
+SATURATED = 0x10  # BC_FLAG_SATURATED (bc_types.h)
 _SECTOR = {1: 0, 3: 1, 2: 2, 6: 3, 4: 4, 5: 5}  # Hall code -> sector (docs/conventions.md)
 _POS = (0, 0, 1, 1, 2, 2)
 _NEG = (1, 2, 2, 0, 0, 1)
@@ -86,6 +89,9 @@ class RippleStats:
         Share of samples in ``D_o`` mode (-).
     dcm_share : float
         Share of the window with every phase current below 1 % of ``I_N`` (discontinuous conduction) (-).
+    sat_share : float
+        Share of samples whose duty was clamped to [0, 1] (``BC_FLAG_SATURATED``: the DC bus cannot drive what the
+        law asks) (-).
     """
 
     tau_mean: float
@@ -98,6 +104,7 @@ class RippleStats:
     n_commutations: int
     do_share: float
     dcm_share: float
+    sat_share: float
 
 
 def trapezoid_drive(drive: Drive) -> Drive:
@@ -251,6 +258,7 @@ def ripple_stats(res: SimResult, drive: Drive) -> RippleStats:
         dips.append(level - low)
         rel.append((level - low) / level if level > 0 else math.nan)
     mode = np.asarray(res["mode"][: n * sub: sub]) if "mode" in res.signals else np.zeros(n)
+    flags = np.asarray(res["flags"][: n * sub: sub]).astype(np.int64)
     i_all = np.stack([res[f"i_{x}"] for x in "abc"])
     t_in = (t >= m.t0) & (t < m.t1)
     dcm = np.all(np.abs(i_all[:, t_in]) < 0.01 * drive.motor.I_N, axis=0)
@@ -265,7 +273,38 @@ def ripple_stats(res: SimResult, drive: Drive) -> RippleStats:
         n_commutations=len(dips),
         do_share=float(np.mean(mode[inside] == 2.0)) if np.any(inside) else math.nan,
         dcm_share=float(np.mean(dcm)) if dcm.size else math.nan,
+        sat_share=float(np.mean((flags[inside] & SATURATED) != 0)) if np.any(inside) else math.nan,
     )
+
+
+def shortfall_cause(row: Mapping[str, object], tolerance: float = 0.03) -> str | None:
+    """Name the likely cause when a row of :func:`compare_methods` misses its reference by more than ``tolerance``.
+
+    Parameters
+    ----------
+    row : mapping
+        A row of the table (``method``, ``tau_mean_pct_ref``, ``sat_share``, ``dcm_share``).
+    tolerance : float
+        Allowed relative error of the mean torque (-).
+
+    Returns
+    -------
+    str or None
+        None within the tolerance; else a sentence: the duty saturated (the DC bus cannot drive the reference),
+        discontinuous conduction (the method regulates the sampled current or torque, not its mean), or neither.
+    """
+    pct = float(row["tau_mean_pct_ref"])  # type: ignore[arg-type]
+    if abs(pct - 100.0) <= 100.0 * tolerance:
+        return None
+    sat, dcm = float(row["sat_share"]), float(row["dcm_share"])  # type: ignore[arg-type]
+    what = f"mean torque {pct:.1f} % of the reference"
+    if sat > 0.01:
+        return (f"{what}: the duty saturated in {100 * sat:.0f} % of the samples, the DC bus cannot drive the "
+                "reference")
+    if dcm > 0.01:
+        return (f"{what}: the current is discontinuous ({100 * dcm:.0f} % of the time without current) and "
+                f"{row['method']} regulates the current or torque at the samples, not its mean")
+    return f"{what}: neither duty saturation nor discontinuous conduction (model error)"
 
 
 def compare_methods(drive: Drive, torques: Sequence[float], speeds: Sequence[float],
@@ -296,7 +335,7 @@ def compare_methods(drive: Drive, torques: Sequence[float], speeds: Sequence[flo
         One row per (method, torque, speed): ``method``, ``torque_ref`` (N m), ``torque_pct`` (% of ``T_N``),
         ``speed`` (rad/s), ``speed_rpm``, ``tau_mean`` (N m), ``tau_mean_pct_ref`` (% of the reference), the
         :class:`RippleStats` fields ``ripple_pp``, ``ripple_rms``, ``ripple_ma_pp``, ``ripple_ma_rms`` (% of the
-        mean torque), ``dip_A``, ``dip_pct``, ``n_commutations``, ``do_share``, ``dcm_share``.
+        mean torque), ``dip_A``, ``dip_pct``, ``n_commutations``, ``do_share``, ``dcm_share``, ``sat_share``.
 
     Raises
     ------

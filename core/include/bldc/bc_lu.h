@@ -57,16 +57,32 @@
  *     changes (the swapped pair's back-EMF has the other sign).
  *   Duties are clamped to [0, 1] (BC_FLAG_SATURATED when clamped).
  *
- * Switching order (order = 1; not in the paper). The averaged models assume both phases of the pair conduct in
+ * Switching order (order >= 1; not in the paper). The averaged models assume both phases of the pair conduct in
  * both switch states. A pair phase with zero current cannot conduct in the off state (its diode would have to carry
  * current the wrong way): the incoming phase at the start of a commutation, and any phase in discontinuous
  * conduction. Centre-aligned PWM puts the off part of a rising half period (after a carrier valley) first and that
- * of a falling half period last, so the end current then depends on the order. With order = 1 the step follows the
+ * of a falling half period last, so the end current then depends on the order. With order >= 1 the step follows the
  * half period part by part (the same circuit, R i at the start of the step, a diode-only phase opening when its
  * current reaches zero: exact for R = 0 and frozen shapes) and the PAIR duty is the root of T(k+1) = T* in [0, 1]
  * (Illinois method started from the closed-form duty, which is returned unchanged whenever the averaged model holds).
  * The half period's direction comes from counting samples from bc_lu_init, which the runner calls before its first
  * sample, taken at a carrier valley (firmware: the PWM timer's counting direction).
+ *
+ * The mean law (order = 2; not in the paper). The laws above make the torque at the SAMPLES equal to T*. That is its
+ * mean only while the current is continuous (a symmetric triangle about each sample). At light load bipolar chopping
+ * stops the current within the PWM period (its ripple V D (1 - D) / (L f_pwm) exceeds twice the mean): the rising
+ * half (off part first) can only reach T* at its end by letting the current die and rise again, the falling half then
+ * carries a large pulse above T*, and the mean torque is up to 2.4 times T* on lu-4kw (docs/theory-paper2.md). With
+ * order = 2, at the start of each PWM period (the output for a rising half period) the step also solves for the
+ * PAIR duty d_m that makes the ordered model's mean torque over the whole period (rising then falling half, the same
+ * duty) equal to T* (skipped if the current does not stop under the end-value duty either, unless the last period
+ * was discontinuous); if under d_m the current stops at some instant of the period, d_m is used (diag mode 3) and
+ * the period's falling half gets the duty whose mean over that half is 2 T* - (the model's mean over the rising
+ * half, from the measured currents with delay 1, as predicted with delay 0), so the period's mean is T* whatever the
+ * first half did (if that is out of reach, e.g. a commutation in the half, the end-value law). Otherwise
+ * (continuous conduction) the end-value laws stay: a mean law alone is only marginally stable there (mean =
+ * (i(k) + i(k+2)) / 2 fixes the sum of two sample currents, not each). Not applied in D_o mode and not to RECT. A
+ * period mean beyond reach saturates the duty (BC_FLAG_SATURATED).
  *
  * Delay. The runner applies an output one sample after it was computed (delay = 1, the DSP case) or at once
  * (delay = 0, what the paper's laws assume: the duty computed at k acts over [k, k+1]). With delay = 1 the step
@@ -84,9 +100,10 @@
  * BC_FLAG_OVERCURRENT | BC_FLAG_SAFE, latched until every |i_x| < i_max / 2 at a sample (or bc_lu_init).
  * Output duties are finite and in [0, 1] for any input.
  *
- * Diagnostics: diag[0] mode (-1 safe, 0 normal, 1 commutation D_c/D_s, 2 D_o), [1] duty computed (D_n, D_c, D_s or
- * D_o; RECT: D), [2] T estimated at this sample from the measured currents (N m), [3] the model's torque at the
- * next sample (N m: under the new output with delay 0, under the output in force with delay 1), [4] theta (rad),
+ * Diagnostics: diag[0] mode (-1 safe, 0 normal, 1 commutation D_c/D_s, 2 D_o, 3 mean law), [1] duty computed (D_n,
+ * D_c, D_s, D_o or the mean law's; RECT: D), [2] T estimated at this sample from the measured currents (N m), [3]
+ * the model's torque at the next sample (N m: under the new output with delay 0, under the output in force with
+ * delay 1), [4] theta (rad),
  * [5] Omega_e (electrical rad/s), [6] i_F of the new output's off phase at the start of its interval (A),
  * [7] sector (-1 safe).
  */
@@ -115,7 +132,8 @@ typedef struct {
     int32_t p;          /* pole pairs (>= 1) */
     int32_t method;     /* BC_LU_TORQUE, BC_LU_NO_DO, BC_LU_RECT */
     int32_t delay;      /* samples between computing and applying an output, 0 or 1 (as the runner/DSP) */
-    int32_t order;      /* 0: the averaged models; 1: also the switching order within the half period (see above) */
+    int32_t order;      /* 0: the averaged models; 1: also the switching order within the half period; 2: as 1,
+                         * and the mean law in discontinuous conduction (see above) */
     float L;            /* inclusive phase inductance L_self - M, H (> 0) */
     float R;            /* phase resistance in the models, Ohm (>= 0; 0: the paper's laws) */
     float ts;           /* sampling period, half the PWM period, s (> 0) */
@@ -151,6 +169,9 @@ typedef struct {
     int32_t oc_latched;    /* over-current trip latched */
     int32_t parity;        /* 0: the sample being taken is at a carrier valley (the next half period rises) */
     int32_t dir;           /* RECT: sign of the last torque reference (+1, -1; 0 none yet) */
+    int32_t dcm;           /* order 2: the PWM period under way conducts discontinuously (mean law) */
+    float t_first;         /* order 2: the model's mean torque over the period's first half, N m */
+    float d_mean;          /* order 2: the last discontinuous period's duty (0: none), the next solve's guess */
 } bc_lu_state;
 
 /* An operating point at the start of a step: what the models and laws need. */
@@ -200,10 +221,20 @@ void bc_lu_predict(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan
 void bc_lu_predict_ordered(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan *plan, int rising,
                            float i_next[3]);
 
+/* The same, also returning the mean torque over the step (N m, shapes frozen) and *dry = 1 if at some instant of
+ * the step no phase carries current (discontinuous conduction; also when the step starts with no current). */
+float bc_lu_mean_ordered(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan *plan, int rising,
+                         float i_next[3], int *dry);
+
 /* The PAIR duty that makes the ordered model's T(k+1) = T* (|error| <= tol, N m), starting from the closed-form
  * duty d0; beyond [0, 1] it returns d0 if d0 is beyond on the same side, else 1 + (or -) the shortfall over the
  * torque range: > 1 means T* is out of reach at full duty, < 0 at zero duty. */
 float bc_lu_solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
                        float d0, float tol);
+
+/* The same for the ordered model's mean torque over the step (bc_lu_mean_ordered) instead of T(k+1); two = 1:
+ * over the step and the next one (the other direction) under the same duty. */
+float bc_lu_solve_pair_mean(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
+                            float d0, float tol, int two);
 
 #endif /* BC_LU_H */

@@ -43,10 +43,10 @@ class Lu(Control):
 
     The reference (``Scenario.ref``) is the torque in N m; a negative torque swaps the two conducting phases. The
     controller's diagnostics appear in the result as ``mode`` (-1 safe, 0 normal conduction, 1 commutation with
-    ``D_c``, 2 ``D_o`` mode), ``duty`` (the duty computed), ``tau_est`` (torque from the measured currents and the
-    shapes, N m), ``tau_pred`` (its model's torque at the next sample, N m), ``theta_est`` (Hall-interpolated
-    electrical angle, rad), ``omega_est`` (electrical speed, rad/s), ``i_off`` (current of the phase whose leg is
-    off, A: the outgoing current during a commutation) and ``sector``.
+    ``D_c``, 2 ``D_o`` mode, 3 the mean law in discontinuous conduction), ``duty`` (the duty computed), ``tau_est``
+    (torque from the measured currents and the shapes, N m), ``tau_pred`` (its model's torque at the next sample,
+    N m), ``theta_est`` (Hall-interpolated electrical angle, rad), ``omega_est`` (electrical speed, rad/s),
+    ``i_off`` (current of the phase whose leg is off, A: the outgoing current during a commutation) and ``sector``.
 
     Parameters
     ----------
@@ -65,6 +65,11 @@ class Lu(Control):
         Follow the order of the off and on parts of each centre-aligned half period in the one-step model, so that
         a pair phase at zero current (the incoming phase at the start of a commutation, discontinuous conduction)
         stays open in the off part, and solve the laws on that model (``False``: the paper's averaged models only).
+    mean_law : bool
+        With ``switching_order``: where the current stops within the PWM period (discontinuous conduction, light
+        load), choose the duties so that the model's *mean* torque over the PWM period is the reference instead of
+        the torque at the next sample (whose mean is then up to 2.4 times the reference on ``lu-4kw``, see
+        ``docs/theory-paper2.md``). ``False``: the end-value laws everywhere, as before.
     shape_points : int
         Points per shape table handed to the controller, uniform over the phase's local angle (a table shape on
         this grid is reproduced exactly).
@@ -92,6 +97,7 @@ class Lu(Control):
     delay: int = 1
     model_R: bool = True
     switching_order: bool = True
+    mean_law: bool = True
     shape_points: int = 360
     i_max: float | None = None
     i_zero: float | None = None
@@ -109,7 +115,7 @@ class Lu(Control):
             raise BldclabError("control.method", f"must be one of {', '.join(_METHOD)}, got {self.method!r}")
         if isinstance(self.delay, bool) or self.delay not in (0, 1):
             raise BldclabError("control.delay", f"must be 0 or 1 sample, got {self.delay!r}")
-        for name in ("model_R", "switching_order"):
+        for name in ("model_R", "switching_order", "mean_law"):
             if not isinstance(getattr(self, name), bool):
                 raise BldclabError(f"control.{name}", f"must be True or False, got {getattr(self, name)!r}")
         if isinstance(self.shape_points, bool) or not isinstance(self.shape_points, int) or self.shape_points < 12:
@@ -200,7 +206,7 @@ class Lu(Control):
         rec["p"] = m.p
         rec["method"] = _METHOD[self.method]
         rec["delay"] = self.delay
-        rec["order"] = int(self.switching_order)
+        rec["order"] = (2 if self.mean_law else 1) if self.switching_order else 0
         rec["L"] = m.L
         rec["R"] = r_total(drive) if self.model_R else 0.0
         rec["ts"] = 0.5 / inv.f_pwm
