@@ -35,7 +35,7 @@ static const float HTM_EMF_12[12] = {0.0f,  0.32f,  0.32f,  0.32f,  0.32f,  0.32
 static const float LU_F_12[12] = {0.0f, 0.4f, 0.4f, 0.4f, 0.4f, 0.4f, 0.0f, -0.4f, -0.4f, -0.4f, -0.4f, -0.4f};
 
 #define LU4KW_LU_PARAMS                                                                                           \
-    {.f = {LU_F_12, LU_F_12, LU_F_12}, .n = 12, .p = 2, .method = BC_LU_TORQUE, .delay = 1, .order = 1,            \
+    {.f = {LU_F_12, LU_F_12, LU_F_12}, .n = 12, .p = 2, .method = BC_LU_TORQUE, .delay = 1, .order = 2,            \
      .L = 0.29e-3f, .R = 0.059f, .ts = 50e-6f, .i_max = 48.0f, .i_zero = 0.16f, .v_max = 600.0f, .k_phi = 0.4f,     \
      .kp = 3.63f, .ki = 1939.0f, .f_tick = 20e6f, .omega_min = 7.5f, .theta_offset = 0.0f}
 
