@@ -2,15 +2,20 @@
 
 A drive is drawn on paper 1's premises (ideal 120-degree trapezoid, DC bus at the nominal voltage) with
 ``bldclab.catalog.synthetic.paper1_drive``: ``Theta_m`` from 0.01 to 0.2 rad, 1 to 20 pole pairs, any size
-(voltage, current, no-load speed), PWM from 5 to 200 periods per commutation interval (a sixth of the electrical
-period) at the no-load speed, and a phase resistance from 0 to a significant share of ``V/I``. Each example runs
-both supplies at one speed (the square wave regulating ``I_N``, the sinusoidal supply asked for ``T_sN``) and
-returns the deviations from the closed forms, so that the test asserts them and the benchmark prints the worst.
+(voltage, current, no-load speed), a carrier from 5 to 200 PWM periods per commutation, and a phase resistance from
+0 to a significant share of ``V/I``. The commutation is the time the outgoing current takes to fall from ``I_N``
+to zero through its diode, ``t_c = 3 L I_N / (V_N (1 + W))`` at the per-unit speed ``W`` (paper 1, IV.A: the first
+part of every commutation, at any speed), i.e. ``3 Theta_m / (p Omega_0 (1 + W))``: the closed forms assume an
+ideal current limiter, which a sampled controller only approaches when a commutation spans several samples.
+Each example runs both supplies at one speed (the square wave regulating ``I_N``, the sinusoidal supply asked for
+``T_sN``) and returns the deviations from the closed forms, so that the test asserts them and the benchmark prints
+the worst.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 from hypothesis import strategies as st
@@ -19,7 +24,10 @@ from bldclab import analytic
 from bldclab.catalog.synthetic import paper1_drive
 from bldclab.compare import default_controls
 from bldclab.experiments import steady_state
-from bldclab.motor import Drive
+from bldclab.motor import TWO_PI, BackEmf, Drive, Trapezoid
+
+#: Highest carrier drawn (Hz): the catalog's Inverter accepts up to 10 MHz; a drive drawn beyond 2 MHz is redrawn.
+MAX_F_PWM = 2e6
 
 
 @dataclass(frozen=True)
@@ -31,20 +39,27 @@ class Case:
     V_N: float
     I_N: float
     Omega_0: float
-    pwm_per_commutation: float
+    pwm_per_commutation: float  # f_pwm t_c at the case's speed
     r_share: float  # R I_N / V_N
     speed_pu: float
 
-    def drive(self, model: str = "average", f_scale: float = 1.0) -> Drive:
-        """The drive, its inverter model, and its carrier frequency scaled by ``f_scale``."""
+    @property
+    def f_pwm(self) -> float:
+        """Carrier frequency (Hz): ``pwm_per_commutation / t_c`` with ``t_c = 3 Theta_m / (p Omega_0 (1 + W))``."""
+        t_c = 3.0 * self.Theta_m / (self.p * self.Omega_0 * (1.0 + self.speed_pu))
+        return self.pwm_per_commutation / t_c
+
+    def drive(self, model: str = "average", flat_top: float = TWO_PI / 3.0) -> Drive:
+        """The drive with the given inverter model and trapezoid flat-top width (rad, electrical)."""
         d = paper1_drive(self.Theta_m, p=self.p, V_N=self.V_N, I_N=self.I_N, Omega_0=self.Omega_0,
-                         R=self.r_share * self.V_N / self.I_N, pwm_per_commutation=self.pwm_per_commutation)
-        inv = dataclasses.replace(d.inverter, model=model, f_pwm=d.inverter.f_pwm * f_scale)
-        return dataclasses.replace(d, inverter=inv)
+                         R=self.r_share * self.V_N / self.I_N, f_pwm=self.f_pwm)
+        motor = dataclasses.replace(d.motor, emf=BackEmf.symmetric(Trapezoid(d.motor.k_phi, flat_top)))
+        return dataclasses.replace(d, motor=motor, inverter=dataclasses.replace(d.inverter, model=model))
 
 
-def cases(r_max: float = 0.0) -> st.SearchStrategy[Case]:
-    """Drives and speeds; ``r_max``: largest ``R I_N / V_N`` (0: paper 1's R = 0)."""
+def cases(r_max: float = 0.0, pwm_max: float = 200.0) -> st.SearchStrategy[Case]:
+    """Drives and speeds; ``r_max``: largest ``R I_N / V_N`` (0: paper 1's R = 0); ``pwm_max``: most PWM periods
+    per commutation (the cost of a run grows with it)."""
     return st.builds(
         Case,
         Theta_m=st.floats(0.01, 0.2),
@@ -52,10 +67,10 @@ def cases(r_max: float = 0.0) -> st.SearchStrategy[Case]:
         V_N=st.floats(12.0, 600.0),
         I_N=st.floats(1.0, 200.0),
         Omega_0=st.floats(20.0, 2000.0),
-        pwm_per_commutation=st.floats(5.0, 200.0),
+        pwm_per_commutation=st.floats(5.0, pwm_max),
         r_share=st.just(0.0) if r_max == 0.0 else st.floats(0.0, r_max),
         speed_pu=st.floats(0.05, 0.98),
-    )
+    ).filter(lambda c: c.f_pwm <= MAX_F_PWM)
 
 
 @dataclass(frozen=True)
@@ -72,14 +87,27 @@ class Outcome:
     TR_s_cf: float
 
 
-def run(case: Case, model: str = "average") -> Outcome:
-    """Simulate both supplies at the case's speed (imposed) and evaluate the closed forms there."""
-    drive = case.drive(model)
-    th = analytic.theta_m(drive)
+#: Flat top under which paper 1's square-wave closed forms hold exactly: (26)-(33) take the back-EMF of the outgoing
+#: phase as constant during a commutation, but with the 120-degree trapezoid that phase leaves its flat top at the
+#: very instant it commutates and its back-EMF ramps down while its current falls. A 160-degree flat top keeps every
+#: commutation (at most ``3 Theta_m W / (1 + W)`` <= 17 degrees for the outgoing current) on the flat tops, with the
+#: same torque outside commutation. On the 120-degree shape the closed forms are off by an error of their own, which
+#: grows with ``Theta_m`` (``benchmarks/random_drives.py`` prints it).
+FLAT_TOP_SQUARE = math.radians(160.0)
+
+
+def run(case: Case, model: str = "average", square_flat_top: float = FLAT_TOP_SQUARE) -> Outcome:
+    """Simulate both supplies at the case's speed (imposed) and evaluate the closed forms there.
+
+    The sinusoidal supply runs on paper 1's 120-degree trapezoid ((13)-(15) are for that shape); the square wave on a
+    trapezoid of ``square_flat_top`` (:data:`FLAT_TOP_SQUARE`: the premise of (26)-(33)).
+    """
+    th = case.Theta_m
     w = case.speed_pu
-    controls = default_controls(drive, lowest_speed_pu=min(w, 0.05))
     out = {}
-    for supply, (control, ref) in controls.items():
+    for supply, flat_top in (("square", square_flat_top), ("sine", TWO_PI / 3.0)):
+        drive = case.drive(model, flat_top)
+        control, ref = default_controls(drive, lowest_speed_pu=min(w, 0.05))[supply]
         point, _ = steady_state(drive, control, w * drive.Omega_0, ref)
         out[supply] = (point.tau_mean_pu, point.ripple_pu)
     return Outcome(T_q=out["square"][0], TR_q=out["square"][1], T_s=out["sine"][0], TR_s=out["sine"][1],
@@ -101,8 +129,9 @@ def mean_torque_switching(case: Case, supply: str) -> tuple[float, float]:
 def describe(case: Case) -> str:
     """One line naming the case (for failure messages and the benchmark)."""
     return (f"Theta_m={case.Theta_m:.4f} p={case.p} V_N={case.V_N:.1f} I_N={case.I_N:.1f} "
-            f"Omega_0={case.Omega_0:.1f} pwm/comm={case.pwm_per_commutation:.1f} R_share={case.r_share:.3f} "
+            f"Omega_0={case.Omega_0:.1f} pwm/comm={case.pwm_per_commutation:.1f} (f_pwm={case.f_pwm:.4g} Hz) "
+            f"R_share={case.r_share:.3f} "
             f"W={case.speed_pu:.3f}")
 
 
-__all__ = ["Case", "Outcome", "cases", "describe", "mean_torque_switching", "run"]
+__all__ = ["FLAT_TOP_SQUARE", "MAX_F_PWM", "Case", "Outcome", "cases", "describe", "mean_torque_switching", "run"]
