@@ -29,10 +29,14 @@ def test_compare_ideal_drive_follows_the_closed_forms():
         assert si.loc[x, "T_pu"] == pytest.approx(an.t_s_pu(x, th), abs=0.005)
         assert sq.loc[x, "TR_pu"] == pytest.approx(an.tr_q_pu(x, th), abs=0.02)
         assert si.loc[x, "TR_pu"] == pytest.approx(an.tr_s_pu(x, th), abs=0.02)
+        # the paper-comparable ripple: exact extremes on the averaged inverter
+        assert sq.loc[x, "TR_avg_pu"] == pytest.approx(an.tr_q_pu(x, th), abs=0.02)
+        assert si.loc[x, "TR_avg_pu"] == pytest.approx(an.tr_s_pu(x, th), abs=0.02)
+        assert sq.loc[x, "T_avg_pu"] == pytest.approx(sq.loc[x, "T_pu"], abs=0.01)
         assert abs(sq.loc[x, "balance"]) < 1e-5 and abs(si.loc[x, "balance"]) < 1e-5
     # the verdict names the speed ranges: sinusoidal torque higher everywhere, ripple higher around half speed
     assert any(v.startswith("mean torque: sinusoidal better for Omega in [0.10, 0.90]") for v in res.verdict)
-    assert any(v.startswith("torque ripple: square-wave better") for v in res.verdict)
+    assert any(v.startswith("torque ripple (averaged inverter): square-wave better") for v in res.verdict)
 
 
 def test_compare_cli_writes_everything(tmp_path):

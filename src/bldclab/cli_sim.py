@@ -227,8 +227,8 @@ def comparison_figures(res: Any) -> dict[str, Figure]:
     si = sim[sim.supply == "sine"]
     over_t = {"simulated, sinusoidal": si.rename(columns={"T_pu": "T_s_pu"})[["Omega_pu", "T_s_pu"]],
               "simulated, square-wave": sq.rename(columns={"T_pu": "T_q_pu"})[["Omega_pu", "T_q_pu"]]}
-    over_r = {"simulated, sinusoidal": si.rename(columns={"TR_pu": "TR_s_pu"})[["Omega_pu", "TR_s_pu"]],
-              "simulated, square-wave": sq.rename(columns={"TR_pu": "TR_q_pu"})[["Omega_pu", "TR_q_pu"]]}
+    over_r = {"averaged inverter, sinusoidal": si.rename(columns={"TR_avg_pu": "TR_s_pu"})[["Omega_pu", "TR_s_pu"]],
+              "averaged inverter, square-wave": sq.rename(columns={"TR_avg_pu": "TR_q_pu"})[["Omega_pu", "TR_q_pu"]]}
     fig_t, _ = plots.plot_torque_speed(res.analytic, overlays=over_t, title=f"{res.drive.name}: torque vs speed")
     fig_r, _ = plots.plot_ripple(res.analytic, overlays=over_r, title=f"{res.drive.name}: torque ripple vs speed")
     fig_e, _ = plots.plot_efficiency(res.analytic, {"sinusoidal": si, "square-wave": sq},
@@ -262,16 +262,20 @@ def run_compare(args: argparse.Namespace) -> int:
           f"{t1.Omega_qB_pu:.3f} p.u.; with R: {t1.Omega_sB_R_pu:.3f} / {t1.Omega_qB_R_pu:.3f} p.u.; simulated: "
           f"{bs['sine']:.3f} / {bs['square']:.3f} p.u.")
     na = "*" if res.not_applicable else ""  # closed-form columns outside paper 1's premises: labelled, kept
-    print(f"  {'Omega [pu]':>10} {'T sine':>8} {'T square':>9} {'(13)/(24)' + na:>10} {'(26)-(32)' + na:>10} "
-          f"{'TR sine':>8} {'TR square':>10} {'eta sine':>9} {'eta sq':>7}")
+    print(f"  {'Omega':>6} {'T sine':>7} {'T sq':>6} {'(13)/(24)' + na:>10} {'(26)-(32)' + na:>10} | {'TR sine':>7} "
+          f"{'sw':>6} {'(15)/(25)' + na:>10} | {'TR sq':>6} {'sw':>6} {'(27)-(33)' + na:>10} | {'eta sine':>8} "
+          f"{'eta sq':>6}")
     an = res.analytic.set_index("Omega_pu")
     for wp in w[:: max(1, len(w) // 12)]:
         a = sim[(sim.supply == "sine") & (sim.Omega_pu == wp)].iloc[0]
         b = sim[(sim.supply == "square") & (sim.Omega_pu == wp)].iloc[0]
         r = an.loc[wp]
-        print(f"  {wp:>10.3f} {a.T_pu:>8.3f} {b.T_pu:>9.3f} {r.T_s_pu:>10.3f} {r.T_q_pu:>10.3f} {a.TR_pu:>8.3f} "
-              f"{b.TR_pu:>10.3f} {a.eta:>9.3f} {b.eta:>7.3f}")
-    print("  (torque and ripple without PWM in p.u. of T_N; columns (13)/(24) and (26)-(32): paper 1, R neglected)")
+        print(f"  {wp:>6.3f} {a.T_pu:>7.3f} {b.T_pu:>6.3f} {r.T_s_pu:>10.3f} {r.T_q_pu:>10.3f} | {a.TR_avg_pu:>7.3f} "
+              f"{a.TR_ma_pu:>6.3f} {r.TR_s_pu:>10.3f} | {b.TR_avg_pu:>6.3f} {b.TR_ma_pu:>6.3f} {r.TR_q_pu:>10.3f} | "
+              f"{a.eta:>8.3f} {b.eta:>6.3f}")
+    print(f"  (p.u. of Omega_0, T_N; T: mean torque, {drive.inverter.model} inverter; TR: torque ripple peak to peak "
+          "on the averaged inverter (no PWM, the paper-comparable one), sw: the switching drive's, of its "
+          "one-PWM-period average; (13)-(33): paper 1, R neglected)")
     if args.pwm_phases > 1:
         spread = {k: float((sim[f"{k}_max"] - sim[f"{k}_min"]).max()) for k in ("T_pu", "TR_pu", "TR_ma_pu")}
         print(f"  over {args.pwm_phases} PWM-grid phases the largest spread is {spread['T_pu']:.4f} p.u. in torque, "
