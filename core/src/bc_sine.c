@@ -7,6 +7,63 @@ static int finite_pos(float v) { return isfinite(v) && v > 0.0f; }
 static int finite_nonneg(float v) { return isfinite(v) && v >= 0.0f; }
 static int is_flag(int32_t v) { return v == 0 || v == 1; }
 static float clampf(float v, float lo, float hi) { return v < lo ? lo : (v > hi ? hi : v); }
+static float table_k(const float *k, int32_t n, float theta);
+
+/* Length of the alpha-beta vector of line values v_ab, v_bc, v_ca: alpha = (v_ab - v_ca) / 3, beta = v_bc / sqrt(3). */
+static float lim_norm(float ab, float bc, float ca)
+{
+    float a = (ab - ca) * (1.0f / 3.0f), b = bc * BC_INV_SQRT3_F;
+    return sqrtf(a * a + b * b);
+}
+
+/* Tables of the shape-aware speed limit (bc_sine.h, 5.) at theta_j = 2 pi j / M: line-to-line back-EMF shape
+ * k_xy, current i_xy of i_q = 1 A (i_x = sin(theta - x 2 pi/3)) and di_xy/dtheta. */
+static void lim_tables(const bc_sine_params *p, bc_sine_state *s)
+{
+    for (int32_t j = 0; j < BC_SINE_LIM_N; ++j) {
+        float th = (float)j * (BC_TWO_PI_F / (float)BC_SINE_LIM_N);
+        float k[3], ix[3], dix[3];
+        for (int x = 0; x < 3; ++x) {
+            float ph = th - (float)x * (BC_TWO_PI_F / 3.0f);
+            k[x] = table_k(p->emf_k[x], p->emf_n, ph);
+            ix[x] = sinf(ph);
+            dix[x] = cosf(ph);
+        }
+        for (int x = 0; x < 3; ++x) {
+            int y = (x + 1) % 3;
+            s->lim_k[x][j] = k[x] - k[y];
+            s->lim_i[x][j] = ix[x] - ix[y];
+            s->lim_di[x][j] = dix[x] - dix[y];
+        }
+    }
+    /* lim_dev: the largest deviation of a line shape k_xy above or below the chord between neighbouring grid
+     * angles (0 for a piecewise-linear shape whose corners are grid angles, (1 - cos(pi/M)) sqrt(3) k_1 for a
+     * sinusoid), sampled at every table spacing or finer */
+    int32_t n_sub = 2 * (p->emf_n / BC_SINE_LIM_N + 1);
+    float dev = 0.0f, dev_c = 0.0f;
+    for (int32_t j = 0; j < BC_SINE_LIM_N; ++j) {
+        int32_t j1 = (j + 1) % BC_SINE_LIM_N;
+        for (int32_t q = 1; q < n_sub; ++q) {
+            float u = (float)q / (float)n_sub;
+            float th = ((float)j + u) * (BC_TWO_PI_F / (float)BC_SINE_LIM_N);
+            float k[3];
+            for (int x = 0; x < 3; ++x) k[x] = table_k(p->emf_k[x], p->emf_n, th - (float)x * (BC_TWO_PI_F / 3.0f));
+            for (int x = 0; x < 3; ++x) {
+                float kxy = k[x] - k[(x + 1) % 3];
+                float chord = s->lim_k[x][j] + u * (s->lim_k[x][j1] - s->lim_k[x][j]);
+                dev = fmaxf(dev, fabsf(kxy - chord));
+            }
+            /* circle: the length of the alpha-beta vector above the chord of the lengths */
+            float n0 = lim_norm(s->lim_k[0][j], s->lim_k[1][j], s->lim_k[2][j]);
+            float n1 = lim_norm(s->lim_k[0][j1], s->lim_k[1][j1], s->lim_k[2][j1]);
+            float nk = lim_norm(k[0] - k[1], k[1] - k[2], k[2] - k[0]);
+            dev_c = fmaxf(dev_c, nk - (n0 + u * (n1 - n0)));
+        }
+    }
+    s->lim_dev = dev;
+    s->lim_dev_c = dev_c;
+    s->lim_shape = 1;
+}
 
 int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
 {
@@ -53,6 +110,16 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->tripped = 0;
     s->six_run = !p->flying_start;
     s->n_quiet = 0;
+    s->lim_shape = 0;
+    if (p->speed_limit && p->emf_k[0] != 0 && p->emf_k[1] != 0 && p->emf_k[2] != 0) {
+        if (p->emf_n < 3 || p->emf_n > BC_SINE_EMF_N_MAX) return BC_ERR_PARAM;
+        for (int x = 0; x < 3; ++x) {
+            for (int32_t j = 0; j < p->emf_n; ++j) {
+                if (!isfinite(p->emf_k[x][j])) return BC_ERR_PARAM;
+            }
+        }
+        lim_tables(p, s);
+    }
     return BC_OK;
 }
 
@@ -116,6 +183,57 @@ static float i_sat(const bc_sine_params *p, float v_dc, float omega_e)
     if (!(g > 0.0f)) return p->i_s_max;
     float i = head / g; /* I_s,sat = (v_dc - 2 k_phi |omega_m|) / g */
     return isfinite(i) ? i : p->i_s_max;
+}
+
+/* min(cap, I_s,sat) from the shape tables (bc_sine.h, 5.): the largest I in [0, cap] with the steady-state
+ * voltage e + I G of currents of sign sgn within the linear range at every tabulated angle. */
+static float i_sat_shape(const bc_sine_params *p, const bc_sine_state *s, float v_dc, float omega_e, float sgn,
+                         float cap)
+{
+    const float c_m = cosf(BC_PI_F / (float)BC_SINE_LIM_N); /* a sinusoid's samples reach c_M of its peak */
+    float wm = omega_e / (float)p->p;
+    float x_e = omega_e * p->L;
+    float r_g = sgn * p->R, x_g = sgn * x_e; /* G = s (R i_xy + omega_e L di_xy) */
+    /* margins for the peaks between grid points: the back-EMF's deviation above its chords, and that of the
+     * drop, a sinusoid of amplitude sqrt(3) |R + j omega_e L| I */
+    float m_e = fabsf(wm) * s->lim_dev;
+    float m_g = (1.0f - c_m) * BC_SQRT3_F * sqrtf(p->R * p->R + x_e * x_e);
+    float best = cap;
+    if (p->limit == BC_SINE_LIMIT_HEX) {
+        float lim = v_dc - m_e;
+        for (int x = 0; x < 3; ++x) {
+            const float *kk = s->lim_k[x], *ii = s->lim_i[x], *di = s->lim_di[x];
+            for (int32_t j = 0; j < BC_SINE_LIM_N; ++j) {
+                float e = wm * kk[j];
+                float g = r_g * ii[j] + x_g * di[j];
+                if (!(fabsf(e) <= lim)) return 0.0f; /* the back-EMF alone exceeds the limit (or NaN) */
+                float num = lim - (g >= 0.0f ? e : -e), den = fabsf(g) + m_g; /* I <= num / den */
+                if (num < best * den) best = num / den;
+            }
+        }
+    } else {
+        /* the drop of balanced sinusoidal currents is a vector of constant length: only the back-EMF's margin */
+        float r = v_dc * BC_INV_SQRT3_F - fabsf(wm) * s->lim_dev_c, r2 = r * r;
+        if (!(r > 0.0f)) return 0.0f;
+        for (int32_t j = 0; j < BC_SINE_LIM_N; ++j) {
+            /* alpha = (v_ab - v_ca) / 3, beta = v_bc / sqrt(3) */
+            float ea = wm * (s->lim_k[0][j] - s->lim_k[2][j]) * (1.0f / 3.0f);
+            float eb = wm * s->lim_k[1][j] * BC_INV_SQRT3_F;
+            float ga = (r_g * (s->lim_i[0][j] - s->lim_i[2][j]) + x_g * (s->lim_di[0][j] - s->lim_di[2][j])) *
+                       (1.0f / 3.0f);
+            float gb = (r_g * s->lim_i[1][j] + x_g * s->lim_di[1][j]) * BC_INV_SQRT3_F;
+            float ee = ea * ea + eb * eb;
+            if (!(ee <= r2)) return 0.0f;
+            float va = ea + best * ga, vb = eb + best * gb;
+            if (va * va + vb * vb > r2) {
+                /* |E + I G|^2 = r^2: I = (-E.G + sqrt((E.G)^2 + |G|^2 (r^2 - |E|^2))) / |G|^2 */
+                float gg = ga * ga + gb * gb, eg = ea * ga + eb * gb;
+                float i = (-eg + sqrtf(fmaxf(eg * eg + gg * (r2 - ee), 0.0f))) / gg;
+                best = isfinite(i) ? clampf(i, 0.0f, best) : 0.0f;
+            }
+        }
+    }
+    return isfinite(best) ? clampf(best, 0.0f, cap) : 0.0f;
 }
 
 /* Enter the start mode: the square-wave controller starts afresh, the d,q integrators are cleared (the hand-off
@@ -234,9 +352,12 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     out->diag[7] = (float)s->mode;
     if (s->mode == BC_SINE_MODE_START) return;
 
-    /* 5. current references (45), (8), (23) with R */
+    /* 5. current references (45), (8), I_s,sat from the shape tables or (23) with R */
     float i_lim = p->i_s_max;
-    if (p->speed_limit) i_lim = fminf(i_lim, i_sat(p, v_dc, omega_e));
+    if (p->speed_limit) {
+        i_lim = s->lim_shape ? i_sat_shape(p, s, v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f, i_lim)
+                             : fminf(i_lim, i_sat(p, v_dc, omega_e));
+    }
     float iq_ref = clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
     float id_ref = 0.0f;
     if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, 1.5f * p->k_1 * iq_ref);
@@ -265,8 +386,10 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     /* 7. voltage angle advanced by the loop delay: theta_v = theta + advance Omega_e T_s */
     float theta_v = bc_wrap_2pi(theta + p->advance * omega_e * p->ts);
     float sv = -sinf(theta_v), cv = -cosf(theta_v);
-    bc_abc g = bc_clarke_inv(bc_park_inv(u, sv, cv));
-    float gv[3] = {g.a, g.b, g.c};
+    /* the two axes' voltages separately: the limit fits the d axis first (d-axis priority) */
+    bc_abc g_d = bc_clarke_inv(bc_park_inv((bc_dq){u.d, 0.0f}, sv, cv));
+    bc_abc g_q = bc_clarke_inv(bc_park_inv((bc_dq){0.0f, u.q}, sv, cv));
+    float gd[3] = {g_d.a, g_d.b, g_d.c}, gq[3] = {g_q.a, g_q.b, g_q.c};
 
     /* 8. back-EMF feed-forward f_x = omega_m k_x(theta_v - x 2 pi/3) */
     float f[3] = {0.0f, 0.0f, 0.0f};
@@ -276,33 +399,38 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
         }
     }
 
-    /* 9. linear-modulation limit: v = f + k u */
-    float k = 1.0f;
+    /* 9. linear-modulation limit: v = f + k_d u_d + k_q u_q, d axis first */
+    float k_d = 1.0f, k_q = 1.0f;
     if (!p->overmod) {
         if (p->limit == BC_SINE_LIMIT_HEX) {
             float sf = spread(f);
             if (sf > v_dc) {
                 for (int x = 0; x < 3; ++x) f[x] *= v_dc / sf;
             }
-            k = hex_scale(f, gv, v_dc);
+            k_d = hex_scale(f, gd, v_dc);
+            float f2[3] = {f[0] + k_d * gd[0], f[1] + k_d * gd[1], f[2] + k_d * gd[2]};
+            k_q = hex_scale(f2, gq, v_dc);
         } else {
             float r = v_dc * BC_INV_SQRT3_F;
             bc_abc fa = {f[0], f[1], f[2]};
-            bc_ab F = bc_clarke(fa), G = bc_clarke(g);
+            bc_ab F = bc_clarke(fa), Gd = bc_clarke(g_d), Gq = bc_clarke(g_q);
             float nf = sqrtf(F.alpha * F.alpha + F.beta * F.beta);
             if (nf > r) {
                 for (int x = 0; x < 3; ++x) f[x] *= r / nf;
                 F = bc_clarke((bc_abc){f[0], f[1], f[2]});
             }
-            k = circle_scale(F, G, r);
+            k_d = circle_scale(F, Gd, r);
+            bc_ab F2 = {F.alpha + k_d * Gd.alpha, F.beta + k_d * Gd.beta};
+            k_q = circle_scale(F2, Gq, r);
         }
     }
-    bc_abc v = {f[0] + k * gv[0], f[1] + k * gv[1], f[2] + k * gv[2]};
+    bc_abc v = {f[0] + k_d * gd[0] + k_q * gq[0], f[1] + k_d * gd[1] + k_q * gq[1],
+                f[2] + k_d * gd[2] + k_q * gq[2]};
 
     /* 10. SVM */
     float duty[3];
     int clipped = bc_svm(v, v_dc, duty);
-    bc_dq ur = {k * u.d, k * u.q};
+    bc_dq ur = {k_d * u.d, k_q * u.q};
     if (clipped && p->overmod) {
         /* realised voltage from the clipped duties, minus the feed-forward, in the frame of theta_v */
         bc_abc va = {duty[0] * v_dc - f[0], duty[1] * v_dc - f[1], duty[2] * v_dc - f[2]};
@@ -310,7 +438,7 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     }
     bc_pi_update(&s->pi_p, &s->pi_d, e_d, u.d, ur.d);
     bc_pi_update(&s->pi_p, &s->pi_q, e_q, u.q, ur.q);
-    if (k < 1.0f || clipped) out->flags |= BC_FLAG_SATURATED;
+    if (k_d < 1.0f || k_q < 1.0f || clipped) out->flags |= BC_FLAG_SATURATED;
 
     for (int x = 0; x < 3; ++x) {
         out->leg[x].mode = BC_LEG_PWM;

@@ -445,6 +445,73 @@ static void test_limits_and_handoff(void)
         double i23 = 2.0 / sqrt(3.0) * (48.0 - 2.0 * K_PHI * w2) / (8.0 * w2 * L);
         CHECK_NEAR(out.diag[2], i23, 2e-3 * i23, "paper 1 (23)");
     }
+    /* without shape tables: (23) with R as before */
+    sine_params(&p, &f);
+    p.emf_ff = 0;
+    for (int x = 0; x < 3; ++x) p.emf_k[x] = 0;
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    {
+        double w2 = 0.97 * 75.0, we2 = 8.0 * w2;
+        rotor r2 = {0.3, we2, 20.0, 0.0, f.sp.f_tick};
+        for (int k = 0; k < 400; ++k) {
+            rotor_in(&r2, k * Ts, tau_n, &in);
+            bc_sine_step(&p, &s, &in, &out);
+        }
+        double isat = (48.0 - 2.0 * K_PHI * w2) / (sqrt(3.0) / 2.0 * we2 * L + 1.5 * R);
+        CHECK_NEAR(out.diag[2], isat, 2e-3 * i_sn(), "I_s,sat (23) with R, no tables");
+    }
+}
+
+/* The speed limit on a sinusoidal back-EMF k_x = k_1 sin(theta) (tables given to the controller; the plant
+ * model of rotor_in is irrelevant to i_q,ref): the back-EMF and the drop add in quadrature,
+ * sqrt(3) |omega_m k_1 + (R + j omega_e L) I| = V_dc, for both limits (a balanced sinusoidal set has a constant
+ * alpha-beta vector of length |.| = V_dc / sqrt(3) on the circle too). */
+static void test_speed_limit_sinusoid(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    static bc_sine_params p;
+    static bc_sine_state s;
+    static float tab[3][360];
+    sine_params(&p, &f);
+    double k1 = 0.33;
+    p.L = 750e-6f; /* the controller's model only: a drop comparable with the back-EMF near the base speed */
+    for (int x = 0; x < 3; ++x) {
+        for (int j = 0; j < 360; ++j) tab[x][j] = (float)(k1 * sin(2.0 * BC_PI * j / 360.0));
+        p.emf_k[x] = tab[x];
+    }
+    p.emf_n = 360;
+    p.k_1 = (float)k1;
+    double Ts = (double)p.ts, L = 750e-6;
+    bc_ctrl_in in;
+    bc_ctrl_out out;
+    for (int lim = 0; lim <= 1; ++lim) {
+        for (int rr = 0; rr <= 1; ++rr) {
+            p.limit = lim ? BC_SINE_LIMIT_CIRCLE : BC_SINE_LIMIT_HEX;
+            p.R = rr ? 0.05f : 0.0f;
+            double R = (double)p.R;
+            for (int iw = 0; iw < 3; ++iw) {
+                double w2 = (0.7 + 0.1 * iw) * 75.0, we2 = 8.0 * w2;
+                CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+                rotor r2 = {0.3, we2, 20.0, 0.0, f.sp.f_tick};
+                for (int k = 0; k < 400; ++k) {
+                    rotor_in(&r2, k * Ts, 1e4f, &in);
+                    bc_sine_step(&p, &s, &in, &out);
+                }
+                /* (R^2 + X^2) I^2 + 2 E R I + E^2 - V^2/3 = 0 */
+                double E = w2 * k1, X = we2 * L, V = 48.0;
+                double a = R * R + X * X, b = 2.0 * E * R, c = E * E - V * V / 3.0;
+                double iq = (-b + sqrt(b * b - 4.0 * a * c)) / (2.0 * a);
+                double want = fmin(iq, i_sn());
+                CHECK(s.mode == BC_SINE_MODE_SINE, "sine mode");
+                CHECK(fabs((double)out.diag[2] - want) <= 2e-3 * i_sn(),
+                      "sinusoid: quadrature limit %.4f vs %.4f A (limit %d, R %g, %.2f Omega_0)", (double)out.diag[2],
+                      want, lim, R, w2 / 75.0);
+                CHECK((double)out.diag[2] <= want * (1.0 + 1e-4), "never above the exact limit: %.4f vs %.4f A",
+                      (double)out.diag[2], want);
+            }
+        }
+    }
 }
 
 /* Decoupling from the measured currents: two controllers in the same state, given currents that differ only in
@@ -515,8 +582,20 @@ static void test_flying_start(void)
     double t_two_edges = 2.0 * (BC_PI / 3.0) / r.we;
     CHECK(k_sine > 0 && k_sine * Ts < t_two_edges + 2.0 * Ts, "sine after two edges: %.3f ms", k_sine * Ts * 1e3);
     CHECK(!active_before, "no square-wave braking at high speed");
+    /* braking: the drop opposes the back-EMF, so its voltage stays within the hexagon at the full I_s,N (the
+     * shape-aware limit is per sign); the closed form (23) (no shape tables) is symmetric: -I_s,sat */
+    CHECK_NEAR(out.diag[2], -i_sn(), 1e-3 * i_sn(), "braking at -I_s,N");
     double isat = (48.0 - 2.0 * K_PHI * 0.9 * 75.0) / (sqrt(3.0) / 2.0 * r.we * 75e-6 + 1.5 * 0.05);
-    CHECK_NEAR(out.diag[2], -isat, 2e-3 * isat, "braking at -I_s,sat");
+    p.emf_ff = 0;
+    for (int x = 0; x < 3; ++x) p.emf_k[x] = 0;
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    for (int k = 0; k < 600; ++k) {
+        rotor_in(&r, k * Ts, -tau_n, &in);
+        bc_sine_step(&p, &s, &in, &out);
+    }
+    CHECK_NEAR(out.diag[2], -isat, 2e-3 * isat, "braking at -I_s,sat (23) without tables");
+    sine_params(&p, &f);
+    p.flying_start = 1;
     /* at standstill the square-wave start begins once no edge came for (pi/3) / omega_on */
     CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
     rotor r0 = {0.3, 1e-9, 0.0, 0.0, f.sp.f_tick};
@@ -644,6 +723,7 @@ int main(void)
     test_limits_and_handoff();
     test_decoupling_measured();
     test_flying_start();
+    test_speed_limit_sinusoid();
     test_closed_loop_imposed();
     test_closed_loop_start();
     return bc_test_summary("test_sine");

@@ -31,14 +31,42 @@
  *                                                            fundamental k_1 (for the ideal trapezoid
  *                                                            1.5 k_1 = 18 k_phi / pi^2, (12))
  *         |i_q,ref| <= i_s_max = I_s,N = 2/sqrt(3) I_N        (8)
- *         |i_q,ref| <= I_s,sat = (v_dc - 2 k_phi |omega_m|) / g(omega_e)       (speed_limit = 1)
- *         g = sqrt(3)/2 |omega_e| L + 3/2 R      if |omega_e| L >= R / sqrt(3)
- *         g = sqrt(3) sqrt(R^2 + (omega_e L)^2)  otherwise
+ *         |i_q,ref| <= I_s,sat(omega_e, v_dc, sign tau)       (speed_limit = 1)
  *         i_d,ref = 0
  *
- *     I_s,sat is paper 1 (23) with the resistance: the peak line-to-line voltage of balanced currents of peak I in
- *     phase with the fundamental is at most 2 k_phi |omega_m| + g I (exact for the 120-degree trapezoid when (18)
- *     holds; for R = 0 it is (20), and I_s,sat = (23)). Where 2 k_phi |omega_m| >= v_dc, I_s,sat = 0.
+ *     I_s,sat is the largest amplitude I >= 0 of balanced currents i_x = s I sin(theta - x 2 pi/3) (s = sign of
+ *     tau; in phase with the fundamental, i_q = s I) whose steady-state voltage stays within the linear range at
+ *     every angle of the period:
+ *
+ *         v_xy(theta) = omega_m k_xy(theta) + s I (R i_xy(theta) + omega_e L di_xy/dtheta(theta))
+ *                     = e_xy(theta) + I G_xy(theta)         (pairs ab, bc, ca; i_xy, di_xy of i_q = 1 A)
+ *
+ *         BC_SINE_LIMIT_HEX:     |e_xy + I G_xy| + m_e + m_g I <= v_dc  at every theta_j and pair:
+ *                                I <= (v_dc - m_e - sign(G_xy) e_xy) / (|G_xy| + m_g)
+ *         BC_SINE_LIMIT_CIRCLE:  |E + I G| <= r = v_dc / sqrt(3) - m_c at every theta_j (alpha-beta vectors, from
+ *                                the line values: alpha = (v_ab - v_ca)/3, beta = v_bc/sqrt(3)): the positive
+ *                                root of |E|^2 + 2 I E.G + I^2 |G|^2 = r^2
+ *
+ *     on the grid theta_j = 2 pi j / M, M = BC_SINE_LIM_N (k_xy from the emf_k tables, i_xy and di_xy/dtheta
+ *     exact, all tabulated by bc_sine_init; each step costs 3 M multiply-adds, a division only where the bound
+ *     tightens). Margins cover peaks between grid angles: m_e = |omega_m| lim_dev (lim_dev, from bc_sine_init, the
+ *     largest deviation of k_xy from its chords between grid angles: 0 for a piecewise-linear shape whose corners
+ *     are grid angles, (1 - cos(pi/M)) sqrt(3) k_1 for a sinusoid), m_g = (1 - cos(pi/M)) sqrt(3) |R + j omega_e L|
+ *     (the drop is a sinusoid); on the circle m_c = |omega_m| lim_dev_c (the excess of |k_alpha,beta| over the
+ *     chords of its grid values; the drop's vector has a constant length). If the back-EMF alone
+ *     exceeds the limit somewhere on the grid, I_s,sat = 0. For sinusoidal shapes (R = 0, HEX) this is
+ *     sqrt(3) |omega_m k_1 + j omega_e L I| <= v_dc: the back-EMF and the inductive drop add in quadrature.
+ *     Without shape tables (an emf_k pointer is null) the closed form of the ideal 120-degree trapezoid is used
+ *     (paper 1 (23) with R):
+ *
+ *         I_s,sat = (v_dc - 2 k_phi |omega_m|) / g(omega_e)
+ *         g = sqrt(3)/2 |omega_e| L + 3/2 R      if |omega_e| L >= R / sqrt(3)
+ *         g = sqrt(3) sqrt(R^2 + (omega_e L)^2)  otherwise
+ *
+ *     the peak line-to-line voltage of balanced currents of peak I is then at most 2 k_phi |omega_m| + g I (for
+ *     the trapezoid the back-EMF and the drop add linearly: the drop peaks inside the flat top when (18) holds).
+ *     On the trapezoid the tables give the same I_s,sat up to the margin m_g; on other shapes (23) is wrong:
+ *     for a sinusoid it adds what adds in quadrature and lowers the current well below the base speed.
  *  6. Current PIs (bc_pi), output first:
  *
  *         u_d = k_p e_d + x_d + ff_d,   e_d = i_d,ref - i_d,   ff_d = R i_d,ref - omega_e L i_q   (decouple)
@@ -59,15 +87,21 @@
  *
  *     so the voltage carries the shape's harmonics and the currents stay sinusoidal (paper 1 (15) assumes
  *     sinusoidal currents).
- *  9. Linear-modulation limit on v_abc = f_abc + k u_abc, k in [0, 1] the largest that fits:
+ *  9. Linear-modulation limit, d axis first: with g_d, g_q the phase voltages of (u_d, 0) and (0, u_q) at theta_v,
+ *
+ *         v_abc = f_abc + k_d g_d + k_q g_q,  k_d in [0, 1] the largest with f + k_d g_d within the limit, then
+ *                                             k_q in [0, 1] the largest with v within it
  *
  *         BC_SINE_LIMIT_HEX:     max_x v_x - min_x v_x <= v_dc    (the whole linear range of min-max SVM; the
  *                                                                 instantaneous form of paper 1 (20) <= V_N)
  *         BC_SINE_LIMIT_CIRCLE:  |Clarke(v_abc)| <= v_dc / sqrt(3) (the hexagon's inscribed circle)
  *
- *     If f alone exceeds the limit it is scaled down to it (k = 0). The PIs update with the realised output:
- *     bc_pi_update(e, u, k u) (anti-windup). overmod = 1 skips the limit (k = 1): the duties clip and the realised
- *     voltage, taken back from the clipped duties, drives the anti-windup.
+ *     If f alone exceeds the limit it is scaled down to it (k_d = k_q = 0). The PIs update with the realised
+ *     outputs: bc_pi_update(e_d, u_d, k_d u_d), bc_pi_update(e_q, u_q, k_q u_q) (anti-windup). The d axis goes
+ *     first so that i_d can always be brought back to 0: scaling both together can hold a saturated state with
+ *     i_d > 0 in which the q axis needs more than the bus (a hand-off from the square wave at high speed).
+ *     overmod = 1 skips the limit (k_d = k_q = 1): the duties clip and the realised voltage, taken back from the
+ *     clipped duties, drives the anti-windup.
  * 10. SVM (bc_svm): d_x = 1/2 + (v_x - (max + min)/2) / v_dc, all legs BC_LEG_PWM.
  *
  * Square-wave start: bc_sixstep (composed, its own parameters in `six`, re-initialised on every entry to the start
@@ -104,6 +138,7 @@
 #define BC_SINE_MODE_SINE 1
 
 #define BC_SINE_EMF_N_MAX 4096 /* largest back-EMF table */
+#define BC_SINE_LIM_N 96       /* angles per electrical period of the shape-aware speed limit (multiple of 12) */
 
 typedef struct {
     /* the controller's motor model */
@@ -119,7 +154,8 @@ typedef struct {
     float v_max;    /* bound of the d,q PI integrators, V (> 0) */
     float i_s_max;  /* I_s,N: limit of |i_q,ref|, A (> 0) */
     float i_max;    /* over-current trip, A (> 0) */
-    int32_t speed_limit; /* 1: |i_q,ref| <= I_s,sat above base speed ((23) with R); 0: off */
+    int32_t speed_limit; /* 1: |i_q,ref| <= I_s,sat above base speed (from the shape tables if given, else (23)
+                            with R); 0: off */
     int32_t decouple;    /* 1: R-L feed-forward ff_d, ff_q; 0: off */
     float advance;       /* voltage angle advance, samples (0 .. 4; 1.5 compensates delay + PWM) */
     /* modulation */
@@ -128,7 +164,8 @@ typedef struct {
     /* back-EMF feed-forward */
     int32_t emf_ff;          /* 1: add f_x = omega_m k_x(theta_v - x 2 pi/3) */
     int32_t emf_n;           /* points per table (3 .. BC_SINE_EMF_N_MAX) */
-    const float *emf_k[3];   /* k_x at local angles 2 pi j / emf_n, V s/rad (phases a, b, c) */
+    const float *emf_k[3];   /* k_x at local angles 2 pi j / emf_n, V s/rad (phases a, b, c); also used by the
+                                speed limit when given (all three non-null) */
     /* angle */
     int32_t angle;      /* BC_SINE_ANGLE_* */
     float f_tick;       /* Hall capture timer, Hz (> 0) */
@@ -159,6 +196,15 @@ typedef struct {
     int32_t tripped; /* over-current trip latched */
     int32_t six_run; /* start mode: the square-wave controller runs (0: coasting, flying_start) */
     int32_t n_quiet; /* samples since the last Hall edge while coasting */
+    /* shape-aware speed limit (5.), filled by bc_sine_init: line-to-line values (pairs ab, bc, ca) at the angles
+     * theta_j = 2 pi j / BC_SINE_LIM_N of the back-EMF shape k_xy, the current i_xy of i_q = 1 A and its
+     * derivative di_xy/dtheta */
+    int32_t lim_shape; /* 1: the tables below are used; 0: (23) with R */
+    float lim_dev;     /* largest deviation of k_xy from its chords between grid angles, V s/rad */
+    float lim_dev_c;   /* largest excess of |k_alpha,beta| over the chord of its grid values, V s/rad */
+    float lim_k[3][BC_SINE_LIM_N];
+    float lim_i[3][BC_SINE_LIM_N];
+    float lim_di[3][BC_SINE_LIM_N];
 } bc_sine_state;
 
 /* Validate the parameters (BC_ERR_PARAM) and reset the state: start mode, integrators 0, trip cleared. */

@@ -1,7 +1,8 @@
 """Sinusoidal current supply of a PM BLDC motor, paper 1 section V (``core/include/bldc/bc_sine.h``).
 
 d,q current control on the Hall-interpolated angle (paper 1 (46)), torque reference to current by (45), current
-limits that keep the modulation linear ((8) and (23) with R), min-max SVM, optional back-EMF feed-forward from the
+limits that keep the modulation linear ((8), and above the base speed the largest current whose voltage fits, from
+the motor's own back-EMF shapes), min-max SVM, optional back-EMF feed-forward from the
 motor's shapes, square-wave start below a hand-off speed. The theory and the measurements are in ``docs/sine.md``.
 """
 
@@ -60,7 +61,9 @@ class Sine(Control):
     The reference (``Scenario.ref``) is the torque in N m (or, with ``speed_loop``, ``Scenario.omega_ref`` is the
     mechanical speed in rad/s). Torque to current: ``i_q,ref = tau / (1.5 k_1)`` with ``k_1`` the back-EMF
     fundamental (paper 1 (45)); the current is limited to ``I_s,N = 2/sqrt(3) I_N`` (8) and, above the base speed,
-    to the amplitude the bus can impress in linear modulation ((23) with R).
+    to the amplitude the bus can impress in linear modulation, computed by the controller from the motor's back-EMF
+    shapes (the feed-forward's tables): paper 1's (23) with R on the ideal trapezoid, the quadrature sum on a
+    sinusoidal back-EMF (``docs/sine.md``, section 4).
 
     Parameters
     ----------
@@ -79,8 +82,10 @@ class Sine(Control):
     overmodulation : bool
         Explicit overmodulation: no linear limit, the duties clip.
     speed_limit : bool
-        Reduce the current amplitude above the base speed ((23) with R). Off: the current stays at the reference
-        and the voltage limit does the rest (for measuring the base speed).
+        Reduce the current amplitude above the base speed to the largest whose steady-state voltage
+        ``R i + L di/dt + e`` stays in the linear range over the whole period, from the drive's back-EMF shapes
+        (tabulated at 96 angles by the C controller; (23) with R on the ideal trapezoid). Off: the current stays at
+        the reference and the voltage limit does the rest (for measuring the base speed).
     decoupling : bool
         Add the R-L voltages ``R i_ref + omega_e L J i`` to the PI outputs, the rotational part from the *measured*
         currents: it cancels the d,q cross-coupling of the motor, so each PI sees ``R + s L`` at any speed. Off, a
