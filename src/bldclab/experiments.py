@@ -25,7 +25,7 @@ import numpy as np
 from . import analytic, plausibility
 from .control import Control, Sine, SixStep
 from .control.sine import fundamental_k1
-from .errors import BldclabError
+from .errors import BldclabError, PlausibilityError
 from .motor import Drive
 from .results import Metrics, SimResult
 from .sim import Profile, Scenario, simulate
@@ -169,6 +169,7 @@ _INCOMING = ((0, 1), (2, -1), (1, 1), (0, -1), (2, 1), (1, -1))
 #: above ``Omega_0``.
 W_MAX = 1.1
 _FLAG_SATURATED = 0x10  # BC_FLAG_SATURATED: the sinusoidal controller's voltage demand left the linear SVM range
+_FLAG_SAFE = 0x1  # BC_FLAG_SAFE: all legs off (a trip)
 
 
 def _square_margin(drive: Drive, w_pu: float, control: Control) -> float:
@@ -195,11 +196,14 @@ def _square_margin(drive: Drive, w_pu: float, control: Control) -> float:
 
 
 def _sine_margin(drive: Drive, w_pu: float, control: Control) -> float:
-    """Return minus the fraction of samples with the voltage demand beyond linear SVM, currents of peak I_s,N."""
+    """Return minus the fraction of samples with the voltage demand beyond linear SVM, currents of peak I_s,N.
+
+    A sample in the controller's safe state (an over-current trip: the currents ran away) counts as beyond it too.
+    """
     ref = 1.5 * fundamental_k1(drive) * analytic.i_sN(drive)  # (45): the torque of i_q = I_s,N
     pt, res = steady_state(drive, control, w_pu * drive.Omega_0, ref, trace=True)
     sel = res.t >= pt.metrics.t0
-    return -float(np.mean((res["flags"][sel].astype(int) & _FLAG_SATURATED) > 0))
+    return -float(np.mean((res["flags"][sel].astype(int) & (_FLAG_SATURATED | _FLAG_SAFE)) > 0))
 
 
 def base_speed_margin(drive: Drive, supply: str, w_pu: float, control: Control | None = None) -> float:
@@ -268,10 +272,15 @@ def base_speed(drive: Drive, supply: str, control: Control | None = None, *, lo:
         raise BldclabError("tol", f"must be positive, got {tol}")
 
     def ok(w: float) -> bool:
-        # the bracket may reach beyond the no-load speed on purpose: the speed warnings it raises there are
-        # part of the search, not a questionable result, and are not shown
-        with plausibility.collect():
-            return base_speed_margin(drive, supply, w, control) >= 0.0
+        # the bracket may reach beyond the no-load speed on purpose: the speed warnings it raises there are part of
+        # the search, not a questionable result, and are not shown; a run the guards refuse as meaningless (the
+        # back-EMF driving current through the diodes past the hardware trip) is a speed where the drive cannot
+        # hold its current: the condition fails there
+        try:
+            with plausibility.collect():
+                return base_speed_margin(drive, supply, w, control) >= 0.0
+        except PlausibilityError:
+            return False
 
     guess = analytic.omega_qB_numeric_pu(drive) if supply == "square" else analytic.omega_sB_numeric_pu(drive)
     a = guess - 0.03 if lo is None else lo
