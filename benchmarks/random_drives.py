@@ -80,7 +80,7 @@ def main() -> None:
     for k in KEYS:
         print(f"  worst {k}: {where[k][0]:+.4f} at {where[k][1]}")
     n_sw = min(args.n, args.switching)
-    print(f"switching vs averaged mean torque, {n_sw} drives x 2 supplies: worst {sw:.4f} p.u.")
+    print(f"switching vs averaged mean torque, {n_sw} drives x 2 supplies: worst {sw:.2e} p.u.")
 
 
 if __name__ == "__main__":

@@ -84,6 +84,9 @@ def test_torque_control_warns_and_names_the_cause(capsys):
     row = {"method": "lu", "tau_mean_pct_ref": 80.0, "sat_share": 0.2, "dcm_share": 0.3}
     assert "DC bus cannot drive" in str(paper2.shortfall_cause(row))
     assert paper2.shortfall_cause({**row, "tau_mean_pct_ref": 102.0}) is None
+    rect = {"method": "rect", "tau_mean_pct_ref": 96.0, "sat_share": 0.0, "dcm_share": 0.0}
+    assert "regulates the current, not the torque" in str(paper2.shortfall_cause(rect))
+    assert "model error" in str(paper2.shortfall_cause({**rect, "method": "lu"}))
 
 
 def test_mean_law_leaves_continuous_conduction_alone():

@@ -86,7 +86,9 @@ def _run_point(args: tuple[Drive, str, Control, float, float, int]) -> dict[str,
         drive_avg = dataclasses.replace(drive, inverter=dataclasses.replace(drive.inverter, model="average"))
         with _plaus.collect() as caught_avg:
             avg, _ = steady_state(drive_avg, control, w_pu * drive.Omega_0, ref)
-        row["_warnings"] += [f"{supply} at {w_pu:.3g} p.u., averaged inverter: {text}" for text in caught_avg]
+        # the same operating point: only what the switching run did not already say
+        row["_warnings"] += [f"{supply} at {w_pu:.3g} p.u., averaged inverter: {text}" for text in caught_avg
+                             if text not in caught]
     row["T_avg_pu"], row["TR_avg_pu"] = avg.tau_mean_pu, avg.ripple_pu
     return row
 

@@ -291,7 +291,8 @@ def shortfall_cause(row: Mapping[str, object], tolerance: float = 0.03) -> str |
     -------
     str or None
         None within the tolerance; else a sentence: the duty saturated (the DC bus cannot drive the reference),
-        discontinuous conduction (the method regulates the sampled current or torque, not its mean), or neither.
+        discontinuous conduction (the method regulates the sampled current or torque, not its mean), the
+        rectangular baseline regulating current rather than torque, or none of these (a model error).
     """
     pct = float(row["tau_mean_pct_ref"])  # type: ignore[arg-type]
     if abs(pct - 100.0) <= 100.0 * tolerance:
@@ -304,6 +305,9 @@ def shortfall_cause(row: Mapping[str, object], tolerance: float = 0.03) -> str |
     if dcm > 0.01:
         return (f"{what}: the current is discontinuous ({100 * dcm:.0f} % of the time without current) and "
                 f"{row['method']} regulates the current or torque at the samples, not its mean")
+    if row["method"] == "rect":
+        return (f"{what}: rect regulates the current, not the torque: its current of T* / (2 k_phi) gives T* only "
+                "with a flat back-EMF, and this motor's shape and the commutations differ from that")
     return f"{what}: neither duty saturation nor discontinuous conduction (model error)"
 
 

@@ -1251,7 +1251,11 @@ def _section_paper2(r: Results, page: _Page) -> str:
     out = ['<section id="paper2"><h2>5. Paper 2: torque control methods compared</h2>'
            "<p>Conventional rectangular current control (<i>rect</i>), torque control neglecting the finite DC bus "
            "(<i>lu-no-do</i>) and considering it (<i>lu</i>, with D_o), at imposed speed. Ripple in % of the mean "
-           "torque; <i>ma</i>: of the one-PWM-period moving average; dip: of the non-commutated current.</p>"]
+           "torque; <i>ma</i>: of the one-PWM-period moving average; dip: of the non-commutated current; "
+           "<i>tau_mean_pct_ref</i>: the mean torque in % of the reference; <i>dcm_share</i>: the share of the time "
+           "without phase current (discontinuous conduction within the PWM period, at light load: there a law that "
+           "holds the torque at the samples gives more than the reference on average, and <i>lu</i>'s mean law "
+           "holds the mean instead; theory page of paper 2, section 5.1).</p>"]
     tc = r.manifest.get("torque_control")
     if isinstance(tc, dict):
         rows = [["how", str(tc.get("run", ""))], ["scenario", str(tc.get("scenario", ""))],
