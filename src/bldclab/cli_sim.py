@@ -227,8 +227,10 @@ def comparison_figures(res: Any) -> dict[str, Figure]:
     si = sim[sim.supply == "sine"]
     over_t = {"simulated, sinusoidal": si.rename(columns={"T_pu": "T_s_pu"})[["Omega_pu", "T_s_pu"]],
               "simulated, square-wave": sq.rename(columns={"T_pu": "T_q_pu"})[["Omega_pu", "T_q_pu"]]}
-    over_r = {"averaged inverter, sinusoidal": si.rename(columns={"TR_avg_pu": "TR_s_pu"})[["Omega_pu", "TR_s_pu"]],
-              "averaged inverter, square-wave": sq.rename(columns={"TR_avg_pu": "TR_q_pu"})[["Omega_pu", "TR_q_pu"]]}
+    # one point set (one marker) for the averaged inverter; each supply's points carry their own column
+    avg = si.rename(columns={"TR_avg_pu": "TR_s_pu"})[["Omega_pu", "TR_s_pu"]].merge(
+        sq.rename(columns={"TR_avg_pu": "TR_q_pu"})[["Omega_pu", "TR_q_pu"]], on="Omega_pu", how="outer")
+    over_r = {"simulated, averaged inverter": avg}
     fig_t, _ = plots.plot_torque_speed(res.analytic, overlays=over_t, title=f"{res.drive.name}: torque vs speed")
     fig_r, _ = plots.plot_ripple(res.analytic, overlays=over_r, title=f"{res.drive.name}: torque ripple vs speed")
     fig_e, _ = plots.plot_efficiency(res.analytic, {"sinusoidal": si, "square-wave": sq},
