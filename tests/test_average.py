@@ -196,6 +196,7 @@ def test_motor_file_key_round_trips(tmp_path: Path):
     assert e.value.field == "inverter.model"
 
 
+@pytest.mark.slow
 def test_cli_inverter_option(tmp_path, capsys):
     assert main(["simulate", "htm-48v", "--inverter", "average", "--periods", "3"]) == 0
     assert "average inverter" in capsys.readouterr().out
@@ -204,7 +205,8 @@ def test_cli_inverter_option(tmp_path, capsys):
     assert (tmp_path / "tc" / "methods.csv").exists()
 
 
-@pytest.mark.parametrize("command", ["simulate", "compare", "torque-control"])
+@pytest.mark.parametrize("command", ["simulate", pytest.param("compare", marks=pytest.mark.slow),
+                                     pytest.param("torque-control", marks=pytest.mark.slow)])
 def test_cli_bad_inverter_exits_2_with_one_line(command, tmp_path):
     proc = subprocess.run([sys.executable, "-m", "bldclab.cli", command, "htm-48v", "--inverter", "avg", "--out",
                            str(tmp_path / "o")], capture_output=True, text=True, cwd=tmp_path)

@@ -120,6 +120,7 @@ def test_count_steps_sees_a_back_step():
     assert angle_back_steps(np.array([6.0, 6.2, 0.1, 0.05, 0.3]), 1) == 1
 
 
+@pytest.mark.slow
 def test_sixstep_never_steps_back():
     """Catalog drives, 0.1 to 1.05 Omega_0 both ways, 1 MHz to 1 GHz ticks, 4800 commutations: no back-step.
 

@@ -134,6 +134,7 @@ def test_agreement_flags_a_settled_speed_offset(case, run):
     assert bad == [f"max |dw|, t >= {mc.SETTLED:g} s"]
 
 
+@pytest.mark.slow
 def test_run_all_prints_one_table_and_survives_a_missing_motulator(tmp_path):
     cmd = [sys.executable, str(ROOT / "benchmarks" / "run_all.py"), "--skip", "sine,sweep,memory,compare,firmware",
            "--seconds", "0.05", "--repeats", "1", "--python", str(tmp_path / "no-python"), "--motulator-venv",

@@ -116,6 +116,7 @@ def test_analyze_out_writes_parseable_files(capsys: pytest.CaptureFixture[str], 
         assert root.tag.endswith("svg")
 
 
+@pytest.mark.slow
 def test_analyze_len_of_speeds_without_duplicates(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     rc, _, _ = run_main(capsys, "analyze", "htm-48v", "--out", str(tmp_path), "--speeds", "3")
     assert rc == 0
@@ -142,6 +143,7 @@ def test_analyze_toml_path(capsys: pytest.CaptureFixture[str], tmp_path: Path) -
     assert re.search(r"(?m)^eta_ratio_0955 .* n/a ", out)
 
 
+@pytest.mark.slow
 def test_subprocess_module_entry_point(tmp_path: Path) -> None:
     res = run_subprocess("analyze", "htm-48v", "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert res.returncode == 0, res.stderr
@@ -209,6 +211,7 @@ def test_malformed_motor_file(capsys: pytest.CaptureFixture[str], tmp_path: Path
     assert not out_dir.exists()
 
 
+@pytest.mark.slow
 def test_malformed_motor_file_subprocess(tmp_path: Path) -> None:
     path = _motor_file(tmp_path, "L = nan")
     res = run_subprocess("analyze", str(path), "--out", str(tmp_path / "out"))

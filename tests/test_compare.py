@@ -39,10 +39,9 @@ def test_compare_ideal_drive_follows_the_closed_forms():
     assert any(v.startswith("torque ripple (averaged inverter): square-wave better") for v in res.verdict)
 
 
-def test_compare_cli_writes_everything(tmp_path):
-    out = tmp_path / "cmp"
-    rc = main(["compare", "htm-48v", "--out", str(out), "--speeds", "6", "--workers", "2"])
-    assert rc == 0
+def test_compare_cli_writes_everything(compare_htm48v):
+    """The session's run (tests/conftest.py): ``bldclab compare htm-48v --speeds 6 --workers 2``."""
+    out = compare_htm48v
     for name in ("simulated.csv", "analytic.csv", "table1.csv", "table1.json", "verdict.txt",
                  "torque_speed.png", "torque_speed.svg", "ripple_speed.png", "efficiency_speed.svg"):
         assert (out / name).stat().st_size > 100, name
@@ -53,6 +52,7 @@ def test_compare_cli_writes_everything(tmp_path):
     assert "quantities" in t1
 
 
+@pytest.mark.slow
 def test_compare_pwm_phases_and_base_speeds(tmp_path, capsys):
     """--pwm-phases adds each point's range over the PWM-grid phases; the simulated base speeds stand beside (21),
     (30) and the numeric values with R in the terminal, the verdict and base_speeds.csv."""
@@ -75,6 +75,7 @@ def test_compare_pwm_phases_and_base_speeds(tmp_path, capsys):
     assert "base speed, square-wave: 0.877 p.u. simulated" in verdict
 
 
+@pytest.mark.slow
 def test_compare_notes_where_the_samples_miss_the_commutation():
     """lu-4kw's square-wave commutation lasts under one PWM period mid-range: the verdict says the ripple at the samples
     misses it there; the sinusoidal supply and htm-48v get no such note."""
@@ -97,13 +98,15 @@ def test_compare_uses_processes_deterministically():
 
 
 @pytest.mark.parametrize("argv, field", [
-    (["compare", "nosuch"], "MOTOR"),
-    (["compare", "htm-48v", "--speeds", "1"], "--speeds"),
-    (["compare", "htm-48v", "--min-speed", "0.9", "--max-speed", "0.5"], "--min-speed"),
-    (["compare", "htm-48v", "--pwm-phases", "0"], "--pwm-phases"),
-    (["simulate", "htm-48v", "--control", "square", "--torque", "10 N m"], "--torque"),
+    pytest.param(["compare", "nosuch"], "MOTOR", marks=pytest.mark.slow),  # a process each: ~1 s
+    pytest.param(["compare", "htm-48v", "--speeds", "1"], "--speeds", marks=pytest.mark.slow),
+    pytest.param(["compare", "htm-48v", "--min-speed", "0.9", "--max-speed", "0.5"], "--min-speed",
+                 marks=pytest.mark.slow),
+    pytest.param(["compare", "htm-48v", "--pwm-phases", "0"], "--pwm-phases", marks=pytest.mark.slow),
+    pytest.param(["simulate", "htm-48v", "--control", "square", "--torque", "10 N m"], "--torque",
+                 marks=pytest.mark.slow),
     (["simulate", "htm-48v", "--speed", "12 V"], "--speed"),
-    (["simulate", "htm-48v", "--speed", "0 rpm"], "--speed"),
+    pytest.param(["simulate", "htm-48v", "--speed", "0 rpm"], "--speed", marks=pytest.mark.slow),
 ])
 def test_bad_arguments_exit_2_with_one_line(argv, field, tmp_path):
     proc = subprocess.run([sys.executable, "-m", "bldclab.cli", *argv, "--out", str(tmp_path / "o")],
@@ -114,6 +117,7 @@ def test_bad_arguments_exit_2_with_one_line(argv, field, tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("control, extra", [("square", []), ("sine", ["--torque", "20 N m"]),
                                             ("sixv", ["--duty", "0.4"]), ("lu", [])])
 def test_simulate_cli(control, extra, tmp_path):
@@ -129,6 +133,7 @@ def test_simulate_cli(control, extra, tmp_path):
     assert res.metrics is not None and len(res) > 100
 
 
+@pytest.mark.slow
 def test_torque_control_cli(tmp_path, capsys):
     rc = main(["torque-control", "lu-4kw", "--torques", "100%", "--speeds", "3000 rpm", "--out", str(tmp_path)])
     assert rc == 0
@@ -140,6 +145,7 @@ def test_torque_control_cli(tmp_path, capsys):
     assert "lu-no-do" in out
 
 
+@pytest.mark.slow
 def test_torque_control_cli_bad_torque(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "bldclab.cli", "torque-control", "lu-4kw", "--torques", "x%"],
                           capture_output=True, text=True)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -39,10 +40,26 @@ def _setup(name: str, drive: bl.Drive):
     return c, info, params, state, keep
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(name=st.sampled_from(sorted(CONTROLS)), motor=st.sampled_from(["htm-48v", "lu-4kw"]),
-       steps=st.lists(record, min_size=1, max_size=40))
+NAMES = st.sampled_from(sorted(CONTROLS))
+MOTORS = st.sampled_from(["htm-48v", "lu-4kw"])
+STEPS = st.lists(record, min_size=1, max_size=40)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(name=NAMES, motor=MOTORS, steps=STEPS)
 def test_outputs_finite_bounded_and_safe(name, motor, steps):
+    check_outputs(name, motor, steps)
+
+
+@pytest.mark.slow
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(name=NAMES, motor=MOTORS, steps=STEPS)
+def test_outputs_finite_bounded_and_safe_many(name, motor, steps):
+    check_outputs(name, motor, steps)
+
+
+def check_outputs(name: str, motor: str, steps: list[dict]) -> None:
+    """One controller, fresh from its init, stepped through ``steps``: the properties of the module docstring."""
     drive = bl.load(motor)
     c, info, params, state, _keep = _setup(name, drive)
     inp = c.record("bc_ctrl_in")

@@ -11,6 +11,8 @@ import pytest
 
 CORE = Path(__file__).resolve().parents[1] / "core"
 
+pytestmark = pytest.mark.slow  # make + run every C test: ~25 s plain, ~75 s under the sanitizers
+
 
 @pytest.mark.parametrize("sanitize", [False, True], ids=["plain", "asan-ubsan"])
 def test_c_core_tests_pass(tmp_path, sanitize):

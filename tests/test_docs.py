@@ -57,6 +57,7 @@ def _text(page: str) -> str:
     return " ".join(html.unescape(re.sub(r"<[^>]+>", " ", page)).split())
 
 
+@pytest.mark.slow
 def test_site_builds_strict_with_the_main_pages(site: Path) -> None:
     for path in ("index.html", "user-guide/install", "user-guide/cli", "user-guide/python", "motor-files",
                  "theory", "conventions", "plant", "theory-paper1", "theory-paper2", "sixstep", "sine", "identify",
@@ -68,6 +69,7 @@ def test_site_builds_strict_with_the_main_pages(site: Path) -> None:
     assert 'pip install ".[test]" && pytest' in home
 
 
+@pytest.mark.slow
 def test_api_reference_is_generated_from_the_docstrings(site: Path) -> None:
     for module in REFERENCE_MODULES:
         page = _page(site, f"reference/{module}")
@@ -85,6 +87,7 @@ def test_api_reference_is_generated_from_the_docstrings(site: Path) -> None:
     assert 'id="bldclab.design.pi_gains"' in _page(site, "reference/design")
 
 
+@pytest.mark.slow
 def test_sphinx_roles_become_links_or_code(site: Path) -> None:
     for module in REFERENCE_MODULES:
         text = _text(_page(site, f"reference/{module}"))
@@ -95,6 +98,7 @@ def test_sphinx_roles_become_links_or_code(site: Path) -> None:
     assert 'href="#bldclab.sim.simulate"' in sim
 
 
+@pytest.mark.slow
 def test_developer_guide_explains_how_to_add_a_controller_and_a_shape(site: Path) -> None:
     guide = _text(_page(site, "developer/add-controller"))
     assert "add a controller" in guide.lower()
@@ -109,6 +113,7 @@ def test_developer_guide_explains_how_to_add_a_controller_and_a_shape(site: Path
         assert words in index, words
 
 
+@pytest.mark.slow
 def test_cli_page_shows_every_subcommand_with_its_current_help(site: Path) -> None:
     from bldclab.cli import COMMANDS
 
@@ -119,6 +124,7 @@ def test_cli_page_shows_every_subcommand_with_its_current_help(site: Path) -> No
         assert " ".join(cmd.help.split()) in text, cmd.name
 
 
+@pytest.mark.slow
 def test_every_example_has_a_gallery_page_with_its_figure_and_code(site: Path) -> None:
     assert EXAMPLES
     index = _page(site, "gallery")

@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from conftest import require_tool
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -16,6 +18,7 @@ sys.modules["firmware_bench"] = fw
 spec.loader.exec_module(fw)
 
 
+@pytest.mark.slow
 def test_every_controller_cross_compiles_for_cortex_m4f(tmp_path):
     require_tool("arm-none-eabi-gcc")
     sizes = fw.arm_sizes(tmp_path)
@@ -35,6 +38,7 @@ def test_every_registered_controller_is_in_the_firmware_harness():
     assert registered <= set(fw.cost_names()), registered - set(fw.cost_names())
 
 
+@pytest.mark.slow
 def test_cost_harness_runs_every_scenario(tmp_path):
     require_tool("cc")
     exe = tmp_path / "cost"

@@ -17,6 +17,8 @@ _spec.loader.exec_module(fz)
 
 SECONDS = 8
 
+pytestmark = pytest.mark.slow  # libFuzzer builds and runs: ~12 s a target
+
 
 @pytest.mark.parametrize("name", fz.fw.cost_names())
 def test_fuzz_target_finds_nothing(name, tmp_path):

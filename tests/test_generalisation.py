@@ -30,6 +30,9 @@ SWITCHING_TOL = 0.01
 #: out: there the closed forms have a kink that a sampled controller rounds off over a few samples.
 CORNER = 0.02
 
+#: the development subset (``pytest -m "not slow"``): a few drives; the ``slow`` tests run many more
+FEW = settings(max_examples=5, deadline=None, derandomize=True,
+               suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 FAST = settings(max_examples=40, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 SLOW = settings(max_examples=150, deadline=None, derandomize=True,
@@ -52,7 +55,7 @@ def check_closed_forms(case: Case) -> None:
     assert math.isclose(out.TR_s, out.TR_s_cf, abs_tol=TR_TOL), f"sine ripple {out.TR_s} vs {out.TR_s_cf}: {msg}"
 
 
-@FAST
+@FEW
 @given(cases().filter(away_from_corners))
 def test_averaged_model_meets_paper1_closed_forms_on_random_drives(case: Case) -> None:
     check_closed_forms(case)
@@ -65,6 +68,7 @@ def test_averaged_model_meets_paper1_closed_forms_on_many_random_drives(case: Ca
     check_closed_forms(case)
 
 
+@pytest.mark.slow
 @FAST
 @given(cases(), st.sampled_from(["square", "sine"]))
 def test_switching_mean_torque_is_within_a_hundredth_of_the_averaged_one(case: Case, supply: str) -> None:
@@ -95,6 +99,7 @@ def base_cases(r_max: float) -> st.SearchStrategy[Case]:
     return cases(r_max=r_max, pwm_max=60.0).map(lambda c: dataclasses.replace(c, speed_pu=0.9))
 
 
+@pytest.mark.slow
 @settings(max_examples=6, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(base_cases(r_max=0.0) | base_cases(r_max=0.08))

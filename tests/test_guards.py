@@ -185,7 +185,7 @@ def test_normal_runs_raise_no_plausibility_warning(drive):
                 assert res.meta["warnings"] == []
 
 
-@pytest.mark.parametrize("drive", [HTM, LU], ids=["htm-48v", "lu-4kw"])
+@pytest.mark.parametrize("drive", [HTM, pytest.param(LU, marks=pytest.mark.slow)], ids=["htm-48v", "lu-4kw"])
 def test_compare_and_torque_control_raise_no_plausibility_warning(drive):
     with warnings.catch_warnings():
         warnings.simplefilter("error", PlausibilityWarning)

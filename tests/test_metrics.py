@@ -44,8 +44,10 @@ def pwm_ma(res: bl.SimResult, sub: int) -> tuple[np.ndarray, np.ndarray]:
 # exact extremes of the instantaneous torque
 
 
-@pytest.mark.parametrize(("drive", "supply", "w"), [(LU, "square", 0.5), (HTM, "square", 0.3), (HTM, "sine", 0.5),
-                                                    (LU, "sine", 0.3)])
+@pytest.mark.parametrize(("drive", "supply", "w"), [(LU, "square", 0.5),
+                                                    pytest.param(HTM, "square", 0.3, marks=pytest.mark.slow),
+                                                    (HTM, "sine", 0.5),
+                                                    pytest.param(LU, "sine", 0.3, marks=pytest.mark.slow)])
 def test_extremes_bound_a_fine_trace_within_its_resolution(drive, supply, w):
     """The exact extremes are never inside a 128-rows-per-PWM-period trace's, and beyond them by at most one row's
     torque change; a 4x finer trace closes most of the gap (the extremes sit between its rows)."""
@@ -215,7 +217,7 @@ def test_simulated_base_speed_of_htm_is_the_r_aware_numeric_one(supply):
     assert base_speed_margin(HTM, supply, wb - 0.01) >= 0.0 > base_speed_margin(HTM, supply, wb + 0.01)
 
 
-@pytest.mark.parametrize("supply", ["square", "sine"])
+@pytest.mark.parametrize("supply", [pytest.param("square", marks=pytest.mark.slow), "sine"])
 def test_simulated_base_speed_of_lu4kw_is_at_the_no_load_speed(supply):
     """lu-4kw (0.29 mH, 300 V): Theta_m is small and the rounded back-EMF reaches its line peak at isolated angles,
     so both supplies hold their current up to about Omega_0, as the numeric computation says."""

@@ -39,6 +39,7 @@ def test_equivalent_blac_motor_develops_0866_of_the_bldc_nominal_torque():
     assert point.metrics.i_peak[0] == pytest.approx(2 / math.sqrt(3) * HTM.motor.I_N, rel=0.03)
 
 
+@pytest.mark.slow
 def test_figures_draw(tmp_path):
     for name, fig in (("fig9", paper1.fig9(HTM)), ("fig11", paper1.fig11(HTM))):
         fig.savefig(tmp_path / f"{name}.png")

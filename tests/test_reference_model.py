@@ -136,6 +136,7 @@ def test_high_side_chopping_timing_and_freewheel_diode(htm: bldclab.Drive) -> No
     assert balance_error(r) < 1e-8
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("upper_mode", [HIGH, PWM])
 def test_six_step_energy_balance(lossy: bldclab.Drive, upper_mode: int) -> None:
     """Six-step at 0.5 Omega_0 with chopping, freewheeling, commutation through diodes and an open phase."""
@@ -174,6 +175,7 @@ def test_six_step_energy_balance(lossy: bldclab.Drive, upper_mode: int) -> None:
     np.testing.assert_allclose(r.tau_e, np.sum(k_abc.T * r.i, axis=1), rtol=1e-12, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_all_off_below_no_load_speed_carries_no_current(lossy: bldclab.Drive) -> None:
     n = 200
     for omega in (0.95 * lossy.Omega_0, -0.95 * lossy.Omega_0):
@@ -187,8 +189,9 @@ def line_emf_max(drive: bldclab.Drive, omega: float, theta_e: np.ndarray) -> np.
     return np.max(e[:, None, :] - e[None, :, :], axis=(0, 1))
 
 
-@pytest.mark.parametrize(("shape", "speed"), [("trapezoid", 1.3), ("trapezoid", -1.3), ("sinusoid", 1.1),
-                                              ("sinusoid", -1.1)])
+@pytest.mark.parametrize(("shape", "speed"), [pytest.param("trapezoid", 1.3, marks=pytest.mark.slow),
+                                              pytest.param("trapezoid", -1.3, marks=pytest.mark.slow),
+                                              ("sinusoid", 1.1), ("sinusoid", -1.1)])
 def test_all_off_above_no_load_speed_rectifies(lossy: bldclab.Drive, shape: str, speed: float) -> None:
     """Legs OFF while the line back-EMF exceeds V_dc + 2 V_f: the diodes rectify into the source.
 
@@ -295,6 +298,7 @@ def test_opening_phase_beyond_other_rail_goes_straight_to_other_diode(lossy: bld
     assert balance_error(r) < 1e-10
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ["htm", "fast"])
 def test_tolerance_convergence(lossy: bldclab.Drive, case: str) -> None:
     """rtol 1e-8 and 1e-11 give the same currents to 1e-6 A.

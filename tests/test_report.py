@@ -98,11 +98,9 @@ def _embedded_equals(column: list, values: pd.Series) -> bool:
 
 
 @pytest.fixture(scope="module")
-def results_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """bldclab compare at 3 speeds, then faults and a small torque-control run into the same directory."""
-    out = tmp_path_factory.mktemp("cmp") / "htm"
-    assert main(["compare", "htm-48v", "--out", str(out), "--speeds", "3", "--workers", "1", "--no-progress"]) == 0
-    return out
+def results_dir(compare_htm48v: Path) -> Path:
+    """The session's bldclab compare run on htm-48v (tests/conftest.py): read only; tests that add files copy it."""
+    return compare_htm48v
 
 
 @pytest.fixture(scope="module")
@@ -247,6 +245,7 @@ def test_page_needs_no_network(page: Page, results_dir: Path) -> None:
     assert len(text.encode()) < 2_000_000
 
 
+@pytest.mark.slow
 def test_report_command_on_the_directory_adds_faults_and_methods(results_dir: Path, tmp_path: Path) -> None:
     d = tmp_path / "res"
     d.mkdir()
@@ -287,6 +286,7 @@ def test_report_from_a_motor_runs_the_comparison(tmp_path: Path) -> None:
     assert pg.all_text.count(cmd) >= 2  # the run and this report
 
 
+@pytest.mark.slow
 def test_compare_without_report(tmp_path: Path) -> None:
     out = tmp_path / "c"
     assert main(["compare", "htm-48v", "--out", str(out), "--speeds", "2", "--workers", "1", "--no-report"]) == 0
@@ -338,10 +338,10 @@ def test_bad_results_directory_exits_2_and_writes_nothing(kind, extra, field, re
 
 
 @pytest.mark.parametrize("argv, field", [
-    (["nosuch-motor"], "nosuch-motor"),
-    (["htm-48v", "--speeds", "1"], "--speeds"),
-    (["htm-48v", "--waveform-speeds", "fast"], "--waveform-speeds"),
-    (["htm-48v", "--min-speed", "0.9", "--max-speed", "0.2"], "--min-speed"),
+    pytest.param(["nosuch-motor"], "nosuch-motor", marks=pytest.mark.slow),  # a process each: ~1 s
+    pytest.param(["htm-48v", "--speeds", "1"], "--speeds", marks=pytest.mark.slow),
+    pytest.param(["htm-48v", "--waveform-speeds", "fast"], "--waveform-speeds", marks=pytest.mark.slow),
+    pytest.param(["htm-48v", "--min-speed", "0.9", "--max-speed", "0.2"], "--min-speed", marks=pytest.mark.slow),
 ])
 def test_bad_motor_arguments_exit_2_with_one_line(argv, field, tmp_path):
     out = tmp_path / "o" / "r.html"

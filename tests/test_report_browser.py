@@ -23,6 +23,8 @@ import pytest
 from bldclab.cli import main
 from conftest import require_tool
 
+pytestmark = pytest.mark.slow  # headless Chromium: a few seconds a page
+
 # Flags that keep headless Chromium off the network and quick to start (a fresh profile for every run); host
 # names resolve to nothing, so even a request that slipped through could not leave the machine.
 FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",

@@ -65,6 +65,7 @@ def _cases():
            1.25 * HTM.Omega_0, np.zeros((400, 3), dtype=np.int32), np.zeros((400, 3)), 0.0)
 
 
+@pytest.mark.slow  # the reference model is slow on purpose: 2 to 20 s a case
 @pytest.mark.parametrize("case", list(_cases()), ids=lambda c: c[0])
 def test_c_plant_matches_reference(case):
     name, drive, om, modes, duties, th0 = case

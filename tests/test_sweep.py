@@ -189,6 +189,7 @@ def test_processes_give_the_same_bits_as_serial(serial_results, tmp_path):
     run.store.close()
 
 
+@pytest.mark.slow
 def test_dask_gives_the_same_bits_as_serial(serial_results, tmp_path):
     require_module("distributed")
     import distributed
@@ -200,6 +201,7 @@ def test_dask_gives_the_same_bits_as_serial(serial_results, tmp_path):
     run.store.close()
 
 
+@pytest.mark.slow
 def test_unreachable_scheduler_is_a_clear_error():
     require_module("distributed")
     with pytest.raises(BldclabError, match="scheduler: cannot connect"):
@@ -371,6 +373,7 @@ def running(procs: list[psutil.Process]) -> list[psutil.Process]:
     return out
 
 
+@pytest.mark.slow
 def test_kill_9_mid_sweep_then_resume(tmp_path, slow_reference):
     s, reference = slow_reference
     (tmp_path / "slow.toml").write_text(SLOW_TOML)
@@ -395,6 +398,7 @@ def test_kill_9_mid_sweep_then_resume(tmp_path, slow_reference):
     rerun_and_check(tmp_path, db, before, s, reference)
 
 
+@pytest.mark.slow
 def test_ctrl_c_mid_sweep_then_resume(tmp_path, slow_reference):
     s, reference = slow_reference
     (tmp_path / "slow.toml").write_text(SLOW_TOML)
