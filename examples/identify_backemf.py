@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import bldclab as bl
-from bldclab.identify import identify, observable_emf, sample_path
+from bldclab.analysis.identify import identify, observable_emf, sample_path
 
 # configure the drive: identify the back-EMF from the record, the rest (R, L, inverter, sensors) from lu-4kw
 catalog = bl.load("lu-4kw")

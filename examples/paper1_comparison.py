@@ -14,8 +14,9 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import bldclab as bl
-from bldclab import analytic, plots
-from bldclab.compare import compare
+from bldclab.analysis.compare import compare
+from bldclab.model import analytic
+from bldclab.report import plots
 
 # configure the drive: paper 1's study case (Table II), with the closed forms' premise R = 0
 drive = bl.load("htm-48v").replace(motor__R=0.0)

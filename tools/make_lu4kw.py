@@ -15,7 +15,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from bldclab.catalog.synthetic import lu4kw_drive
+from bldclab.model.catalog.synthetic import lu4kw_drive
 
 DEFAULT_OUTPUT = Path(__file__).resolve().parents[1] / "src" / "bldclab" / "catalog" / "lu-4kw.toml"
 

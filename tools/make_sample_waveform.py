@@ -21,7 +21,7 @@ import sys
 from pathlib import Path
 
 from bldclab import load
-from bldclab.identify import SAMPLE_FILE, synthetic_measurement, waveform_csv
+from bldclab.analysis.identify import SAMPLE_FILE, synthetic_measurement, waveform_csv
 
 DEFAULT_OUTPUT = Path(__file__).resolve().parents[1] / "src" / "bldclab" / "data" / SAMPLE_FILE
 

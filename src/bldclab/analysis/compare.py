@@ -25,12 +25,12 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from . import analytic
-from . import plausibility as _plaus
-from .control import Control, Sine, SixStep
-from .errors import BldclabError, PlausibilityWarning
+from ..control import Control, Sine, SixStep
+from ..errors import BldclabError, PlausibilityWarning
+from ..model import analytic
+from ..model.motor import Drive
+from ..sim import plausibility as _plaus
 from .experiments import base_speed, steady_state
-from .motor import Drive
 
 __all__ = ["CompareResult", "base_speed_table", "compare", "default_controls", "speed_grid"]
 

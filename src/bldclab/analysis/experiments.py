@@ -22,13 +22,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import analytic, plausibility
-from .control import Control, Sine, SixStep
-from .control.sine import fundamental_k1
-from .errors import BldclabError, PlausibilityError
-from .motor import Drive
-from .results import Metrics, SimResult
-from .sim import Profile, Scenario, simulate
+from ..control import Control, Sine, SixStep
+from ..control.sine import fundamental_k1
+from ..errors import BldclabError, PlausibilityError
+from ..model import analytic
+from ..model.motor import Drive
+from ..sim import Profile, Scenario, plausibility, simulate
+from ..sim.results import Metrics, SimResult
 
 __all__ = ["PointResult", "base_speed", "base_speed_margin", "steady_state"]
 

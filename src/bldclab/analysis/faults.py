@@ -16,10 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .control import Control
+from ..control import Control
+from ..model.motor import Drive
+from ..sim import Fault, Scenario, simulate
 from .experiments import electrical_period
-from .motor import Drive
-from .sim import Fault, Scenario, simulate
 
 __all__ = ["FaultCase", "default_faults", "fault_table"]
 

@@ -30,12 +30,12 @@ import pandas as pd
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
-from .control import Lu
-from .errors import BldclabError
+from ..control import Lu
+from ..errors import BldclabError
+from ..model.motor import BackEmf, Drive, Trapezoid
+from ..sim import Scenario, simulate
+from ..sim.results import SimResult
 from .experiments import electrical_period
-from .motor import BackEmf, Drive, Trapezoid
-from .results import SimResult
-from .sim import Scenario, simulate
 
 __all__ = [
     "METHODS",

@@ -15,15 +15,22 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import analytic
-from . import plausibility as _plaus
-from .catalog import load
-from .control import Control, Lu, Sine, SixStep, SixStepVoltage
-from .errors import BldclabError, PlausibilityWarning
-from .experiments import electrical_period
-from .motor import Drive, Inverter
-from .sim import Scenario, simulate
-from .units import to_si
+from .._files import write_files
+from ..analysis import paper1, paper2
+from ..analysis.compare import compare, speed_grid
+from ..analysis.experiments import electrical_period
+from ..analysis.faults import fault_table
+from ..analysis.paper1 import table1_text
+from ..control import Control, Lu, Sine, SixStep, SixStepVoltage
+from ..errors import BldclabError, PlausibilityWarning
+from ..model import analytic
+from ..model.catalog import load
+from ..model.motor import Drive, Inverter
+from ..model.units import to_si
+from ..report import plots
+from ..report.bundle import compare_command, compare_outputs
+from ..sim import Scenario, simulate
+from ..sim import plausibility as _plaus
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -82,7 +89,6 @@ def _summarise(caught: list[str], runs: int) -> None:
 
 
 def _write(out: Path, files: dict[str, bytes]) -> list[Path]:
-    from .cli import write_files
 
     return write_files(out, files)
 
@@ -220,8 +226,6 @@ def configure_compare(p: argparse.ArgumentParser) -> None:
 
 def comparison_figures(res: Any) -> dict[str, Figure]:
     """Torque, ripple and efficiency vs speed: analytic curves of paper 1 and simulated points, both supplies."""
-    from . import plots
-
     sim = res.simulated
     sq = sim[sim.supply == "square"]
     si = sim[sim.supply == "sine"]
@@ -240,8 +244,6 @@ def comparison_figures(res: Any) -> dict[str, Figure]:
 
 def run_compare(args: argparse.Namespace) -> int:
     """Run ``bldclab compare``."""
-    from .compare import compare, speed_grid
-
     drive = load_drive(args)
     if args.speeds < 2:
         raise BldclabError("--speeds", f"needs at least 2, got {args.speeds}")
@@ -293,13 +295,11 @@ def run_compare(args: argparse.Namespace) -> int:
     files["simulated.csv"] = sim.to_csv(index=False).encode()
     files["analytic.csv"] = res.analytic.to_csv(index=False).encode()
     files["base_speeds.csv"] = res.base_speeds.to_csv(index=False).encode()
-    from .cli import table1_text
 
     files["table1.csv"] = table1_text(t1, "csv").encode()
     files["table1.json"] = table1_text(t1, "json", res.not_applicable).encode()
     files["verdict.txt"] = ("\n".join(res.verdict) + "\n").encode()
     figures = comparison_figures(res)
-    from . import paper1
 
     figures["fig9_torque_0.8pu"] = paper1.fig9(drive)
     figures["fig11_currents"] = paper1.fig11(drive)
@@ -308,7 +308,6 @@ def run_compare(args: argparse.Namespace) -> int:
     for name, fig in figures.items():
         files[f"{name}.png"] = _figure_bytes(fig, "png")
         files[f"{name}.svg"] = _figure_bytes(fig, "svg")
-    from .report import compare_command, compare_outputs  # waveforms.csv, manifest.json, report.html
 
     files.update(compare_outputs(res, files, command=compare_command(args, out), motor_source=args.motor,
                                  report=not args.no_report))
@@ -343,8 +342,6 @@ def _list(text: str, parse: Any, field: str) -> list[float]:
 
 def run_torque_control(args: argparse.Namespace) -> int:
     """Run ``bldclab torque-control``: paper 2's methods compared over a load x speed grid."""
-    from . import paper2
-
     drive = load_drive(args)
 
     def torque(t: str) -> float:
@@ -404,8 +401,6 @@ def configure_faults(p: argparse.ArgumentParser) -> None:
 
 def run_faults(args: argparse.Namespace) -> int:
     """Run ``bldclab faults``: each injected fault, detection, time to the safe state, peak current."""
-    from .faults import fault_table
-
     drive = load(args.motor)
     speed = parse_speed(args.speed, drive)
     ctl, ref, _ = _control(args.control, drive, handoff=0.02 * drive.Omega_0)

@@ -16,15 +16,15 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 
-from ..analytic import r_total
-from ..design import max_bandwidth, pi_gains
 from ..errors import BldclabError
-from ..motor import TWO_PI
+from ..model.analytic import r_total
+from ..model.design import max_bandwidth, pi_gains
+from ..model.motor import TWO_PI
 from .base import Control, check_number
 
 if TYPE_CHECKING:
     from .._core import Core
-    from ..motor import Drive
+    from ..model.motor import Drive
 
 __all__ = ["Lu"]
 

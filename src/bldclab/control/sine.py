@@ -15,15 +15,15 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 
-from ..analytic import i_sN, r_total
-from ..design import pi_gains
 from ..errors import BldclabError
+from ..model.analytic import i_sN, r_total
+from ..model.design import pi_gains
 from .base import Control, check_number
 from .sixstep import SixStep
 
 if TYPE_CHECKING:
     from .._core import Core
-    from ..motor import Drive
+    from ..model.motor import Drive
 
 __all__ = ["Sine", "fundamental_k1"]
 

@@ -14,14 +14,14 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 
-from ..analytic import r_total
-from ..design import pi_gains
 from ..errors import BldclabError
+from ..model.analytic import r_total
+from ..model.design import pi_gains
 from .base import Control, check_number
 
 if TYPE_CHECKING:
     from .._core import Core
-    from ..motor import Drive
+    from ..model.motor import Drive
 
 __all__ = ["SixStep"]
 

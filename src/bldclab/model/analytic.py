@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import BldclabError
+from ..errors import BldclabError
 from .motor import TWO_PI, Drive, Trapezoid
 
 if TYPE_CHECKING:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from .errors import BldclabError
+from ..errors import BldclabError
 
 __all__ = ["max_bandwidth", "pi_gains"]
 

@@ -22,8 +22,8 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._files import read_toml
-from .errors import BldclabError
+from .._files import read_toml
+from ..errors import BldclabError
 from .units import to_si
 
 __all__ = [

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import re
 
-from .errors import BldclabError
+from ..errors import BldclabError
 
 __all__ = ["ALIASES", "DIMENSIONS", "to_si"]
 

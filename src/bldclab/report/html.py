@@ -26,36 +26,30 @@ a static SVG drawn by :func:`svg_plot`, which also serves the notebook displays 
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import datetime
-import hashlib
 import html
-import inspect
 import io
 import json
 import math
-import platform
 import re
-import shlex
-import sys
 import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
-from . import __version__
-from .errors import BldclabError
+from .._version import __version__
+from ..errors import BldclabError
+from ..model import analytic
+from ..model.motor import Drive
+from ..svg import Series, _e, svg_plot
 
 if TYPE_CHECKING:
-    from .compare import CompareResult
-    from .control import Control
-    from .motor import Drive
+    from ..model.motor import Drive
 
 __all__ = [
     "FORMAT",
@@ -65,18 +59,7 @@ __all__ = [
     "REPORT",
     "WAVEFORM_SPEEDS",
     "Results",
-    "Series",
-    "compare_command",
-    "compare_outputs",
-    "configure_command",
-    "make_manifest",
-    "methods_traces",
-    "motor_results",
-    "read_results",
     "render",
-    "run_command",
-    "svg_plot",
-    "waveforms",
 ]
 
 #: Name of the manifest a results directory carries.
@@ -154,11 +137,6 @@ _PREFIX = ((1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "\
 # formatting
 
 
-def _e(text: object) -> str:
-    """Escape text for HTML."""
-    return html.escape(str(text), quote=True)
-
-
 def _num(value: object) -> str:
     """Format a value for a table: 6 significant digits, yes/no, n/a for NaN or None."""
     if value is None:
@@ -225,541 +203,12 @@ def _frame_table(df: pd.DataFrame, columns: Sequence[str] | None = None) -> str:
 # static SVG plots (no-JavaScript fallback, notebook displays)
 
 
-@dataclass
-class Series:
-    """One line or point set of :func:`svg_plot`.
-
-    Parameters
-    ----------
-    name : str
-        Legend text.
-    x, y : array_like
-        Coordinates (NaN breaks a line).
-    color : str
-        CSS colour.
-    line : bool
-        Draw a line through the points.
-    marker : {None, "o", "x", "s"}
-        Marker drawn at every point.
-    dash : str, optional
-        SVG dash pattern, e.g. ``"5 4"``.
-    """
-
-    name: str
-    x: Any
-    y: Any
-    color: str = "#333333"
-    line: bool = True
-    marker: str | None = None
-    dash: str | None = None
-
-
-def _ticks(lo: float, hi: float, n: int) -> list[tuple[float, str]]:
-    """Nice tick values (1, 2, 5 times a power of ten) in [lo, hi] and their labels; as the page's script."""
-    raw = (hi - lo) / n
-    mag = 10.0 ** math.floor(math.log10(raw))
-    r = raw / mag
-    step = (1 if r < 1.5 else 2 if r < 3 else 5 if r < 7 else 10) * mag
-    decimals = max(0, min(10, -math.floor(math.log10(step) + 1e-9)))
-    out = []
-    k = math.ceil(lo / step - 1e-9)
-    while k * step <= hi + step * 1e-9 and len(out) < 50:
-        v = k * step
-        out.append((v, f"{0.0 if abs(v) < step * 1e-9 else v:.{decimals}f}"))
-        k += 1
-    return out
-
-
-def _decimate(x: np.ndarray, y: np.ndarray, n_max: int) -> tuple[np.ndarray, np.ndarray]:
-    """Keep at most about ``n_max`` points: the extremes of each bucket, in order (spikes survive)."""
-    if x.size <= n_max:
-        return x, y
-    size = math.ceil(2 * x.size / n_max)
-    keep: list[int] = []
-    for start in range(0, x.size, size):
-        seg = y[start:start + size]
-        finite = np.isfinite(seg)
-        if not finite.any():
-            keep.append(start)
-            continue
-        lo = int(np.nanargmin(seg)) + start
-        hi = int(np.nanargmax(seg)) + start
-        keep.extend(sorted({lo, hi}))
-        if not finite.all():
-            keep.append(start + int(np.argmin(finite)))
-    idx = np.array(sorted(set(keep)))
-    return x[idx], y[idx]
-
-
-def _marker_d(kind: str, px: float, py: float, r: float = 3.6) -> str:
-    if kind == "x":
-        return f"M{px - r:.1f} {py - r:.1f}l{2 * r} {2 * r}m0 {-2 * r}l{-2 * r} {2 * r}"
-    if kind == "s":
-        return f"M{px - r:.1f} {py - r:.1f}h{2 * r}v{2 * r}h{-2 * r}z"
-    return f"M{px - r:.1f} {py:.1f}a{r} {r} 0 1 0 {2 * r} 0a{r} {r} 0 1 0 {-2 * r} 0"
-
-
-def svg_plot(series: Sequence[Series], *, title: str = "", xlabel: str = "", ylabel: str = "",
-             xlim: tuple[float | None, float | None] = (None, None),
-             ylim: tuple[float | None, float | None] = (None, None),
-             vlines: Sequence[Mapping[str, Any]] = (), width: int = 640, height: int = 400,
-             max_points: int = 800) -> str:
-    """Draw a static line/marker plot as an inline SVG string (no JavaScript, no external resources).
-
-    Parameters
-    ----------
-    series : sequence of Series
-        What to draw.
-    title, xlabel, ylabel : str
-        Texts (the title is the SVG's accessible label).
-    xlim, ylim : pair of float or None
-        Axis limits; None: from the data (y with 5 % margins).
-    vlines : sequence of mapping
-        Vertical marks: ``{"x": float, "label": str, "color": str, "dash": str}``.
-    width, height : int
-        Size of the plot area's viewBox (px); the legend adds rows below.
-    max_points : int
-        Points kept per series (extremes per bucket).
-
-    Returns
-    -------
-    str
-        ``<svg ...>...</svg>``, scalable (``viewBox``), without an ``xmlns`` (inline HTML needs none).
-    """
-    ml, mr, mt, mb = 66, 18, 14, 50
-    pw, ph = width - ml - mr, height - mt - mb
-    data = []
-    for s in series:
-        x = np.asarray(s.x, dtype=float).ravel()
-        y = np.asarray(s.y, dtype=float).ravel()
-        if x.shape != y.shape:
-            raise BldclabError(f"series {s.name!r}", f"x and y differ in length ({x.size} and {y.size})")
-        data.append((s, *_decimate(x, y, max_points)))
-    fin = [(x[np.isfinite(x) & np.isfinite(y)], y[np.isfinite(x) & np.isfinite(y)]) for _, x, y in data]
-    xs = np.concatenate([f[0] for f in fin]) if fin else np.zeros(0)
-    ys = np.concatenate([f[1] for f in fin]) if fin else np.zeros(0)
-    x0, x1 = (float(xs.min()), float(xs.max())) if xs.size else (0.0, 1.0)
-    y0, y1 = (float(ys.min()), float(ys.max())) if ys.size else (0.0, 1.0)
-    pad = (y1 - y0) * 0.05 or abs(y1) * 0.05 or 1.0
-    y0, y1 = y0 - pad, y1 + pad
-    x0 = x0 if xlim[0] is None else float(xlim[0])
-    x1 = x1 if xlim[1] is None else float(xlim[1])
-    y0 = y0 if ylim[0] is None else float(ylim[0])
-    y1 = y1 if ylim[1] is None else float(ylim[1])
-    x1 = x1 if x1 > x0 else x0 + 1.0
-    y1 = y1 if y1 > y0 else y0 + 1.0
-
-    def sx(v: float) -> float:
-        return ml + (v - x0) / (x1 - x0) * pw
-
-    def sy(v: float) -> float:
-        return mt + ph - (v - y0) / (y1 - y0) * ph
-
-    rows = math.ceil(len(series) / 2)
-    total_h = height + 16 * rows + (4 if rows else 0)
-    clip = "sc" + hashlib.sha1(repr((title, xlabel, ylabel, [s.name for s in series], x0, x1, y0, y1)).encode()
-                               ).hexdigest()[:10]
-    out = [f'<svg class="static-chart" viewBox="0 0 {width} {total_h}" role="img" aria-label="{_e(title)}" '
-           f'font-family="system-ui, sans-serif" font-size="12">',
-           f'<defs><clipPath id="{clip}"><rect x="{ml}" y="{mt}" width="{pw}" height="{ph}"/></clipPath></defs>',
-           f'<rect x="0" y="0" width="{width}" height="{total_h}" fill="#fff"/>']
-    grid, labels = [], []
-    for v, label in _ticks(x0, x1, 7):
-        grid.append(f"M{sx(v):.1f} {mt}V{mt + ph}")
-        labels.append(f'<text x="{sx(v):.1f}" y="{mt + ph + 16}" text-anchor="middle" fill="#4b555e">{label}</text>')
-    for v, label in _ticks(y0, y1, 6):
-        grid.append(f"M{ml} {sy(v):.1f}H{ml + pw}")
-        labels.append(f'<text x="{ml - 6}" y="{sy(v):.1f}" dy="0.32em" text-anchor="end" fill="#4b555e">{label}</text>')
-    out.append(f'<path d="{"".join(grid)}" stroke="#e6eaee" fill="none"/>')
-    out.extend(labels)
-    out.append(f'<g clip-path="url(#{clip})">')
-    for vl in vlines:
-        px = sx(float(vl["x"]))
-        color = _e(vl.get("color", "#888"))
-        dash = f' stroke-dasharray="{_e(vl["dash"])}"' if vl.get("dash") else ""
-        out.append(f'<path d="M{px:.1f} {mt}V{mt + ph}" stroke="{color}" fill="none"{dash}/>')
-    for s, x, y in data:
-        ok = np.isfinite(x) & np.isfinite(y)
-        px = np.clip(ml + (x - x0) / (x1 - x0) * pw, -5000, 5000)
-        py = np.clip(mt + ph - (y - y0) / (y1 - y0) * ph, -5000, 5000)
-        if s.line:
-            d, pen = [], False
-            for j in range(x.size):
-                if not ok[j]:
-                    pen = False
-                    continue
-                d.append(f"{'L' if pen else 'M'}{px[j]:.1f} {py[j]:.1f}")
-                pen = True
-            if d:
-                dash = f' stroke-dasharray="{_e(s.dash)}"' if s.dash else ""
-                out.append(f'<path d="{"".join(d)}" stroke="{_e(s.color)}" stroke-width="1.6" fill="none"{dash}/>')
-        if s.marker:
-            m = "".join(_marker_d(s.marker, float(px[j]), float(py[j])) for j in range(x.size) if ok[j])
-            if m:
-                out.append(f'<path d="{m}" stroke="{_e(s.color)}" stroke-width="1.4" fill="none"/>')
-    out.append("</g>")
-    out.append(f'<rect x="{ml}" y="{mt}" width="{pw}" height="{ph}" fill="none" stroke="#8a949d"/>')
-    out.append(f'<text x="{ml + pw / 2}" y="{height - 8}" text-anchor="middle" font-size="13">{_e(xlabel)}</text>')
-    out.append(f'<text transform="translate(14 {mt + ph / 2}) rotate(-90)" text-anchor="middle" font-size="13">'
-               f'{_e(ylabel)}</text>')
-    for j, s in enumerate(series):
-        lx = ml + (j % 2) * (pw / 2)
-        ly = height + 6 + 16 * (j // 2)
-        if s.line:
-            dash = f' stroke-dasharray="{_e(s.dash)}"' if s.dash else ""
-            out.append(f'<path d="M{lx:.1f} {ly + 6}h26" stroke="{_e(s.color)}" stroke-width="2"{dash}/>')
-        if s.marker:
-            out.append(f'<path d="{_marker_d(s.marker, lx + 13, ly + 6)}" stroke="{_e(s.color)}" fill="none"/>')
-        out.append(f'<text x="{lx + 32:.1f}" y="{ly + 10}" font-size="11">{_e(s.name)}</text>')
-    out.append("</svg>")
-    return "".join(out)
-
-
 # ------------------------------------------------------------------------------------------------------------
 # producing the data
 
 
-def waveforms(drive: Drive, speeds_pu: Sequence[float] = WAVEFORM_SPEEDS, *,
-              controls: Mapping[str, tuple[Control, float]] | None = None, trace_sub: int = WAVEFORM_SUB
-              ) -> tuple[pd.DataFrame, list[dict[str, Any]]]:
-    """Simulate phase currents and torque over one electrical period at each speed, both supplies, in steady state.
-
-    Each point runs as in :func:`bldclab.compare.compare` (:func:`bldclab.experiments.steady_state`: imposed speed,
-    the same controllers and references) with a trace; the period shown is the first of the measuring window.
-
-    Parameters
-    ----------
-    drive : Drive
-    speeds_pu : sequence of float
-        Per-unit speeds (of ``Omega_0``), > 0.
-    controls : mapping, optional
-        ``{"square": (control, ref), "sine": (control, ref)}``; default
-        :func:`bldclab.compare.default_controls` for the lowest speed.
-    trace_sub : int
-        Trace rows per controller sample.
-
-    Returns
-    -------
-    pandas.DataFrame
-        Columns ``supply``, ``speed_pu``, ``theta_e_deg`` (electrical angle, degrees, from the window's start),
-        ``t_ms`` (ms from the window's start), ``i_a``, ``i_b``, ``i_c`` (A), ``tau_e`` (N m), ``tau_e_pu``.
-    list of dict
-        Per supply and speed: ``supply``, ``speed_pu``, ``tau_mean_pu``, ``ripple_pu`` (without PWM),
-        ``ripple_inst_pu`` (instantaneous), ``efficiency`` over the measuring window.
-    """
-    from .compare import SUPPLIES, default_controls
-    from .experiments import electrical_period, steady_state
-
-    w = [float(s) for s in speeds_pu]
-    if not w or any(not math.isfinite(s) or s <= 0 for s in w):
-        raise BldclabError("--waveform-speeds", f"must be positive per-unit speeds, got {list(speeds_pu)!r}")
-    controls = controls or default_controls(drive, min(w))
-    frames, points = [], []
-    for supply in SUPPLIES:
-        ctl, ref = controls[supply]
-        for s in w:
-            om = s * drive.Omega_0
-            point, res = steady_state(drive, ctl, om, ref, trace=True, trace_sub=trace_sub)
-            m = point.metrics
-            te = electrical_period(drive, om)
-            sel = (res.t >= m.t0) & (res.t < m.t0 + te)
-            th = np.degrees(np.unwrap(res["theta_e"][sel]))
-            th -= 360.0 * math.floor(th[0] / 360.0 + 1e-9) if th.size else 0.0
-            frames.append(pd.DataFrame({
-                "supply": supply, "speed_pu": s, "theta_e_deg": th, "t_ms": (res.t[sel] - m.t0) * 1e3,
-                "i_a": res["i_a"][sel], "i_b": res["i_b"][sel], "i_c": res["i_c"][sel], "tau_e": res["tau_e"][sel],
-                "tau_e_pu": res["tau_e"][sel] / drive.T_N}))
-            points.append({"supply": supply, "speed_pu": s, "tau_mean_pu": point.tau_mean_pu,
-                           "ripple_pu": point.ripple_sampled_pu, "ripple_inst_pu": point.ripple_pu,
-                           "efficiency": point.efficiency})
-    return pd.concat(frames, ignore_index=True), points
-
-
-def methods_traces(drive: Drive, torque: float | None = None, speed: float | None = None,
-                   methods: Sequence[str] = ("rect", "lu-no-do", "lu")) -> pd.DataFrame:
-    """Run paper 2's methods; return torque and largest current over the last half period (one-PWM-period means).
-
-    The same runs and quantities as :func:`bldclab.paper2.fig_compare`, as data.
-
-    Parameters
-    ----------
-    drive : Drive
-    torque : float, optional
-        Torque reference (N m); default ``T_N``.
-    speed : float, optional
-        Imposed speed (rad/s); default the rated speed.
-    methods : sequence of str
-        Among ``rect``, ``lu-no-do``, ``lu``.
-
-    Returns
-    -------
-    pandas.DataFrame
-        Columns ``method``, ``t_ms`` (from the start of the span shown), ``tau_ma`` (N m), ``i_max_ma`` (A).
-    """
-    from . import paper2
-
-    tq = drive.T_N if torque is None else torque
-    om = drive.motor.Omega_nominal if speed is None else speed
-    span = math.pi / (drive.motor.p * om)
-    frames = []
-    for mth in methods:
-        res = paper2.operating_point(drive, mth, tq, om, trace_sub=8)
-        sub = paper2._sub(res)
-        h = paper2._half_means(res, "tau_mean", sub, instantaneous=False)
-        tk = res.t[: len(h) * sub: sub]
-        ma = 0.5 * (h[1:] + h[:-1])
-        hi = np.stack([paper2._half_means(res, f"i_{x}", sub, instantaneous=True) for x in "abc"])
-        big = np.max(np.abs(0.5 * (hi[:, 1:] + hi[:, :-1])), axis=0)
-        m = res.metrics
-        assert m is not None
-        t0 = m.t1 - span
-        sel = (tk[1:] >= t0) & (tk[1:] <= m.t1)
-        frames.append(pd.DataFrame({"method": mth, "t_ms": (tk[1:][sel] - t0) * 1e3, "tau_ma": ma[sel],
-                                    "i_max_ma": big[sel]}))
-    return pd.concat(frames, ignore_index=True)
-
-
-def _plain(value: Any) -> Any:
-    """JSON-ready copy: dataclasses to dicts (with their class), NaN to None, numpy scalars to Python."""
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        out: dict[str, Any] = {"class": type(value).__name__}
-        for f in dataclasses.fields(value):
-            out[f.name] = _plain(getattr(value, f.name))
-        return out
-    if isinstance(value, Mapping):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.generic):
-        return _plain(value.item())
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if value is None or isinstance(value, bool | int | float | str):
-        return value
-    return str(value)
-
-
-def _scenario() -> dict[str, Any]:
-    """Return the measuring scenario of :func:`~bldclab.experiments.steady_state` as ``compare`` runs it."""
-    from .experiments import steady_state
-    from .sim import Scenario
-
-    par = inspect.signature(steady_state).parameters
-    delay = next(f.default for f in dataclasses.fields(Scenario) if f.name == "delay")
-    return {"speed": "imposed (dynamometer), constant", "settle_periods": par["settle_periods"].default,
-            "settle_time_s": par["settle_time"].default, "measure_periods": par["measure_periods"].default,
-            "delay_samples": delay, "start": "from rest: zero currents, electrical angle 0"}
-
-
-def _supplies(drive: Drive, controls: Mapping[str, tuple[Control, float]]) -> dict[str, Any]:
-    meaning = {"square": ("A", "injected current I_N (paper 1 premise, II.B)"),
-               "sine": ("N m", "torque T_s,N of (12)/(13); lowered above the base speed, (23)-(25)")}
-    out = {}
-    for supply, (ctl, ref) in controls.items():
-        unit, text = meaning.get(supply, ("", ""))
-        out[supply] = {"controller": type(ctl).__name__, "reference": float(ref), "reference_unit": unit,
-                       "reference_meaning": text, "settings": _plain(ctl)}
-    return out
-
-
-def _now() -> str:
-    return datetime.datetime.now(datetime.UTC).replace(microsecond=0).isoformat().replace("+00:00", "Z")
-
-
-def _environment() -> dict[str, str]:
-    from . import _core
-
-    return {"python": platform.python_version(), "numpy": np.__version__, "pandas": pd.__version__,
-            "platform": platform.platform(), "core": _core.core().version}
-
-
-def make_manifest(res: CompareResult, controls: Mapping[str, tuple[Control, float]], *, command: str,
-                  files: Sequence[str], motor_source: str, waveform_points: Sequence[Mapping[str, Any]] = (),
-                  waveform_sub: int = WAVEFORM_SUB, extra: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """Describe a comparison's results directory: what was run, how, and which files hold what.
-
-    Parameters
-    ----------
-    res : CompareResult
-        The comparison.
-    controls : mapping
-        The controllers and references it ran (``{"square": (control, ref), "sine": ...}``).
-    command : str
-        The command line that reproduces it.
-    files : sequence of str
-        Names of the files in the directory (the manifest included).
-    motor_source : str
-        What the user named: a catalog name or a motor-file path.
-    waveform_points : sequence of mapping
-        The operating points of the waveforms (:func:`waveforms`' second value).
-    waveform_sub : int
-        Trace rows per sample of the waveforms.
-    extra : mapping, optional
-        Further entries (e.g. ``torque_control``: how paper 2's methods were run).
-
-    Returns
-    -------
-    dict
-        JSON-ready; ``format`` is :data:`FORMAT`, ``format_version`` :data:`FORMAT_VERSION`.
-    """
-    speeds = [float(v) for v in res.analytic["Omega_pu"]]
-    return {**_plain(dict(extra or {})),
-        "format": FORMAT, "format_version": FORMAT_VERSION, "command": command, "bldclab_version": __version__,
-        "created": _now(), "environment": _environment(), "wall_time_s": round(float(res.seconds), 3),
-        "motor": {"name": res.drive.name, "source": motor_source, "toml": res.drive.to_toml()},
-        "speeds_pu": speeds, "supplies": _supplies(res.drive, controls), "scenario": _scenario(),
-        "waveforms": {"speeds_pu": sorted({float(p["speed_pu"]) for p in waveform_points}),
-                      "trace_sub": waveform_sub, "periods_shown": 1, "points": _plain(list(waveform_points))},
-        "verdict": list(res.verdict), "files": sorted(set(files)),
-    }
-
-
-def compare_command(args: argparse.Namespace, out: Path) -> str:
-    """Return the ``bldclab compare`` command line that reproduces a run (process count aside: results are equal)."""
-    return shlex.join(["bldclab", "compare", str(args.motor), "--out", str(out), "--speeds", str(args.speeds),
-                       "--min-speed", f"{args.min_speed:g}", "--max-speed", f"{args.max_speed:g}"])
-
-
-def compare_outputs(res: CompareResult, files: Mapping[str, bytes], *, command: str, motor_source: str | None = None,
-                    report: bool = True, waveform_speeds: Sequence[float] = WAVEFORM_SPEEDS,
-                    extra: Mapping[str, Any] | None = None) -> dict[str, bytes]:
-    """Return the files ``bldclab compare`` adds to its results: waveforms, manifest and (by default) the report.
-
-    Parameters
-    ----------
-    res : CompareResult
-        The comparison (:func:`bldclab.compare.compare` with its default controllers).
-    files : mapping of str to bytes
-        The other files of the results directory (``simulated.csv``, ``table1.json``, ...).
-    command : str
-        The command line that reproduces the run.
-    motor_source : str, optional
-        The motor as the user named it; default the drive's name.
-    report : bool
-        Also render ``report.html``.
-    waveform_speeds : sequence of float
-        Per-unit speeds of the waveform panels.
-    extra : mapping, optional
-        Further manifest entries (:func:`make_manifest`).
-
-    Returns
-    -------
-    dict of str to bytes
-        ``waveforms.csv``, ``manifest.json`` and, with ``report``, ``report.html``.
-    """
-    from .compare import default_controls
-
-    drive = res.drive
-    controls = default_controls(drive, float(np.min(res.analytic["Omega_pu"])))
-    wf, points = waveforms(drive, waveform_speeds, controls=controls)
-    new: dict[str, bytes] = {"waveforms.csv": wf.to_csv(index=False, float_format="%.6g").encode()}
-    names = [*files, "waveforms.csv", MANIFEST, *([REPORT] if report else [])]
-    manifest = make_manifest(res, controls, command=command, files=names, motor_source=motor_source or drive.name,
-                             waveform_points=points, extra=extra)
-    new[MANIFEST] = (json.dumps(manifest, indent=2, allow_nan=False) + "\n").encode()
-    if report:
-        results = Results.from_files({**files, **new}, source="the run itself (bldclab compare)")
-        results.files = sorted(set(names))
-        new[REPORT] = render(results, report_command=command).encode()
-    return new
-
-
-def motor_results(drive: Drive, speeds_pu: Sequence[float], *, command: str, motor_source: str,
-                  workers: int | None = None, waveform_speeds: Sequence[float] = WAVEFORM_SPEEDS,
-                  torque_control: bool = False, progress: bool = False) -> dict[str, bytes]:
-    """Run a comparison and return the files of its results directory (in memory), as ``bldclab compare`` would.
-
-    Parameters
-    ----------
-    drive : Drive
-    speeds_pu : sequence of float
-        Per-unit speeds.
-    command : str
-        The command line that reproduces this.
-    motor_source : str
-        The motor as the user named it.
-    workers : int, optional
-        Processes for the comparison (default all cores).
-    waveform_speeds : sequence of float
-        Per-unit speeds of the waveform panels.
-    torque_control : bool
-        Also run paper 2's methods (:func:`bldclab.paper2.compare_methods` on its default grid and
-        :func:`methods_traces`).
-    progress : bool
-        Progress bar on stderr.
-
-    Returns
-    -------
-    dict of str to bytes
-        ``simulated.csv``, ``analytic.csv``, ``table1.json``, ``verdict.txt``, ``dynamometer.csv``,
-        ``waveforms.csv``, ``manifest.json`` and, with ``torque_control``, ``methods.csv`` and
-        ``methods_traces.csv``.
-    """
-    from . import paper1
-    from .cli import table1_text
-    from .compare import compare
-
-    res = compare(drive, speeds_pu, workers=workers, progress=progress)
-    files: dict[str, bytes] = {
-        "simulated.csv": res.simulated.to_csv(index=False).encode(),
-        "analytic.csv": res.analytic.to_csv(index=False).encode(),
-        "table1.json": table1_text(res.table1, "json", res.not_applicable).encode(),
-        "verdict.txt": ("\n".join(res.verdict) + "\n").encode(),
-        "dynamometer.csv": paper1.fig12(drive)[1].to_csv(index=False).encode(),
-    }
-    extra: dict[str, Any] = {}
-    if torque_control:
-        from . import paper2
-        from .control import Lu
-
-        torques, speeds = paper2.default_grid(drive)
-        files["methods.csv"] = paper2.compare_methods(drive, torques, speeds).to_csv(index=False).encode()
-        files["methods_traces.csv"] = methods_traces(drive).to_csv(index=False, float_format="%.6g").encode()
-        extra["torque_control"] = {
-            "run": "bldclab.paper2.compare_methods on its default grid, then methods_traces at T_N and the rated speed",
-            "torques_N_m": list(torques), "speeds_rad_s": list(speeds), "trace_sub": 8,
-            "controller": _plain(Lu()), "scenario": "paper2.operating_point: imposed speed, 3 electrical periods "
-            "(at least 10 ms) settling, 2 measured; computation delay 1 sample"}
-    files.update(compare_outputs(res, files, command=command, motor_source=motor_source, report=False,
-                                 waveform_speeds=waveform_speeds, extra=extra))
-    return files
-
-
 # ------------------------------------------------------------------------------------------------------------
 # reading the results
-
-
-def read_results(path: Path) -> dict[str, bytes]:
-    """Read the files of a results directory that a report uses, and list the names of all the others.
-
-    Parameters
-    ----------
-    path : Path
-        A directory written by ``bldclab compare`` (it holds ``manifest.json``).
-
-    Returns
-    -------
-    dict of str to bytes
-        File name to content for :data:`MANIFEST` and the known result files present; other files map to ``b""``
-        (listed, not read).
-
-    Raises
-    ------
-    BldclabError
-        If the directory has no manifest or a file cannot be read.
-    """
-    if not (path / MANIFEST).is_file():
-        raise BldclabError(MANIFEST, "is missing: not a results directory written by bldclab compare (run "
-                           f"'bldclab compare MOTOR --out {path}', or give a motor)", str(path))
-    files: dict[str, bytes] = {}
-    try:
-        for entry in sorted(path.iterdir()):
-            if not entry.is_file() or entry.name.startswith("."):
-                continue
-            files[entry.name] = entry.read_bytes() if entry.name in (MANIFEST, *_KNOWN) else b""
-    except OSError as exc:
-        raise BldclabError("results directory", f"cannot read: {exc.strerror or exc}", str(path)) from None
-    return files
 
 
 def _csv(files: Mapping[str, bytes], name: str, columns: Sequence[str], source: str,
@@ -864,8 +313,6 @@ class Results:
         BldclabError
             Naming the file (and column or key) that is missing or wrong.
         """
-        from .motor import Drive
-
         if MANIFEST not in files:
             raise BldclabError(MANIFEST, "is missing", source)
         try:
@@ -1003,7 +450,6 @@ def _section_motor(r: Results, page: _Page) -> str:
         parts.append(f"<div><h3>{_e(part)}</h3>"
                      + _html_table(["field", "quantity", "value", "unit", "reads"], body,
                                    [False, False, True, False, True]) + "</div>")
-    from . import analytic
 
     derived = [["k_phi", "motor constant: half the peak line-to-line shape", d.motor.k_phi, "V s/rad", ""],
                ["Omega_0", "speed base V_dc / (2 k_phi), (2)", d.Omega_0, "rad/s", _readable(d.Omega_0, "rad/s")],
@@ -1054,8 +500,6 @@ def _emf_text(d: Drive) -> str:
 
 def _not_applicable(r: Results) -> list[str]:
     """Why paper 1's closed forms do not describe the report's drive (:func:`bldclab.analytic.applicability`)."""
-    from . import analytic
-
     return analytic.applicability(r.drive)
 
 
@@ -1098,7 +542,6 @@ def _base_caption(t1: Mapping[str, Any]) -> str:
 
 
 def _section_characteristics(r: Results, page: _Page) -> str:
-    from . import analytic
 
     t1 = _t1(r)
     d = r.drive
@@ -1452,84 +895,5 @@ def render(results: Results, *, report_command: str, created: str | None = None)
 # command line (registered in bldclab.cli)
 
 
-def configure_command(p: argparse.ArgumentParser) -> None:
-    """Declare the arguments of ``bldclab report``."""
-    p.add_argument("source", metavar="RESULTS_DIR|MOTOR",
-                   help="a directory written by bldclab compare, or a motor (built-in name or TOML file): then the "
-                   "comparison is run first")
-    p.add_argument("--out", type=Path, help="the HTML file (default: RESULTS_DIR/report.html, or "
-                   "out/<motor>/report.html for a motor)")
-    p.add_argument("--speeds", type=int, help="motor only: speeds per supply (default 32)")
-    p.add_argument("--min-speed", type=float, help="motor only: lowest speed, p.u. of Omega_0 (default 0.05)")
-    p.add_argument("--max-speed", type=float, help="motor only: highest speed, p.u. of Omega_0 (default 0.98)")
-    p.add_argument("--waveform-speeds", help='motor only: per-unit speeds of the waveform panels (default "0.3,0.8")')
-    p.add_argument("--torque-control", action="store_true",
-                   help="motor only: also compare paper 2's torque control methods (table and torque traces)")
-    p.add_argument("--workers", type=int, default=0, help="motor only: processes (default: all cores; 1: serial)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-
-
-def _speeds_list(text: str) -> list[float]:
-    try:
-        values = [float(t) for t in text.split(",") if t.strip()]
-    except ValueError:
-        raise BldclabError("--waveform-speeds", f"expected per-unit speeds separated by commas, got {text!r}") from None
-    if not values or any(not math.isfinite(v) or not 0 < v < 1.5 for v in values):
-        raise BldclabError("--waveform-speeds", f"needs per-unit speeds in (0, 1.5), got {text!r}")
-    return values
-
-
-def _motor_only(args: argparse.Namespace) -> list[str]:
-    given = [("--speeds", args.speeds), ("--min-speed", args.min_speed), ("--max-speed", args.max_speed),
-             ("--waveform-speeds", args.waveform_speeds)]
-    out = [name for name, v in given if v is not None]
-    if args.torque_control:
-        out.append("--torque-control")
-    if args.workers:
-        out.append("--workers")
-    return out
-
-
-def run_command(args: argparse.Namespace) -> int:
-    """Run ``bldclab report``: read or run a comparison, write one HTML file."""
-    from .catalog import load
-    from .cli import write_files
-    from .compare import speed_grid
-
-    src = Path(args.source)
-    if src.is_dir():
-        extra = _motor_only(args)
-        if extra:
-            raise BldclabError(extra[0], "applies to a motor; a results directory is reported as it is")
-        out = args.out if args.out is not None else src / REPORT
-        results = Results.from_files(read_results(src), source=str(src))
-        parts = ["bldclab", "report", str(src), "--out", str(out)]
-    else:
-        drive = load(args.source)
-        n = 32 if args.speeds is None else args.speeds
-        lo = 0.05 if args.min_speed is None else args.min_speed
-        hi = 0.98 if args.max_speed is None else args.max_speed
-        if n < 2:
-            raise BldclabError("--speeds", f"needs at least 2, got {n}")
-        if not 0 < lo < hi < 1.5:
-            raise BldclabError("--min-speed", "needs 0 < min-speed < max-speed < 1.5 (p.u. of Omega_0)")
-        if args.workers < 0:
-            raise BldclabError("--workers", f"must be >= 0, got {args.workers}")
-        wspeeds = _speeds_list(args.waveform_speeds) if args.waveform_speeds is not None else list(WAVEFORM_SPEEDS)
-        out = args.out if args.out is not None else Path("out") / drive.name / REPORT
-        parts = ["bldclab", "report", str(args.source), "--out", str(out), "--speeds", str(n), "--min-speed",
-                 f"{lo:g}", "--max-speed", f"{hi:g}", "--waveform-speeds", ",".join(f"{v:g}" for v in wspeeds)]
-        if args.torque_control:
-            parts.append("--torque-control")
-        command = shlex.join(parts)
-        files = motor_results(drive, speed_grid(n, lo, hi), command=command, motor_source=str(args.source),
-                              workers=args.workers or None, waveform_speeds=wspeeds,
-                              torque_control=args.torque_control,
-                              progress=not args.no_progress and sys.stderr.isatty())
-        results = Results.from_files(files, source=f"a comparison run by this command ({drive.name})")
-    if out.exists() and out.is_dir():
-        out = out / REPORT
-    text = render(results, report_command=shlex.join(parts))
-    (path,) = write_files(out.parent, {out.name: text.encode()})
-    print(f"wrote {path} ({len(text.encode()) / 1024:.0f} kB)")
-    return 0
+def _now() -> str:
+    return datetime.datetime.now(datetime.UTC).replace(microsecond=0).isoformat().replace("+00:00", "Z")

@@ -12,13 +12,16 @@ for Fig 7, ``TR_s_pu``, ``TR_q_pu`` for Fig 8); missing columns are skipped.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
-from matplotlib.axes import Axes
-from matplotlib.figure import Figure
 
-from .errors import BldclabError
+from ..errors import BldclabError
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 __all__ = ["plot_efficiency", "plot_ripple", "plot_torque_speed"]
 
@@ -33,6 +36,8 @@ _MAX_MARKS = 30
 
 def _axes(ax: Axes | None) -> tuple[Figure, Axes]:
     """Return the figure and axes to draw into: those of ``ax``, or a new 6.4 x 4.4 in figure."""
+    from matplotlib.figure import Figure  # deferred: matplotlib loads when a figure is drawn, not with the CLI
+
     if ax is not None:
         fig = ax.figure
         if not isinstance(fig, Figure):  # a SubFigure: hand back its root figure

@@ -16,12 +16,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import __version__
+from .._core import core
+from .._version import __version__
+from ..control import Control
+from ..errors import BldclabError
+from ..model.motor import Drive, Inverter
 from . import plausibility as _plaus
-from ._core import core
-from .control import Control
-from .errors import BldclabError
-from .motor import Drive, Inverter
 from .results import Metrics, SimResult
 
 __all__ = ["Fault", "Scenario", "simulate"]

@@ -54,11 +54,11 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from .errors import PlausibilityError, PlausibilityWarning
+from ..errors import PlausibilityError, PlausibilityWarning
 
 if TYPE_CHECKING:
-    from .control import Control
-    from .motor import Drive
+    from ..control import Control
+    from ..model.motor import Drive
     from .results import SimResult
 
 __all__ = ["BALANCE_ERROR", "BALANCE_WARN", "CHECK_MODES", "Finding", "apply", "check_pwm", "check_reference",

@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -13,7 +11,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import BldclabError
+from .._files import write_atomic
+from ..errors import BldclabError
+from ..svg import Series, svg_plot
 
 __all__ = ["Metrics", "SimResult"]
 
@@ -224,7 +224,6 @@ class SimResult:
         """
         import html
 
-        from .report import Series, svg_plot
 
         parts = [f"<p><b>{html.escape(repr(self))}</b></p>"]
         t = self.signals.get("t")
@@ -315,15 +314,8 @@ class SimResult:
             p = p.with_suffix(p.suffix + ".npz")
         header = {"units": self.units, "docs": self.docs, "meta": self.meta,
                   "metrics": asdict(self.metrics) if self.metrics else None}
-        fd, tmp = tempfile.mkstemp(dir=p.parent or ".", suffix=".tmp")
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                np.savez_compressed(fh, __header__=np.array(json.dumps(header, default=_json_default)),
-                                    **self.signals)
-            os.replace(tmp, p)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        write_atomic(p, lambda fh: np.savez_compressed(
+            fh, __header__=np.array(json.dumps(header, default=_json_default)), **self.signals), None)
         return p
 
     @classmethod

@@ -23,9 +23,7 @@ inputs and gives the same bits. See ``docs/sweeps.md``.
 
 from __future__ import annotations
 
-import argparse
 import concurrent.futures
-import contextlib
 import copy
 import dataclasses
 import hashlib
@@ -39,7 +37,6 @@ import shutil
 import signal
 import sqlite3
 import sys
-import tempfile
 import threading
 import time
 import tomllib
@@ -55,16 +52,19 @@ from typing import Any, ClassVar, Literal, NamedTuple, TextIO
 
 import numpy as np
 
-from . import __version__, catalog
-from ._files import read_toml
-from .control import Control
-from .errors import BldclabError
-from .experiments import steady_state
-from .motor import Drive
-from .results import Metrics
-from .sim import Scenario, simulate
+from .. import control as package
+from .._files import read_toml
+from .._version import __version__
+from ..analysis.experiments import steady_state
+from ..control import Control
+from ..errors import BldclabError
+from ..model import catalog
+from ..model.motor import Drive
+from ..model.units import to_si
+from ..sim import Scenario, simulate
+from ..sim.results import Metrics
+from ..svg import Series, svg_plot
 from .store import Store
-from .units import to_si
 
 __all__ = [
     "EXPERIMENTS",
@@ -231,8 +231,6 @@ def controllers() -> dict[str, type[Control]]:
     Every dataclass subclass of :class:`~bldclab.control.Control` in ``bldclab.control.__all__`` under its class
     name, and those added with :func:`register_control`.
     """
-    from . import control as package
-
     out: dict[str, type[Control]] = {}
     for name in getattr(package, "__all__", ()):
         obj = getattr(package, name, None)
@@ -1367,7 +1365,6 @@ class SweepRun:
         """
         import html
 
-        from .report import svg_plot
 
         parts = [f"<p><b>{html.escape(self.summary())}</b></p>"]
         try:
@@ -1394,7 +1391,6 @@ def _sweep_plot(df: Any, axes: Sequence[str]) -> tuple[list[Any], str, str] | No
     """Return the series and labels of a sweep's notebook plot: first varying numeric result vs the first axis."""
     import pandas as pd
 
-    from .report import Series
 
     echo = {*axes, *_SPEEDS}
     skip = {"case", "key", *echo, *(f"{n}_result" for n in echo)}
@@ -1619,86 +1615,3 @@ def load_results(sweep: Sweep | str | Path, store: Store | str | Path) -> Any:
 # command line (registered in bldclab.cli)
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
-    return value
-
-
-def configure_command(p: argparse.ArgumentParser) -> None:
-    """Declare the arguments of ``bldclab sweep``."""
-    p.add_argument("sweep", metavar="SWEEP.toml", type=Path, help="sweep file (format: docs/sweeps.md)")
-    p.add_argument("--store", metavar="DIR|FILE", type=Path,
-                   help="results store: an SQLite file, or a directory to hold SWEEP.sqlite "
-                   "(default: SWEEP.sqlite next to the sweep file); finished cases in it are not run again")
-    where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", metavar="N", type=_positive_int,
-                       help="local worker processes (default: one per core)")
-    where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run on this Dask cluster")
-    where.add_argument("--serial", action="store_true", help="run in this process, one case after the other")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
-    p.add_argument("--csv", metavar="OUT.csv", type=Path,
-                   help="also write the results (one row per case, axes as columns) to this CSV file")
-
-
-def _store_path(sweep_file: Path, store: Path | None) -> Path:
-    if store is None:
-        return sweep_file.with_suffix(".sqlite")
-    if store.is_dir():
-        return store / f"{sweep_file.stem}.sqlite"
-    if not store.parent.is_dir():
-        raise BldclabError("--store", f"directory {str(store.parent)!r} does not exist")
-    return store
-
-
-def _write_atomic(path: Path, data: bytes, option: str) -> None:
-    tmp = None
-    try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-        umask = os.umask(0o022)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-        tmp = None
-    except OSError as exc:
-        raise BldclabError(option, f"cannot write {str(path)!r}: {exc.strerror or exc}") from None
-    finally:
-        if tmp is not None:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
-
-
-def run_command(args: argparse.Namespace) -> int:
-    """Run ``bldclab sweep``: exit 0 when every case is stored, 1 if some failed, 2 for bad input."""
-    sw = Sweep.from_toml(args.sweep)
-    path = _store_path(args.sweep, args.store)
-    if args.csv is not None and not args.csv.parent.is_dir():
-        raise BldclabError("--csv", f"directory {str(args.csv.parent)!r} does not exist")
-    executor: Executor
-    if args.serial:
-        executor = Serial()
-    elif args.scheduler:
-        executor = Dask(args.scheduler)
-    else:
-        executor = Processes(args.workers)
-    done = run(sw, path, executor=executor, progress=False if args.no_progress else None)
-    with done.store:
-        sys.stdout.write(done.summary() + "\n")
-        if args.csv is not None:
-            df = done.to_pandas()
-            _write_atomic(args.csv, df.to_csv(index=False, lineterminator="\n").encode(), "--csv")
-            sys.stdout.write(f"wrote {args.csv} ({len(df)} rows)\n")
-    if done.failed:
-        index, message = done.errors[0]
-        sys.stderr.write(f"bldclab: error: {done.failed} of {done.total} cases failed (rerun retries them); "
-                         f"first: case {index}: {' '.join(message.split())}\n")
-        return 1
-    return 0

@@ -32,7 +32,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from .errors import BldclabError
+from ..errors import BldclabError
 
 __all__ = ["SCHEMA_VERSION", "Store"]
 

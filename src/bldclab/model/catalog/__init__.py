@@ -12,7 +12,7 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
-from ..errors import BldclabError
+from ...errors import BldclabError
 from ..motor import Drive
 
 __all__ = ["load", "names"]

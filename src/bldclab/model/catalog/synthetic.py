@@ -59,7 +59,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import BldclabError
+from ...errors import BldclabError
 from ..motor import TWO_PI, BackEmf, Drive, Inverter, Mechanics, Motor, Sensors, Table, Trapezoid
 
 __all__ = [
