@@ -108,15 +108,15 @@ def base_speed_table(drive: Drive, simulated: dict[str, float], table1: Any) -> 
     ----------
     drive : Drive
     simulated : dict
-        ``{"square": ..., "sine": ...}`` from :func:`bldclab.experiments.base_speed`.
+        ``{"square": ..., "sine": ...}`` from :func:`bldclab.analysis.experiments.base_speed`.
     table1 : analytic.Table1
-        The drive's Table I (:func:`bldclab.analytic.table1`).
+        The drive's Table I (:func:`bldclab.model.analytic.table1`).
 
     Returns
     -------
     pandas.DataFrame
         Columns ``supply``, ``closed_form_pu`` ((21) sinusoidal, (30) square wave), ``equation``, ``numeric_R_pu``
-        (:func:`bldclab.analytic.omega_sB_numeric_pu` / :func:`~bldclab.analytic.omega_qB_numeric_pu`),
+        (:func:`bldclab.model.analytic.omega_sB_numeric_pu` / :func:`~bldclab.model.analytic.omega_qB_numeric_pu`),
         ``simulated_pu`` and ``simulated_rpm`` (nan where the search found none).
     """
     rows = []
@@ -142,14 +142,15 @@ class CompareResult:
         no PWM: the ripple paper 1's closed forms describe, and the one the verdict compares); efficiency; powers;
         currents; energy-balance residue.
     analytic : pandas.DataFrame
-        Paper 1's closed forms on the same speeds (:func:`bldclab.analytic.characteristic`).
+        Paper 1's closed forms on the same speeds (:func:`bldclab.model.analytic.characteristic`).
     table1 : analytic.Table1
         Paper 1's Table I for the drive (with the R-aware numeric base speeds).
     base_speeds : pandas.DataFrame or None
         :func:`base_speed_table`: (21)/(30), the numeric values with R and the simulated base speeds
-        (:func:`bldclab.experiments.base_speed`); None if not asked for.
+        (:func:`bldclab.analysis.experiments.base_speed`); None if not asked for.
     pwm_phases : int
-        PWM-grid phases per point (:func:`bldclab.experiments.steady_state`); with more than one, ``simulated`` has
+        PWM-grid phases per point (:func:`bldclab.analysis.experiments.steady_state`); with more than one,
+        ``simulated`` has
         ``T_pu_min``, ``T_pu_max``, ``TR_pu_min``, ``TR_pu_max``, ``TR_ma_pu_min``, ``TR_ma_pu_max`` too.
     verdict : list of str
         Where each supply wins and by how much; notes where the ripple at the samples misses part of the
@@ -157,11 +158,11 @@ class CompareResult:
     seconds : float
         Wall time of the simulations.
     warnings : list of str
-        Plausibility warnings of the runs (:mod:`bldclab.plausibility`), each prefixed by its supply and speed;
+        Plausibility warnings of the runs (:mod:`bldclab.sim.plausibility`), each prefixed by its supply and speed;
         :func:`compare` issues one :class:`~bldclab.errors.PlausibilityWarning` summarising them.
     not_applicable : list of str
         Why paper 1's closed forms (the ``analytic`` columns) do not describe this drive
-        (:func:`bldclab.analytic.applicability`); empty where their premises hold.
+        (:func:`bldclab.model.analytic.applicability`); empty where their premises hold.
     """
 
     drive: Drive
@@ -211,9 +212,9 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
         Show a progress bar on stderr.
     pwm_phases : int
         PWM-grid phases per point (>= 1): each point is the mean over that many offsets of the rotor's initial
-        angle within one PWM period's travel, with its range (:func:`bldclab.experiments.steady_state`).
+        angle within one PWM period's travel, with its range (:func:`bldclab.analysis.experiments.steady_state`).
     base_speeds : bool
-        Also search the simulated base speed of each supply (:func:`bldclab.experiments.base_speed`, with the
+        Also search the simulated base speed of each supply (:func:`bldclab.analysis.experiments.base_speed`, with the
         default controllers of paper 1's definitions).
 
     Returns

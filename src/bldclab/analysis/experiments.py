@@ -2,7 +2,7 @@
 
 An operating point is measured as on a dynamometer test bench: the speed is imposed, the controller runs from
 rest until the transients have died out, then the torque is averaged over whole electrical periods. Ripple is
-reported three ways (:class:`~bldclab.results.Metrics`): max - min of the exact instantaneous torque; of its
+reported three ways (:class:`~bldclab.sim.results.Metrics`): max - min of the exact instantaneous torque; of its
 moving average over one PWM period, evaluated continuously; and of its values at the controller samples (carrier
 valleys and peaks, where the currents cross their PWM-period averages). The last removes the PWM component without
 flattening commutation spikes a few PWM periods wide and is the one to compare with closed forms that assume ideal
@@ -45,7 +45,7 @@ class PointResult:
         Speed in per unit of ``Omega_0`` (-).
     tau_mean, ripple, ripple_ma, ripple_sampled : float
         Mean torque, max - min of the torque, of its one-PWM-period moving average, and of its values at the
-        controller samples (PWM-free: :class:`~bldclab.results.Metrics`) (N m).
+        controller samples (PWM-free: :class:`~bldclab.sim.results.Metrics`) (N m).
     tau_mean_pu, ripple_pu, ripple_ma_pu, ripple_sampled_pu : float
         The same in per unit of ``T_N`` (-).
     efficiency : float
@@ -246,7 +246,7 @@ def base_speed(drive: Drive, supply: str, control: Control | None = None, *, lo:
     speed at which the controller still holds the current ``I_s,N`` with its voltage demand inside the linear SVM
     range (the linear-modulation limit) (paper 1, IV.B; (21) with R = 0). Both by bisection on
     :func:`base_speed_margin`: the whole switching-level drive (PWM, commutation, controller delay), where
-    :func:`bldclab.analytic.omega_sB_numeric_pu` and :func:`~bldclab.analytic.omega_qB_numeric_pu` solve the
+    :func:`bldclab.model.analytic.omega_sB_numeric_pu` and :func:`~bldclab.model.analytic.omega_qB_numeric_pu` solve the
     circuit with ideal regulation.
 
     Parameters

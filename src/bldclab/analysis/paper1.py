@@ -210,7 +210,7 @@ def _json_value(value: float | bool) -> float | bool | None:
 
 
 def table1_text(t: analytic.Table1, fmt: str, not_applicable: Sequence[str] = ()) -> str:
-    """Render a :class:`~bldclab.analytic.Table1` as ``table`` (aligned text), ``csv`` or ``json``.
+    """Render a :class:`~bldclab.model.analytic.Table1` as ``table`` (aligned text), ``csv`` or ``json``.
 
     Parameters
     ----------
@@ -219,7 +219,7 @@ def table1_text(t: analytic.Table1, fmt: str, not_applicable: Sequence[str] = ()
     fmt : {"table", "csv", "json"}
         Output format.
     not_applicable : sequence of str
-        Why the closed forms do not describe the drive (:func:`bldclab.analytic.applicability`): one line each
+        Why the closed forms do not describe the drive (:func:`bldclab.model.analytic.applicability`): one line each
         under the table, a ``not_applicable`` list in JSON (CSV: not written, the file stays one table).
 
     Returns

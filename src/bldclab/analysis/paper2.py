@@ -47,6 +47,7 @@ __all__ = [
     "fig12",
     "fig_compare",
     "fig_method",
+    "method_trace",
     "operating_point",
     "prediction_error",
     "ripple_stats",
@@ -148,7 +149,7 @@ def operating_point(drive: Drive, method: str, torque: float, speed: float, *, d
                     **control: object) -> SimResult:
     """Run one method at an imposed speed and torque reference until steady state, with a fine trace.
 
-    As :func:`bldclab.experiments.steady_state`: the first ``settle_periods`` electrical periods (at least
+    As :func:`bldclab.analysis.experiments.steady_state`: the first ``settle_periods`` electrical periods (at least
     ``settle_time``) are discarded and the next ``measure_periods`` whole periods are the metric window; the run
     lasts half a sample longer than the window so that the window's end is inside it whatever the rounding.
 
@@ -518,6 +519,38 @@ def fig12(drive: Drive, torque: float | None = None, speed: float | None = None,
     return _fig_for("lu", 12, drive, torque, speed, delay, span)
 
 
+def method_trace(res: SimResult, span: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Torque and largest phase current of a run as one-PWM-period means over its last ``span`` seconds.
+
+    During a commutation the largest current is the non-commutated phase's (it carries the incoming and the outgoing
+    currents); in two-phase conduction it is the pair current. :func:`fig_compare` draws these traces and
+    :func:`bldclab.report.bundle.methods_traces` tabulates them.
+
+    Parameters
+    ----------
+    res : SimResult
+        A run of :func:`operating_point` (with its metrics window).
+    span : float
+        Time shown (s), ending at the end of the metrics window.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Time from the start of the span (ms), mean torque (N m), mean largest ``|i_x|`` (A).
+    """
+    sub = _sub(res)
+    h = _half_means(res, "tau_mean", sub, instantaneous=False)
+    tk = res.t[: len(h) * sub: sub]
+    ma = 0.5 * (h[1:] + h[:-1])
+    hi = np.stack([_half_means(res, f"i_{x}", sub, instantaneous=True) for x in "abc"])
+    big = np.max(np.abs(0.5 * (hi[:, 1:] + hi[:, :-1])), axis=0)
+    m = res.metrics
+    assert m is not None
+    t0 = m.t1 - span
+    sel = (tk[1:] >= t0) & (tk[1:] <= m.t1)
+    return (tk[1:][sel] - t0) * 1e3, ma[sel], big[sel]
+
+
 def fig_compare(drive: Drive, torque: float | None = None, speed: float | None = None, *, delay: int = 1,
                 span: float | None = None) -> Figure:
     """Overlay the three methods: torque and the largest phase current, both as one-PWM-period means.
@@ -547,19 +580,9 @@ def fig_compare(drive: Drive, torque: float | None = None, speed: float | None =
     for mth, color in zip(METHODS, ("tab:gray", "tab:blue", "tab:red"), strict=True):
         res = operating_point(drive, mth, tq, om, delay=delay, trace_sub=8)
         st = ripple_stats(res, drive)
-        sub = _sub(res)
-        h = _half_means(res, "tau_mean", sub, instantaneous=False)
-        tk = res.t[: len(h) * sub: sub]
-        ma = 0.5 * (h[1:] + h[:-1])
-        m = res.metrics
-        assert m is not None
-        t0 = m.t1 - span
-        sel = (tk[1:] >= t0) & (tk[1:] <= m.t1)
-        ax[0].plot((tk[1:][sel] - t0) * 1e3, ma[sel], color=color, lw=1.1,
-                   label=f"{mth}: ripple {st.ripple_ma_pp:.1f} % p-p")
-        hi = np.stack([_half_means(res, f"i_{x}", sub, instantaneous=True) for x in "abc"])
-        big = np.max(np.abs(0.5 * (hi[:, 1:] + hi[:, :-1])), axis=0)
-        ax[1].plot((tk[1:][sel] - t0) * 1e3, big[sel], color=color, lw=1.1, label=mth)
+        t_ms, tau, i_big = method_trace(res, span)
+        ax[0].plot(t_ms, tau, color=color, lw=1.1, label=f"{mth}: ripple {st.ripple_ma_pp:.1f} % p-p")
+        ax[1].plot(t_ms, i_big, color=color, lw=1.1, label=mth)
     ax[0].set_ylabel("torque [N m]")
     ax[1].set_ylabel("largest |i_x| [A]")
     ax[1].set_xlabel("t [ms]")

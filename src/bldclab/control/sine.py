@@ -95,7 +95,7 @@ class Sine(Control):
         is slower than 10 kHz (the loop delay of 1.5 samples then costs 27 deg of phase margin at most). Given,
         it is used as is.
     phase_margin_deg : float
-        Current-loop phase margin (paper 1: 90 deg), :func:`bldclab.design.pi_gains` without delay.
+        Current-loop phase margin (paper 1: 90 deg), :func:`bldclab.model.design.pi_gains` without delay.
     R_design : float, optional
         Resistance (Ohm) the PI gains are designed for. Default: the drive's ``R + R_on``, but at least
         ``omega_c L / 10``: the 90-degree design cancels the R-L pole (``k_i = omega_c R``), so with a small R

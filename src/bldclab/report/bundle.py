@@ -49,7 +49,8 @@ def waveforms(drive: Drive, speeds_pu: Sequence[float] = WAVEFORM_SPEEDS, *,
               ) -> tuple[pd.DataFrame, list[dict[str, Any]]]:
     """Simulate phase currents and torque over one electrical period at each speed, both supplies, in steady state.
 
-    Each point runs as in :func:`bldclab.compare.compare` (:func:`bldclab.experiments.steady_state`: imposed speed,
+    Each point runs as in :func:`bldclab.analysis.compare.compare`
+    (:func:`bldclab.analysis.experiments.steady_state`: imposed speed,
     the same controllers and references) with a trace; the period shown is the first of the measuring window.
 
     Parameters
@@ -59,7 +60,7 @@ def waveforms(drive: Drive, speeds_pu: Sequence[float] = WAVEFORM_SPEEDS, *,
         Per-unit speeds (of ``Omega_0``), > 0.
     controls : mapping, optional
         ``{"square": (control, ref), "sine": (control, ref)}``; default
-        :func:`bldclab.compare.default_controls` for the lowest speed.
+        :func:`bldclab.analysis.compare.default_controls` for the lowest speed.
     trace_sub : int
         Trace rows per controller sample.
 
@@ -101,7 +102,8 @@ def methods_traces(drive: Drive, torque: float | None = None, speed: float | Non
                    methods: Sequence[str] = ("rect", "lu-no-do", "lu")) -> pd.DataFrame:
     """Run paper 2's methods; return torque and largest current over the last half period (one-PWM-period means).
 
-    The same runs and quantities as :func:`bldclab.paper2.fig_compare`, as data.
+    The same runs and traces as :func:`bldclab.analysis.paper2.fig_compare`
+    (:func:`~bldclab.analysis.paper2.method_trace`), as data.
 
     Parameters
     ----------
@@ -124,18 +126,8 @@ def methods_traces(drive: Drive, torque: float | None = None, speed: float | Non
     frames = []
     for mth in methods:
         res = paper2.operating_point(drive, mth, tq, om, trace_sub=8)
-        sub = paper2._sub(res)
-        h = paper2._half_means(res, "tau_mean", sub, instantaneous=False)
-        tk = res.t[: len(h) * sub: sub]
-        ma = 0.5 * (h[1:] + h[:-1])
-        hi = np.stack([paper2._half_means(res, f"i_{x}", sub, instantaneous=True) for x in "abc"])
-        big = np.max(np.abs(0.5 * (hi[:, 1:] + hi[:, :-1])), axis=0)
-        m = res.metrics
-        assert m is not None
-        t0 = m.t1 - span
-        sel = (tk[1:] >= t0) & (tk[1:] <= m.t1)
-        frames.append(pd.DataFrame({"method": mth, "t_ms": (tk[1:][sel] - t0) * 1e3, "tau_ma": ma[sel],
-                                    "i_max_ma": big[sel]}))
+        t_ms, tau, i_big = paper2.method_trace(res, span)
+        frames.append(pd.DataFrame({"method": mth, "t_ms": t_ms, "tau_ma": tau, "i_max_ma": i_big}))
     return pd.concat(frames, ignore_index=True)
 
 
@@ -160,7 +152,7 @@ def _plain(value: Any) -> Any:
 
 
 def _scenario() -> dict[str, Any]:
-    """Return the measuring scenario of :func:`~bldclab.experiments.steady_state` as ``compare`` runs it."""
+    """Return the measuring scenario of :func:`~bldclab.analysis.experiments.steady_state` as ``compare`` runs it."""
     par = inspect.signature(steady_state).parameters
     delay = next(f.default for f in dataclasses.fields(Scenario) if f.name == "delay")
     return {"speed": "imposed (dynamometer), constant", "settle_periods": par["settle_periods"].default,
@@ -240,7 +232,7 @@ def compare_outputs(res: CompareResult, files: Mapping[str, bytes], *, command: 
     Parameters
     ----------
     res : CompareResult
-        The comparison (:func:`bldclab.compare.compare` with its default controllers).
+        The comparison (:func:`bldclab.analysis.compare.compare` with its default controllers).
     files : mapping of str to bytes
         The other files of the results directory (``simulated.csv``, ``table1.json``, ...).
     command : str
@@ -293,7 +285,7 @@ def motor_results(drive: Drive, speeds_pu: Sequence[float], *, command: str, mot
     waveform_speeds : sequence of float
         Per-unit speeds of the waveform panels.
     torque_control : bool
-        Also run paper 2's methods (:func:`bldclab.paper2.compare_methods` on its default grid and
+        Also run paper 2's methods (:func:`bldclab.analysis.paper2.compare_methods` on its default grid and
         :func:`methods_traces`).
     progress : bool
         Progress bar on stderr.
@@ -320,7 +312,8 @@ def motor_results(drive: Drive, speeds_pu: Sequence[float], *, command: str, mot
         files["methods.csv"] = paper2.compare_methods(drive, torques, speeds).to_csv(index=False).encode()
         files["methods_traces.csv"] = methods_traces(drive).to_csv(index=False, float_format="%.6g").encode()
         extra["torque_control"] = {
-            "run": "bldclab.paper2.compare_methods on its default grid, then methods_traces at T_N and the rated speed",
+            "run": ("bldclab.analysis.paper2.compare_methods on its default grid, then methods_traces at T_N and the "
+                    "rated speed"),
             "torques_N_m": list(torques), "speeds_rad_s": list(speeds), "trace_sub": 8,
             "controller": _plain(Lu()), "scenario": "paper2.operating_point: imposed speed, 3 electrical periods "
             "(at least 10 ms) settling, 2 measured; computation delay 1 sample"}

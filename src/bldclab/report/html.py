@@ -21,7 +21,7 @@ Where the numbers come from:
 The plots are drawn in the browser by a small dependency-free script shipped in ``bldclab/report_assets``
 (axes, ticks, lines and markers, legend toggles, hover values, zoom and pan). Without JavaScript every plot shows
 a static SVG drawn by :func:`svg_plot`, which also serves the notebook displays of
-:class:`~bldclab.results.SimResult` and :class:`~bldclab.sweep.SweepRun`. Contents: ``docs/report.md``.
+:class:`~bldclab.sim.results.SimResult` and :class:`~bldclab.sweep.SweepRun`. Contents: ``docs/report.md``.
 """
 
 from __future__ import annotations
@@ -499,7 +499,7 @@ def _emf_text(d: Drive) -> str:
 
 
 def _not_applicable(r: Results) -> list[str]:
-    """Why paper 1's closed forms do not describe the report's drive (:func:`bldclab.analytic.applicability`)."""
+    """Why paper 1's closed forms do not describe the report's drive (:func:`bldclab.model.analytic.applicability`)."""
     return analytic.applicability(r.drive)
 
 
@@ -800,8 +800,8 @@ def _section_provenance(r: Results, report_command: str, created: str) -> str:
         ("torque ripple", "max - min of the torque at the controller samples (without the PWM component); the "
                           "instantaneous one in TR_inst_pu"),
         ("efficiency", "shaft power (electromechanical minus friction) over the DC source's power"),
-        ("closed forms", "paper 1's equations (bldclab.analytic), R neglected, evaluated at 201 speeds and the region "
-                         "boundaries for the curves, at the simulated speeds in analytic.csv"),
+        ("closed forms", "paper 1's equations (bldclab.model.analytic), R neglected, evaluated at 201 speeds and the "
+                         "region boundaries for the curves, at the simulated speeds in analytic.csv"),
     ])
     files = ", ".join(f"<code>{_e(f)}</code>" for f in r.files)
     return ('<section id="provenance"><h2>How every number was produced</h2>'

@@ -102,7 +102,7 @@ def plot_torque_speed(df: pd.DataFrame, ax: Axes | None = None, *,
     Parameters
     ----------
     df : pandas.DataFrame
-        Output of :func:`bldclab.analytic.characteristic`: columns ``Omega_pu``, ``T_s_pu``, ``T_q_pu`` and,
+        Output of :func:`bldclab.model.analytic.characteristic`: columns ``Omega_pu``, ``T_s_pu``, ``T_q_pu`` and,
         with ``blac``, ``T_blac_pu``.
     ax : matplotlib.axes.Axes, optional
         Axes to draw into; a new figure if omitted.
@@ -144,7 +144,7 @@ def plot_ripple(df: pd.DataFrame, ax: Axes | None = None, *,
     Parameters
     ----------
     df : pandas.DataFrame
-        Output of :func:`bldclab.analytic.characteristic`: columns ``Omega_pu``, ``TR_s_pu``, ``TR_q_pu``.
+        Output of :func:`bldclab.model.analytic.characteristic`: columns ``Omega_pu``, ``TR_s_pu``, ``TR_q_pu``.
     ax : matplotlib.axes.Axes, optional
         Axes to draw into; a new figure if omitted.
     overlays : mapping of str to pandas.DataFrame, optional
@@ -178,7 +178,7 @@ def plot_efficiency(df: pd.DataFrame, simulated: Mapping[str, pd.DataFrame] | No
     Parameters
     ----------
     df : pandas.DataFrame
-        Output of :func:`bldclab.analytic.characteristic`: columns ``Omega_pu``, ``eta_s``, ``eta_q``.
+        Output of :func:`bldclab.model.analytic.characteristic`: columns ``Omega_pu``, ``eta_s``, ``eta_q``.
     simulated : mapping of str to pandas.DataFrame, optional
         Simulated points by supply label (``"sinusoidal"``, ``"square-wave"``), with ``Omega_pu`` and ``eta``.
     ax : matplotlib.axes.Axes, optional

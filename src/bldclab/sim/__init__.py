@@ -1,4 +1,4 @@
-"""Run the C closed loop: :func:`simulate` (drive, control, scenario) -> :class:`~bldclab.results.SimResult`.
+"""Run the C closed loop: :func:`simulate` (drive, control, scenario) -> :class:`~bldclab.sim.results.SimResult`.
 
 Python prepares the parameter structs and per-sample input arrays once; one call into C runs the whole simulation
 (plant, sensors, controller, sample by sample) and fills the trace. Nothing in Python runs per time step.
@@ -271,7 +271,7 @@ def samples_of(drive: Drive, duration: float) -> int:
 def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str = "error") -> SimResult:
     """Simulate the drive in closed loop with a C controller.
 
-    Plausibility guards (:mod:`bldclab.plausibility`) run before the run (PWM frequency against ``L/R`` and the
+    Plausibility guards (:mod:`bldclab.sim.plausibility`) run before the run (PWM frequency against ``L/R`` and the
     electrical frequency, imposed speed against the no-load speed, reference against the controller's current
     limit) and after it (finite values, energy balance, currents after a hardware trip, steady state of the metric
     window with rotor dynamics). A questionable run issues a :class:`~bldclab.errors.PlausibilityWarning`; a
@@ -430,7 +430,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
 
 def _guards_before(drive: Drive, control: Control, cparams: np.ndarray, imposed: bool, peak: dict[str, float],
                    check: str) -> list[str]:
-    """Plausibility checks on the inputs (:mod:`bldclab.plausibility`); return the warnings issued."""
+    """Plausibility checks on the inputs (:mod:`bldclab.sim.plausibility`); return the warnings issued."""
     if check == "off":
         return []
     findings = _plaus.check_speed(drive, peak["omega"], peak["v_src"]) if imposed else []

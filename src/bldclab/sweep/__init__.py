@@ -17,7 +17,7 @@ case has one flat name, the same in Python, in a sweep file and as a DataFrame c
 
 A case is resolved to plain data (the drive's motor-file text after overrides, the controller's class and every
 parameter, the experiment with SI numbers) whose canonical JSON, hashed with sha256, is its key in the
-:class:`~bldclab.store.Store`. Workers rebuild the objects from that data, so every executor runs exactly the same
+:class:`~bldclab.sweep.store.Store`. Workers rebuild the objects from that data, so every executor runs exactly the same
 inputs and gives the same bits. See ``docs/sweeps.md``.
 """
 
@@ -304,7 +304,7 @@ class Experiment(ABC):
     """Base of what one case measures: a frozen dataclass of plain settings (SI) with :meth:`run`.
 
     Subclasses set :attr:`kind` (the name used by the ``experiment`` setting) and :attr:`dimensions` (the unit
-    dimension of fields that accept a string with a unit, see :mod:`bldclab.units`), and are listed in
+    dimension of fields that accept a string with a unit, see :mod:`bldclab.model.units`), and are listed in
     :data:`EXPERIMENTS`.
     """
 
@@ -384,10 +384,10 @@ def _metrics_row(m: Metrics, row: dict[str, float | int]) -> None:
 
 @dataclass(frozen=True)
 class SteadyState(Experiment):
-    """A steady-state operating point at imposed speed (:func:`bldclab.experiments.steady_state`).
+    """A steady-state operating point at imposed speed (:func:`bldclab.analysis.experiments.steady_state`).
 
     Result row: ``speed`` (rad/s), ``speed_pu``, ``tau_mean``, ``ripple``, ``ripple_ma`` (N m) and their ``_pu``
-    values, ``efficiency``, then every :class:`~bldclab.results.Metrics` value (mean powers ``p_*`` in W, rms and
+    values, ``efficiency``, then every :class:`~bldclab.sim.results.Metrics` value (mean powers ``p_*`` in W, rms and
     peak currents ``i_rms_a`` ... in A, energy balance residue ``balance_electrical``, ...), and the integrator's
     ``steps`` and ``events``.
 
@@ -449,7 +449,7 @@ class SteadyState(Experiment):
 class Simulate(Experiment):
     """A raw :func:`bldclab.simulate` run with constant inputs; the result row is its :class:`Metrics`.
 
-    Result row: every :class:`~bldclab.results.Metrics` value over ``window`` (per-phase values as ``_a``, ``_b``,
+    Result row: every :class:`~bldclab.sim.results.Metrics` value over ``window`` (per-phase values as ``_a``, ``_b``,
     ``_c``), the integrator's ``steps``, ``events`` and ``plant_flags``, and the final state ``t_final`` (s),
     ``theta_e_final`` (rad), ``omega_m_final`` (rad/s).
 
@@ -1465,7 +1465,7 @@ def run(sweep: Sweep | str | Path, store: Store | str | Path | None = None, *, e
     sweep : Sweep or path
         The sweep, or a sweep file.
     store : Store or path, optional
-        Results store: a :class:`~bldclab.store.Store`, or the path of an SQLite file (created if missing; opened
+        Results store: a :class:`~bldclab.sweep.store.Store`, or the path of an SQLite file (created if missing; opened
         after the cases are validated and left open in :attr:`SweepRun.store`); default an in-memory store.
     executor : Executor, optional
         :class:`Serial`, :class:`Processes` (default: one process per core) or :class:`Dask`.

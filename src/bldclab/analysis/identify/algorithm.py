@@ -690,7 +690,7 @@ class Identification:
 
     @property
     def emf(self) -> BackEmf:
-        """The identified shapes as a :class:`~bldclab.motor.BackEmf` of three tables on a shared grid."""
+        """The identified shapes as a :class:`~bldclab.model.motor.BackEmf` of three tables on a shared grid."""
         th = tuple(float(x) for x in self.theta)
         a, b, c = (Table(th, tuple(float(v) for v in kx)) for kx in self.k)
         return BackEmf((a, b, c))

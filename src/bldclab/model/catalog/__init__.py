@@ -1,7 +1,7 @@
 """Built-in drives: motor files shipped with bldclab.
 
 ``htm-48v``: paper 1 Table II. ``lu-4kw``: paper 2 appendix with a synthetic non-ideal back-EMF (see
-:mod:`bldclab.catalog.synthetic` for how it is made). ``outrunner-24v``: a 24 V, 21-pole-pair outrunner with a
+:mod:`bldclab.model.catalog.synthetic` for how it is made). ``outrunner-24v``: a 24 V, 21-pole-pair outrunner with a
 sinusoidal back-EMF, from the motor parameters of Ben Katz's open-source Mini Cheetah motor-controller firmware.
 ``servo-2k2``: a 540 V, 2.2 kW PMSM with a sinusoidal back-EMF and 51 mH, from the motulator examples. Each file
 cites the source of every number and says which are assumed (``docs/motor-files.md``).
@@ -30,7 +30,7 @@ def load(name_or_path: str | Path) -> Drive:
     Parameters
     ----------
     name_or_path : str or Path
-        A catalog name (``bldclab.catalog.names()``) or the path of a TOML motor file.
+        A catalog name (``bldclab.model.catalog.names()``) or the path of a TOML motor file.
 
     Returns
     -------

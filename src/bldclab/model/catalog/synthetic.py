@@ -290,12 +290,12 @@ def lu4kw_drive() -> Drive:
         "4 kW BLDC motor of paper 2 (Lu, Zhang, Qu, IEEE Trans. Power Electron. 2008), appendix: 4 poles, "
         "4 kW, 300 V, 3000 rpm, 0.059 Ohm, 0.29 mH; currents of phases a and c measured (its Fig. 5). "
         "SYNTHETIC back-EMF (the paper shows the measured shape only as a figure), made by "
-        "bldclab.catalog.synthetic.lu4kw_emf(): a 120-degree trapezoid with corners rounded by a 40-degree "
+        "bldclab.model.catalog.synthetic.lu4kw_emf(): a 120-degree trapezoid with corners rounded by a 40-degree "
         "Hann window and a flat top rising by 8 %, phases a, b, c scaled by 1.00/0.97/1.025 and delayed by "
         "0/+2/-1.5 deg, scaled to k_phi = 0.4 V s/rad (assumed), 360 points per phase. Also assumed: "
         "I_N = 4 kW / (3000 rpm * 2 k_phi) = 15.92 A, J, B, tau_c, f_pwm = 10 kHz, f_tick = 20 MHz, "
         "ideal inverter with a hardware over-current trip at 4 I_N = 64 A (assumed); reasons in "
-        "bldclab.catalog.synthetic.lu4kw_drive. Regenerate with "
+        "bldclab.model.catalog.synthetic.lu4kw_drive. Regenerate with "
         "tools/make_lu4kw.py; do not edit by hand."
     )
     return Drive(
@@ -361,7 +361,7 @@ def paper1_drive(Theta_m: float, *, p: int = 4, V_N: float = 48.0, I_N: float = 
         f_pwm = pwm_per_commutation * 6.0 * p * Omega_0 / TWO_PI
     description = (f"Synthetic drive on paper 1's premises: Theta_m = {Theta_m:.4g} rad, p = {p}, V_N = {V_N:.4g} V, "
                    f"I_N = {I_N:.4g} A, Omega_0 = {Omega_0:.4g} rad/s, R = {R:.4g} Ohm, f_pwm = {f_pwm:.4g} Hz "
-                   "(bldclab.catalog.synthetic.paper1_drive).")
+                   "(bldclab.model.catalog.synthetic.paper1_drive).")
     return Drive(
         motor=Motor(p=p, R=R, L=L, emf=BackEmf.symmetric(Trapezoid(k_phi)), V_N=V_N, I_N=I_N),
         inverter=Inverter(V_dc=V_N, f_pwm=f_pwm, i_trip=4.0 * I_N),
