@@ -17,8 +17,12 @@ period's rotor travel and reports their mean and range.
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from abc import ABC, abstractmethod
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -27,10 +31,12 @@ from ..control.sine import fundamental_k1
 from ..errors import BldclabError, PlausibilityError
 from ..model import analytic
 from ..model.motor import Drive
+from ..model.units import to_si
 from ..sim import Profile, Scenario, plausibility, simulate
 from ..sim.results import Metrics, SimResult
 
-__all__ = ["PointResult", "base_speed", "base_speed_margin", "steady_state"]
+__all__ = ["EXPERIMENTS", "Experiment", "PointResult", "Simulate", "SteadyState", "base_speed", "base_speed_margin",
+           "steady_state"]
 
 
 @dataclass(frozen=True)
@@ -299,3 +305,278 @@ def base_speed(drive: Drive, supply: str, control: Control | None = None, *, lo:
         mid = 0.5 * (a + b)
         a, b = (mid, b) if ok(mid) else (a, mid)
     return 0.5 * (a + b)
+
+
+_SPEEDS = ("speed", "speed_rpm", "speed_pu")
+
+
+_RPM = 2.0 * math.pi / 60.0
+
+
+def _real(name: str, v: object, *, lo: float | None = None, lo_open: bool = False, nonzero: bool = False) -> None:
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        raise BldclabError(name, f"expected a number, got {type(v).__name__} ({v!r})")
+    if not math.isfinite(v):
+        raise BldclabError(name, f"must be finite, got {v}")
+    if nonzero and v == 0:
+        raise BldclabError(name, "must not be zero")
+    if lo is not None and (v < lo or (lo_open and v == lo)):
+        raise BldclabError(name, f"must be {'>' if lo_open else '>='} {lo:g}, got {v!r}")
+
+
+def _integer(name: str, v: object, lo: int) -> None:
+    if isinstance(v, bool) or not isinstance(v, int) or v < lo:
+        raise BldclabError(name, f"must be an integer >= {lo}, got {v!r}")
+
+
+def _numbers(name: str, v: object, n: int) -> tuple[float, ...]:
+    if isinstance(v, str | bytes) or not isinstance(v, Sequence) or len(v) != n:
+        raise BldclabError(name, f"needs a list of {n} numbers, got {v!r}")
+    for j, x in enumerate(v):
+        _real(f"{name}[{j}]", x)
+    return tuple(float(x) for x in v)
+
+
+class Experiment(ABC):
+    """Base of what one case measures: a frozen dataclass of plain settings (SI) with :meth:`run`.
+
+    Subclasses set :attr:`kind` (the name used by the ``experiment`` setting) and :attr:`dimensions` (the unit
+    dimension of fields that accept a string with a unit, see :mod:`bldclab.model.units`), and are listed in
+    :data:`EXPERIMENTS`.
+    """
+
+    kind: ClassVar[str] = ""
+    dimensions: ClassVar[dict[str, str]] = {}
+
+    @abstractmethod
+    def run(self, drive: Drive, control: Control) -> dict[str, float | int]:
+        """Run the experiment and return its result row (names to numbers)."""
+
+    @classmethod
+    def from_settings(cls, settings: Mapping[str, Any], Omega_0: float) -> Experiment:
+        """Build from a case's settings (speed as ``speed``/``speed_rpm``/``speed_pu``, unit strings allowed).
+
+        Parameters
+        ----------
+        settings : mapping
+            Field names to values.
+        Omega_0 : float
+            The case's speed base (rad/s), for ``speed_pu``.
+
+        Raises
+        ------
+        BldclabError
+            Naming the setting that is unknown, missing or invalid.
+        """
+        names = [f.name for f in dataclasses.fields(cls) if f.init]  # type: ignore[arg-type]
+        speeds = [k for k in _SPEEDS if k in settings]
+        if len(speeds) > 1:
+            raise BldclabError(speeds[1], f"give one of speed, speed_rpm, speed_pu; {speeds[0]} is also set")
+        kw: dict[str, Any] = {}
+        for key, value in settings.items():
+            if key in _SPEEDS and "speed" in names:
+                kw["speed"] = _speed_si(key, value, Omega_0)
+            elif key not in names:
+                extra = ", speed_rpm, speed_pu" if "speed" in names else ""
+                raise BldclabError(key, f"unknown setting of experiment {cls.kind!r} (settings: "
+                                   f"{', '.join(names)}{extra})")
+            else:
+                kw[key] = _si(key, value, cls.dimensions.get(key))
+        for f in dataclasses.fields(cls):  # type: ignore[arg-type]
+            if f.init and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING \
+                    and f.name not in kw:
+                raise BldclabError(f.name, f"missing (experiment {cls.kind!r} needs it)")
+        return cls(**kw)
+
+
+def _si(key: str, value: Any, dimension: str | None) -> Any:
+    if dimension is None:
+        return value
+    if isinstance(value, str):
+        return to_si(value, dimension, key)
+    if isinstance(value, list | tuple):
+        return [to_si(v, dimension, f"{key}[{j}]") if isinstance(v, str) else v for j, v in enumerate(value)]
+    return value
+
+
+def _speed_si(key: str, value: Any, Omega_0: float) -> float:
+    if key == "speed":
+        v = to_si(value, "speed", key) if isinstance(value, str) else value
+        _real(key, v)
+        return float(v)
+    _real(key, value)
+    return float(value) * (_RPM if key == "speed_rpm" else Omega_0)
+
+
+def _metrics_row(m: Metrics, row: dict[str, float | int]) -> None:
+    """Add every metric not yet in ``row``; per-phase tuples become ``name_a``, ``name_b``, ``name_c``."""
+    for f in dataclasses.fields(m):
+        v = getattr(m, f.name)
+        if isinstance(v, tuple):
+            for x, comp in zip("abc", v, strict=True):
+                row.setdefault(f"{f.name}_{x}", float(comp))
+        else:
+            row.setdefault(f.name, float(v))
+
+
+@dataclass(frozen=True)
+class SteadyState(Experiment):
+    """A steady-state operating point at imposed speed (:func:`bldclab.analysis.experiments.steady_state`).
+
+    Result row: ``speed`` (rad/s), ``speed_pu``, ``tau_mean``, ``ripple``, ``ripple_ma`` (N m) and their ``_pu``
+    values, ``efficiency``, then every :class:`~bldclab.sim.results.Metrics` value (mean powers ``p_*`` in W, rms and
+    peak currents ``i_rms_a`` ... in A, energy balance residue ``balance_electrical``, ...), and the integrator's
+    ``steps`` and ``events``.
+
+    Parameters
+    ----------
+    speed : float
+        Imposed mechanical speed (rad/s), non-zero.
+    ref : float
+        The controller's reference (its meaning depends on the controller).
+    settle_periods : int
+        Electrical periods discarded before measuring.
+    measure_periods : int
+        Whole electrical periods measured.
+    settle_time : float
+        Minimum settling time (s).
+    delay : int
+        Controller computation delay (samples, 0 or 1).
+    h_max : float
+        Longest integration step (s); 0: half a PWM period.
+    """
+
+    speed: float
+    ref: float
+    settle_periods: int = 3
+    measure_periods: int = 2
+    settle_time: float = 0.01
+    delay: int = 1
+    h_max: float = 0.0
+    kind: ClassVar[str] = "steady_state"
+    dimensions: ClassVar[dict[str, str]] = {"settle_time": "time", "h_max": "time"}
+
+    def __post_init__(self) -> None:
+        _real("speed", self.speed, nonzero=True)
+        _real("ref", self.ref)
+        _integer("settle_periods", self.settle_periods, 0)
+        _integer("measure_periods", self.measure_periods, 1)
+        _real("settle_time", self.settle_time, lo=0.0)
+        if self.delay not in (0, 1) or isinstance(self.delay, bool):
+            raise BldclabError("delay", f"must be 0 or 1 sample, got {self.delay!r}")
+        _real("h_max", self.h_max, lo=0.0)
+        for name in ("speed", "ref", "settle_time", "h_max"):
+            object.__setattr__(self, name, float(getattr(self, name)))
+
+    def run(self, drive: Drive, control: Control) -> dict[str, float | int]:
+        """Run :func:`steady_state` at this point and return the result row."""
+        point, res = steady_state(drive, control, self.speed, self.ref, settle_periods=self.settle_periods,
+                                  measure_periods=self.measure_periods, settle_time=self.settle_time,
+                                  delay=self.delay, h_max=self.h_max)
+        row: dict[str, float | int] = {
+            "speed": point.speed, "speed_pu": point.speed_pu, "tau_mean": point.tau_mean, "ripple": point.ripple,
+            "ripple_ma": point.ripple_ma, "tau_mean_pu": point.tau_mean_pu, "ripple_pu": point.ripple_pu,
+            "ripple_ma_pu": point.ripple_ma_pu, "efficiency": point.efficiency}
+        _metrics_row(point.metrics, row)
+        row["steps"] = int(res.meta["stats"]["steps"])
+        row["events"] = int(res.meta["stats"]["events"])
+        return row
+
+
+@dataclass(frozen=True)
+class Simulate(Experiment):
+    """A raw :func:`bldclab.simulate` run with constant inputs; the result row is its :class:`Metrics`.
+
+    Result row: every :class:`~bldclab.sim.results.Metrics` value over ``window`` (per-phase values as ``_a``, ``_b``,
+    ``_c``), the integrator's ``steps``, ``events`` and ``plant_flags``, and the final state ``t_final`` (s),
+    ``theta_e_final`` (rad), ``omega_m_final`` (rad/s).
+
+    Parameters
+    ----------
+    duration : float
+        Simulated time (s).
+    speed : float, optional
+        Imposed mechanical speed (rad/s); ``None``: the rotor follows the drive's mechanics.
+    ref, omega_ref, load_torque : float
+        Controller reference, speed reference (rad/s), load torque (N m).
+    v_dc : float, optional
+        DC source voltage (V); default the inverter's.
+    theta0 : float
+        Initial electrical angle (rad).
+    omega0 : float, optional
+        Initial speed (rad/s).
+    i0 : tuple of float
+        Initial phase currents (A).
+    delay : int
+        Controller computation delay (samples, 0 or 1).
+    window : tuple of float, optional
+        Metric window (t0, t1) in s; default the whole run.
+    h_max : float
+        Longest integration step (s).
+    """
+
+    duration: float
+    speed: float | None = None
+    ref: float = 0.0
+    omega_ref: float = 0.0
+    load_torque: float = 0.0
+    v_dc: float | None = None
+    theta0: float = 0.0
+    omega0: float | None = None
+    i0: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    delay: int = 1
+    window: tuple[float, float] | None = None
+    h_max: float = 0.0
+    kind: ClassVar[str] = "simulate"
+    dimensions: ClassVar[dict[str, str]] = {
+        "duration": "time", "omega_ref": "speed", "load_torque": "torque", "v_dc": "voltage", "theta0": "angle",
+        "omega0": "speed", "i0": "current", "window": "time", "h_max": "time"}
+
+    def __post_init__(self) -> None:
+        _real("duration", self.duration, lo=0.0, lo_open=True)
+        for name in ("speed", "v_dc", "omega0"):
+            if getattr(self, name) is not None:
+                _real(name, getattr(self, name))
+        for name in ("ref", "omega_ref", "load_torque", "theta0", "h_max", "duration"):
+            _real(name, getattr(self, name))
+        if self.v_dc is not None and self.v_dc <= 0:
+            raise BldclabError("v_dc", f"must be > 0, got {self.v_dc!r}")
+        if self.delay not in (0, 1) or isinstance(self.delay, bool):
+            raise BldclabError("delay", f"must be 0 or 1 sample, got {self.delay!r}")
+        object.__setattr__(self, "i0", _numbers("i0", self.i0, 3))
+        window = (0.0, self.duration) if self.window is None else _numbers("window", self.window, 2)
+        object.__setattr__(self, "window", window)
+        for name in ("duration", "speed", "ref", "omega_ref", "load_torque", "v_dc", "theta0", "omega0", "h_max"):
+            v = getattr(self, name)
+            if v is not None:
+                object.__setattr__(self, name, float(v))
+        try:
+            self.scenario()
+        except BldclabError as exc:
+            raise BldclabError(exc.field.removeprefix("scenario."), exc.problem) from None
+
+    def scenario(self) -> Scenario:
+        """Return the :class:`~bldclab.sim.Scenario` (no trace, metrics over ``window``)."""
+        return Scenario(duration=self.duration, speed=self.speed, ref=self.ref, omega_ref=self.omega_ref,
+                        load_torque=self.load_torque, v_dc=self.v_dc, theta0=self.theta0, omega0=self.omega0,
+                        i0=self.i0, delay=self.delay, trace=False, window=self.window, h_max=self.h_max)
+
+    def run(self, drive: Drive, control: Control) -> dict[str, float | int]:
+        """Run :func:`~bldclab.sim.simulate` with :meth:`scenario` and return the result row."""
+        res = simulate(drive, control, self.scenario())
+        if res.metrics is None:
+            raise RuntimeError(f"the metric window {self.window} was not completed")
+        row: dict[str, float | int] = {}
+        _metrics_row(res.metrics, row)
+        stats, final = res.meta["stats"], res.meta["final"]
+        row.update({"steps": int(stats["steps"]), "events": int(stats["events"]),
+                    "plant_flags": int(stats["plant_flags"]), "t_final": float(final["t"]),
+                    "theta_e_final": float(final["theta_e"]), "omega_m_final": float(final["omega_m"])})
+        return row
+
+
+#: Experiments by the name the ``experiment`` setting uses. Adding one: an :class:`Experiment` subclass and a line.
+EXPERIMENTS: dict[str, type[Experiment]] = {
+    SteadyState.kind: SteadyState,
+    Simulate.kind: Simulate,
+}
