@@ -17,7 +17,7 @@ from bldclab.model.catalog.synthetic import lu4kw_drive, lu4kw_emf, rounded_trap
 from bldclab.model.motor import TWO_PI, BackEmf, Table, Trapezoid
 
 ROOT = Path(__file__).resolve().parents[1]
-SHIPPED = ROOT / "src" / "bldclab" / "catalog" / "lu-4kw.toml"
+SHIPPED = ROOT / "src" / "bldclab" / "model" / "catalog" / "lu-4kw.toml"
 DEG = math.pi / 180.0
 
 

@@ -9,18 +9,22 @@ how every number was produced (command line, version, date, drive, controllers, 
 
 Where the numbers come from:
 
-- ``bldclab compare`` writes, beside its CSV files and figures, ``waveforms.csv`` (:func:`waveforms`),
-  ``manifest.json`` (what was run and which files are there: :func:`make_manifest`) and, unless ``--no-report``,
-  ``report.html`` (:func:`compare_outputs`).
-- Given a results directory, the report reads those files (:func:`read_results`), plus ``methods.csv`` and
+- ``bldclab compare`` writes, beside its CSV files and figures, ``waveforms.csv``
+  (:func:`~bldclab.report.bundle.waveforms`),
+  ``manifest.json`` (what was run and which files are there: :func:`~bldclab.report.bundle.make_manifest`) and, unless
+  ``--no-report``,
+  ``report.html`` (:func:`~bldclab.report.bundle.compare_outputs`).
+- Given a results directory, the report reads those files (:func:`~bldclab.report.bundle.read_results`), plus
+  ``methods.csv`` and
   ``methods_compared.svg`` of ``bldclab torque-control`` and ``faults.csv`` of ``bldclab faults`` if they were
   written into the same directory.
-- Given a motor (catalog name or TOML file), it runs the comparison itself (:func:`motor_results`) and builds the
+- Given a motor (catalog name or TOML file), it runs the comparison itself
+  (:func:`~bldclab.report.bundle.motor_results`) and builds the
   same files in memory, so both ways give the same page.
 
 The plots are drawn in the browser by a small dependency-free script shipped in ``bldclab/report_assets``
 (axes, ticks, lines and markers, legend toggles, hover values, zoom and pan). Without JavaScript every plot shows
-a static SVG drawn by :func:`svg_plot`, which also serves the notebook displays of
+a static SVG drawn by :func:`~bldclab.svg.svg_plot`, which also serves the notebook displays of
 :class:`~bldclab.sim.results.SimResult` and :class:`~bldclab.sweep.SweepRun`. Contents: ``docs/report.md``.
 """
 
@@ -257,7 +261,7 @@ class Results:
     Attributes
     ----------
     manifest : dict
-        The manifest (:func:`make_manifest`).
+        The manifest (:func:`~bldclab.report.bundle.make_manifest`).
     drive : Drive
         The drive, rebuilt from the motor file in the manifest.
     simulated : pandas.DataFrame
@@ -300,7 +304,7 @@ class Results:
         Parameters
         ----------
         files : mapping of str to bytes
-            File name to content (:func:`read_results`).
+            File name to content (:func:`~bldclab.report.bundle.read_results`).
         source : str
             The directory, for messages.
 

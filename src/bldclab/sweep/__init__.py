@@ -8,10 +8,12 @@ case has one flat name, the same in Python, in a sweep file and as a DataFrame c
 ``motor.<field>``, ``inverter.<field>``, ``mechanics.<field>``, ``sensors.<field>``
     An override of a motor-file field, with the motor file's syntax (``"motor.L" = "80 uH"``, ``"motor.emf.k_phi"``).
 ``controller``, ``control.<parameter>``
-    A controller registered by name (:func:`controllers`: every :class:`~bldclab.control.Control` subclass that
-    :mod:`bldclab.control` exports, plus :func:`register_control`) and its keyword arguments.
+    A controller registered by name (:func:`~bldclab.sweep.registry.controllers`: every
+    :class:`~bldclab.control.Control` subclass that
+    :mod:`bldclab.control` exports, plus :func:`~bldclab.sweep.registry.register_control`) and its keyword arguments.
 ``experiment`` and its settings
-    ``"steady_state"`` (:class:`SteadyState`, the default) or ``"simulate"`` (:class:`Simulate`); the settings are
+    ``"steady_state"`` (:class:`~bldclab.analysis.experiments.SteadyState`, the default) or ``"simulate"``
+    (:class:`~bldclab.analysis.experiments.Simulate`); the settings are
     the bare names of their fields. A speed is given as ``speed`` (rad/s, or a string with a unit such as
     ``"600 rpm"``), ``speed_rpm`` or ``speed_pu`` (per unit of the case's own ``Omega_0``).
 
@@ -130,7 +132,7 @@ class ResolvedCase(NamedTuple):
     index : int
         Position in the sweep (the order of results).
     key : str
-        sha256 of the canonical inputs (:func:`case_key`).
+        sha256 of the canonical inputs (:func:`~bldclab.sweep.keys.case_key`).
     inputs : dict
         Everything that determines the result: ``bldclab`` version, ``drive`` (motor-file text after overrides),
         ``control`` (``class`` as ``module:qualname``, every ``params``), ``experiment`` (``kind`` and SI fields).
@@ -632,7 +634,8 @@ def run(sweep: Sweep | str | Path, store: Store | str | Path | None = None, *, e
         Results store: a :class:`~bldclab.sweep.store.Store`, or the path of an SQLite file (created if missing; opened
         after the cases are validated and left open in :attr:`SweepRun.store`); default an in-memory store.
     executor : Executor, optional
-        :class:`Serial`, :class:`Processes` (default: one process per core) or :class:`Dask`.
+        :class:`~bldclab.sweep.executors.Serial`, :class:`~bldclab.sweep.executors.Processes` (default: one process
+        per core) or :class:`~bldclab.sweep.executors.Dask`.
     progress : bool, optional
         Progress bar on ``stream``; default only if it is a terminal.
     stream : text stream, optional

@@ -13,22 +13,17 @@ from .algorithm import (
     DEFAULT_WINDOW,
     MIN_SAMPLES_PER_PERIOD,
     OFFSET_WARN,
-    SAMPLE_FILE,
     SPACING_ERROR,
     SPACING_WARN,
     SPEED_ERROR,
     SPEED_WARN,
     HallEdges,
     Identification,
-    Waveform,
     identify,
     observable_emf,
-    read_waveform,
-    sample_path,
-    synthetic_measurement,
-    waveform_csv,
-    waveform_from_columns,
 )
+from .scope import SAMPLE_FILE, sample_path, synthetic_measurement
+from .waveform import Waveform, read_waveform, waveform_csv, waveform_from_columns
 
 __all__ = [
     "ASYMMETRY_WARN",
