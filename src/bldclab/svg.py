@@ -23,6 +23,7 @@ __all__ = [
     "svg_plot",
 ]
 
+
 @dataclass
 class Series:
     """One line or point set of :func:`svg_plot`.

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import io
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -19,19 +18,12 @@ from ..model.catalog import load, names
 from ..report import plots
 
 if TYPE_CHECKING:
-    from matplotlib.figure import Figure
+    pass
 
 __all__ = [
     "configure_command",
     "run_command",
 ]
-
-def _figure_bytes(fig: Figure, fmt: str) -> bytes:
-    """Render a matplotlib figure to PNG or SVG bytes (SVG without a date, so reruns give equal files)."""
-    buf = io.BytesIO()
-    meta = {"Date": None} if fmt == "svg" else {}
-    fig.savefig(buf, format=fmt, dpi=150, metadata=meta)
-    return buf.getvalue()
 
 
 def configure_command(p: argparse.ArgumentParser) -> None:
@@ -71,7 +63,7 @@ def run_command(args: argparse.Namespace) -> int:
         fig8, _ = plots.plot_ripple(df, title=f"Torque ripple (paper 1 Fig. 8){title}")
         for stem, fig in (("fig7_torque_speed", fig7), ("fig8_ripple", fig8)):
             for ext in ("png", "svg"):
-                files[f"{stem}.{ext}"] = _figure_bytes(fig, ext)
+                files[f"{stem}.{ext}"] = plots.figure_bytes(fig, ext, dpi=150, dated=False)
         write_files(args.out, files)
     sys.stdout.write(text)
     return 0

@@ -19,6 +19,7 @@ __all__ = [
     "run_command",
 ]
 
+
 def configure_command(p: argparse.ArgumentParser) -> None:
     """Declare the arguments of ``bldclab identify``."""
     p.add_argument("waveform", metavar="WAVEFORM.csv",

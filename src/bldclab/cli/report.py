@@ -20,6 +20,7 @@ __all__ = [
     "run_command",
 ]
 
+
 def configure_command(p: argparse.ArgumentParser) -> None:
     """Declare the arguments of ``bldclab report``."""
     p.add_argument("source", metavar="RESULTS_DIR|MOTOR",

@@ -16,11 +16,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._files import write_files
-from ..analysis import paper1, paper2
+from ..analysis import paper2
 from ..analysis.compare import compare, speed_grid
 from ..analysis.experiments import electrical_period
 from ..analysis.faults import fault_table
-from ..analysis.paper1 import table1_text
 from ..control import Control, Lu, Sine, SixStep, SixStepVoltage
 from ..errors import BldclabError, PlausibilityWarning
 from ..model import analytic
@@ -28,12 +27,12 @@ from ..model.catalog import load
 from ..model.motor import Drive, Inverter
 from ..model.units import to_si
 from ..report import plots
-from ..report.bundle import compare_command, compare_outputs
+from ..report.bundle import compare_command, compare_files, compare_outputs
 from ..sim import Scenario, simulate
 from ..sim import plausibility as _plaus
 
 if TYPE_CHECKING:
-    from matplotlib.figure import Figure
+    pass
 
 __all__ = ["configure_compare", "configure_simulate", "parse_speed", "run_compare", "run_simulate"]
 
@@ -73,12 +72,6 @@ def load_drive(args: argparse.Namespace) -> Drive:
     """Load ``args.motor`` with ``--inverter`` applied."""
     drive = load(args.motor)
     return drive if args.inverter is None else drive.replace(inverter__model=args.inverter)
-
-
-def _figure_bytes(fig: Figure, fmt: str) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format=fmt, dpi=120)
-    return buf.getvalue()
 
 
 def _summarise(caught: list[str], runs: int) -> None:
@@ -193,8 +186,8 @@ def run_simulate(args: argparse.Namespace) -> int:
         files["metrics.json"] = (json.dumps({**summary, "metrics": asdict(m)}, indent=2) + "\n").encode()
         if args.plot:
             fig = res.plot()
-            files["waveforms.png"] = _figure_bytes(fig, "png")
-            files["waveforms.svg"] = _figure_bytes(fig, "svg")
+            files["waveforms.png"] = plots.figure_bytes(fig, "png")
+            files["waveforms.svg"] = plots.figure_bytes(fig, "svg")
         written = _write(args.out, files)
         res.save(args.out / "result.npz")
         for path in [*written, args.out / "result.npz"]:
@@ -222,24 +215,6 @@ def configure_compare(p: argparse.ArgumentParser) -> None:
                    help="PWM-grid phases per point: offsets of the rotor's initial angle within one PWM period; "
                         "points report their mean and range (default 1)")
     add_inverter_option(p)
-
-
-def comparison_figures(res: Any) -> dict[str, Figure]:
-    """Torque, ripple and efficiency vs speed: analytic curves of paper 1 and simulated points, both supplies."""
-    sim = res.simulated
-    sq = sim[sim.supply == "square"]
-    si = sim[sim.supply == "sine"]
-    over_t = {"simulated, sinusoidal": si.rename(columns={"T_pu": "T_s_pu"})[["Omega_pu", "T_s_pu"]],
-              "simulated, square-wave": sq.rename(columns={"T_pu": "T_q_pu"})[["Omega_pu", "T_q_pu"]]}
-    # one point set (one marker) for the averaged inverter; each supply's points carry their own column
-    avg = si.rename(columns={"TR_avg_pu": "TR_s_pu"})[["Omega_pu", "TR_s_pu"]].merge(
-        sq.rename(columns={"TR_avg_pu": "TR_q_pu"})[["Omega_pu", "TR_q_pu"]], on="Omega_pu", how="outer")
-    over_r = {"simulated, averaged inverter": avg}
-    fig_t, _ = plots.plot_torque_speed(res.analytic, overlays=over_t, title=f"{res.drive.name}: torque vs speed")
-    fig_r, _ = plots.plot_ripple(res.analytic, overlays=over_r, title=f"{res.drive.name}: torque ripple vs speed")
-    fig_e, _ = plots.plot_efficiency(res.analytic, {"sinusoidal": si, "square-wave": sq},
-                                     title=f"{res.drive.name}: efficiency vs speed")
-    return {"torque_speed": fig_t, "ripple_speed": fig_r, "efficiency_speed": fig_e}
 
 
 def run_compare(args: argparse.Namespace) -> int:
@@ -291,24 +266,7 @@ def run_compare(args: argparse.Namespace) -> int:
     print("verdict:")
     for line in res.verdict:
         print(f"  - {line}")
-    files: dict[str, bytes] = {}
-    files["simulated.csv"] = sim.to_csv(index=False).encode()
-    files["analytic.csv"] = res.analytic.to_csv(index=False).encode()
-    files["base_speeds.csv"] = res.base_speeds.to_csv(index=False).encode()
-
-    files["table1.csv"] = table1_text(t1, "csv").encode()
-    files["table1.json"] = table1_text(t1, "json", res.not_applicable).encode()
-    files["verdict.txt"] = ("\n".join(res.verdict) + "\n").encode()
-    figures = comparison_figures(res)
-
-    figures["fig9_torque_0.8pu"] = paper1.fig9(drive)
-    figures["fig11_currents"] = paper1.fig11(drive)
-    figures["fig12_dynamometer"], dyno = paper1.fig12(drive)
-    files["dynamometer.csv"] = dyno.to_csv(index=False).encode()
-    for name, fig in figures.items():
-        files[f"{name}.png"] = _figure_bytes(fig, "png")
-        files[f"{name}.svg"] = _figure_bytes(fig, "svg")
-
+    files = compare_files(res)
     files.update(compare_outputs(res, files, command=compare_command(args, out), motor_source=args.motor,
                                  report=not args.no_report))
     for path in _write(out, files):
@@ -380,8 +338,8 @@ def run_torque_control(args: argparse.Namespace) -> int:
         for name, fn in (("fig10_rect", paper2.fig10), ("fig11_lu_no_do", paper2.fig11), ("fig12_lu", paper2.fig12),
                          ("methods_compared", paper2.fig_compare)):
             fig = fn(drive, tq, om)
-            files[f"{name}.png"] = _figure_bytes(fig, "png")
-            files[f"{name}.svg"] = _figure_bytes(fig, "svg")
+            files[f"{name}.png"] = plots.figure_bytes(fig, "png")
+            files[f"{name}.svg"] = plots.figure_bytes(fig, "svg")
         for path in _write(args.out, files):
             print(f"wrote {path}")
     return 0

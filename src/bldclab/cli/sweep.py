@@ -15,6 +15,7 @@ __all__ = [
     "run_command",
 ]
 
+
 def _positive_int(text: str) -> int:
     try:
         value = int(text)

@@ -11,7 +11,9 @@ from __future__ import annotations
 from ..svg import Series, svg_plot
 from .bundle import (
     compare_command,
+    compare_files,
     compare_outputs,
+    comparison_figures,
     make_manifest,
     methods_traces,
     motor_results,
@@ -30,7 +32,9 @@ __all__ = [
     "Results",
     "Series",
     "compare_command",
+    "compare_files",
     "compare_outputs",
+    "comparison_figures",
     "make_manifest",
     "methods_traces",
     "motor_results",

@@ -17,7 +17,7 @@ import platform
 import shlex
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -32,17 +32,24 @@ from ..control import Control, Lu
 from ..errors import BldclabError
 from ..model.motor import Drive
 from ..sim import Scenario
+from . import plots
 from .html import _KNOWN, FORMAT, FORMAT_VERSION, MANIFEST, REPORT, WAVEFORM_SPEEDS, WAVEFORM_SUB, Results, _now, render
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = [
     "compare_command",
+    "compare_files",
     "compare_outputs",
+    "comparison_figures",
     "make_manifest",
     "methods_traces",
     "motor_results",
     "read_results",
     "waveforms",
 ]
+
 
 def waveforms(drive: Drive, speeds_pu: Sequence[float] = WAVEFORM_SPEEDS, *,
               controls: Mapping[str, tuple[Control, float]] | None = None, trace_sub: int = WAVEFORM_SUB
@@ -224,6 +231,47 @@ def compare_command(args: argparse.Namespace, out: Path) -> str:
                        "--min-speed", f"{args.min_speed:g}", "--max-speed", f"{args.max_speed:g}"])
 
 
+def compare_files(res: CompareResult, *, figures: bool = True) -> dict[str, bytes]:
+    """Return the result files of a comparison, in the order ``bldclab compare`` writes them.
+
+    The one producer of a results directory's data files: ``simulated.csv``, ``analytic.csv``, ``base_speeds.csv``,
+    ``table1.csv``, ``table1.json``, ``verdict.txt``, ``dynamometer.csv`` and, with ``figures``, the PNG and SVG of
+    the torque, ripple and efficiency characteristics and of paper 1's Figs 9, 11 and 12.
+    :func:`compare_outputs` adds ``waveforms.csv``, ``manifest.json`` and ``report.html``.
+
+    Parameters
+    ----------
+    res : CompareResult
+        The comparison (:func:`bldclab.analysis.compare.compare`).
+    figures : bool
+        Also draw the figures (matplotlib).
+
+    Returns
+    -------
+    dict of str to bytes
+    """
+    drive, t1 = res.drive, res.table1
+    files: dict[str, bytes] = {
+        "simulated.csv": res.simulated.to_csv(index=False).encode(),
+        "analytic.csv": res.analytic.to_csv(index=False).encode(),
+        "base_speeds.csv": res.base_speeds.to_csv(index=False).encode(),
+        "table1.csv": table1_text(t1, "csv").encode(),
+        "table1.json": table1_text(t1, "json", res.not_applicable).encode(),
+        "verdict.txt": ("\n".join(res.verdict) + "\n").encode(),
+    }
+    figs = comparison_figures(res) if figures else {}
+    if figures:
+        figs["fig9_torque_0.8pu"] = paper1.fig9(drive)
+        figs["fig11_currents"] = paper1.fig11(drive)
+    figs["fig12_dynamometer"], dyno = paper1.fig12(drive)
+    files["dynamometer.csv"] = dyno.to_csv(index=False).encode()
+    if figures:
+        for name, fig in figs.items():
+            files[f"{name}.png"] = plots.figure_bytes(fig, "png")
+            files[f"{name}.svg"] = plots.figure_bytes(fig, "svg")
+    return files
+
+
 def compare_outputs(res: CompareResult, files: Mapping[str, bytes], *, command: str, motor_source: str | None = None,
                     report: bool = True, waveform_speeds: Sequence[float] = WAVEFORM_SPEEDS,
                     extra: Mapping[str, Any] | None = None) -> dict[str, bytes]:
@@ -298,13 +346,7 @@ def motor_results(drive: Drive, speeds_pu: Sequence[float], *, command: str, mot
         ``methods_traces.csv``.
     """
     res = compare(drive, speeds_pu, workers=workers, progress=progress)
-    files: dict[str, bytes] = {
-        "simulated.csv": res.simulated.to_csv(index=False).encode(),
-        "analytic.csv": res.analytic.to_csv(index=False).encode(),
-        "table1.json": table1_text(res.table1, "json", res.not_applicable).encode(),
-        "verdict.txt": ("\n".join(res.verdict) + "\n").encode(),
-        "dynamometer.csv": paper1.fig12(drive)[1].to_csv(index=False).encode(),
-    }
+    files = compare_files(res, figures=False)
     extra: dict[str, Any] = {}
     if torque_control:
 
@@ -353,3 +395,21 @@ def read_results(path: Path) -> dict[str, bytes]:
     except OSError as exc:
         raise BldclabError("results directory", f"cannot read: {exc.strerror or exc}", str(path)) from None
     return files
+
+
+def comparison_figures(res: CompareResult) -> dict[str, Figure]:
+    """Torque, ripple and efficiency vs speed: analytic curves of paper 1 and simulated points, both supplies."""
+    sim = res.simulated
+    sq = sim[sim.supply == "square"]
+    si = sim[sim.supply == "sine"]
+    over_t = {"simulated, sinusoidal": si.rename(columns={"T_pu": "T_s_pu"})[["Omega_pu", "T_s_pu"]],
+              "simulated, square-wave": sq.rename(columns={"T_pu": "T_q_pu"})[["Omega_pu", "T_q_pu"]]}
+    # one point set (one marker) for the averaged inverter; each supply's points carry their own column
+    avg = si.rename(columns={"TR_avg_pu": "TR_s_pu"})[["Omega_pu", "TR_s_pu"]].merge(
+        sq.rename(columns={"TR_avg_pu": "TR_q_pu"})[["Omega_pu", "TR_q_pu"]], on="Omega_pu", how="outer")
+    over_r = {"simulated, averaged inverter": avg}
+    fig_t, _ = plots.plot_torque_speed(res.analytic, overlays=over_t, title=f"{res.drive.name}: torque vs speed")
+    fig_r, _ = plots.plot_ripple(res.analytic, overlays=over_r, title=f"{res.drive.name}: torque ripple vs speed")
+    fig_e, _ = plots.plot_efficiency(res.analytic, {"sinusoidal": si, "square-wave": sq},
+                                     title=f"{res.drive.name}: efficiency vs speed")
+    return {"torque_speed": fig_t, "ripple_speed": fig_r, "efficiency_speed": fig_e}

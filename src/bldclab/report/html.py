@@ -66,6 +66,7 @@ __all__ = [
     "render",
 ]
 
+
 #: Name of the manifest a results directory carries.
 MANIFEST = "manifest.json"
 #: Name of the report ``bldclab compare`` writes.

@@ -11,6 +11,7 @@ for Fig 7, ``TR_s_pu``, ``TR_q_pu`` for Fig 8); missing columns are skipped.
 
 from __future__ import annotations
 
+import io
 from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
@@ -23,7 +24,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["plot_efficiency", "plot_ripple", "plot_torque_speed"]
+__all__ = ["figure_bytes", "plot_efficiency", "plot_ripple", "plot_torque_speed"]
 
 #: Marker style per supply, as in paper 1: x for sinusoidal, o for real square-wave.
 _STYLE = {
@@ -204,3 +205,26 @@ def plot_efficiency(df: pd.DataFrame, simulated: Mapping[str, pd.DataFrame] | No
     _finish(ax, "efficiency (shaft / DC power)", title)
     ax.set_ylim(bottom=0.0, top=1.0)
     return fig, ax
+
+
+def figure_bytes(fig: Figure, fmt: str, *, dpi: int = 120, dated: bool = True) -> bytes:
+    """Render a matplotlib figure to PNG or SVG bytes.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    fmt : str
+        ``"png"`` or ``"svg"``.
+    dpi : int
+        Resolution of the PNG (dots per inch).
+    dated : bool
+        Keep matplotlib's creation date in an SVG; ``False`` leaves it out, so reruns give equal files.
+
+    Returns
+    -------
+    bytes
+    """
+    buf = io.BytesIO()
+    meta = {} if dated or fmt != "svg" else {"Date": None}
+    fig.savefig(buf, format=fmt, dpi=dpi, metadata=meta)
+    return buf.getvalue()

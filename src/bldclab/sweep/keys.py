@@ -23,6 +23,7 @@ __all__ = [
     "case_key",
 ]
 
+
 class _NotPlainError(Exception):
     """A value that is not plain data; ``path`` locates it inside the value being converted."""
 

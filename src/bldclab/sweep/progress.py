@@ -12,6 +12,7 @@ __all__ = [
     "Progress",
 ]
 
+
 def _clock(seconds: float) -> str:
     if not math.isfinite(seconds):
         return "--:--"

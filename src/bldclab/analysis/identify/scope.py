@@ -25,6 +25,7 @@ __all__ = [
     "synthetic_measurement",
 ]
 
+
 #: The sample measurement shipped with the package (``bldclab/data``); see :func:`sample_path`.
 SAMPLE_FILE = "lu4kw_backemf_1300rpm.csv"
 

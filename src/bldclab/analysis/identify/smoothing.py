@@ -14,6 +14,7 @@ from ...model.motor import TWO_PI
 __all__ = [
 ]
 
+
 class _Periodic:
     """Samples (angle, value) pooled over periods; local linear regression at any angle (cumulative sums).
 
