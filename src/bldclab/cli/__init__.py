@@ -23,7 +23,7 @@ from .._files import write_files
 from .._version import __version__
 from ..analysis.paper1 import table1_text
 from ..errors import BldclabError, PlausibilityWarning
-from . import analyze, identify, report, simulate, sweep
+from . import analyze, compare, faults, identify, report, simulate, sweep, torque_control
 
 __all__ = ["COMMANDS", "Command", "build_parser", "main", "table1_text", "write_files"]
 
@@ -85,13 +85,13 @@ COMMANDS: tuple[Command, ...] = (
     Command("identify", "back-EMF tables from a constant-speed waveform (paper 2)",
             identify.configure_command, identify.run_command),
     Command("simulate", "one switching-level simulation: square, sine, sixv, lu, lu-no-do or rect control",
-            simulate.configure_simulate, simulate.run_simulate),
+            simulate.configure_command, simulate.run_command),
     Command("compare", "square-wave vs sinusoidal supply: closed forms and simulation over speed (paper 1)",
-            simulate.configure_compare, simulate.run_compare),
+            compare.configure_command, compare.run_command),
     Command("torque-control", "paper 2's torque control vs its baselines over a load x speed grid",
-            simulate.configure_torque_control, simulate.run_torque_control),
+            torque_control.configure_command, torque_control.run_command),
     Command("faults", "inject sensor, bus and phase faults: detection, time to safe state, peak current",
-            simulate.configure_faults, simulate.run_faults),
+            faults.configure_command, faults.run_command),
     Command("report", "one self-contained HTML report of a comparison (a results directory, or a motor to run)",
             report.configure_command, report.run_command),
 )
