@@ -41,7 +41,7 @@ import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -51,9 +51,6 @@ from ..errors import BldclabError
 from ..model import analytic
 from ..model.motor import Drive
 from ..svg import Series, _e, svg_plot
-
-if TYPE_CHECKING:
-    from ..model.motor import Drive
 
 __all__ = [
     "FORMAT",
