@@ -16,9 +16,9 @@ import dataclasses
 import warnings
 
 import bldclab as bl
-from bldclab import analytic
-from bldclab.compare import default_controls
-from bldclab.experiments import steady_state
+from bldclab.analysis.compare import default_controls
+from bldclab.analysis.experiments import steady_state
+from bldclab.model import analytic
 
 F_PWM = (10e3, 20e3, 40e3, 80e3)
 

@@ -33,10 +33,10 @@ import sys
 import numpy as np
 
 import bldclab as bl
-from bldclab import paper2
+from bldclab.analysis import paper2
+from bldclab.analysis.experiments import electrical_period
 from bldclab.control import SixStepVoltage
-from bldclab.experiments import electrical_period
-from bldclab.motor import Drive
+from bldclab.model.motor import Drive
 
 SUB = 32  # trace rows per sample: the zero-current intervals resolved to T_s / 32
 

@@ -131,8 +131,8 @@ def shared_drive() -> bl.Drive:
 def shared_case(t_stop: float = 1.0) -> Case:
     """Return the case built from htm-48v and bldclab's default ``Sine`` design."""
     import bldclab as bl
-    from bldclab.analytic import i_sN
     from bldclab.control.sine import fundamental_k1
+    from bldclab.model.analytic import i_sN
 
     drive = shared_drive()
     m, mech = drive.motor, drive.mechanics

@@ -96,7 +96,7 @@ def plant_rows(seconds: float, repeats: int) -> list[Row]:
 def sine_rows(seconds: float, repeats: int) -> list[Row]:
     """``Sine`` (paper 1's sinusoidal supply) on htm-48v at 0.5 Omega_0 imposed, nominal torque ``T_s,N``."""
     import bldclab as bl
-    from bldclab import analytic as an
+    from bldclab.model import analytic as an
 
     drive = bl.load("htm-48v")
     ctl = bl.Sine()

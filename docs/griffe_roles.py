@@ -1,10 +1,10 @@
 """Griffe extension for the API reference: Sphinx cross-reference roles in docstrings become Markdown links.
 
 bldclab's numpydoc docstrings refer to other objects with Sphinx roles (``:func:`simulate```,
-``:class:`~bldclab.results.SimResult```). mkdocstrings renders Markdown, where a role would show as literal text,
+``:class:`~bldclab.sim.results.SimResult```). mkdocstrings renders Markdown, where a role would show as literal text,
 so before rendering every role is rewritten:
 
-- to an autorefs link ``[`SimResult`][bldclab.results.SimResult]`` when the target resolves (from the object's
+- to an autorefs link ``[`SimResult`][bldclab.sim.results.SimResult]`` when the target resolves (from the object's
   own scope, as Sphinx would) to a public object that the API reference renders (a documented module's public
   member with a docstring); re-exports (``bldclab.Drive``) link to their definition;
 - to inline code otherwise (a private helper, an object of another package such as ``matplotlib.figure.Figure``),

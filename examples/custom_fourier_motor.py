@@ -15,9 +15,9 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import bldclab as bl
-from bldclab import analytic
+from bldclab.analysis.experiments import steady_state
 from bldclab.cli import table1_text
-from bldclab.experiments import steady_state
+from bldclab.model import analytic
 
 # configure the drive: 4 pole pairs, 24 V, a flat-topped Fourier back-EMF (V s/rad per harmonic order)
 k1 = 0.05

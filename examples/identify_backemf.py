@@ -3,7 +3,7 @@
 Paper 2 measures its motor's back-EMF "by the constant speed test" and drives its torque controller with the shapes
 `e_x / omega_m`. The sample file shipped with bldclab is such a record of the `lu-4kw` motor at 1300 rpm (three
 terminal voltages with probe noise and offsets, Hall signals; its provenance is in the file's header).
-`bldclab.identify.identify` turns it into three per-phase tables `k_x(theta_x)` in V s/rad on bldclab's angle
+`bldclab.analysis.identify.identify` turns it into three per-phase tables `k_x(theta_x)` in V s/rad on bldclab's angle
 convention; `Identification.drive` puts them into a base drive. Terminal voltages cannot see the part common to
 the three phases (the triplen harmonics), which is also inert in a star motor without neutral (`docs/identify.md`):
 the tables match the catalog motor's observable shapes (`observable_emf`), not its full trapezoids, and the
@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import bldclab as bl
-from bldclab.identify import identify, observable_emf, sample_path
+from bldclab.analysis.identify import identify, observable_emf, sample_path
 
 # configure the drive: identify the back-EMF from the record, the rest (R, L, inverter, sensors) from lu-4kw
 catalog = bl.load("lu-4kw")

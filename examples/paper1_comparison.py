@@ -1,7 +1,8 @@
 """Paper 1 comparison: square-wave vs sinusoidal supply of htm-48v at a few speeds, beside the closed forms.
 
-`bldclab.compare.compare` runs both supplies at each speed on a dynamometer (imposed speed) until steady state and
-measures whole electrical periods: the real square-wave (120-degree) current supply with Hall commutation
+`bldclab.analysis.compare.compare` runs both supplies at each speed on a dynamometer (imposed speed) until steady
+state and measures whole electrical periods: the real square-wave (120-degree) current supply with Hall
+commutation
 (`SixStep`) at the nominal current amplitude, and the sinusoidal supply (`Sine`) at the torque of the same rms
 current. Under paper 1's premise (phase resistance neglected) the simulated mean torque and the torque ripple at the
 controller samples fall on the paper's closed forms, drawn as lines. `bldclab compare htm-48v` does the same job
@@ -14,14 +15,15 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import bldclab as bl
-from bldclab import analytic, plots
-from bldclab.compare import compare
+from bldclab.analysis.compare import compare
+from bldclab.model import analytic
+from bldclab.report import plots
 
 # configure the drive: paper 1's study case (Table II), with the closed forms' premise R = 0
 drive = bl.load("htm-48v").replace(motor__R=0.0)
 speeds_pu = [0.1, 0.3, 0.5, 0.7, 0.9]  # per unit of the no-load speed Omega_0
 
-# configure the control: paper 1's two supplies with their references (bldclab.compare.default_controls)
+# configure the control: paper 1's two supplies with their references (bldclab.analysis.compare.default_controls)
 # simulate: 2 supplies x 5 speeds, in this process
 res = compare(drive, speeds_pu, workers=1)
 

@@ -15,7 +15,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import bldclab as bl
-from bldclab import paper2
+from bldclab.analysis import paper2
 
 # configure the drive: paper 2's motor at an imposed 1000 rpm, a quarter of the rated torque
 drive = bl.load("lu-4kw")

@@ -13,7 +13,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import bldclab as bl
-from bldclab import analytic
+from bldclab.model import analytic
 
 # configure the drive: htm-48v with its mechanics (no imposed speed)
 drive = bl.load("htm-48v")

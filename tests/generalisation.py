@@ -20,11 +20,11 @@ from dataclasses import dataclass
 
 from hypothesis import strategies as st
 
-from bldclab import analytic
-from bldclab.catalog.synthetic import paper1_drive
-from bldclab.compare import default_controls
-from bldclab.experiments import steady_state
-from bldclab.motor import TWO_PI, BackEmf, Drive, Trapezoid
+from bldclab.analysis.compare import default_controls
+from bldclab.analysis.experiments import steady_state
+from bldclab.model import analytic
+from bldclab.model.catalog.synthetic import paper1_drive
+from bldclab.model.motor import TWO_PI, BackEmf, Drive, Trapezoid
 
 #: Highest carrier drawn (Hz): the catalog's Inverter accepts up to 10 MHz; a drive drawn beyond 2 MHz is redrawn.
 MAX_F_PWM = 2e6

@@ -12,8 +12,8 @@ from scipy.integrate import solve_ivp
 
 import bldclab
 from bldclab import BackEmf, BldclabError, Fourier, Sinusoid, Table, Trapezoid
-from bldclab import analytic as an
-from bldclab.motor import TWO_PI
+from bldclab.model import analytic as an
+from bldclab.model.motor import TWO_PI
 
 
 @pytest.fixture(scope="module")

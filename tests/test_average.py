@@ -17,11 +17,11 @@ import numpy as np
 import pytest
 
 import bldclab as bl
-from bldclab import analytic as an
+from bldclab.analysis.compare import default_controls
+from bldclab.analysis.experiments import PointResult, steady_state
 from bldclab.cli import main
-from bldclab.compare import default_controls
 from bldclab.errors import BldclabError
-from bldclab.experiments import PointResult, steady_state
+from bldclab.model import analytic as an
 
 DRIVES = ("htm-48v", "lu-4kw")
 SUPPLIES = ("square", "sine")

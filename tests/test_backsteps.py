@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 import bldclab as bl
-from bldclab.catalog.synthetic import rounded_trapezoid
-from bldclab.motor import BackEmf
+from bldclab.model.catalog.synthetic import rounded_trapezoid
+from bldclab.model.motor import BackEmf
 
 HTM = bl.load("htm-48v")
 LU4 = bl.load("lu-4kw")

@@ -14,15 +14,16 @@ import warnings
 import numpy as np
 import pytest
 
-from bldclab import analytic, cli
-from bldclab.catalog import load, names
-from bldclab.compare import compare
+from bldclab import cli
+from bldclab.analysis.compare import compare
+from bldclab.analysis.experiments import PointResult, steady_state
 from bldclab.control import Lu, Sine, SixStep
-from bldclab.design import max_bandwidth, pi_gains
 from bldclab.errors import BldclabError, PlausibilityWarning
-from bldclab.experiments import PointResult, steady_state
-from bldclab.motor import Drive
-from bldclab.results import SimResult
+from bldclab.model import analytic
+from bldclab.model.catalog import load, names
+from bldclab.model.design import max_bandwidth, pi_gains
+from bldclab.model.motor import Drive
+from bldclab.sim.results import SimResult
 
 NEW = ("outrunner-24v", "servo-2k2")
 SPEEDS_PU = (0.2, 0.5, 0.8)

@@ -16,8 +16,8 @@ import pandas as pd
 import pytest
 
 import bldclab
-from bldclab import analytic as an
 from bldclab import cli
+from bldclab.model import analytic as an
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 OUT_FILES = {"table1.csv", "table1.json", "characteristic.csv", "fig7_torque_speed.png",
@@ -268,7 +268,7 @@ def test_commands_registry_drives_the_parser() -> None:
 def test_plots_overlays_and_given_axes() -> None:
     from matplotlib.figure import Figure
 
-    from bldclab import plots
+    from bldclab.report import plots
 
     drive = bldclab.load("htm-48v")
     df = an.characteristic(drive, [0.0, 0.25, 0.5, 0.75, 0.9, 1.0])
@@ -292,7 +292,7 @@ def test_plots_overlays_and_given_axes() -> None:
 
 
 def test_plots_do_not_touch_pyplot() -> None:
-    code = ("import sys, bldclab, bldclab.plots as p, bldclab.analytic as a\n"
+    code = ("import sys, bldclab, bldclab.report.plots as p, bldclab.model.analytic as a\n"
             "df = a.characteristic(bldclab.load('htm-48v'), [0.0, 0.5, 1.0])\n"
             "p.plot_torque_speed(df); p.plot_ripple(df)\n"
             "assert 'matplotlib.pyplot' not in sys.modules\n")

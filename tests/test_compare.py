@@ -11,9 +11,9 @@ import pandas as pd
 import pytest
 
 import bldclab as bl
-from bldclab import analytic as an
+from bldclab.analysis.compare import compare
 from bldclab.cli import main
-from bldclab.compare import compare
+from bldclab.model import analytic as an
 
 
 def test_compare_ideal_drive_follows_the_closed_forms():

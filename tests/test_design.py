@@ -3,8 +3,8 @@ import math
 
 import pytest
 
-from bldclab.design import pi_gains
 from bldclab.errors import BldclabError
+from bldclab.model.design import pi_gains
 
 
 def test_paper_design_is_pole_zero_cancellation():

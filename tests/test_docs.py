@@ -23,9 +23,13 @@ from conftest import require_module
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 EXAMPLES = sorted((ROOT / "examples").glob("*.py"))
-REFERENCE_MODULES = ("motor", "catalog", "sim", "control", "results", "experiments", "compare", "analytic", "paper1",
-                     "paper2", "identify", "sweep", "store", "faults", "report", "design", "plots", "units", "errors",
-                     "cli")
+#: reference page -> the module it documents
+REFERENCE_MODULES = {"motor": "model.motor", "catalog": "model.catalog", "sim": "sim", "control": "control",
+                     "results": "sim.results", "experiments": "analysis.experiments", "compare": "analysis.compare",
+                     "analytic": "model.analytic", "paper1": "analysis.paper1", "paper2": "analysis.paper2",
+                     "identify": "analysis.identify", "sweep": "sweep", "store": "sweep.store",
+                     "faults": "analysis.faults", "report": "report", "design": "model.design", "plots": "report.plots",
+                     "units": "model.units", "errors": "errors", "cli": "cli"}
 
 
 def _require_mkdocs() -> None:
@@ -71,9 +75,9 @@ def test_site_builds_strict_with_the_main_pages(site: Path) -> None:
 
 @pytest.mark.slow
 def test_api_reference_is_generated_from_the_docstrings(site: Path) -> None:
-    for module in REFERENCE_MODULES:
-        page = _page(site, f"reference/{module}")
-        assert f'id="bldclab.{module}"' in page, f"reference/{module}: no section for bldclab.{module}"
+    for name, module in REFERENCE_MODULES.items():
+        page = _page(site, f"reference/{name}")
+        assert f'id="bldclab.{module}"' in page, f"reference/{name}: no section for bldclab.{module}"
     sim = _page(site, "reference/sim")
     for name in ("simulate", "Scenario", "Fault"):
         assert f'id="bldclab.sim.{name}"' in sim
@@ -83,18 +87,18 @@ def test_api_reference_is_generated_from_the_docstrings(site: Path) -> None:
                  "control.sixstep.SixStep", "control.sine.Sine", "control.lu.Lu"):
         assert f'id="bldclab.{name}"' in control
     motor = _page(site, "reference/motor")
-    assert 'id="bldclab.motor.Drive.replace"' in motor and 'id="bldclab.motor.Fourier"' in motor
-    assert 'id="bldclab.design.pi_gains"' in _page(site, "reference/design")
+    assert 'id="bldclab.model.motor.Drive.replace"' in motor and 'id="bldclab.model.motor.Fourier"' in motor
+    assert 'id="bldclab.model.design.pi_gains"' in _page(site, "reference/design")
 
 
 @pytest.mark.slow
 def test_sphinx_roles_become_links_or_code(site: Path) -> None:
-    for module in REFERENCE_MODULES:
-        text = _text(_page(site, f"reference/{module}"))
-        assert not re.search(r":(class|func|meth|mod|attr|data|exc):`", text), f"reference/{module}: a raw role"
+    for name in REFERENCE_MODULES:
+        text = _text(_page(site, f"reference/{name}"))
+        assert not re.search(r":(class|func|meth|mod|attr|data|exc):`", text), f"reference/{name}: a raw role"
     sim = _page(site, "reference/sim")
-    # "Run the C closed loop: :func:`simulate` ... :class:`~bldclab.results.SimResult`" in sim's module docstring
-    assert 'href="../results/#bldclab.results.SimResult"' in sim
+    # "Run the C closed loop: :func:`simulate` ... :class:`~bldclab.sim.results.SimResult`" in sim's module docstring
+    assert 'href="../results/#bldclab.sim.results.SimResult"' in sim
     assert 'href="#bldclab.sim.simulate"' in sim
 
 

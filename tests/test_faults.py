@@ -7,9 +7,9 @@ import math
 import pytest
 
 import bldclab as bl
-from bldclab import analytic as an
+from bldclab.analysis.faults import fault_table
 from bldclab.cli import main
-from bldclab.faults import fault_table
+from bldclab.model import analytic as an
 
 HTM = bl.load("htm-48v")
 LU = bl.load("lu-4kw")

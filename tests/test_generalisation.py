@@ -19,8 +19,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from bldclab import analytic
-from bldclab.experiments import base_speed
+from bldclab.analysis.experiments import base_speed
+from bldclab.model import analytic
 from generalisation import FLAT_TOP_SQUARE, TWO_PI, Case, cases, describe, mean_torque_switching, run
 
 T_TOL = 0.005

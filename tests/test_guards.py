@@ -11,11 +11,12 @@ import numpy as np
 import pytest
 
 import bldclab as bl
-from bldclab import paper2, plausibility
+from bldclab.analysis import paper2
+from bldclab.analysis.compare import compare
+from bldclab.analysis.experiments import electrical_period, steady_state
 from bldclab.cli import main
-from bldclab.compare import compare
 from bldclab.errors import BldclabError, PlausibilityError, PlausibilityWarning
-from bldclab.experiments import electrical_period, steady_state
+from bldclab.sim import plausibility
 
 HTM = bl.load("htm-48v")
 LU = bl.load("lu-4kw")

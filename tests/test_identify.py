@@ -14,8 +14,7 @@ import pytest
 
 import bldclab
 from bldclab import cli
-from bldclab.errors import BldclabError
-from bldclab.identify import (
+from bldclab.analysis.identify import (
     Identification,
     identify,
     observable_emf,
@@ -24,7 +23,8 @@ from bldclab.identify import (
     synthetic_measurement,
     waveform_csv,
 )
-from bldclab.motor import TWO_PI, BackEmf, Drive
+from bldclab.errors import BldclabError
+from bldclab.model.motor import TWO_PI, BackEmf, Drive
 
 ROOT = Path(__file__).resolve().parents[1]
 DEG = math.pi / 180.0

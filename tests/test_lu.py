@@ -14,8 +14,8 @@ from hypothesis import strategies as st
 from matplotlib.figure import Figure
 
 import bldclab as bl
-from bldclab import paper2
 from bldclab._core import core
+from bldclab.analysis import paper2
 from bldclab.cli import main
 from bldclab.errors import BldclabError
 

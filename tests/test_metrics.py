@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 import bldclab as bl
-from bldclab import analytic as an
-from bldclab.compare import default_controls
-from bldclab.experiments import base_speed, base_speed_margin, steady_state
+from bldclab.analysis.compare import default_controls
+from bldclab.analysis.experiments import base_speed, base_speed_margin, steady_state
+from bldclab.model import analytic as an
 
 HTM = bl.load("htm-48v")
 LU = bl.load("lu-4kw")

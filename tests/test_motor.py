@@ -15,9 +15,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bldclab import catalog
 from bldclab.errors import BldclabError
-from bldclab.motor import (
+from bldclab.model import catalog
+from bldclab.model.motor import (
     TWO_PI,
     BackEmf,
     Cogging,
@@ -31,7 +31,7 @@ from bldclab.motor import (
     Table,
     Trapezoid,
 )
-from bldclab.units import ALIASES, DIMENSIONS, to_si
+from bldclab.model.units import ALIASES, DIMENSIONS, to_si
 
 RPM = TWO_PI / 60.0
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import bldclab as bl
-from bldclab import analytic as an
-from bldclab import paper1
+from bldclab.analysis import paper1
+from bldclab.model import analytic as an
 
 HTM = bl.load("htm-48v")
 

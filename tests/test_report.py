@@ -17,9 +17,10 @@ import pandas as pd
 import pytest
 
 import bldclab as bl
-from bldclab import __version__, report, sweep
+from bldclab import __version__, sweep
 from bldclab.cli import main
-from bldclab.motor import Inverter, Mechanics, Motor, Sensors
+from bldclab.model.motor import Inverter, Mechanics, Motor, Sensors
+from bldclab.report import html as report
 
 
 class Page(HTMLParser):

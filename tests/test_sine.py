@@ -16,12 +16,12 @@ from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 import bldclab as bl
-from bldclab import analytic as an
-from bldclab.catalog.synthetic import paper1_drive
-from bldclab.compare import default_controls
+from bldclab.analysis.compare import default_controls
+from bldclab.analysis.experiments import base_speed, steady_state
 from bldclab.control.sine import fundamental_k1
 from bldclab.errors import BldclabError
-from bldclab.experiments import base_speed, steady_state
+from bldclab.model import analytic as an
+from bldclab.model.catalog.synthetic import paper1_drive
 
 HTM = bl.load("htm-48v")
 HTM0 = HTM.replace(motor__R=0.0)

@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 import bldclab as bl
-from bldclab import analytic as an
-from bldclab.design import pi_gains
+from bldclab.analysis.experiments import PointResult, base_speed, steady_state
 from bldclab.errors import BldclabError
-from bldclab.experiments import PointResult, base_speed, steady_state
+from bldclab.model import analytic as an
+from bldclab.model.design import pi_gains
 
 HTM = bl.load("htm-48v")
 HTM0 = HTM.replace(motor__R=0.0)

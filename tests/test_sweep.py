@@ -28,7 +28,7 @@ import bldclab as bl
 from bldclab import sweep as sw
 from bldclab.cli import main
 from bldclab.errors import BldclabError
-from bldclab.store import Store
+from bldclab.sweep.store import Store
 from conftest import require_module
 
 # Short cases: htm-48v at high per-unit speed (electrical period ~12 ms), few periods, six-step voltage mode.

@@ -10,14 +10,14 @@ from types import ModuleType
 import numpy as np
 import pytest
 
-from bldclab import catalog
-from bldclab.catalog import synthetic
-from bldclab.catalog.synthetic import lu4kw_drive, lu4kw_emf, rounded_trapezoid
 from bldclab.errors import BldclabError
-from bldclab.motor import TWO_PI, BackEmf, Table, Trapezoid
+from bldclab.model import catalog
+from bldclab.model.catalog import synthetic
+from bldclab.model.catalog.synthetic import lu4kw_drive, lu4kw_emf, rounded_trapezoid
+from bldclab.model.motor import TWO_PI, BackEmf, Table, Trapezoid
 
 ROOT = Path(__file__).resolve().parents[1]
-SHIPPED = ROOT / "src" / "bldclab" / "catalog" / "lu-4kw.toml"
+SHIPPED = ROOT / "src" / "bldclab" / "model" / "catalog" / "lu-4kw.toml"
 DEG = math.pi / 180.0
 
 

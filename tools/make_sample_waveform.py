@@ -7,7 +7,7 @@ Usage::
     PYTHONPATH=src python tools/make_sample_waveform.py -o out.csv
 
 The record is paper 2's constant-speed test (its Fig. 6, 1300 rpm) done on the ``lu-4kw`` catalog drive by
-bldclab's simulator: :func:`bldclab.identify.synthetic_measurement` with the settings below (all legs off, no
+bldclab's simulator: :func:`bldclab.analysis.identify.synthetic_measurement` with the settings below (all legs off, no
 current; voltages to an artificial star point; a 12-bit scope with 0.5 % noise; the Hall sensors on digital
 channels). Deterministic: a fixed noise seed. Provenance: ``src/bldclab/data/README.txt`` and
 ``docs/identify.md``.
@@ -21,7 +21,7 @@ import sys
 from pathlib import Path
 
 from bldclab import load
-from bldclab.identify import SAMPLE_FILE, synthetic_measurement, waveform_csv
+from bldclab.analysis.identify import SAMPLE_FILE, synthetic_measurement, waveform_csv
 
 DEFAULT_OUTPUT = Path(__file__).resolve().parents[1] / "src" / "bldclab" / "data" / SAMPLE_FILE
 
@@ -46,7 +46,7 @@ def render() -> str:
     comments = [
         f"Simulated constant-speed back-EMF test: bldclab drive '{DRIVE}' at {RPM:g} rpm (paper 2, Fig. 6), "
         "open circuit (all inverter legs off).",
-        "Made by tools/make_sample_waveform.py with bldclab.identify.synthetic_measurement: "
+        "Made by tools/make_sample_waveform.py with bldclab.analysis.identify.synthetic_measurement: "
         + ", ".join(f"{k} = {v:g}" for k, v in SETTINGS.items()) + ".",
         "Columns: t (s, sample centre); v_a, v_b, v_c (V): terminal voltages to an artificial star point, "
         "Gaussian noise and a 12-bit quantiser on a 1-2-5 scope range;",

@@ -1,13 +1,20 @@
-"""bldclab: simulate, analyse and control PM brushless DC motor drives."""
+"""bldclab: simulate, analyse and control PM brushless DC motor drives.
+
+The public names: ``import bldclab as bl`` then ``bl.load``, ``bl.simulate``, the drive and controller classes, and
+the modules ``bl.catalog`` (:mod:`bldclab.model.catalog`) and ``bl.experiments``
+(:mod:`bldclab.analysis.experiments`). The package is layered (base, model, binding, control,
+sim, analysis, sweep, report, cli); this module is the top, the only one that imports from all of them.
+"""
 
 from __future__ import annotations
 
-__version__ = "0.1.0"
-
-from .catalog import load
+from ._version import __version__
+from .analysis import experiments
 from .control import Control, Lu, OpenLoop, Sine, SixStep, SixStepVoltage
 from .errors import BldclabError
-from .motor import (
+from .model import catalog
+from .model.catalog import load
+from .model.motor import (
     BackEmf,
     Cogging,
     Drive,
@@ -20,8 +27,8 @@ from .motor import (
     Table,
     Trapezoid,
 )
-from .results import Metrics, SimResult
 from .sim import Fault, Scenario, simulate
+from .sim.results import Metrics, SimResult
 
 __all__ = [
     "BackEmf",
@@ -47,6 +54,8 @@ __all__ = [
     "Table",
     "Trapezoid",
     "__version__",
+    "catalog",
+    "experiments",
     "load",
     "simulate",
 ]

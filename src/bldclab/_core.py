@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._version import __version__
+
 __all__ = ["Controller", "Core", "core"]
 
 _BASE = {"f8": np.float64, "f4": np.float32, "i4": np.int32, "u4": np.uint32, "i8": np.int64, "u8": np.uint64,
@@ -185,8 +187,6 @@ class Core:
 @cache
 def core() -> Core:
     """Return the loaded core (loaded once per process)."""
-    from . import __version__
-
     c = Core(_library_path())
     if c.version != __version__:
         raise ImportError(f"bldclab core library is version {c.version}, the package {__version__}: reinstall")

@@ -32,7 +32,7 @@ class BldclabError(ValueError):
 
 
 class PlausibilityError(BldclabError):
-    """A simulation whose result would be physically meaningless (see :mod:`bldclab.plausibility`).
+    """A simulation whose result would be physically meaningless (see :mod:`bldclab.sim.plausibility`).
 
     ``field`` names the cause (``"inverter.f_pwm"``, ``"scenario.speed"``, ``"result.energy_balance"``, ...),
     ``problem`` the numbers and the threshold crossed.
@@ -40,7 +40,7 @@ class PlausibilityError(BldclabError):
 
 
 class PlausibilityWarning(UserWarning):
-    """A simulation that ran but whose result is questionable (see :mod:`bldclab.plausibility`).
+    """A simulation that ran but whose result is questionable (see :mod:`bldclab.sim.plausibility`).
 
     Issued through :mod:`warnings`; silence or escalate it with the usual filters, e.g.
     ``warnings.simplefilter("error", PlausibilityWarning)``.

@@ -12,7 +12,7 @@ from ..errors import BldclabError
 
 if TYPE_CHECKING:
     from .._core import Core
-    from ..motor import Drive
+    from ..model.motor import Drive
 
 __all__ = ["Control", "check_number"]
 

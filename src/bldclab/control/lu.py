@@ -16,15 +16,15 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 
-from ..analytic import r_total
-from ..design import max_bandwidth, pi_gains
 from ..errors import BldclabError
-from ..motor import TWO_PI
+from ..model.analytic import r_total
+from ..model.design import max_bandwidth, pi_gains
+from ..model.motor import TWO_PI
 from .base import Control, check_number
 
 if TYPE_CHECKING:
     from .._core import Core
-    from ..motor import Drive
+    from ..model.motor import Drive
 
 __all__ = ["Lu"]
 
@@ -79,9 +79,9 @@ class Lu(Control):
         An outgoing current at or below this is zero: the commutation is over (A); default ``0.01 I_N``.
     bandwidth_hz : float, optional
         ``rect``: crossover of the PI design for the line ``(2 (R + R_on), 2 L)`` with the loop delay
-        ``(delay + 1/2) T_s`` (:func:`bldclab.design.pi_gains`). Default: 1 kHz where a PI can give the margin
+        ``(delay + 1/2) T_s`` (:func:`bldclab.model.design.pi_gains`). Default: 1 kHz where a PI can give the margin
         there; where the drive's PWM makes the delay too long for that, the highest bandwidth at which the PI keeps
-        its zero a decade below the crossover (:func:`bldclab.design.max_bandwidth`; 745 Hz for ``servo-2k2``:
+        its zero a decade below the crossover (:func:`bldclab.model.design.max_bandwidth`; 745 Hz for ``servo-2k2``:
         51 mH at 8 kHz PWM). A bandwidth given here is used as it is (and refused if a PI cannot reach it).
     phase_margin_deg : float
         ``rect``: phase margin of that design.
@@ -140,7 +140,7 @@ class Lu(Control):
         Returns
         -------
         tuple of float
-            The given gains, else :func:`bldclab.design.pi_gains` at :meth:`bandwidth` and ``phase_margin_deg``.
+            The given gains, else :func:`bldclab.model.design.pi_gains` at :meth:`bandwidth` and ``phase_margin_deg``.
         """
         ts = 0.5 / drive.inverter.f_pwm
         kp, ki = pi_gains(2.0 * r_total(drive), 2.0 * drive.motor.L, self.bandwidth(drive), self.phase_margin_deg,
@@ -150,9 +150,10 @@ class Lu(Control):
     def bandwidth(self, drive: Drive) -> float:
         """Return ``rect``'s current-loop bandwidth (Hz): ``bandwidth_hz`` if given, else the default.
 
-        The default is :data:`DEFAULT_BANDWIDTH_HZ` if :func:`bldclab.design.pi_gains` can give ``phase_margin_deg``
+        The default is :data:`DEFAULT_BANDWIDTH_HZ` if :func:`bldclab.model.design.pi_gains` can give
+        ``phase_margin_deg``
         there for the line ``(2 (R + R_on), 2 L)`` with the loop delay ``(delay + 1/2) T_s``, else
-        :func:`bldclab.design.max_bandwidth` of that loop (lower: the delay of a slow PWM takes the phase).
+        :func:`bldclab.model.design.max_bandwidth` of that loop (lower: the delay of a slow PWM takes the phase).
 
         Parameters
         ----------

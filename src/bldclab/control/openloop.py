@@ -13,7 +13,7 @@ from .base import Control
 
 if TYPE_CHECKING:
     from .._core import Core
-    from ..motor import Drive
+    from ..model.motor import Drive
 
 __all__ = ["OpenLoop", "SixStepVoltage"]
 

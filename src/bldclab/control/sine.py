@@ -15,15 +15,15 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 
-from ..analytic import i_sN, r_total
-from ..design import pi_gains
 from ..errors import BldclabError
+from ..model.analytic import i_sN, r_total
+from ..model.design import pi_gains
 from .base import Control, check_number
 from .sixstep import SixStep
 
 if TYPE_CHECKING:
     from .._core import Core
-    from ..motor import Drive
+    from ..model.motor import Drive
 
 __all__ = ["Sine", "fundamental_k1"]
 
@@ -95,7 +95,7 @@ class Sine(Control):
         is slower than 10 kHz (the loop delay of 1.5 samples then costs 27 deg of phase margin at most). Given,
         it is used as is.
     phase_margin_deg : float
-        Current-loop phase margin (paper 1: 90 deg), :func:`bldclab.design.pi_gains` without delay.
+        Current-loop phase margin (paper 1: 90 deg), :func:`bldclab.model.design.pi_gains` without delay.
     R_design : float, optional
         Resistance (Ohm) the PI gains are designed for. Default: the drive's ``R + R_on``, but at least
         ``omega_c L / 10``: the 90-degree design cancels the R-L pole (``k_i = omega_c R``), so with a small R

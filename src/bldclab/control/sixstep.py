@@ -14,14 +14,14 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 
-from ..analytic import r_total
-from ..design import pi_gains
 from ..errors import BldclabError
+from ..model.analytic import r_total
+from ..model.design import pi_gains
 from .base import Control, check_number
 
 if TYPE_CHECKING:
     from .._core import Core
-    from ..motor import Drive
+    from ..model.motor import Drive
 
 __all__ = ["SixStep"]
 
@@ -43,7 +43,7 @@ class SixStep(Control):
     regulation : {"predictive", "pi", "hysteresis"}
         ``predictive``: the duty that brings the incoming phase's current to the reference at the sample after next,
         from an average model of the inverter and motor (full voltage when it cannot: paper 1's idealisation);
-        ``pi``: PI on the line current with back-EMF feed-forward, gains from :func:`bldclab.design.pi_gains` for
+        ``pi``: PI on the line current with back-EMF feed-forward, gains from :func:`bldclab.model.design.pi_gains` for
         the line ``2 R``, ``2 L``; ``hysteresis``: on below ``I - band/2``, off above ``I + band/2`` at the samples.
     chopping : {"pwm-on-pwm", "bipolar", "high", "sync"}
         ``pwm-on-pwm``: a phase chops in the first and last 30 degrees of its conduction and is fully on in the
@@ -128,7 +128,7 @@ class SixStep(Control):
         Returns
         -------
         tuple of float
-            ``k_p`` (V/A) and ``k_i`` (V/(A s)): the given ones, else :func:`bldclab.design.pi_gains`.
+            ``k_p`` (V/A) and ``k_i`` (V/(A s)): the given ones, else :func:`bldclab.model.design.pi_gains`.
         """
         kp, ki = pi_gains(2.0 * r_total(drive), 2.0 * drive.motor.L, self.bandwidth_hz, self.phase_margin_deg)
         return (kp if self.kp is None else float(self.kp)), (ki if self.ki is None else float(self.ki))

@@ -1,0 +1,325 @@
+"""Square-wave vs sinusoidal supply of one drive, by closed form and by switching-level simulation (paper 1).
+
+:func:`compare` runs both supplies at the same current limits on an imposed-speed grid (the paper's
+dynamometer), measures mean torque, ripple and efficiency over whole electrical periods, puts paper 1's closed
+forms beside them, and writes a short verdict per speed range.
+
+Square-wave supply: :class:`~bldclab.control.SixStep` regulating the injected current at ``I_N`` (the paper's
+premise, section II.B). Sinusoidal supply: :class:`~bldclab.control.Sine` asked for the nominal torque ``T_sN``
+(13); above its base speed it lowers the current so the modulation stays linear, (23)-(25). Both see the same DC
+bus and the same rms current ``sqrt(2/3) I_N`` below base speed, (7)-(8).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import sys
+import time
+import warnings
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..control import Control, Sine, SixStep
+from ..errors import BldclabError, PlausibilityWarning
+from ..model import analytic
+from ..model.motor import Drive
+from ..sim import plausibility as _plaus
+from .experiments import base_speed, steady_state
+
+__all__ = ["CompareResult", "base_speed_table", "compare", "default_controls", "speed_grid"]
+
+SUPPLIES = ("square", "sine")
+
+
+def default_controls(drive: Drive, lowest_speed_pu: float = 0.05) -> dict[str, tuple[Control, float]]:
+    """Return the two supplies as paper 1 compares them: controller and its reference.
+
+    The sinusoidal controller's hand-off from its square-wave start is set below the lowest speed compared (paper 1
+    hands off at 0.1 Omega_N because its Hall-based angle needs speed; at an imposed constant speed the angle is
+    accurate lower too), so every point measures the sinusoidal supply.
+
+    Returns
+    -------
+    dict
+        ``{"square": (SixStep(...), I_N [A]), "sine": (Sine(...), T_sN [N m])}``.
+    """
+    T_sN = analytic.t_sN(drive)
+    handoff = 0.5 * lowest_speed_pu * drive.Omega_0
+    return {"square": (SixStep(), drive.motor.I_N), "sine": (Sine(handoff_speed=handoff), T_sN)}
+
+
+def speed_grid(n: int, lo: float = 0.05, hi: float = 0.98) -> np.ndarray:
+    """Return ``n`` per-unit speeds from ``lo`` to ``hi``."""
+    if n < 2:
+        raise BldclabError("--speeds", f"needs at least 2 speeds, got {n}")
+    return np.linspace(lo, hi, n)
+
+
+def _run_point(args: tuple[Drive, str, Control, float, float, int]) -> dict[str, Any]:
+    drive, supply, control, ref, w_pu, pwm_phases = args
+    with _plaus.collect() as caught:  # recorded here, in the worker, and summarised once by compare()
+        point, _ = steady_state(drive, control, w_pu * drive.Omega_0, ref, pwm_phases=pwm_phases)
+    m = point.metrics
+    T_N = drive.T_N
+    row = {"supply": supply, "Omega_pu": w_pu, "Omega": point.speed, "T_pu": point.tau_mean_pu,
+           "TR_pu": point.ripple_sampled_pu, "TR_inst_pu": point.ripple_pu, "TR_ma_pu": point.ripple_ma_pu,
+           "T": point.tau_mean, "TR": point.ripple_sampled, "tau_std_pu": m.tau_std / T_N,
+           "eta": point.efficiency,
+           "p_src": m.p_src, "p_cu": m.p_cu, "p_inv": m.p_sw + m.p_diode + m.p_Rsrc, "i_rms": float(np.mean(m.i_rms)),
+           "i_peak": float(max(m.i_peak)), "balance": m.balance_electrical,
+           "_warnings": [f"{supply} at {w_pu:.3g} p.u.: {text}" for text in caught]}
+    if pwm_phases > 1:
+        for key, rng in (("T_pu", point.tau_mean_range), ("TR_pu", point.ripple_sampled_range),
+                         ("TR_ma_pu", point.ripple_ma_range)):
+            row[f"{key}_min"], row[f"{key}_max"] = rng[0] / T_N, rng[1] / T_N
+    # the paper-comparable point: the same drive and controller on the averaged inverter (no PWM ripple, paper 1's
+    # ideal current limiter idealised as far as a sampled controller goes), its exact instantaneous extremes
+    if drive.inverter.model == "average":
+        avg = point
+    else:
+        drive_avg = dataclasses.replace(drive, inverter=dataclasses.replace(drive.inverter, model="average"))
+        with _plaus.collect() as caught_avg:
+            avg, _ = steady_state(drive_avg, control, w_pu * drive.Omega_0, ref)
+        # the same operating point: only what the switching run did not already say
+        row["_warnings"] += [f"{supply} at {w_pu:.3g} p.u., averaged inverter: {text}" for text in caught_avg
+                             if text not in caught]
+    row["T_avg_pu"], row["TR_avg_pu"] = avg.tau_mean_pu, avg.ripple_pu
+    return row
+
+
+def _run_base_speed(args: tuple[Drive, str]) -> float:
+    drive, supply = args
+    try:
+        return base_speed(drive, supply)
+    except BldclabError:
+        return float("nan")  # the condition fails down to 0.05 p.u.: no base speed in the searched range
+
+
+def base_speed_table(drive: Drive, simulated: dict[str, float], table1: Any) -> pd.DataFrame:
+    """Return the base speeds side by side: closed form (R = 0), numeric with R, simulated (p.u. of Omega_0).
+
+    Parameters
+    ----------
+    drive : Drive
+    simulated : dict
+        ``{"square": ..., "sine": ...}`` from :func:`bldclab.analysis.experiments.base_speed`.
+    table1 : analytic.Table1
+        The drive's Table I (:func:`bldclab.model.analytic.table1`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``supply``, ``closed_form_pu`` ((21) sinusoidal, (30) square wave), ``equation``, ``numeric_R_pu``
+        (:func:`bldclab.model.analytic.omega_sB_numeric_pu` / :func:`~bldclab.model.analytic.omega_qB_numeric_pu`),
+        ``simulated_pu`` and ``simulated_rpm`` (nan where the search found none).
+    """
+    rows = []
+    for supply, eq, cf, num in (("sine", "(21)", table1.Omega_sB_pu, table1.Omega_sB_R_pu),
+                                ("square", "(30)", table1.Omega_qB_pu, table1.Omega_qB_R_pu)):
+        w = simulated[supply]
+        rows.append({"supply": supply, "equation": eq, "closed_form_pu": cf, "numeric_R_pu": num,
+                     "simulated_pu": w, "simulated_rpm": w * drive.Omega_0 * 60.0 / (2.0 * np.pi)})
+    return pd.DataFrame(rows)
+
+
+@dataclass
+class CompareResult:
+    """Outcome of :func:`compare`.
+
+    Attributes
+    ----------
+    drive : Drive
+    simulated : pandas.DataFrame
+        One row per supply and speed: per-unit and SI mean torque; ripple of the switching drive at the controller
+        samples ``TR``, instantaneous (exact extremes, with PWM) ``TR_inst`` and of its continuous one-PWM-period
+        average ``TR_ma``; the same point on the averaged inverter, ``T_avg_pu`` and ``TR_avg_pu`` (exact extremes,
+        no PWM: the ripple paper 1's closed forms describe, and the one the verdict compares); efficiency; powers;
+        currents; energy-balance residue.
+    analytic : pandas.DataFrame
+        Paper 1's closed forms on the same speeds (:func:`bldclab.model.analytic.characteristic`).
+    table1 : analytic.Table1
+        Paper 1's Table I for the drive (with the R-aware numeric base speeds).
+    base_speeds : pandas.DataFrame or None
+        :func:`base_speed_table`: (21)/(30), the numeric values with R and the simulated base speeds
+        (:func:`bldclab.analysis.experiments.base_speed`); None if not asked for.
+    pwm_phases : int
+        PWM-grid phases per point (:func:`bldclab.analysis.experiments.steady_state`); with more than one,
+        ``simulated`` has
+        ``T_pu_min``, ``T_pu_max``, ``TR_pu_min``, ``TR_pu_max``, ``TR_ma_pu_min``, ``TR_ma_pu_max`` too.
+    verdict : list of str
+        Where each supply wins and by how much; notes where the ripple at the samples misses part of the
+        commutation (``TR_ma_pu`` above ``TR_pu`` by more than :data:`SAMPLING_GAP_PU` and 20 %); the base speeds.
+    seconds : float
+        Wall time of the simulations.
+    warnings : list of str
+        Plausibility warnings of the runs (:mod:`bldclab.sim.plausibility`), each prefixed by its supply and speed;
+        :func:`compare` issues one :class:`~bldclab.errors.PlausibilityWarning` summarising them.
+    not_applicable : list of str
+        Why paper 1's closed forms (the ``analytic`` columns) do not describe this drive
+        (:func:`bldclab.model.analytic.applicability`); empty where their premises hold.
+    """
+
+    drive: Drive
+    simulated: pd.DataFrame
+    analytic: pd.DataFrame
+    table1: Any
+    base_speeds: pd.DataFrame | None = None
+    pwm_phases: int = 1
+    verdict: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+    warnings: list[str] = field(default_factory=list)
+    not_applicable: list[str] = field(default_factory=list)
+
+
+def _progress(total: int, enabled: bool) -> Callable[[int], None]:
+    start = time.perf_counter()
+    if not enabled:
+        return lambda done: None
+
+    def show(done: int) -> None:
+        el = time.perf_counter() - start
+        eta = el / done * (total - done) if done else float("nan")
+        bar = "#" * int(30 * done / total)
+        sys.stderr.write(f"\r  simulating [{bar:<30}] {done}/{total}  {el:5.1f} s  eta {eta:4.1f} s")
+        if done == total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+    return show
+
+
+def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls: dict[str, tuple[Control, float]]
+            | None = None, workers: int | None = None, progress: bool = False, pwm_phases: int = 1,
+            base_speeds: bool = True) -> CompareResult:
+    """Compare square-wave and sinusoidal supply of a drive over speed.
+
+    Parameters
+    ----------
+    drive : Drive
+    speeds_pu : sequence of float, optional
+        Per-unit speeds (of ``Omega_0``); default 32 speeds from 0.05 to 0.98.
+    controls : dict, optional
+        ``{"square": (control, ref), "sine": (control, ref)}``; default :func:`default_controls`.
+    workers : int, optional
+        Processes; default all cores (1: in this process).
+    progress : bool
+        Show a progress bar on stderr.
+    pwm_phases : int
+        PWM-grid phases per point (>= 1): each point is the mean over that many offsets of the rotor's initial
+        angle within one PWM period's travel, with its range (:func:`bldclab.analysis.experiments.steady_state`).
+    base_speeds : bool
+        Also search the simulated base speed of each supply (:func:`bldclab.analysis.experiments.base_speed`, with the
+        default controllers of paper 1's definitions).
+
+    Returns
+    -------
+    CompareResult
+    """
+    w = np.asarray(speed_grid(32) if speeds_pu is None else speeds_pu, dtype=float)
+    if w.ndim != 1 or not np.all(np.isfinite(w)) or np.any(w <= 0):
+        raise BldclabError("speeds", "per-unit speeds must be positive and finite")
+    if not isinstance(pwm_phases, int) or isinstance(pwm_phases, bool) or pwm_phases < 1:
+        raise BldclabError("pwm_phases", f"must be an integer >= 1, got {pwm_phases!r}")
+    controls = controls or default_controls(drive, float(np.min(w)))
+    jobs = [(drive, s, controls[s][0], controls[s][1], float(x), pwm_phases) for s in SUPPLIES for x in w]
+    bs_jobs = [(drive, s) for s in SUPPLIES] if base_speeds else []
+    show = _progress(len(jobs), progress)
+    t0 = time.perf_counter()
+    rows: list[dict[str, Any]] = []
+    bs: list[float] = []
+    n_workers = workers or os.cpu_count() or 1
+    if n_workers <= 1:
+        for j, job in enumerate(jobs):
+            rows.append(_run_point(job))
+            show(j + 1)
+        bs = [_run_base_speed(job) for job in bs_jobs]
+    else:
+        with ProcessPoolExecutor(max_workers=n_workers) as pool:
+            bs_futures = [pool.submit(_run_base_speed, job) for job in bs_jobs]  # the longest jobs first
+            for j, row in enumerate(pool.map(_run_point, jobs, chunksize=max(1, len(jobs) // (4 * n_workers)))):
+                rows.append(row)
+                show(j + 1)
+            bs = [f.result() for f in bs_futures]
+    seconds = time.perf_counter() - t0
+    caught = [text for row in rows for text in row.pop("_warnings")]
+    sim = pd.DataFrame(rows)
+    an = analytic.characteristic(drive, w)
+    t1 = analytic.table1(drive)
+    bst = base_speed_table(drive, dict(zip(SUPPLIES, bs, strict=True)), t1) if base_speeds else None
+    res = CompareResult(drive=drive, simulated=sim, analytic=an, table1=t1, base_speeds=bst,
+                        pwm_phases=pwm_phases, seconds=seconds)
+    res.verdict = _verdict(sim) + _sampling_notes(sim) + (_base_speed_verdict(bst) if bst is not None else [])
+    res.warnings = caught
+    res.not_applicable = analytic.applicability(drive)
+    line = _plaus.summary(caught, len(jobs))
+    if line:
+        warnings.warn(line, PlausibilityWarning, stacklevel=2)
+    return res
+
+
+#: A point's ripple at the samples is flagged as missing part of the commutation when the continuous one-PWM-period
+#: average's ripple exceeds it by more than this (p.u. of T_N) and by more than 20 %.
+SAMPLING_GAP_PU = 0.02
+
+
+def _sampling_notes(sim: pd.DataFrame) -> list[str]:
+    names = {"sine": "sinusoidal", "square": "square-wave"}
+    lines = []
+    for supply in SUPPLIES:
+        s = sim[sim.supply == supply].sort_values("Omega_pu")
+        gap = (s.TR_ma_pu - s.TR_pu).to_numpy()
+        mask = (gap > SAMPLING_GAP_PU) & (s.TR_ma_pu.to_numpy() > 1.2 * s.TR_pu.to_numpy())
+        w = s.Omega_pu.to_numpy()
+        for lo, hi in _ranges(mask, w):
+            sel = (w >= lo) & (w <= hi)
+            lines.append(f"note, {names[supply]}: for Omega in [{lo:.2f}, {hi:.2f}] p.u. the commutation falls between "
+                         f"controller samples: the torque ripple at the samples (TR) is below the continuous "
+                         f"one-PWM-period average's (TR_ma) by up to {float(np.max(gap[sel])):.3f} p.u.")
+    return lines
+
+
+def _base_speed_verdict(bst: pd.DataFrame) -> list[str]:
+    names = {"sine": "sinusoidal", "square": "square-wave"}
+    return [f"base speed, {names[r.supply]}: {r.simulated_pu:.3f} p.u. simulated, {r.numeric_R_pu:.3f} numeric with "
+            f"R, {r.closed_form_pu:.3f} by {r.equation} (R neglected)" for r in bst.itertuples()]
+
+
+def _ranges(mask: np.ndarray, w: np.ndarray) -> list[tuple[float, float]]:
+    out, start = [], None
+    for j, flag in enumerate(mask):
+        if flag and start is None:
+            start = j
+        if (not flag or j == len(mask) - 1) and start is not None:
+            end = j if flag else j - 1
+            out.append((float(w[start]), float(w[end])))
+            start = None
+    return out
+
+
+def _verdict(sim: pd.DataFrame) -> list[str]:
+    sq = sim[sim.supply == "square"].sort_values("Omega_pu").reset_index(drop=True)
+    si = sim[sim.supply == "sine"].sort_values("Omega_pu").reset_index(drop=True)
+    w = sq["Omega_pu"].to_numpy()
+    lines = []
+    for key, name, better_high in (("T_pu", "mean torque", True),
+                                   ("TR_avg_pu", "torque ripple (averaged inverter)", False),
+                                   ("eta", "efficiency", True)):
+        a, b = si[key].to_numpy(), sq[key].to_numpy()
+        sine_wins = a > b if better_high else a < b
+        for lo, hi in _ranges(sine_wins, w):
+            sel = (w >= lo) & (w <= hi)
+            gain = np.mean(np.abs(a[sel] - b[sel]))
+            lines.append(f"{name}: sinusoidal better for Omega in [{lo:.2f}, {hi:.2f}] p.u. "
+                         f"(by {gain:.3f} on average)")
+        for lo, hi in _ranges(~sine_wins, w):
+            sel = (w >= lo) & (w <= hi)
+            gain = np.mean(np.abs(a[sel] - b[sel]))
+            lines.append(f"{name}: square-wave better for Omega in [{lo:.2f}, {hi:.2f}] p.u. "
+                         f"(by {gain:.3f} on average)")
+    return lines

@@ -1,0 +1,163 @@
+"""Command-line interface: ``bldclab <command> [options]``.
+
+Every subcommand is a :class:`Command`: a name, a one-line help, a function that declares its arguments
+and a function that runs it and returns the exit code. They are registered in :data:`COMMANDS`, the one place
+to add a new one. :func:`main` owns the error handling for all of them: a bad argument or a
+:class:`BldclabError` prints one line ``bldclab: error: <message>`` on stderr and exits with status 2, without
+a traceback.
+
+Files are written atomically (a temporary file in the target directory, then :func:`os.replace`), after every
+result has been computed, so an error leaves no half-written output.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os  # noqa: F401  (bldclab.cli.os: the tests fail os.replace through it)
+import sys
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from .._files import write_files
+from .._version import __version__
+from ..analysis.paper1 import table1_text
+from ..errors import BldclabError, PlausibilityWarning
+from . import analyze, compare, faults, identify, report, simulate, sweep, torque_control
+
+__all__ = ["COMMANDS", "Command", "build_parser", "main", "table1_text", "write_files"]
+
+PROG = "bldclab"
+
+
+class _UsageError(Exception):
+    """A command-line argument is wrong (raised instead of argparse's print-usage-and-exit)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """Argument parser that raises :class:`_UsageError` instead of printing the usage and exiting."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        """Raise the parsing error for :func:`main` to report on one line."""
+        raise _UsageError(message)
+
+
+@dataclass(frozen=True)
+class Command:
+    """One subcommand.
+
+    Parameters
+    ----------
+    name : str
+        What the user types after ``bldclab``.
+    help : str
+        One line for ``bldclab --help``.
+    configure : callable
+        ``configure(parser)`` adds the subcommand's arguments to its parser.
+    run : callable
+        ``run(args) -> int`` does the work and returns the exit status.
+
+    """
+
+    name: str
+    help: str
+    configure: Callable[[argparse.ArgumentParser], None]
+    run: Callable[[argparse.Namespace], int]
+
+
+# ------------------------------------------------------------------------------------------------------------
+# shared helpers
+
+
+# ------------------------------------------------------------------------------------------------------------
+# analyze
+
+
+# ------------------------------------------------------------------------------------------------------------
+# registry and entry point
+
+#: The subcommands, in the order ``bldclab --help`` lists them. Add new ones here.
+COMMANDS: tuple[Command, ...] = (
+    Command("analyze", "paper 1 closed forms for a motor: Table I, characteristics, Figs 7-8",
+            analyze.configure_command, analyze.run_command),
+    Command("sweep", "run many simulations (grid or list of cases) on processes or Dask into a resumable store",
+            sweep.configure_command, sweep.run_command),
+    Command("identify", "back-EMF tables from a constant-speed waveform (paper 2)",
+            identify.configure_command, identify.run_command),
+    Command("simulate", "one switching-level simulation: square, sine, sixv, lu, lu-no-do or rect control",
+            simulate.configure_command, simulate.run_command),
+    Command("compare", "square-wave vs sinusoidal supply: closed forms and simulation over speed (paper 1)",
+            compare.configure_command, compare.run_command),
+    Command("torque-control", "paper 2's torque control vs its baselines over a load x speed grid",
+            torque_control.configure_command, torque_control.run_command),
+    Command("faults", "inject sensor, bus and phase faults: detection, time to safe state, peak current",
+            faults.configure_command, faults.run_command),
+    Command("report", "one self-contained HTML report of a comparison (a results directory, or a motor to run)",
+            report.configure_command, report.run_command),
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Build the argument parser with every subcommand of :data:`COMMANDS`.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+
+    """
+    parser = _Parser(prog=PROG, description="Simulate, analyse and control PM brushless DC motor drives.")
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for cmd in COMMANDS:
+        p = sub.add_parser(cmd.name, help=cmd.help, description=cmd.help)
+        cmd.configure(p)
+        p.set_defaults(run=cmd.run)
+    return parser
+
+
+def _one_line(text: str) -> str:
+    """Collapse a message onto one line."""
+    return " ".join(str(text).split())
+
+
+def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                  file: object = None, line: str | None = None) -> None:
+    """Show a plausibility warning as one line ``bldclab: warning: <message>`` on stderr; others as usual."""
+    if issubclass(category, PlausibilityWarning):
+        sys.stderr.write(f"{PROG}: warning: {_one_line(str(message))}\n")
+    else:
+        sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        Arguments without the program name; default ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        Exit status: 0 on success, 2 for a bad argument or bad input (one line on stderr), including a simulation
+        whose result would be physically meaningless (:class:`~bldclab.errors.PlausibilityError`), 130 if
+        interrupted. Plausibility warnings go to stderr, one line each.
+
+    """
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", PlausibilityWarning)
+            warnings.showwarning = _show_warning
+            return int(args.run(args))
+    except SystemExit as exc:  # --help, --version
+        return exc.code if isinstance(exc.code, int) else 0  # argparse exits 0 after printing help
+    except (_UsageError, BldclabError) as exc:
+        sys.stderr.write(f"{PROG}: error: {_one_line(str(exc))}\n")
+        return 2
+    except KeyboardInterrupt:
+        sys.stderr.write(f"{PROG}: interrupted\n")
+        return 130
+

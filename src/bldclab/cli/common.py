@@ -1,0 +1,66 @@
+"""Helpers shared by the simulating commands.
+
+The drive from MOTOR and ``--inverter``, controllers by their CLI names, speeds with units, warnings summarised.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import warnings
+
+from ..control import Control, Lu, Sine, SixStep, SixStepVoltage
+from ..errors import BldclabError, PlausibilityWarning
+from ..model import analytic
+from ..model.catalog import load
+from ..model.motor import Drive, Inverter
+from ..model.units import to_si
+from ..sim import plausibility as _plaus
+
+__all__ = ["CONTROLS", "add_inverter_option", "control_of", "load_drive", "parse_speed", "summarise"]
+
+
+CONTROLS = ("square", "sine", "sixv", "lu", "lu-no-do", "rect")
+
+
+def parse_speed(text: str, drive: Drive) -> float:
+    """Read a speed: ``"0.5 pu"`` (of ``Omega_0``), ``"300 rpm"``, ``"31.4 rad/s"`` or a number in rad/s."""
+    m = re.fullmatch(r"\s*([-+]?[\d.]+(?:[eE][-+]?\d+)?)\s*pu\s*", text)
+    if m:
+        return float(m.group(1)) * drive.Omega_0
+    return to_si(text, "speed", "--speed")
+
+
+def control_of(name: str, drive: Drive, handoff: float | None = None) -> tuple[Control, float, str]:
+    """Return the controller for a --control name, its default reference and what the reference means."""
+    if name == "square":
+        return SixStep(), drive.motor.I_N, "A"
+    if name == "sine":
+        ctl = Sine() if handoff is None else Sine(handoff_speed=handoff)
+        return ctl, analytic.t_sN(drive), "N m"
+    if name == "sixv":
+        return SixStepVoltage("high"), 0.5, "duty"
+    if name in ("lu", "lu-no-do", "rect"):
+        return Lu(method=name), drive.T_N, "N m"
+    raise BldclabError("--control", f"must be one of {', '.join(CONTROLS)}, got {name!r}")
+
+
+def add_inverter_option(p: argparse.ArgumentParser) -> None:
+    """Add ``--inverter switching|average`` (overrides the motor file's ``[inverter] model``)."""
+    p.add_argument("--inverter", choices=Inverter.MODELS,
+                   help="inverter model: switching (every gate edge) or average (half-period averages, faster, "
+                        "no PWM ripple); default: the motor file's [inverter] model")
+
+
+def load_drive(args: argparse.Namespace) -> Drive:
+    """Load ``args.motor`` with ``--inverter`` applied."""
+    drive = load(args.motor)
+    return drive if args.inverter is None else drive.replace(inverter__model=args.inverter)
+
+
+def summarise(caught: list[str], runs: int) -> None:
+    """Issue one plausibility warning for the many an experiment collected (count and first message)."""
+    line = _plaus.summary(caught, runs)
+    if line:
+        warnings.warn(line, PlausibilityWarning, stacklevel=2)
+

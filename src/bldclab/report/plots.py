@@ -1,0 +1,230 @@
+"""Figures of paper 1's analysis: torque-speed (Fig 7) and ripple-speed (Fig 8) characteristics.
+
+Figures are made with :class:`matplotlib.figure.Figure` directly, never through ``pyplot`` state, so library
+code opens no window and works with any backend (saving to PNG or SVG needs none). Each function draws into a
+given ``Axes`` or a new figure and returns ``(figure, axes)``.
+
+Simulated or measured points go on top of the analytic curves through ``overlays``: a mapping from a label to
+a ``DataFrame`` with an ``Omega_pu`` column and any of the characteristic's columns (``T_s_pu``, ``T_q_pu``
+for Fig 7, ``TR_s_pu``, ``TR_q_pu`` for Fig 8); missing columns are skipped.
+"""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pandas as pd
+
+from ..errors import BldclabError
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+__all__ = ["figure_bytes", "plot_efficiency", "plot_ripple", "plot_torque_speed"]
+
+#: Marker style per supply, as in paper 1: x for sinusoidal, o for real square-wave.
+_STYLE = {
+    "s": {"marker": "x", "color": "tab:blue", "label": "sinusoidal supply"},
+    "q": {"marker": "o", "color": "tab:red", "label": "real square-wave supply"},
+}
+_OVERLAY_MARKERS = ("s", "^", "D", "v", "P", "*")
+_MAX_MARKS = 30
+
+
+def _axes(ax: Axes | None) -> tuple[Figure, Axes]:
+    """Return the figure and axes to draw into: those of ``ax``, or a new 6.4 x 4.4 in figure."""
+    from matplotlib.figure import Figure  # deferred: matplotlib loads when a figure is drawn, not with the CLI
+
+    if ax is not None:
+        fig = ax.figure
+        if not isinstance(fig, Figure):  # a SubFigure: hand back its root figure
+            fig = fig.figure
+        if not isinstance(fig, Figure):
+            raise BldclabError("ax", "is not attached to a matplotlib Figure")
+        return fig, ax
+    fig = Figure(figsize=(6.4, 4.4), layout="constrained")
+    return fig, fig.add_subplot()
+
+
+def _check(df: pd.DataFrame, columns: tuple[str, ...], what: str) -> None:
+    """Raise a :class:`BldclabError` naming the first missing column."""
+    for c in ("Omega_pu", *columns):
+        if c not in df.columns:
+            raise BldclabError(f"{what}: column {c}", "is missing")
+
+
+def _curve(ax: Axes, df: pd.DataFrame, column: str, supply: str) -> None:
+    """Draw one analytic curve: a line with the supply's markers at most ``_MAX_MARKS`` times."""
+    style = _STYLE[supply]
+    x = df["Omega_pu"].to_numpy(dtype=float)
+    y = df[column].to_numpy(dtype=float)
+    order = np.argsort(x)
+    every = max(1, int(np.ceil(x.size / _MAX_MARKS)))
+    ax.plot(x[order], y[order], marker=style["marker"], markevery=every, color=style["color"],
+            label=style["label"], linewidth=1.2, markersize=6, fillstyle="none")
+
+
+def _overlay(ax: Axes, overlays: Mapping[str, pd.DataFrame] | None, columns: dict[str, str]) -> None:
+    """Draw the extra point sets: one marker shape per label, the supply's colour per column."""
+    if not overlays:
+        return
+    for j, (label, odf) in enumerate(overlays.items()):
+        if "Omega_pu" not in odf.columns:
+            raise BldclabError(f"overlay {label!r}: column Omega_pu", "is missing")
+        marker = _OVERLAY_MARKERS[j % len(_OVERLAY_MARKERS)]
+        for column, supply in columns.items():
+            if column in odf.columns:
+                ax.plot(odf["Omega_pu"].to_numpy(dtype=float), odf[column].to_numpy(dtype=float),
+                        linestyle="none", marker=marker, color=_STYLE[supply]["color"], markersize=7,
+                        label=f"{label}: {_STYLE[supply]['label']}")
+
+
+def _finish(ax: Axes, ylabel: str, title: str | None) -> None:
+    ax.set_xlabel(r"speed $\Omega_{pu}$ (per unit of $\Omega_0$)")
+    ax.set_ylabel(ylabel)
+    ax.set_xlim(0.0, 1.0)
+    ax.set_ylim(bottom=0.0)
+    ax.grid(True, alpha=0.4)
+    ax.legend(loc="best", fontsize="small")
+    if title:
+        ax.set_title(title)
+
+
+def plot_torque_speed(df: pd.DataFrame, ax: Axes | None = None, *,
+                      overlays: Mapping[str, pd.DataFrame] | None = None, blac: bool = True,
+                      title: str | None = "Torque-speed characteristic (paper 1 Fig. 7)"
+                      ) -> tuple[Figure, Axes]:
+    """Plot the per-unit torque against speed for both supplies, paper 1 Fig. 7.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Output of :func:`bldclab.model.analytic.characteristic`: columns ``Omega_pu``, ``T_s_pu``, ``T_q_pu`` and,
+        with ``blac``, ``T_blac_pu``.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new figure if omitted.
+    overlays : mapping of str to pandas.DataFrame, optional
+        Extra points (e.g. simulations) by label, with ``Omega_pu`` and ``T_s_pu`` and/or ``T_q_pu``.
+    blac : bool
+        Also draw the equivalent PM BLAC motor (paper 1 section IV.B).
+    title : str or None
+        Axes title.
+
+    Returns
+    -------
+    tuple of (matplotlib.figure.Figure, matplotlib.axes.Axes)
+
+    Raises
+    ------
+    BldclabError
+        If a needed column is missing.
+
+    """
+    _check(df, ("T_s_pu", "T_q_pu", *(("T_blac_pu",) if blac else ())), "characteristic")
+    fig, ax = _axes(ax)
+    _curve(ax, df, "T_s_pu", "s")
+    _curve(ax, df, "T_q_pu", "q")
+    if blac:
+        order = np.argsort(df["Omega_pu"].to_numpy(dtype=float))
+        ax.plot(df["Omega_pu"].to_numpy(dtype=float)[order], df["T_blac_pu"].to_numpy(dtype=float)[order],
+                color="tab:gray", linestyle="--", linewidth=1.2, label="equivalent PM BLAC motor")
+    _overlay(ax, overlays, {"T_s_pu": "s", "T_q_pu": "q"})
+    _finish(ax, r"torque $T_{pu}$ (per unit of $T_N$)", title)
+    return fig, ax
+
+
+def plot_ripple(df: pd.DataFrame, ax: Axes | None = None, *,
+                overlays: Mapping[str, pd.DataFrame] | None = None,
+                title: str | None = "Torque ripple (paper 1 Fig. 8)") -> tuple[Figure, Axes]:
+    """Plot the per-unit peak-to-peak torque ripple against speed for both supplies, paper 1 Fig. 8.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Output of :func:`bldclab.model.analytic.characteristic`: columns ``Omega_pu``, ``TR_s_pu``, ``TR_q_pu``.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new figure if omitted.
+    overlays : mapping of str to pandas.DataFrame, optional
+        Extra points (e.g. simulations) by label, with ``Omega_pu`` and ``TR_s_pu`` and/or ``TR_q_pu``.
+    title : str or None
+        Axes title.
+
+    Returns
+    -------
+    tuple of (matplotlib.figure.Figure, matplotlib.axes.Axes)
+
+    Raises
+    ------
+    BldclabError
+        If a needed column is missing.
+
+    """
+    _check(df, ("TR_s_pu", "TR_q_pu"), "characteristic")
+    fig, ax = _axes(ax)
+    _curve(ax, df, "TR_s_pu", "s")
+    _curve(ax, df, "TR_q_pu", "q")
+    _overlay(ax, overlays, {"TR_s_pu": "s", "TR_q_pu": "q"})
+    _finish(ax, r"torque ripple $TR_{pu}$ (per unit of $T_N$)", title)
+    return fig, ax
+
+
+def plot_efficiency(df: pd.DataFrame, simulated: Mapping[str, pd.DataFrame] | None = None, ax: Axes | None = None, *,
+                    title: str | None = "Efficiency") -> tuple[Figure, Axes]:
+    """Plot efficiency against speed: paper 1's (38)/(39) and simulated points (shaft power over DC power).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Output of :func:`bldclab.model.analytic.characteristic`: columns ``Omega_pu``, ``eta_s``, ``eta_q``.
+    simulated : mapping of str to pandas.DataFrame, optional
+        Simulated points by supply label (``"sinusoidal"``, ``"square-wave"``), with ``Omega_pu`` and ``eta``.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new figure if omitted.
+    title : str or None
+        Axes title.
+
+    Returns
+    -------
+    tuple of (matplotlib.figure.Figure, matplotlib.axes.Axes)
+    """
+    _check(df, ("eta_s", "eta_q"), "characteristic")
+    fig, ax = _axes(ax)
+    _curve(ax, df, "eta_s", "s")
+    _curve(ax, df, "eta_q", "q")
+    for j, (label, d) in enumerate((simulated or {}).items()):
+        if "eta" not in d.columns:
+            raise BldclabError(f"simulated {label}: column eta", "is missing")
+        supply = "s" if label.startswith("sin") else "q"
+        ax.plot(d["Omega_pu"].to_numpy(dtype=float), d["eta"].to_numpy(dtype=float), linestyle="none",
+                marker=_OVERLAY_MARKERS[j % len(_OVERLAY_MARKERS)], markerfacecolor="none",
+                color=_STYLE[supply]["color"], label=f"simulated, {label}")
+    _finish(ax, "efficiency (shaft / DC power)", title)
+    ax.set_ylim(bottom=0.0, top=1.0)
+    return fig, ax
+
+
+def figure_bytes(fig: Figure, fmt: str, *, dpi: int = 120, dated: bool = True) -> bytes:
+    """Render a matplotlib figure to PNG or SVG bytes.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    fmt : str
+        ``"png"`` or ``"svg"``.
+    dpi : int
+        Resolution of the PNG (dots per inch).
+    dated : bool
+        Keep matplotlib's creation date in an SVG; ``False`` leaves it out, so reruns give equal files.
+
+    Returns
+    -------
+    bytes
+    """
+    buf = io.BytesIO()
+    meta = {} if dated or fmt != "svg" else {"Date": None}
+    fig.savefig(buf, format=fmt, dpi=dpi, metadata=meta)
+    return buf.getvalue()

@@ -1,0 +1,422 @@
+"""Plausibility guards: checks that a simulation's result is physically meaningful.
+
+:func:`bldclab.simulate` runs these checks before the run (drive, scenario, reference) and after it (the result).
+Each check is a pure function returning :class:`Finding` objects; :func:`apply` turns them into
+:class:`~bldclab.errors.PlausibilityWarning` warnings (the run is questionable) or a
+:class:`~bldclab.errors.PlausibilityError` (the result would be physically meaningless). Every message names the
+cause, the number and the threshold.
+
+Thresholds and why (``T_pwm = 1 / f_pwm``, ``tau_el = L / R``, ``f_e = p |Omega| / (2 pi)``):
+
+* PWM period vs electrical time constant, ``T_pwm / tau_el``: every current controller here (and the paper-1 and
+  paper-2 analyses) treats the current as its PWM-period average plus a small ripple, which needs the current to
+  change almost linearly within a period, ``T_pwm << tau_el``. Warning above 1 (the current settles within a
+  period: a chain of exponentials, not an average with ripple); error above 10 (it settles ten times over: the
+  PWM no longer sets a current at all). The catalog drives are at 0.004 to 0.05.
+* PWM periods per electrical period, ``f_pwm / f_e``: the controller samples twice per PWM period and applies its
+  output one sample later, a lag of ``pi f_e / f_pwm`` electrical radians. Warning below 12 (a lag above
+  15 degrees, fewer than four samples per 60-degree commutation sector); error below 3 (fewer than one sample per
+  sector: whole commutation steps are missed).
+* Imposed speed vs the no-load speed ``Omega_0 = V_dc / (2 k_phi)`` (at the highest bus voltage of the run): above
+  it the line back-EMF peak exceeds the bus, the diodes conduct and no controller here (none weakens the field)
+  can drive motoring current: warning above ``Omega_0``; error above ``10 Omega_0``, beyond the constant-power
+  speed range of any practical permanent-magnet drive (3 to 5, rarely 10). (With a sinusoidal back-EMF, six-step
+  voltage, whose fundamental is ``2 sqrt(3) / pi = 1.10`` times the bus, can still motor up to ``1.10 Omega_0``:
+  there the warning flags a regime outside the paper-1 comparison rather than a wrong result.)
+* Reference vs the drive's limit: the controller's over-current trip ``i_max`` (its default is a multiple of
+  ``I_N``), for a torque reference also the motor's ``T_peak`` if larger: warning above the limit (the reference
+  cannot be reached without tripping; a reference above the continuous rating ``I_N`` alone is a legitimate short
+  test and is not flagged); error above 10 times the limit.
+* Energy balance ``Metrics.balance_electrical`` (and ``balance_mechanical`` with rotor dynamics): the plant closes
+  it to 1e-9 to 1e-7 on the catalog drives; the residue grows with the electrical frequency per integration step
+  (about as ``(omega_e h)^4``), the largest measured on a legitimate run being 4.6e-5 (sinusoidal supply at
+  0.995 ``Omega_0`` of a drive with 28 PWM periods per electrical period). Warning above 1e-4 (the energy
+  bookkeeping is off by more than 0.01 %); error above 1e-2 (efficiencies wrong by a percent, the size of the
+  differences the comparisons resolve: the integration did not resolve the run).
+* Non-finite metrics, states or traced currents/torques/speeds: error.
+* Currents after the inverter's hardware trip ``Inverter.i_trip`` (all legs off): they can only decay unless the
+  back-EMF drives them through the diodes. Warning above 1.01 ``i_trip``; error above 2 ``i_trip`` (beyond the
+  level the trip protects the switches at: a real inverter would fail). Without a hardware trip: error above
+  100 ``I_N`` (ten thousand times the rated copper loss).
+* Steady state of the metric window with rotor dynamics: the relative speed change across the window,
+  ``|dW_kin| / (J Omega_mean^2)``, above 1 %, or the mean torques of the window's two halves differing by more
+  than 5 % of ``max(|tau_mean|, 0.1 T_N)``: warning (the window still holds a run-up).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+
+from ..errors import PlausibilityError, PlausibilityWarning
+
+if TYPE_CHECKING:
+    from ..control import Control
+    from ..model.motor import Drive
+    from .results import SimResult
+
+__all__ = ["BALANCE_ERROR", "BALANCE_WARN", "CHECK_MODES", "Finding", "apply", "check_pwm", "check_reference",
+           "check_result", "check_speed", "check_steady", "collect", "summary"]
+
+#: Accepted values of ``simulate(..., check=)``.
+CHECK_MODES = ("error", "warn", "off")
+
+PWM_TAU_WARN = 1.0
+PWM_TAU_ERROR = 10.0
+PWM_PER_PERIOD_WARN = 12.0
+PWM_PER_PERIOD_ERROR = 3.0
+SPEED_ERROR_PU = 10.0
+REF_ERROR_FACTOR = 10.0
+BALANCE_WARN = 1e-4
+BALANCE_ERROR = 1e-2
+TRIP_WARN = 1.01
+TRIP_ERROR = 2.0
+CURRENT_ERROR_IN = 100.0
+STEADY_SPEED = 0.01
+STEADY_TORQUE = 0.05
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One plausibility finding.
+
+    Attributes
+    ----------
+    level : {"warning", "error"}
+        ``error``: the result would be physically meaningless.
+    cause : str
+        What is implausible, as a dotted name (``"inverter.f_pwm"``, ``"scenario.speed"``, ``"scenario.ref"``,
+        ``"result.energy_balance"``, ``"result.currents"``, ``"result.finite"``, ``"scenario.window"``).
+    message : str
+        The numbers and the threshold crossed.
+    """
+
+    level: Literal["warning", "error"]
+    cause: str
+    message: str
+
+    def __str__(self) -> str:
+        """``cause: message``."""
+        return f"{self.cause}: {self.message}"
+
+
+def _grade(value: float, warn: float, error: float, above: bool = True) -> Literal["warning", "error"] | None:
+    if above:
+        return "error" if value > error else "warning" if value > warn else None
+    return "error" if value < error else "warning" if value < warn else None
+
+
+def check_pwm(drive: Drive, omega_max: float | None, time_constant: bool = True) -> list[Finding]:
+    """Check the PWM frequency against the electrical time constant and the electrical frequency.
+
+    Parameters
+    ----------
+    drive : Drive
+    omega_max : float or None
+        Highest mechanical speed of the run (rad/s); ``None``: only the time-constant check.
+    time_constant : bool
+        Also check the PWM period against ``L / R``.
+
+    Returns
+    -------
+    list of Finding
+    """
+    out = []
+    f_pwm = drive.inverter.f_pwm
+    m = drive.motor
+    if time_constant and m.R > 0:
+        tau_el = m.L / m.R
+        ratio = 1.0 / f_pwm / tau_el
+        level = _grade(ratio, PWM_TAU_WARN, PWM_TAU_ERROR)
+        if level:
+            out.append(Finding(level, "inverter.f_pwm",
+                               f"the PWM period 1/f_pwm = {1 / f_pwm:.4g} s is {ratio:.3g} times the electrical time "
+                               f"constant L/R = {tau_el:.4g} s (limit {PWM_TAU_WARN:g} for a warning, "
+                               f"{PWM_TAU_ERROR:g} for an error): the current is no PWM average with a ripple"))
+    if omega_max is not None and omega_max > 0:
+        f_e = m.p * omega_max / (2.0 * math.pi)
+        n = f_pwm / f_e
+        level = _grade(n, PWM_PER_PERIOD_WARN, PWM_PER_PERIOD_ERROR, above=False)
+        if level:
+            out.append(Finding(level, "inverter.f_pwm",
+                               f"f_pwm = {f_pwm:.4g} Hz gives {n:.3g} PWM periods per electrical period at "
+                               f"{omega_max:.4g} rad/s (f_e = {f_e:.4g} Hz; at least {PWM_PER_PERIOD_WARN:g} "
+                               f"wanted, below {PWM_PER_PERIOD_ERROR:g} the controller misses commutation sectors)"))
+    return out
+
+
+def check_speed(drive: Drive, omega_max: float, v_dc_max: float | None = None) -> list[Finding]:
+    """Check an imposed speed against the no-load speed ``Omega_0`` at the highest bus voltage.
+
+    Parameters
+    ----------
+    drive : Drive
+    omega_max : float
+        Highest imposed mechanical speed (rad/s, magnitude).
+    v_dc_max : float, optional
+        Highest DC source voltage of the run (V); default the inverter's ``V_dc``.
+
+    Returns
+    -------
+    list of Finding
+    """
+    v = drive.inverter.V_dc if v_dc_max is None else v_dc_max
+    omega_0 = v / (2.0 * drive.motor.k_phi)
+    pu = omega_max / omega_0
+    level = _grade(pu, 1.0 + 1e-9, SPEED_ERROR_PU)
+    if not level:
+        return []
+    return [Finding(level, "scenario.speed",
+                    f"{omega_max:.4g} rad/s ({omega_max * 30 / math.pi:.4g} rpm) is {pu:.4g} times the no-load speed "
+                    f"Omega_0 = V_dc / (2 k_phi) = {omega_0:.4g} rad/s at V_dc = {v:.4g} V: the back-EMF exceeds the "
+                    f"bus (error above {SPEED_ERROR_PU:g} Omega_0)")]
+
+
+def _reference_kind(control: Control) -> str | None:
+    """Return ``"current"``, ``"torque"`` or ``None`` (a duty, an open-loop command or a speed loop's output)."""
+    if getattr(control, "speed_loop", False):
+        return None
+    if control.ref_meaning.startswith("current"):
+        return str(getattr(control, "reference", "current"))
+    if control.ref_meaning.startswith("torque"):
+        return "torque"
+    return None
+
+
+def check_reference(drive: Drive, control: Control, ref_max: float, i_limit: float | None) -> list[Finding]:
+    """Check a current or torque reference against the drive's limit.
+
+    Parameters
+    ----------
+    drive : Drive
+    control : Control
+        The controller (its ``ref_meaning`` says what the reference is).
+    ref_max : float
+        Largest magnitude of the reference over the run (A or N m).
+    i_limit : float or None
+        The controller's over-current trip (A), ``None`` if it has none (then ``2 I_N``).
+
+    Returns
+    -------
+    list of Finding
+    """
+    kind = _reference_kind(control)
+    if kind is None or not math.isfinite(ref_max):
+        return []
+    m = drive.motor
+    i_lim = i_limit if i_limit is not None and i_limit > 0 else 2.0 * m.I_N
+    if kind == "current":
+        limit, unit, what = i_lim, "A", f"the controller's current limit i_max = {i_lim:.4g} A"
+    else:
+        limit = 2.0 * m.k_phi * i_lim
+        what = f"the torque at the controller's current limit, 2 k_phi i_max = {limit:.4g} N m"
+        if m.T_peak is not None and m.T_peak > limit:
+            limit, what = m.T_peak, f"the motor's peak torque T_peak = {m.T_peak:.4g} N m"
+        unit = "N m"
+    level = _grade(ref_max / limit, 1.0 + 1e-9, REF_ERROR_FACTOR)
+    if not level:
+        return []
+    return [Finding(level, "scenario.ref",
+                    f"the {kind} reference {ref_max:.4g} {unit} is {ref_max / limit:.3g} times {what} (rated "
+                    f"I_N = {m.I_N:.4g} A; error above {REF_ERROR_FACTOR:g} times the limit)")]
+
+
+def _nonfinite(res: SimResult) -> list[str]:
+    bad = []
+    m = res.metrics
+    if m is not None:
+        for name in ("tau_mean", "tau_min", "tau_max", "omega_mean", "p_src", "p_cu", "p_emf", "dW_L", "dW_kin",
+                     "balance_electrical", "balance_mechanical"):
+            if not math.isfinite(getattr(m, name)):
+                bad.append(f"metrics.{name} = {getattr(m, name)}")
+        for name in ("i_rms", "i_peak"):
+            if not all(math.isfinite(v) for v in getattr(m, name)):
+                bad.append(f"metrics.{name} = {getattr(m, name)}")
+    final = res.meta.get("final", {})
+    for key in ("i", "omega_m", "theta_e"):
+        vals = np.atleast_1d(np.asarray(final.get(key, 0.0), dtype=float))
+        if not np.all(np.isfinite(vals)):
+            bad.append(f"final {key} = {final[key]}")
+    for name in ("i_a", "i_b", "i_c", "tau_e", "omega_m"):
+        sig = res.signals.get(name)
+        if sig is not None and sig.size and not np.all(np.isfinite(sig)):
+            j = int(np.nonzero(~np.isfinite(sig))[0][0])
+            bad.append(f"{name} at t = {float(res.t[j]):.6g} s is {sig[j]}")
+    return bad
+
+
+def check_result(drive: Drive, res: SimResult) -> list[Finding]:
+    """Check a finished run: finite values, energy balance, currents after a hardware trip.
+
+    Parameters
+    ----------
+    drive : Drive
+    res : SimResult
+
+    Returns
+    -------
+    list of Finding
+    """
+    bad = _nonfinite(res)
+    if bad:
+        return [Finding("error", "result.finite", f"non-finite values ({'; '.join(bad[:3])}): the integration "
+                        "diverged")]
+    out = []
+    m = res.metrics
+    if m is not None:
+        for name in ("balance_electrical", "balance_mechanical"):
+            r = abs(getattr(m, name))
+            level = _grade(r, BALANCE_WARN, BALANCE_ERROR)
+            if level:
+                out.append(Finding(level, "result.energy_balance",
+                                   f"{name} residue {getattr(m, name):.3g} over the window [{m.t0:.4g}, {m.t1:.4g}] "
+                                   f"s (limit {BALANCE_WARN:g} for a warning, {BALANCE_ERROR:g} for an error; the "
+                                   f"plant closes it to 1e-7 or better when the PWM resolves the electrical "
+                                   f"period): the integration did not resolve the run"))
+    peaks = [abs(v) for v in res.meta.get("final", {}).get("i", [])]
+    if m is not None:
+        peaks += list(m.i_peak)
+    for name in ("i_a", "i_b", "i_c"):
+        sig = res.signals.get(name)
+        if sig is not None and sig.size:
+            peaks.append(float(np.max(np.abs(sig))))
+    i_pk = max(peaks, default=0.0)
+    i_trip = drive.inverter.i_trip
+    tripped = res.meta.get("stats", {}).get("hw_trip") is not None
+    if tripped and i_trip > 0:
+        level = _grade(i_pk / i_trip, TRIP_WARN, TRIP_ERROR)
+        if level:
+            out.append(Finding(level, "result.currents",
+                               f"a phase current reached {i_pk:.4g} A, {i_pk / i_trip:.3g} times the hardware trip "
+                               f"i_trip = {i_trip:.4g} A, with every leg off since the trip: the back-EMF drives it "
+                               f"through the diodes (error above {TRIP_ERROR:g} i_trip)"))
+    elif i_pk > CURRENT_ERROR_IN * drive.motor.I_N:
+        out.append(Finding("error", "result.currents",
+                           f"a phase current reached {i_pk:.4g} A, {i_pk / drive.motor.I_N:.3g} times I_N = "
+                           f"{drive.motor.I_N:.4g} A (error above {CURRENT_ERROR_IN:g} I_N)"))
+    return out
+
+
+def check_steady(drive: Drive, res: SimResult) -> list[Finding]:
+    """Check that the metric window of a run with rotor dynamics is in steady state.
+
+    Parameters
+    ----------
+    drive : Drive
+    res : SimResult
+        A run with rotor dynamics (``Scenario.speed`` is ``None``) and a metric window.
+
+    Returns
+    -------
+    list of Finding
+    """
+    m = res.metrics
+    if m is None:
+        return []
+    out = []
+    J = drive.mechanics.J
+    w2 = m.omega_mean**2
+    rel = abs(m.dW_kin) / (J * w2) if w2 > 0 else (math.inf if m.dW_kin != 0 else 0.0)
+    if rel > STEADY_SPEED:
+        dw = math.copysign(math.sqrt(2.0 * abs(m.dW_kin) / J), m.dW_kin) if w2 == 0 else m.dW_kin / (J * m.omega_mean)
+        out.append(Finding("warning", "scenario.window",
+                           f"the speed changes by {dw:.4g} rad/s ({100 * rel:.3g} % of its mean {m.omega_mean:.4g} "
+                           f"rad/s) across the metric window [{m.t0:.4g}, {m.t1:.4g}] s (limit {100 * STEADY_SPEED:g} "
+                           f"%): not a steady state, the window still holds a run-up"))
+    t = res.signals.get("t")
+    tau = res.signals.get("tau_mean")
+    if t is not None and tau is not None and t.size:
+        mid = 0.5 * (m.t0 + m.t1)
+        first = tau[(t >= m.t0) & (t < mid)]
+        second = tau[(t >= mid) & (t < m.t1)]
+        if first.size >= 2 and second.size >= 2:
+            a, b = float(np.mean(first)), float(np.mean(second))
+            scale = max(abs(m.tau_mean), 0.1 * drive.T_N)
+            if abs(a - b) > STEADY_TORQUE * scale:
+                out.append(Finding("warning", "scenario.window",
+                                   f"the mean torque of the window's first half ({a:.4g} N m) and second half "
+                                   f"({b:.4g} N m) differ by {abs(a - b):.4g} N m, more than {100 * STEADY_TORQUE:g} % "
+                                   f"of {scale:.4g} N m: not a steady state, the window still holds a run-up"))
+    return out
+
+
+def apply(findings: Iterable[Finding], check: str, stacklevel: int = 3) -> list[str]:
+    """Issue the findings: warnings through :mod:`warnings`, errors raised (``check="error"``) or warned.
+
+    Parameters
+    ----------
+    findings : iterable of Finding
+    check : {"error", "warn", "off"}
+        ``error``: raise the first error as :class:`~bldclab.errors.PlausibilityError` (after issuing the
+        warnings); ``warn``: issue errors as warnings too; ``off``: nothing.
+    stacklevel : int
+        Passed to :func:`warnings.warn`.
+
+    Returns
+    -------
+    list of str
+        The messages issued as warnings.
+
+    Raises
+    ------
+    PlausibilityError
+        For the first error finding with ``check="error"``.
+    """
+    if check == "off":
+        return []
+    found = list(findings)
+    issued = []
+    for f in found:
+        if f.level == "warning" or check == "warn":
+            text = str(f) if f.level == "warning" else f"{f} [error ignored: check='warn']"
+            warnings.warn(text, PlausibilityWarning, stacklevel=stacklevel)
+            issued.append(text)
+    if check == "error":
+        for f in found:
+            if f.level == "error":
+                raise PlausibilityError(f.cause, f.message)
+    return issued
+
+
+@contextmanager
+def collect() -> Iterator[list[str]]:
+    """Record plausibility warnings instead of showing them (for experiments that run many points).
+
+    Yields
+    ------
+    list of str
+        Filled with each warning's message as it is issued; other warnings pass through unchanged.
+    """
+    caught: list[str] = []
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always", PlausibilityWarning)
+        try:
+            yield caught
+        finally:
+            for w in rec:
+                if issubclass(w.category, PlausibilityWarning):
+                    caught.append(str(w.message))
+                else:
+                    warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    # the list is complete once the block has ended
+
+
+def summary(messages: Sequence[str], runs: int) -> str | None:
+    """One line for many warnings: their count, the runs they came from and the first message (``None`` if none).
+
+    Parameters
+    ----------
+    messages : sequence of str
+    runs : int
+        Simulations run.
+    """
+    if not messages:
+        return None
+    return (f"{len(messages)} plausibility warning{'s' if len(messages) != 1 else ''} in {runs} runs; first: "
+            f"{messages[0]}")

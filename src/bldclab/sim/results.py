@@ -1,0 +1,369 @@
+"""Results of a simulation: named signals, window metrics, plots, files."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._files import write_atomic
+from ..errors import BldclabError
+from ..svg import Series, svg_plot
+
+__all__ = ["Metrics", "SimResult"]
+
+
+@dataclass(frozen=True)
+class Metrics:
+    """What happened over a metric window [t0, t1] of a run (computed in C from integrated power flows).
+
+    Attributes
+    ----------
+    t0, t1 : float
+        Window (s).
+    tau_mean : float
+        Mean electromagnetic torque (N m).
+    tau_min, tau_max : float
+        Extremes of the instantaneous torque (N m) over every integration step and event of the window: the step
+        ends and, inside each step, the turning points of the cubic Hermite interpolant of the torque through its
+        end values and exact time derivatives (the interpolant's error is of the order of the RK4 step's, h^4;
+        the step is at most half a PWM period and lands on every gate edge and diode event). Includes the PWM
+        ripple.
+    ripple : float
+        ``tau_max - tau_min`` (N m): the peak-to-peak instantaneous torque, PWM ripple included.
+    tau_ma_min, tau_ma_max : float
+        Extremes of the torque's moving average over one PWM period ``T = 1/f_pwm`` (N m), evaluated continuously:
+        ``MA(t) = (A(t) - A(t - T)) / T`` with ``A`` the torque's integral, for every ``t`` in ``[t0 + T, t1]``
+        that is an integration step end or a step end shifted by ``T`` (between those nodes ``MA`` is smooth; a
+        cubic Hermite of ``A`` gives its values off the nodes). nan if the window is shorter than one PWM period.
+    ripple_ma : float
+        ``tau_ma_max - tau_ma_min`` (N m): the torque ripple with the PWM component averaged out exactly (a
+        one-period average of a periodic PWM ripple is its mean), wherever it falls relative to the samples. It
+        also flattens features shorter than a PWM period: a commutation spike of width ``w < T`` is reduced to
+        about ``w/T`` of its height.
+    tau_ma_grid_min, tau_ma_grid_max : float
+        The same moving average evaluated only at the controller samples (the mean of two consecutive half
+        periods), N m; always inside ``[tau_ma_min, tau_ma_max]``. nan if the window is under two samples.
+    ripple_ma_grid : float
+        ``tau_ma_grid_max - tau_ma_grid_min`` (N m).
+    ma_lost : int
+        Continuous moving-average evaluations skipped because one PWM period held more integration steps than the
+        runner's history (``BC_SIM_HIST`` = 1024 step ends; ``h_max`` below about 1/500 of a PWM period); 0 in
+        every run bldclab makes by default. When positive the moving-average extremes cover only part of the window
+        (nan if no evaluation was left).
+    tau_s_min, tau_s_max : float
+        Extremes of the torque at the controller samples (carrier valleys and peaks), N m. There the phase currents
+        cross their PWM-period averages, so these samples carry no PWM ripple while keeping the sampling
+        resolution ``1/(2 f_pwm)``: a feature narrower than a half period (a commutation spike lasting one or two
+        PWM periods) can fall between samples and be missed.
+    ripple_sampled : float
+        ``tau_s_max - tau_s_min`` (N m): the torque ripple without its PWM component (the measure to compare with
+        closed forms that assume ideal current regulation, as long as the commutation lasts several PWM periods).
+    tau_std : float
+        Root-mean-square deviation of the torque from its mean (N m).
+    omega_mean : float
+        Mean mechanical speed (rad/s).
+    p_src, p_Rsrc, p_cu, p_sw, p_diode, p_emf, p_cog, p_fric, p_load : float
+        Mean powers (W): from the DC source; lost in the source resistance, the windings, the switches, the diodes;
+        converted to mechanical (``sum e i``); cogging; friction; to the load.
+    dW_L, dW_kin : float
+        Change of magnetic and kinetic energy over the window (J).
+    balance_electrical : float
+        ``(E_src - E_Rsrc - E_cu - E_sw - E_diode - E_emf - dW_L) / max(|E_src|, |E_emf|)``: the integration's
+        energy residue (dimensionless).
+    balance_mechanical : float
+        ``(E_emf + E_cog - E_fric - E_load - dW_kin) / max(|E_emf|, ...)`` (dynamic mechanics; 0 otherwise).
+    i_rms, i_peak : tuple of float
+        Per-phase rms and peak current (A).
+    efficiency : float
+        Shaft power ``p_emf + p_cog - p_fric`` over ``p_src`` (motoring; nan if ``p_src <= 0``).
+    """
+
+    t0: float
+    t1: float
+    tau_mean: float
+    tau_min: float
+    tau_max: float
+    ripple: float
+    tau_ma_min: float
+    tau_ma_max: float
+    ripple_ma: float
+    tau_ma_grid_min: float
+    tau_ma_grid_max: float
+    ripple_ma_grid: float
+    ma_lost: int
+    tau_s_min: float
+    tau_s_max: float
+    ripple_sampled: float
+    tau_std: float
+    omega_mean: float
+    p_src: float
+    p_Rsrc: float
+    p_cu: float
+    p_sw: float
+    p_diode: float
+    p_emf: float
+    p_cog: float
+    p_fric: float
+    p_load: float
+    dW_L: float
+    dW_kin: float
+    balance_electrical: float
+    balance_mechanical: float
+    i_rms: tuple[float, float, float]
+    i_peak: tuple[float, float, float]
+    efficiency: float
+
+    @classmethod
+    def from_c(cls, m: np.void, acc_names: tuple[str, ...], imposed: bool, omega_integral: float) -> Metrics:
+        """Build from a ``bc_sim_metrics`` record."""
+        dt = float(m["t1"] - m["t0"])
+        E = {name: float(v) for name, v in zip(acc_names, m["E"], strict=True)}
+        p = {k: v / dt for k, v in E.items()}
+        dW_L = float(m["w_l1"] - m["w_l0"])
+        dW_kin = float(m["w_kin1"] - m["w_kin0"])
+        scale_e = max(abs(E["src"]), abs(E["emf"]), 1e-300)
+        bal_e = (E["src"] - E["Rsrc"] - E["cu"] - E["sw"] - E["diode"] - E["emf"] - dW_L) / scale_e
+        if imposed:
+            bal_m = 0.0
+        else:
+            scale_m = max(abs(E["emf"]), abs(E["fric"]), abs(E["load"]), abs(dW_kin), 1e-300)
+            bal_m = (E["emf"] + E["cog"] - E["fric"] - E["load"] - dW_kin) / scale_m
+        tau_mean = E["tau"] / dt
+        ma_min, ma_max = float(m["tau_ma_min"]), float(m["tau_ma_max"])
+        if int(m["n_ma"]) == 0:
+            ma_min = ma_max = math.nan
+        mg_min, mg_max = float(m["tau_ma_grid_min"]), float(m["tau_ma_grid_max"])
+        if int(m["n_ma_grid"]) == 0:
+            mg_min = mg_max = math.nan
+        shaft = p["emf"] + p["cog"] - p["fric"]
+        return cls(
+            t0=float(m["t0"]), t1=float(m["t1"]), tau_mean=tau_mean, tau_min=float(m["tau_min"]),
+            tau_max=float(m["tau_max"]), ripple=float(m["tau_max"] - m["tau_min"]), tau_ma_min=ma_min,
+            tau_ma_max=ma_max, ripple_ma=ma_max - ma_min, tau_ma_grid_min=mg_min, tau_ma_grid_max=mg_max,
+            ripple_ma_grid=mg_max - mg_min, ma_lost=int(m["ma_lost"]), tau_s_min=float(m["tau_s_min"]),
+            tau_s_max=float(m["tau_s_max"]), ripple_sampled=float(m["tau_s_max"] - m["tau_s_min"]),
+            tau_std=math.sqrt(max(E["tau2"] / dt - tau_mean**2, 0.0)), omega_mean=omega_integral / dt,
+            p_src=p["src"], p_Rsrc=p["Rsrc"], p_cu=p["cu"], p_sw=p["sw"], p_diode=p["diode"], p_emf=p["emf"],
+            p_cog=p["cog"], p_fric=p["fric"], p_load=p["load"], dW_L=dW_L, dW_kin=dW_kin,
+            balance_electrical=bal_e, balance_mechanical=bal_m,
+            i_rms=(math.sqrt(E["i2a"] / dt), math.sqrt(E["i2b"] / dt), math.sqrt(E["i2c"] / dt)),
+            i_peak=(float(m["i_peak"][0]), float(m["i_peak"][1]), float(m["i_peak"][2])),
+            efficiency=shaft / p["src"] if p["src"] > 0.0 else math.nan)
+
+
+class SimResult:
+    """The outcome of :func:`bldclab.simulate`: named signals over time, window metrics, metadata.
+
+    Signals are numpy arrays of equal length, one value per trace row; ``units`` and ``docs`` describe them.
+    Instantaneous signals (``i_a``, ``tau_e``, ...) hold the value at the start of the row's window, mean signals
+    (``tau_mean``, ``p_src``, ``v_a``, ...) the mean over the window (see ``docs``). Access a signal as
+    ``res["i_a"]`` or ``res.i_a``.
+
+    Parameters
+    ----------
+    signals : dict of str to ndarray
+        Signals, including the time ``t`` (s).
+    units, docs : dict of str to str
+        Unit and description of each signal.
+    metrics : Metrics or None
+        Metrics over the scenario's metric window.
+    meta : dict
+        How the result was produced (drive, control, scenario, version, statistics).
+    """
+
+    def __init__(self, signals: dict[str, NDArray[np.float64]], units: dict[str, str], docs: dict[str, str],
+                 metrics: Metrics | None, meta: dict[str, Any]) -> None:
+        self.signals = signals
+        self.units = units
+        self.docs = docs
+        self.metrics = metrics
+        self.meta = meta
+
+    def __getitem__(self, name: str) -> NDArray[np.float64]:
+        """Return the signal ``name``."""
+        try:
+            return self.signals[name]
+        except KeyError:
+            raise KeyError(f"no signal {name!r}; signals: {', '.join(self.signals)}") from None
+
+    def __getattr__(self, name: str) -> NDArray[np.float64]:
+        """Return the signal ``name`` as an attribute."""
+        if name.startswith("_") or name in ("signals", "units", "docs", "metrics", "meta"):
+            raise AttributeError(name)
+        try:
+            return self.signals[name]
+        except KeyError:
+            raise AttributeError(f"SimResult has no signal {name!r}") from None
+
+    def __len__(self) -> int:
+        """Return the number of trace rows."""
+        return len(self.signals["t"])
+
+    @property
+    def t(self) -> NDArray[np.float64]:
+        """Time of each row (s)."""
+        return self.signals["t"]
+
+    def __repr__(self) -> str:
+        """Short description."""
+        m = f", tau_mean={self.metrics.tau_mean:.4g} N m" if self.metrics else ""
+        ctrl = self.meta.get("control", {}).get("controller", "?")
+        return f"<SimResult {self.meta.get('drive', {}).get('name', '')} {ctrl}: {len(self)} rows{m}>"
+
+    def _repr_html_(self) -> str:
+        """Jupyter: the description, currents and torque as small inline SVG plots, and the metrics with units.
+
+        The plots show the metric window (the whole run if there is none); nothing is fetched, so the notebook
+        displays offline and keeps the plots when saved.
+        """
+        import html
+
+
+        parts = [f"<p><b>{html.escape(repr(self))}</b></p>"]
+        t = self.signals.get("t")
+        if t is not None and len(t) > 1:
+            sel = np.ones(len(t), dtype=bool)
+            if self.metrics is not None:
+                sel = (t >= self.metrics.t0) & (t <= self.metrics.t1)
+                sel = sel if np.count_nonzero(sel) > 1 else np.ones(len(t), dtype=bool)
+            t_ms = t[sel] * 1e3
+            plots = []
+            for names, colors, ylabel in ((("i_a", "i_b", "i_c"), ("#1f77b4", "#ff7f0e", "#2ca02c"), "current [A]"),
+                                          (("tau_e", "tau_mean"), ("#888888", "#d62728"), "torque [N m]")):
+                present = [(n, c) for n, c in zip(names, colors, strict=True) if n in self.signals]
+                if present:
+                    svg = svg_plot([Series(n, t_ms, self.signals[n][sel], c) for n, c in present], title=ylabel,
+                                   xlabel="t [ms]", ylabel=ylabel, width=520, height=280, max_points=700)
+                    plots.append(f'<div style="flex: 0 1 460px; min-width: 280px">{svg}</div>')
+            if plots:
+                parts.append(f'<div style="display: flex; flex-wrap: wrap; gap: 8px">{"".join(plots)}</div>')
+        if self.metrics is not None:
+            rows = []
+            for k, v in asdict(self.metrics).items():
+                text = ", ".join(f"{x:.6g}" for x in v) if isinstance(v, list | tuple) else f"{v:.6g}"
+                rows.append(f"<tr><td>{k}</td><td style=\"text-align: right\">{text}</td><td>{_metric_unit(k)}</td>"
+                            "</tr>")
+            parts.append("<table><thead><tr><th>metric</th><th>value</th><th>unit</th></tr></thead><tbody>"
+                         + "".join(rows) + "</tbody></table>")
+        return "".join(parts)
+
+    def to_pandas(self) -> Any:
+        """Return the signals as a pandas DataFrame indexed by time ``t`` (s)."""
+        import pandas as pd
+
+        df = pd.DataFrame({k: v for k, v in self.signals.items() if k != "t"}, index=pd.Index(self.t, name="t"))
+        df.attrs["units"] = dict(self.units)
+        return df
+
+    def plot(self, signals: tuple[str, ...] | list[str] | None = None, *, fig: Any = None) -> Any:
+        """Plot signals against time, one axis per group (currents, torque, voltages by default).
+
+        Parameters
+        ----------
+        signals : sequence of str, optional
+            Signals to plot, one axis each; default: currents, torque (instantaneous and window mean), back-EMFs.
+        fig : matplotlib.figure.Figure, optional
+            Figure to draw into.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from matplotlib.figure import Figure
+
+        groups: list[tuple[str, ...]]
+        if signals is None:
+            groups = [("i_a", "i_b", "i_c"), ("tau_e", "tau_mean"), ("e_a", "e_b", "e_c")]
+        else:
+            groups = [(s,) for s in signals]
+        fig = fig or Figure(figsize=(9, 2.2 * len(groups) + 0.6), layout="constrained")
+        axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
+        for ax, group in zip(axes, groups, strict=True):
+            for name in group:
+                ax.plot(self.t * 1e3, self[name], lw=0.9, label=name)
+            ax.set_ylabel(f"[{self.units.get(group[0], '')}]")
+            ax.legend(loc="upper right", fontsize=8, ncols=len(group))
+            ax.grid(True, lw=0.3)
+        axes[-1].set_xlabel("t [ms]")
+        return fig
+
+    # ---------------------------------------------------------------------------------------------------------
+    # files
+
+    def save(self, path: str | Path) -> Path:
+        """Write the result to a ``.npz`` file (signals, units, metrics and metadata as JSON), atomically.
+
+        Parameters
+        ----------
+        path : str or Path
+            Target file; ``.npz`` is appended if missing.
+
+        Returns
+        -------
+        Path
+            The file written.
+        """
+        p = Path(path)
+        if p.suffix != ".npz":
+            p = p.with_suffix(p.suffix + ".npz")
+        header = {"units": self.units, "docs": self.docs, "meta": self.meta,
+                  "metrics": asdict(self.metrics) if self.metrics else None}
+        write_atomic(p, lambda fh: np.savez_compressed(
+            fh, __header__=np.array(json.dumps(header, default=_json_default)), **self.signals), None)
+        return p
+
+    @classmethod
+    def load(cls, path: str | Path) -> SimResult:
+        """Read a result written by :meth:`save`.
+
+        Raises
+        ------
+        BldclabError
+            If the file is missing or not a bldclab result.
+        """
+        p = Path(path)
+        try:
+            with np.load(p, allow_pickle=False) as z:
+                header = json.loads(str(z["__header__"]))
+                signals = {k: z[k] for k in z.files if k != "__header__"}
+        except (OSError, KeyError, ValueError) as exc:
+            raise BldclabError("result file", f"cannot read a bldclab result ({exc})", str(p)) from None
+        metrics = None
+        if header.get("metrics"):
+            kw = header["metrics"]
+            for f in fields(Metrics):
+                if f.name in ("i_rms", "i_peak"):
+                    kw[f.name] = tuple(kw[f.name])
+            metrics = Metrics(**kw)
+        return cls(signals, header["units"], header["docs"], metrics, header["meta"])
+
+
+def _metric_unit(name: str) -> str:
+    """Return the SI unit of a :class:`Metrics` field."""
+    if name in ("t0", "t1"):
+        return "s"
+    if name.startswith(("tau_", "ripple")):
+        return "N m"
+    if name == "omega_mean":
+        return "rad/s"
+    if name.startswith("p_"):
+        return "W"
+    if name.startswith("dW_"):
+        return "J"
+    if name.startswith("i_"):
+        return "A"
+    return "-"
+
+
+def _json_default(obj: object) -> object:
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    return str(obj)
