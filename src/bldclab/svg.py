@@ -60,7 +60,7 @@ def _ticks(lo: float, hi: float, n: int) -> list[tuple[float, str]]:
     r = raw / mag
     step = (1 if r < 1.5 else 2 if r < 3 else 5 if r < 7 else 10) * mag
     decimals = max(0, min(10, -math.floor(math.log10(step) + 1e-9)))
-    out = []
+    out: list[tuple[float, str]] = []
     k = math.ceil(lo / step - 1e-9)
     while k * step <= hi + step * 1e-9 and len(out) < 50:
         v = k * step
@@ -173,10 +173,10 @@ def svg_plot(series: Sequence[Series], *, title: str = "", xlabel: str = "", yla
     out.extend(labels)
     out.append(f'<g clip-path="url(#{clip})">')
     for vl in vlines:
-        px = sx(float(vl["x"]))
+        vx = sx(float(vl["x"]))
         color = _e(vl.get("color", "#888"))
         dash = f' stroke-dasharray="{_e(vl["dash"])}"' if vl.get("dash") else ""
-        out.append(f'<path d="M{px:.1f} {mt}V{mt + ph}" stroke="{color}" fill="none"{dash}/>')
+        out.append(f'<path d="M{vx:.1f} {mt}V{mt + ph}" stroke="{color}" fill="none"{dash}/>')
     for s, x, y in data:
         ok = np.isfinite(x) & np.isfinite(y)
         px = np.clip(ml + (x - x0) / (x1 - x0) * pw, -5000, 5000)

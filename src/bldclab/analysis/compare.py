@@ -54,11 +54,11 @@ def default_controls(drive: Drive, lowest_speed_pu: float = 0.05) -> dict[str, t
     return {"square": (SixStep(), drive.motor.I_N), "sine": (Sine(handoff_speed=handoff), T_sN)}
 
 
-def speed_grid(n: int, lo: float = 0.05, hi: float = 0.98) -> np.ndarray:
-    """Return ``n`` per-unit speeds from ``lo`` to ``hi``."""
+def speed_grid(n: int, lo: float = 0.05, hi: float = 0.98) -> list[float]:
+    """Return ``n`` equally spaced per-unit speeds from ``lo`` to ``hi``."""
     if n < 2:
         raise BldclabError("--speeds", f"needs at least 2 speeds, got {n}")
-    return np.linspace(lo, hi, n)
+    return [float(w) for w in np.linspace(lo, hi, n)]
 
 
 def _run_point(args: tuple[Drive, str, Control, float, float, int]) -> dict[str, Any]:
@@ -67,7 +67,7 @@ def _run_point(args: tuple[Drive, str, Control, float, float, int]) -> dict[str,
         point, _ = steady_state(drive, control, w_pu * drive.Omega_0, ref, pwm_phases=pwm_phases)
     m = point.metrics
     T_N = drive.T_N
-    row = {"supply": supply, "Omega_pu": w_pu, "Omega": point.speed, "T_pu": point.tau_mean_pu,
+    row: dict[str, Any] = {"supply": supply, "Omega_pu": w_pu, "Omega": point.speed, "T_pu": point.tau_mean_pu,
            "TR_pu": point.ripple_sampled_pu, "TR_inst_pu": point.ripple_pu, "TR_ma_pu": point.ripple_ma_pu,
            "T": point.tau_mean, "TR": point.ripple_sampled, "tau_std_pu": m.tau_std / T_N,
            "eta": point.efficiency,

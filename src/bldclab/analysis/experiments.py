@@ -98,7 +98,7 @@ def electrical_period(drive: Drive, speed: float) -> float:
 
 def steady_state(drive: Drive, control: Control, speed: float, ref: Profile, *, settle_periods: int = 3,
                  measure_periods: int = 2, settle_time: float = 0.01, trace: bool = False, pwm_phases: int = 1,
-                 **scenario: object) -> tuple[PointResult, SimResult]:
+                 **scenario: Any) -> tuple[PointResult, SimResult]:
     """Run the drive at an imposed speed until steady state and measure whole electrical periods.
 
     Parameters
@@ -137,12 +137,12 @@ def steady_state(drive: Drive, control: Control, speed: float, ref: Profile, *, 
     Te = electrical_period(drive, speed)
     t_settle = max(settle_periods * Te, math.ceil(settle_time / Te) * Te)
     t_end = t_settle + measure_periods * Te
-    theta0 = float(scenario.pop("theta0", 0.0))  # type: ignore[arg-type]
+    theta0 = float(scenario.pop("theta0", 0.0))
     travel = drive.motor.p * abs(speed) / drive.inverter.f_pwm  # electrical angle over one PWM period, rad
     runs: list[tuple[Metrics, SimResult]] = []
     for j in range(pwm_phases):
         sc = Scenario(duration=t_end, speed=speed, ref=ref, trace=trace and j == 0, window=(t_settle, t_end),
-                      theta0=theta0 + travel * j / pwm_phases, **scenario)  # type: ignore[arg-type]
+                      theta0=theta0 + travel * j / pwm_phases, **scenario)
         res = simulate(drive, control, sc)
         assert res.metrics is not None
         runs.append((res.metrics, res))
@@ -368,7 +368,7 @@ class Experiment(ABC):
         BldclabError
             Naming the setting that is unknown, missing or invalid.
         """
-        names = [f.name for f in dataclasses.fields(cls) if f.init]  # type: ignore[arg-type]
+        names = [f.name for f in dataclasses.fields(cls) if f.init]  # type: ignore[arg-type]  # cls: an Experiment subclass, each a dataclass
         speeds = [k for k in _SPEEDS if k in settings]
         if len(speeds) > 1:
             raise BldclabError(speeds[1], f"give one of speed, speed_rpm, speed_pu; {speeds[0]} is also set")
@@ -382,7 +382,7 @@ class Experiment(ABC):
                                    f"{', '.join(names)}{extra})")
             else:
                 kw[key] = _si(key, value, cls.dimensions.get(key))
-        for f in dataclasses.fields(cls):  # type: ignore[arg-type]
+        for f in dataclasses.fields(cls):  # type: ignore[arg-type]  # cls: an Experiment subclass, each a dataclass
             if f.init and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING \
                     and f.name not in kw:
                 raise BldclabError(f.name, f"missing (experiment {cls.kind!r} needs it)")

@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -146,7 +147,7 @@ def default_grid(drive: Drive) -> tuple[tuple[float, ...], tuple[float, ...]]:
 
 def operating_point(drive: Drive, method: str, torque: float, speed: float, *, delay: int = 1, trace_sub: int = 8,
                     settle_periods: int = 3, measure_periods: int = 2, settle_time: float = 0.01,
-                    **control: object) -> SimResult:
+                    **control: Any) -> SimResult:
     """Run one method at an imposed speed and torque reference until steady state, with a fine trace.
 
     As :func:`bldclab.analysis.experiments.steady_state`: the first ``settle_periods`` electrical periods (at least
@@ -177,7 +178,7 @@ def operating_point(drive: Drive, method: str, torque: float, speed: float, *, d
     SimResult
         With the trace over the whole run and metrics over the measured periods.
     """
-    ctrl = Lu(method=method, delay=delay, **control)  # type: ignore[arg-type]
+    ctrl = Lu(method=method, delay=delay, **control)  # type: ignore[arg-type]  # Lu checks method against its names
     Te = electrical_period(drive, speed)
     t_settle = max(settle_periods * Te, math.ceil(settle_time / Te) * Te)
     t_end = t_settle + measure_periods * Te
@@ -247,7 +248,7 @@ def ripple_stats(res: SimResult, drive: Drive) -> RippleStats:
     per_sector = max(round((math.pi / 3) / (abs(m.omega_mean) * drive.motor.p * ts)), 6)
     after = max(6, per_sector // 3)
     dips, rel = [], []
-    for k in np.nonzero((sector[1:] != sector[:-1]) & (sector[1:] >= 0) & (sector[:-1] >= 0))[0] + 1:
+    for k in (int(j) + 1 for j in np.nonzero((sector[1:] != sector[:-1]) & (sector[1:] >= 0) & (sector[:-1] >= 0))[0]):
         if k - 6 < 0 or k + after >= len(ma_i[0]) or not (inside[k - 6] and inside[min(k + after + 1, n - 1)]):
             continue
         s0, s1 = sector[k - 1], sector[k]
@@ -278,7 +279,7 @@ def ripple_stats(res: SimResult, drive: Drive) -> RippleStats:
     )
 
 
-def shortfall_cause(row: Mapping[str, object], tolerance: float = 0.03) -> str | None:
+def shortfall_cause(row: Mapping[str, Any], tolerance: float = 0.03) -> str | None:
     """Name the likely cause when a row of :func:`compare_methods` misses its reference by more than ``tolerance``.
 
     Parameters
@@ -295,10 +296,10 @@ def shortfall_cause(row: Mapping[str, object], tolerance: float = 0.03) -> str |
         discontinuous conduction (the method regulates the sampled current or torque, not its mean), the
         rectangular baseline regulating current rather than torque, or none of these (a model error).
     """
-    pct = float(row["tau_mean_pct_ref"])  # type: ignore[arg-type]
+    pct = float(row["tau_mean_pct_ref"])
     if abs(pct - 100.0) <= 100.0 * tolerance:
         return None
-    sat, dcm = float(row["sat_share"]), float(row["dcm_share"])  # type: ignore[arg-type]
+    sat, dcm = float(row["sat_share"]), float(row["dcm_share"])
     what = f"mean torque {pct:.1f} % of the reference"
     if sat > 0.01:
         return (f"{what}: the duty saturated in {100 * sat:.0f} % of the samples, the DC bus cannot drive the "
@@ -314,7 +315,7 @@ def shortfall_cause(row: Mapping[str, object], tolerance: float = 0.03) -> str |
 
 def compare_methods(drive: Drive, torques: Sequence[float], speeds: Sequence[float],
                     methods: Sequence[str] = METHODS, *, delay: int = 1, trace_sub: int = 8,
-                    **control: object) -> pd.DataFrame:
+                    **control: Any) -> pd.DataFrame:
     """Run every method at every torque x speed and tabulate torque ripple and current dip.
 
     Parameters

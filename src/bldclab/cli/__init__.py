@@ -18,6 +18,7 @@ import sys
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import NoReturn
 
 from .._files import write_files
 from .._version import __version__
@@ -37,7 +38,7 @@ class _UsageError(Exception):
 class _Parser(argparse.ArgumentParser):
     """Argument parser that raises :class:`_UsageError` instead of printing the usage and exiting."""
 
-    def error(self, message: str) -> None:  # type: ignore[override]
+    def error(self, message: str) -> NoReturn:
         """Raise the parsing error for :func:`main` to report on one line."""
         raise _UsageError(message)
 

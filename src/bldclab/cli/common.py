@@ -41,7 +41,7 @@ def control_of(name: str, drive: Drive, handoff: float | None = None) -> tuple[C
     if name == "sixv":
         return SixStepVoltage("high"), 0.5, "duty"
     if name in ("lu", "lu-no-do", "rect"):
-        return Lu(method=name), drive.T_N, "N m"
+        return Lu(method=name), drive.T_N, "N m"  # type: ignore[arg-type]  # name: one of Lu's methods, checked above
     raise BldclabError("--control", f"must be one of {', '.join(CONTROLS)}, got {name!r}")
 
 

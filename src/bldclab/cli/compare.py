@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -51,10 +52,10 @@ def run_command(args: argparse.Namespace) -> int:
     sim = res.simulated
     print(f"{drive.name}: square-wave (SixStep, I_N = {drive.motor.I_N:g} A) vs sinusoidal (Sine, "
           f"T_sN = {analytic.t_sN(drive):.4g} N m), {args.speeds} speeds x 2 supplies in {res.seconds:.1f} s")
-    bs = res.base_speeds.set_index("supply").simulated_pu
+    bs = {} if res.base_speeds is None else res.base_speeds.set_index("supply").simulated_pu.to_dict()
     print(f"  Theta_m {t1.Theta_m * 1e3:.2f} mrad; base speed (21) sine {t1.Omega_sB_pu:.3f} p.u., (30) square "
           f"{t1.Omega_qB_pu:.3f} p.u.; with R: {t1.Omega_sB_R_pu:.3f} / {t1.Omega_qB_R_pu:.3f} p.u.; simulated: "
-          f"{bs['sine']:.3f} / {bs['square']:.3f} p.u.")
+          f"{bs.get('sine', math.nan):.3f} / {bs.get('square', math.nan):.3f} p.u.")
     na = "*" if res.not_applicable else ""  # closed-form columns outside paper 1's premises: labelled, kept
     print(f"  {'Omega':>6} {'T sine':>7} {'T sq':>6} {'(13)/(24)' + na:>10} {'(26)-(32)' + na:>10} | {'TR sine':>7} "
           f"{'sw':>6} {'(15)/(25)' + na:>10} | {'TR sq':>6} {'sw':>6} {'(27)-(33)' + na:>10} | {'eta sine':>8} "

@@ -1059,11 +1059,11 @@ def _drive_to_toml(d: Drive) -> str:
     shapes = m.emf.shapes
     if m.emf.is_symmetric:
         out.append(_table("motor.emf", shapes[0].to_toml_dict()))
-    elif all(isinstance(s, Table) for s in shapes) and len({s.theta for s in shapes}) == 1:  # type: ignore[attr-defined]
-        t0: Table = shapes[0]  # type: ignore[assignment]
-        items: dict[str, object] = {"kind": "table", "theta": list(t0.theta)}
-        for j, s in enumerate(shapes):
-            items["k_" + _PHASES[j]] = list(s.k)  # type: ignore[attr-defined]
+    elif len(tables := [s for s in shapes if isinstance(s, Table)]) == len(shapes) \
+            and len({t.theta for t in tables}) == 1:
+        items: dict[str, object] = {"kind": "table", "theta": list(tables[0].theta)}
+        for j, t in enumerate(tables):
+            items["k_" + _PHASES[j]] = list(t.k)
         out.append(_table("motor.emf", items))
     else:
         for s in shapes:
@@ -1077,9 +1077,9 @@ def _drive_to_toml(d: Drive) -> str:
         del inv["model"]  # the default: files written before the averaged inverter existed stay as they were
     out.append(_table("inverter", inv))
     out.append(_table("mechanics", dataclasses.asdict(d.mechanics)))
-    s = dataclasses.asdict(d.sensors)
-    s["current_gain"] = list(s["current_gain"])
-    s["current_offset"] = list(s["current_offset"])
-    s["hall_error"] = list(s["hall_error"])
-    out.append(_table("sensors", s))
+    sen = dataclasses.asdict(d.sensors)
+    sen["current_gain"] = list(sen["current_gain"])
+    sen["current_offset"] = list(sen["current_offset"])
+    sen["hall_error"] = list(sen["hall_error"])
+    out.append(_table("sensors", sen))
     return "\n".join(out)

@@ -313,7 +313,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     keep: list[object] = []
     n = samples_of(drive, scenario.duration)
     t_half = 0.5 / drive.inverter.f_pwm
-    t_samples = np.arange(n) * t_half
+    t_samples = np.arange(n, dtype=np.float64) * t_half
     imposed = scenario.speed is not None
 
     plant = _plant_params(drive, 0 if imposed else 1, scenario.h_max, keep)

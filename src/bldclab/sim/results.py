@@ -314,8 +314,8 @@ class SimResult:
             p = p.with_suffix(p.suffix + ".npz")
         header = {"units": self.units, "docs": self.docs, "meta": self.meta,
                   "metrics": asdict(self.metrics) if self.metrics else None}
-        write_atomic(p, lambda fh: np.savez_compressed(
-            fh, __header__=np.array(json.dumps(header, default=_json_default)), **self.signals), None)
+        arrays: dict[str, Any] = {"__header__": np.array(json.dumps(header, default=_json_default)), **self.signals}
+        write_atomic(p, lambda fh: np.savez_compressed(fh, **arrays), None)
         return p
 
     @classmethod

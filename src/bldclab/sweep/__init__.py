@@ -142,7 +142,7 @@ class ResolvedCase(NamedTuple):
         Every setting of the case as written (JSON-able).
     """
 
-    index: int
+    index: int  # type: ignore[assignment]  # the case number; a NamedTuple field may shadow tuple.index
     key: str
     inputs: dict[str, Any]
     axes: dict[str, Any]

@@ -49,7 +49,7 @@ def _control_of(spec: str) -> Control:
     obj: Any = importlib.import_module(module)
     for part in qualname.split("."):
         obj = getattr(obj, part)
-    return _build(obj, data["params"], "control")  # type: ignore[no-any-return]
+    return _build(obj, data["params"], "control")
 
 
 def run_case(inputs: Mapping[str, Any]) -> dict[str, float | int]:
@@ -72,7 +72,7 @@ def run_case(inputs: Mapping[str, Any]) -> dict[str, float | int]:
 
 
 class _Outcome(NamedTuple):
-    index: int
+    index: int  # type: ignore[assignment]  # the case number; a NamedTuple field may shadow tuple.index
     key: str
     row: dict[str, float | int] | None
     error: str | None
@@ -158,7 +158,7 @@ class _SerialBackend(_Backend):
         return list(handles)
 
     def result(self, handle: Any) -> list[_Outcome]:
-        return handle.outcomes  # type: ignore[no-any-return]
+        return handle.outcomes
 
 
 @dataclass(frozen=True)
@@ -189,7 +189,7 @@ class _PoolBackend(_Backend):
         return concurrent.futures.wait(handles, return_when=concurrent.futures.FIRST_COMPLETED).done
 
     def result(self, handle: Any) -> list[_Outcome]:
-        return handle.result()  # type: ignore[no-any-return]  # BrokenProcessPool: fatal, propagates
+        return handle.result()  # BrokenProcessPool: fatal, propagates
 
     def close(self, abort: bool) -> None:
         if not abort:
@@ -266,12 +266,12 @@ class _DaskBackend(_Backend):
         return fut
 
     def wait(self, handles: Collection[Any]) -> Iterable[Any]:
-        return self._completed.next_batch(block=True)  # type: ignore[no-any-return]
+        return self._completed.next_batch(block=True)
 
     def result(self, handle: Any) -> list[_Outcome]:
         self._pending.discard(handle)
         try:
-            return handle.result()  # type: ignore[no-any-return]
+            return handle.result()
         except Exception as exc:  # KilledWorker, CancelledError: the scheduler gave up on the chunk
             raise _ChunkLostError(f"{type(exc).__name__}: {exc}") from None
 

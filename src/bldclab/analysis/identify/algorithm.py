@@ -561,7 +561,7 @@ def identify(data: str | Path | Waveform | Mapping[str, ArrayLike], speed: objec
     elif isinstance(data, str | Path):
         wf = read_waveform(data)
     elif isinstance(data, Mapping) or hasattr(data, "columns"):
-        wf = waveform_from_columns(data)  # type: ignore[arg-type]
+        wf = waveform_from_columns(data)
     else:
         raise BldclabError("data", f"expected a CSV path, a Waveform or named columns, got {type(data).__name__}")
     if isinstance(points, bool) or not isinstance(points, int | np.integer) or points < 12 or points % 3:
@@ -574,7 +574,7 @@ def identify(data: str | Path | Waveform | Mapping[str, ArrayLike], speed: objec
     omega_given = _speed(speed)
     h_user: float | None = None
     if smooth is not None:
-        h_user = to_si(smooth if isinstance(smooth, str) else float(smooth), "angle", "smooth")  # type: ignore[arg-type]
+        h_user = to_si(smooth if isinstance(smooth, str) else float(smooth), "angle", "smooth")  # type: ignore[arg-type]  # to_si rejects a non-number
         if not math.isfinite(h_user) or not 0.0 <= h_user <= math.pi / 6.0:
             raise BldclabError("smooth", f"must be an angle in [0, 30] deg, got {smooth!r}")
     if float(np.max(np.abs(wf.v))) == 0.0:

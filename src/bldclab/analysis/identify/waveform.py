@@ -37,21 +37,21 @@ _TIME = ("t", "time")
 _ANGLE = ("theta", "thetae", "angle")
 
 
-_PHASE_ALIASES = {
+_PHASE_ALIASES: dict[str, tuple[str, ...]] = {
     "a": ("va", "ea", "van", "vu", "eu", "vun"),
     "b": ("vb", "eb", "vbn", "vv", "ev", "vvn"),
     "c": ("vc", "ec", "vcn", "vw", "ew", "vwn"),
 }
 
 
-_LINE_ALIASES = {
+_LINE_ALIASES: dict[str, tuple[str, ...]] = {
     "ab": ("vab", "eab", "vuv", "euv"),
     "bc": ("vbc", "ebc", "vvw", "evw"),
     "ca": ("vca", "eca", "vwu", "ewu"),
 }
 
 
-_LINE_REVERSED = {  # written the other way round: the column is minus the line voltage
+_LINE_REVERSED: dict[str, tuple[str, ...]] = {  # written the other way round: the column is minus the line voltage
     "ab": ("vba", "eba", "vvu", "evu"),
     "bc": ("vcb", "ecb", "vwv", "ewv"),
     "ca": ("vac", "eac", "vuw", "euw"),
@@ -385,9 +385,9 @@ def _build(data: dict[str, NDArray[np.float64]], used: dict[str, str], ignored: 
             rms = math.sqrt(float(np.mean(ab * ab + bc * bc + ca * ca)) / 3.0)
             closure = math.sqrt(float(np.mean((ab + bc + ca) ** 2))) / rms if rms > 0.0 else math.nan
         if ab is None:
-            ab = -(bc + ca)  # type: ignore[operator]
+            ab = -(bc + ca)  # type: ignore[operator]  # two of the three are given (checked above)
         if bc is None:
-            bc = -(ab + ca)  # type: ignore[operator]
+            bc = -(ab + ca)  # type: ignore[operator]  # two of the three are given (checked above)
         if ca is None:
             ca = -(ab + bc)
         # zero-sequence-free phase voltages; with three columns this is the least-squares fit
