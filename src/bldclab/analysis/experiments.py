@@ -98,7 +98,7 @@ def electrical_period(drive: Drive, speed: float) -> float:
 
 def steady_state(drive: Drive, control: Control, speed: float, ref: Profile, *, settle_periods: int = 3,
                  measure_periods: int = 2, settle_time: float = 0.01, trace: bool = False, pwm_phases: int = 1,
-                 **scenario: Any) -> tuple[PointResult, SimResult]:
+                 estimate: Drive | None = None, **scenario: Any) -> tuple[PointResult, SimResult]:
     """Run the drive at an imposed speed until steady state and measure whole electrical periods.
 
     Parameters
@@ -122,6 +122,9 @@ def steady_state(drive: Drive, control: Control, speed: float, ref: Profile, *, 
         (``T = 1/f_pwm``, ``N = pwm_phases``): N evenly spaced positions of the PWM carrier relative to the rotor
         within one PWM period. The point's scalars are the means over the phases, the ``*_range`` fields their
         extremes; the returned simulation is the first phase's.
+    estimate : Drive, optional
+        The drive the controller is configured from, when it differs from the plant (see
+        :func:`bldclab.simulate`).
     **scenario
         Further :class:`~bldclab.sim.Scenario` fields (``delay``, ``trace_sub``, ``omega_ref``, ``theta0``, ...).
 
@@ -143,7 +146,7 @@ def steady_state(drive: Drive, control: Control, speed: float, ref: Profile, *, 
     for j in range(pwm_phases):
         sc = Scenario(duration=t_end, speed=speed, ref=ref, trace=trace and j == 0, window=(t_settle, t_end),
                       theta0=theta0 + travel * j / pwm_phases, **scenario)
-        res = simulate(drive, control, sc)
+        res = simulate(drive, control, sc, estimate=estimate)
         assert res.metrics is not None
         runs.append((res.metrics, res))
     ms = [m for m, _ in runs]

@@ -132,6 +132,10 @@ class Shape(ABC):
     def to_toml_dict(self) -> dict[str, Any]:
         """Return the TOML table describing this shape (SI numbers)."""
 
+    @abstractmethod
+    def scaled(self, factor: float) -> Shape:
+        """Return the same shape with every value times ``factor`` (> 0)."""
+
 
 def _pwl_fourier(x: NDArray[np.float64], y: NDArray[np.float64], n_max: int
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -205,6 +209,9 @@ class Trapezoid(Shape):
     def to_toml_dict(self) -> dict[str, Any]:  # noqa: D102
         return {"kind": self.kind, "k_phi": self.k_phi, "flat_top": self.flat_top}
 
+    def scaled(self, factor: float) -> Trapezoid:  # noqa: D102
+        return dataclasses.replace(self, k_phi=self.k_phi * factor)
+
 
 @dataclass(frozen=True)
 class Sinusoid(Shape):
@@ -237,6 +244,9 @@ class Sinusoid(Shape):
 
     def to_toml_dict(self) -> dict[str, Any]:  # noqa: D102
         return {"kind": self.kind, "k_1": self.k_1}
+
+    def scaled(self, factor: float) -> Sinusoid:  # noqa: D102
+        return dataclasses.replace(self, k_1=self.k_1 * factor)
 
 
 @dataclass(frozen=True)
@@ -282,6 +292,9 @@ class Fourier(Shape):
 
     def to_toml_dict(self) -> dict[str, Any]:  # noqa: D102
         return {"kind": self.kind, "a": list(self.a), "b": list(self.b)}
+
+    def scaled(self, factor: float) -> Fourier:  # noqa: D102
+        return dataclasses.replace(self, a=tuple(v * factor for v in self.a), b=tuple(v * factor for v in self.b))
 
 
 @dataclass(frozen=True)
@@ -335,6 +348,9 @@ class Table(Shape):
     def to_toml_dict(self) -> dict[str, Any]:  # noqa: D102
         return {"kind": self.kind, "theta": list(self.theta), "k": list(self.k)}
 
+    def scaled(self, factor: float) -> Table:  # noqa: D102
+        return dataclasses.replace(self, k=tuple(v * factor for v in self.k))
+
 
 _SHAPES: dict[str, type[Shape]] = {c.kind: c for c in (Trapezoid, Sinusoid, Fourier, Table)}
 
@@ -362,6 +378,10 @@ class BackEmf:
     def symmetric(cls, shape: Shape) -> BackEmf:
         """Return a back-EMF with the same shape on the three phases."""
         return cls((shape, shape, shape))
+
+    def scaled(self, factor: float) -> BackEmf:
+        """Return the back-EMF with every phase's shape times ``factor`` (> 0)."""
+        return BackEmf(tuple(sh.scaled(factor) for sh in self.shapes))  # type: ignore[arg-type]  # three shapes in, three out
 
     @property
     def is_symmetric(self) -> bool:
@@ -723,6 +743,34 @@ class Drive:
         for key in ("name", "description"):
             if not isinstance(getattr(self, key), str):
                 raise BldclabError(key, f"expected a string, got {getattr(self, key)!r}")
+
+    def scaled(self, *, R: float = 1.0, L: float = 1.0, emf: float = 1.0) -> Drive:
+        """Return the drive with the motor's resistance, inductance and back-EMF scaled (a controller's estimate).
+
+        For parameter-mismatch studies: ``bl.simulate(drive, control, scenario, estimate=drive.scaled(L=1.2))``
+        configures the controller for an inductance 20 % above the plant's.
+
+        Parameters
+        ----------
+        R, L, emf : float
+            Factors (> 0, finite) on ``motor.R``, ``motor.L`` and every phase's back-EMF shape (so on ``k_phi``).
+
+        Returns
+        -------
+        Drive
+            The scaled copy, named ``<name> (estimate)``.
+
+        Raises
+        ------
+        BldclabError
+            Naming the factor that is not a finite number > 0.
+        """
+        for key, f in (("R", R), ("L", L), ("emf", emf)):
+            if isinstance(f, bool) or not isinstance(f, int | float) or not math.isfinite(f) or f <= 0:
+                raise BldclabError(f"scaled.{key}", f"must be a finite factor > 0, got {f!r}")
+        m = self.motor
+        motor = dataclasses.replace(m, R=m.R * R, L=m.L * L, emf=m.emf.scaled(emf) if emf != 1.0 else m.emf)
+        return dataclasses.replace(self, motor=motor, name=f"{self.name} (estimate)")
 
     @property
     def Omega_0(self) -> float:

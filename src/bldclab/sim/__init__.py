@@ -268,7 +268,8 @@ def samples_of(drive: Drive, duration: float) -> int:
     return max(1, math.ceil(n - 1e-9))
 
 
-def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str = "error") -> SimResult:
+def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str = "error",
+             estimate: Drive | None = None) -> SimResult:
     """Simulate the drive in closed loop with a C controller.
 
     Plausibility guards (:mod:`bldclab.sim.plausibility`) run before the run (PWM frequency against ``L/R`` and the
@@ -289,6 +290,11 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     check : {"error", "warn", "off"}
         ``"error"`` (default): warnings for questionable runs, an exception for meaningless ones; ``"warn"``: only
         warnings (for runs that go there on purpose, e.g. a fault driving hundreds of amps); ``"off"``: no guards.
+    estimate : Drive, optional
+        The drive the controller is configured from (its gains, models and limits), when it differs from the plant:
+        parameter-mismatch studies, e.g. ``estimate=drive.scaled(L=1.2, emf=0.95)``. Default: the plant's own
+        ``drive``. Pole pairs and PWM frequency must match the plant's (they are not estimates but the hardware the
+        controller runs on).
 
     Returns
     -------
@@ -308,6 +314,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         raise BldclabError("drive", f"expected a Drive, got {type(drive).__name__}")
     if not isinstance(control, Control):
         raise BldclabError("control", f"expected a bldclab.control controller, got {type(control).__name__}")
+    _check_estimate(drive, estimate)
     c = core()
     control = control.with_delay(scenario.delay)
     keep: list[object] = []
@@ -330,7 +337,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         rec["fault"]["t_off"][0, j] = f.t_off
         rec["fault"]["value"][0, j] = f.value
     info = c.controllers[control.c_name]
-    cparams = control.c_params(drive, c, keep, n)
+    cparams = control.c_params(drive if estimate is None else estimate, c, keep, n)
     cstate = c.opaque(info.state)
     rc = c.controller_init(info, cparams, cstate)
     if rc != 0:
@@ -415,6 +422,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         "version": __version__,
         "drive": {"name": drive.name, "toml": drive.to_toml()},
         "control": control.describe(),
+        "estimate": None if estimate is None else {"name": estimate.name, "toml": estimate.to_toml()},
         "scenario": _describe_scenario(scenario),
         "samples": n,
         "stats": {"steps": int(plant_st["n_steps"]), "events": int(plant_st["n_events"]),
@@ -426,6 +434,21 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     res = SimResult(signals, units, docs, metrics, meta)
     meta["warnings"] = issued + _guards_after(drive, res, imposed, check)
     return res
+
+
+def _check_estimate(drive: Drive, estimate: Drive | None) -> None:
+    """Refuse an estimate that is not a drive, or that differs in what the controller cannot estimate."""
+    if estimate is None:
+        return
+    if not isinstance(estimate, Drive):
+        raise BldclabError("estimate", f"expected a Drive, got {type(estimate).__name__}")
+    if estimate.motor.p != drive.motor.p:
+        raise BldclabError("estimate.motor.p", f"must equal the plant's pole pairs {drive.motor.p}, got "
+                           f"{estimate.motor.p}")
+    if estimate.inverter.f_pwm != drive.inverter.f_pwm:
+        raise BldclabError("estimate.inverter.f_pwm", f"must equal the plant's PWM frequency "
+                           f"{drive.inverter.f_pwm:g} Hz (the controller's sample rate), got "
+                           f"{estimate.inverter.f_pwm:g} Hz")
 
 
 def _guards_before(drive: Drive, control: Control, cparams: np.ndarray, imposed: bool, peak: dict[str, float],
