@@ -1,6 +1,7 @@
 """Firmware table: each controller cross-compiled for a Cortex-M4F and its cost per step.
 
-- Flash and RAM per controller: the controllers (not the plant) are built with Debian's gcc-arm-none-eabi and
+- Flash and RAM per controller: the controllers (``core/ctrl/src/*.c``, exactly what ``make -C core firmware``
+  cross-compiles; never the plant side in ``core/host``) are built with Debian's gcc-arm-none-eabi and
   newlib (``-mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard``, C99, the project's warnings as errors), linked
   into the bare-metal harness ``core/firmware/harness.c`` one controller at a time with ``--gc-sections``; the cost
   is the image size minus the empty harness (libm functions a controller pulls in are included).
@@ -25,14 +26,13 @@ CORE = ROOT / "core"
 WARN = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wdouble-promotion", "-Werror"]
 ARM = ["-mcpu=cortex-m4", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard", "-mthumb", "-Os", "-ffunction-sections",
        "-fdata-sections"]
-PLANT_SIDE = {"bc_plant.c", "bc_emf.c", "bc_sensors.c", "bc_sim.c"}
+CTRL = CORE / "ctrl"
 SCENARIOS = ("run", "edge", "invalid", "nan")
 
 
 def controller_sources() -> list[Path]:
-    """Core sources that run on the MCU: everything but the plant side and the host binding."""
-    srcs = (CORE / "src").glob("*.c")
-    return sorted(p for p in srcs if p.name not in PLANT_SIDE and not p.name.startswith("bc_bind"))
+    """Core sources that run on the MCU: the ctrl half of the core (the host half is plant, runner, binding)."""
+    return sorted((CTRL / "src").glob("*.c"))
 
 
 def harness_names() -> list[str]:
@@ -52,7 +52,7 @@ def arm_sizes(tmp: Path) -> dict[str, tuple[int, int]]:
     out = {}
     for name in ["none", *harness_names()]:
         elf = tmp / f"{name}.elf"
-        cmd = ["arm-none-eabi-gcc", *ARM, *WARN, f"-DBC_FW_{name.upper()}", f"-I{CORE / 'include'}",
+        cmd = ["arm-none-eabi-gcc", *ARM, *WARN, f"-DBC_FW_{name.upper()}", f"-I{CTRL / 'include'}",
                str(CORE / "firmware" / "harness.c"), *map(str, controller_sources()), "-Wl,--gc-sections",
                "--specs=nosys.specs", "-lm", "-o", str(elf)]
         subprocess.run(cmd, check=True, capture_output=True, text=True)
@@ -65,7 +65,7 @@ def arm_sizes(tmp: Path) -> dict[str, tuple[int, int]]:
 
 def instruction_counts(tmp: Path, n: int) -> dict[str, dict[str, float]]:
     exe = tmp / "cost"
-    subprocess.run(["cc", "-O2", "-g", *WARN[:1], f"-I{CORE / 'include'}", str(CORE / "firmware" / "cost.c"),
+    subprocess.run(["cc", "-O2", "-g", *WARN[:1], f"-I{CTRL / 'include'}", str(CORE / "firmware" / "cost.c"),
                     str(CORE / "firmware" / "targets.c"), *map(str, controller_sources()), "-lm", "-o", str(exe)],
                    check=True)
     out: dict[str, dict[str, float]] = {}

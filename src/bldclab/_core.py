@@ -1,6 +1,6 @@
 """The binding to the C core: one shared library, loaded with ctypes.
 
-Nothing here restates a C struct by hand. At import the library describes itself (``core/src/bc_bind.c``): every
+Nothing here restates a C struct by hand. At import the library describes itself (``core/host/src/bc_bind.c``): every
 struct the host fills or reads, with member offsets and sizes taken from the compiler, the trace fields of
 ``BC_TRACE_FIELDS``, and the registry of controllers. numpy structured dtypes are built from that description and
 checked against the C ``sizeof`` of each struct, so a stale or mismatched library fails loudly at import.

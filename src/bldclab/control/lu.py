@@ -1,4 +1,4 @@
-"""Paper 2's torque controller and its two comparison methods (``core/include/bldc/bc_lu.h``).
+"""Paper 2's torque controller and its two comparison methods (``core/ctrl/include/bldc/bc_lu.h``).
 
 H. Lu, L. Zhang, W. Qu, *A New Torque Control Method for Torque Ripple Minimization of BLDC Motors With Un-Ideal
 Back EMF*, IEEE Trans. Power Electron. 2008. Two-phase conduction with bipolar chopping; the duties ``D_n``

@@ -1,4 +1,4 @@
-"""Sinusoidal current supply of a PM BLDC motor, paper 1 section V (``core/include/bldc/bc_sine.h``).
+"""Sinusoidal current supply of a PM BLDC motor, paper 1 section V (``core/ctrl/include/bldc/bc_sine.h``).
 
 d,q current control on the Hall-interpolated angle (paper 1 (46)), torque reference to current by (45), current
 limits that keep the modulation linear ((8), and above the base speed the largest current whose voltage fits, from

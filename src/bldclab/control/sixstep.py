@@ -1,4 +1,5 @@
-"""Real square-wave (120-degree) current-controlled supply, paper 1 section IV.A (``core/include/bldc/bc_sixstep.h``).
+"""Real square-wave (120-degree) current-controlled supply, paper 1 section IV.A (``bc_sixstep.h`` in
+``core/ctrl/include/bldc``).
 
 Hall commutation with the outgoing phase left to freewheel through its diode, the current of the incoming phase
 regulated by a PI, a hysteresis band or a predictive ("deadbeat") law, with a selectable chopping pattern. The
