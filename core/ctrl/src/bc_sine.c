@@ -3,10 +3,11 @@
 
 #include <math.h>
 
+#include "bldc/bc_math.h"
+
 static int finite_pos(float v) { return isfinite(v) && v > 0.0f; }
 static int finite_nonneg(float v) { return isfinite(v) && v >= 0.0f; }
 static int is_flag(int32_t v) { return v == 0 || v == 1; }
-static float clampf(float v, float lo, float hi) { return v < lo ? lo : (v > hi ? hi : v); }
 static float table_k(const float *k, int32_t n, float theta);
 
 /* Length of the alpha-beta vector of line values v_ab, v_bc, v_ca: alpha = (v_ab - v_ca) / 3, beta = v_bc / sqrt(3). */
@@ -130,7 +131,7 @@ static float table_k(const float *k, int32_t n, float theta)
     int32_t j = (int32_t)u;
     if (j < 0) j = 0;
     if (j > n - 1) j = n - 1;
-    float frac = clampf(u - (float)j, 0.0f, 1.0f);
+    float frac = bc_clampf(u - (float)j, 0.0f, 1.0f);
     int32_t j1 = (j + 1 < n) ? j + 1 : 0;
     return k[j] + frac * (k[j1] - k[j]); /* k = k_j + (k_j+1 - k_j) frac */
 }
@@ -146,7 +147,7 @@ static float hex_scale(const float f[3], const float g[3], float lim)
         if (gxy > 0.0f && fxy + gxy > lim) k = fminf(k, (lim - fxy) / gxy);
         if (gxy < 0.0f && fxy + gxy < -lim) k = fminf(k, (-lim - fxy) / gxy);
     }
-    return clampf(k, 0.0f, 1.0f);
+    return bc_clampf(k, 0.0f, 1.0f);
 }
 
 /* Largest k in [0, 1] with |F + k G| <= r (alpha-beta vectors), assuming |F| <= r:
@@ -161,7 +162,7 @@ static float circle_scale(bc_ab F, bc_ab G, float r)
     if (sum <= r * r) return 1.0f;
     float disc = fg * fg - gg * (ff - r * r);
     float k = (-fg + sqrtf(fmaxf(disc, 0.0f))) / gg;
-    return isfinite(k) ? clampf(k, 0.0f, 1.0f) : 0.0f;
+    return isfinite(k) ? bc_clampf(k, 0.0f, 1.0f) : 0.0f;
 }
 
 /* Line-to-line spread max - min of three values. */
@@ -229,11 +230,11 @@ static float i_sat_shape(const bc_sine_params *p, const bc_sine_state *s, float 
                 /* |E + I G|^2 = r^2: I = (-E.G + sqrt((E.G)^2 + |G|^2 (r^2 - |E|^2))) / |G|^2 */
                 float gg = ga * ga + gb * gb, eg = ea * ga + eb * gb;
                 float i = (-eg + sqrtf(fmaxf(eg * eg + gg * (r2 - ee), 0.0f))) / gg;
-                best = isfinite(i) ? clampf(i, 0.0f, best) : 0.0f;
+                best = isfinite(i) ? bc_clampf(i, 0.0f, best) : 0.0f;
             }
         }
     }
-    return isfinite(best) ? clampf(best, 0.0f, cap) : 0.0f;
+    return isfinite(best) ? bc_clampf(best, 0.0f, cap) : 0.0f;
 }
 
 /* Enter the start mode: the square-wave controller starts afresh, the d,q integrators are cleared (the hand-off
@@ -339,7 +340,7 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
         /* square-wave start: bc_sixstep with the torque limited to a square-wave current of I_N */
         float tau_lim = p->six.k_e * (0.5f * BC_SQRT3_F) * p->i_s_max;
         bc_ctrl_in in6 = *in;
-        in6.ref = clampf(tau, -tau_lim, tau_lim);
+        in6.ref = bc_clampf(tau, -tau_lim, tau_lim);
         bc_sixstep_step(&p->six, &s->six, &in6, out);
         if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, in6.ref);
         for (int j = 0; j < BC_DIAG_N; ++j) out->diag[j] = 0.0f;
@@ -358,7 +359,7 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
         i_lim = s->lim_shape ? i_sat_shape(p, s, v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f, i_lim)
                              : fminf(i_lim, i_sat(p, v_dc, omega_e));
     }
-    float iq_ref = clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
+    float iq_ref = bc_clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
     float id_ref = 0.0f;
     if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, 1.5f * p->k_1 * iq_ref);
 

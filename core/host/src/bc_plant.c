@@ -44,8 +44,10 @@ static double h_max_of(const bc_plant_params *p)
 /* ---------------------------------------------------------------------------------------------------------- */
 /* back-EMF shapes and cogging at an angle inside the current pieces                                          */
 
+/* k_x(th) of the three phases and, if dk is non-null, dk_x/dth (tables: the piece's slope; Fourier: the series
+ * differentiated term by term, sum_m m (y_m cos - x_m sin)). */
 static void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s, double th,
-                      double *restrict k)
+                      double *restrict k, double *restrict dk)
 {
     int trig = 0;
     double c = 0.0, sn = 0.0;
@@ -53,6 +55,7 @@ static void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *r
         const bc_emf_shape *sh = &p->emf[x];
         if (sh->kind == BC_EMF_TABLE) {
             k[x] = s->piece[x].k0 + s->piece[x].slope * (th - s->piece[x].lo);
+            if (dk) dk[x] = s->piece[x].slope;
             continue;
         }
         if (!trig) {
@@ -63,14 +66,16 @@ static void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *r
         /* cos and sin of the local angle th - PHI[x] by rotation, then harmonics by recurrence */
         double c1 = c * COS_PHI[x] + sn * SIN_PHI[x];
         double s1 = sn * COS_PHI[x] - c * SIN_PHI[x];
-        double cm = 1.0, sm = 0.0, acc = 0.0;
+        double cm = 1.0, sm = 0.0, acc = 0.0, acc_d = 0.0;
         for (int32_t m = 0; m < sh->n; ++m) {
             acc += sh->x[m] * cm + sh->y[m] * sm;
+            if (dk) acc_d += (double)m * (sh->y[m] * cm - sh->x[m] * sm);
             double cn = cm * c1 - sm * s1;
             sm = sm * c1 + cm * s1;
             cm = cn;
         }
         k[x] = acc;
+        if (dk) dk[x] = acc_d;
     }
 }
 
@@ -95,7 +100,7 @@ static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restric
     const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
     const double th = y[Y_TH], om = y[Y_OM];
     double k[3];
-    shapes_at(p, s, th, k);
+    shapes_at(p, s, th, k, 0);
     const double e0 = om * k[0], e1 = om * k[1], e2 = om * k[2];
     const double R = p->R, V_f = p->V_f;
     /* terminals from the precomputed conduction coefficients: v_x = up v_bus + U0 - r i (no branches) */
@@ -1207,31 +1212,7 @@ static double tau_rate(const bc_plant_params *p, const bc_plant_state *s, const 
 {
     const double th = y[Y_TH], om = y[Y_OM];
     double k[3], dk[3];
-    shapes_at(p, s, th, k);
-    int trig = 0;
-    double c = 0.0, sn = 0.0;
-    for (int x = 0; x < 3; ++x) {
-        const bc_emf_shape *sh = &p->emf[x];
-        if (sh->kind == BC_EMF_TABLE) {
-            dk[x] = s->piece[x].slope;
-            continue;
-        }
-        if (!trig) {
-            c = cos(th);
-            sn = sin(th);
-            trig = 1;
-        }
-        double c1 = c * COS_PHI[x] + sn * SIN_PHI[x];
-        double s1 = sn * COS_PHI[x] - c * SIN_PHI[x];
-        double cm = 1.0, sm = 0.0, acc = 0.0;
-        for (int32_t m = 0; m < sh->n; ++m) {
-            acc += (double)m * (sh->y[m] * cm - sh->x[m] * sm);
-            double cn = cm * c1 - sm * s1;
-            sm = sm * c1 + cm * s1;
-            cm = cn;
-        }
-        dk[x] = acc;
-    }
+    shapes_at(p, s, th, k, dk);
     double r = 0.0;
     for (int x = 0; x < 3; ++x) r += k[x] * dy[Y_I + x] + (double)p->p * om * dk[x] * y[Y_I + x];
     if (p->n_cog > 0) {
