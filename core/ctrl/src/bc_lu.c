@@ -446,7 +446,8 @@ int bc_lu_init(const bc_lu_params *p, bc_lu_state *s)
     s->applied.off = 2;
     s->applied.sig = 0;
     s->applied.duty = 0.0f;
-    s->oc_latched = 0;
+    s->guard_p = (bc_guard_params){.i_max = p->i_max, .v_max = p->v_max};
+    if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
     s->dir = 0;
     s->dcm = 0;
     s->t_first = 0.0f;
@@ -464,27 +465,6 @@ static void go_safe(bc_lu_state *s, bc_ctrl_out *out, uint32_t why)
     s->applied.kind = BC_LU_SAFE;
     s->applied.duty = 0.0f;
     bc_pi_reset(&s->pi_p, &s->pi, 0.0f);
-}
-
-/* The measured currents, the unmeasured one reconstructed (sum zero); 0 if fewer than two are measured or a
- * measured one is not finite. */
-static int currents(const bc_ctrl_in *in, float i[3])
-{
-    uint32_t m = in->i_mask & 7u;
-    int n = 0, missing = -1;
-    for (int x = 0; x < 3; ++x) {
-        if (m & (1u << x)) {
-            if (!isfinite(in->i_abc[x])) return 0;
-            i[x] = in->i_abc[x];
-            ++n;
-        } else {
-            i[x] = 0.0f;
-            missing = x;
-        }
-    }
-    if (n < 2) return 0;
-    if (n == 2) i[missing] = -(i[0] + i[1] + i[2]); /* i_a + i_b + i_c = 0 */
-    return 1;
 }
 
 /* The one-step model the parameters ask for: ordered (order = 1) or averaged. */
@@ -537,27 +517,15 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
     bc_hall_step(&s->hall_p, &s->hall, in, &h);
     out->diag[4] = h.theta;
     out->diag[5] = h.omega_e;
-    if (!h.valid) {
-        go_safe(s, out, BC_FLAG_HALL_INVALID);
-        return;
-    }
 
-    /* measurements */
+    /* measurements, DC bus, hardware and software over-current trips: the input guard (bc_guard.h) */
     bc_lu_point x0;
     float v = in->v_dc, t_ref = in->ref;
-    if (!currents(in, x0.i) || !isfinite(v) || !(v > 0.0f) || !(v <= p->v_max) || !isfinite(t_ref)) {
-        go_safe(s, out, BC_FLAG_BAD_INPUT);
-        return;
-    }
-    if (in->fault_pin) { /* the inverter's hardware protection has tripped: its gates are off; stay safe */
-        go_safe(s, out, BC_FLAG_OVERCURRENT);
-        return;
-    }
-    float i_peak = fmaxf(fabsf(x0.i[0]), fmaxf(fabsf(x0.i[1]), fabsf(x0.i[2])));
-    if (s->oc_latched && i_peak < 0.5f * p->i_max) s->oc_latched = 0;
-    if (!(i_peak <= p->i_max)) s->oc_latched = 1;
-    if (s->oc_latched) {
-        go_safe(s, out, BC_FLAG_OVERCURRENT);
+    uint32_t why = bc_guard_step(&s->guard_p, &s->guard, in, x0.i);
+    if (!h.valid) why |= BC_FLAG_HALL_INVALID;
+    if (!isfinite(t_ref)) why |= BC_FLAG_BAD_INPUT;
+    if (why) {
+        go_safe(s, out, why);
         return;
     }
     x0.v_dc = v;

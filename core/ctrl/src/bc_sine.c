@@ -108,7 +108,8 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->piw_p.u_max = p->speed_loop ? p->tau_max : 1.0f;
     if (bc_pi_init(&s->piw_p, &s->pi_w) != BC_OK) return BC_ERR_PARAM;
     s->mode = BC_SINE_MODE_START;
-    s->tripped = 0;
+    s->guard_p = (bc_guard_params){.i_max = p->i_max, .v_max = p->v_max};
+    if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
     s->six_run = !p->flying_start;
     s->n_quiet = 0;
     s->lim_shape = 0;
@@ -265,41 +266,19 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     }
     out->flags = 0u;
 
-    /* 1. safety (fault_pin: the inverter's hardware protection has tripped, its gates are off) */
-    if (s->tripped || in->fault_pin) {
-        go_safe(p, s, out, BC_FLAG_OVERCURRENT);
-        return;
-    }
-    uint32_t mask = in->i_mask & 7u;
-    int n_meas = (int)(mask & 1u) + (int)((mask >> 1) & 1u) + (int)((mask >> 2) & 1u);
-    int bad = !(isfinite(in->v_dc) && in->v_dc > 0.0f) || n_meas < 2;
-    for (int x = 0; x < 3; ++x) {
-        if (((mask >> x) & 1u) && !isfinite(in->i_abc[x])) bad = 1;
-    }
-    if (p->angle == BC_SINE_ANGLE_ENCODER && !isfinite(in->theta_enc)) bad = 1;
-    if (p->speed_loop ? !isfinite(in->omega_ref) : !isfinite(in->ref)) bad = 1;
+    /* 1. safety: the input guard (bc_guard.h), the Hall code, the reference and the encoder angle if used */
     bc_hall_out h;
     bc_hall_step(&s->hall_p, &s->hall, in, &h); /* keeps the edge bookkeeping even when the output is safe */
-    if (bad) {
-        go_safe(p, s, out, BC_FLAG_BAD_INPUT);
+    float i3[3];
+    uint32_t why = bc_guard_step(&s->guard_p, &s->guard, in, i3);
+    if (!h.valid) why |= BC_FLAG_HALL_INVALID;
+    if (p->angle == BC_SINE_ANGLE_ENCODER && !isfinite(in->theta_enc)) why |= BC_FLAG_BAD_INPUT;
+    if (p->speed_loop ? !isfinite(in->omega_ref) : !isfinite(in->ref)) why |= BC_FLAG_BAD_INPUT;
+    if (why) {
+        go_safe(p, s, out, why);
         return;
     }
-    bc_abc i;
-    i.a = (mask & 1u) ? in->i_abc[0] : 0.0f;
-    i.b = (mask & 2u) ? in->i_abc[1] : 0.0f;
-    i.c = (mask & 4u) ? in->i_abc[2] : 0.0f;
-    if (!(mask & 1u)) i.a = -(i.b + i.c); /* the unmeasured phase from i_a + i_b + i_c = 0 */
-    if (!(mask & 2u)) i.b = -(i.a + i.c);
-    if (!(mask & 4u)) i.c = -(i.a + i.b);
-    if (!(fabsf(i.a) <= p->i_max && fabsf(i.b) <= p->i_max && fabsf(i.c) <= p->i_max)) {
-        s->tripped = 1;
-        go_safe(p, s, out, BC_FLAG_OVERCURRENT);
-        return;
-    }
-    if (!h.valid) {
-        go_safe(p, s, out, BC_FLAG_HALL_INVALID);
-        return;
-    }
+    bc_abc i = {i3[0], i3[1], i3[2]};
 
     /* 2. angle and speed */
     float theta = (p->angle == BC_SINE_ANGLE_ENCODER) ? bc_wrap_2pi(in->theta_enc) : h.theta;

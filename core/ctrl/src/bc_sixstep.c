@@ -41,7 +41,8 @@ int bc_sixstep_init(const bc_sixstep_params *p, bc_sixstep_state *s)
     s->seen = -1;
     s->incoming = -1;
     s->hyst_on = 0;
-    s->oc_latched = 0;
+    s->guard_p = (bc_guard_params){.i_max = p->i_max, .v_max = p->v_max};
+    if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
     return BC_OK;
 }
 
@@ -268,45 +269,14 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
     bc_hall_step(&s->hall_p, &s->hall, in, &h);
     out->diag[4] = h.omega_e;
 
-    /* measurements: two measured phases give the third, i_a + i_b + i_c = 0 */
-    uint32_t mask = in->i_mask & 7u;
-    int n_meas = 0, bad = 0;
-    float i[3], sum = 0.0f;
-    for (int x = 0; x < 3; ++x) {
-        i[x] = 0.0f;
-        if (mask & (1u << x)) {
-            ++n_meas;
-            if (!fin(in->i_abc[x])) bad = 1;
-            else {
-                i[x] = in->i_abc[x];
-                sum += i[x];
-            }
-        }
-    }
-    if (n_meas == 2) {
-        for (int x = 0; x < 3; ++x)
-            if (!(mask & (1u << x))) i[x] = -sum;
-    }
+    /* measurements, DC bus, hardware and software over-current trips: the input guard (bc_guard.h) */
+    float i[3];
+    uint32_t why = bc_guard_step(&s->guard_p, &s->guard, in, i);
     float v = in->v_dc;
-    if (n_meas < 2 || !fin(v) || !(v > 0.0f) || v > p->v_max || !fin(in->ref) || !fin(sum)) bad = 1;
-    if (!h.valid || bad) {
-        safe(s, out, (h.valid ? 0u : BC_FLAG_HALL_INVALID) | (bad ? BC_FLAG_BAD_INPUT : 0u));
-        return;
-    }
-
-    /* the inverter's hardware protection has tripped: its gates are off; stay safe */
-    if (in->fault_pin) {
-        safe(s, out, BC_FLAG_OVERCURRENT);
-        return;
-    }
-
-    /* over-current: trip above i_max, latched until every |i| < i_max / 2 */
-    float i_abs = 0.0f;
-    for (int x = 0; x < 3; ++x) i_abs = fabsf(i[x]) > i_abs ? fabsf(i[x]) : i_abs;
-    if (!fin(i_abs) || i_abs > p->i_max) s->oc_latched = 1;
-    else if (s->oc_latched && i_abs < 0.5f * p->i_max) s->oc_latched = 0;
-    if (s->oc_latched) {
-        safe(s, out, BC_FLAG_OVERCURRENT);
+    if (!h.valid) why |= BC_FLAG_HALL_INVALID;
+    if (!fin(in->ref)) why |= BC_FLAG_BAD_INPUT;
+    if (why) {
+        safe(s, out, why);
         return;
     }
 
