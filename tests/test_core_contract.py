@@ -124,3 +124,10 @@ def test_controllers_restate_no_c_constant():
             m = re.match(r"^_([A-Z]+) = \{(.*)\}", line)
             if m and m.group(1) != "REF":  # ref_torque is a 0/1 switch, not a C constant
                 assert re.search(r'"BC_\w+"', m.group(2)) and not re.search(r":\s*-?\d", m.group(2)), (f.name, line)
+
+
+def test_the_plant_integrator_cache_is_private():
+    """The binding describes the plant state a caller reads; the integrator's work memory is not part of it."""
+    names = set(core().dtypes["bc_plant_state"].names)
+    assert {"t", "i", "theta", "omega", "acc", "flags"} <= names
+    assert not names & {"work", "k1", "k1_valid", "wcache", "aux_tau", "wdir"}

@@ -501,7 +501,7 @@ static double angle_event(const bc_plant_params *p, const bc_plant_state *s, dou
     if (p->mech == BC_MECH_IMPOSED) {
         return w0 > 0.0 ? delta / w0 : HUGE_VAL;
     }
-    double acc = s->k1[Y_OM] * (double)s->dir;
+    double acc = s->work.k1[Y_OM] * (double)s->dir;
     double disc = w0 * w0 + 2.0 * acc * delta;
     if (disc < 0.0) {
         return HUGE_VAL; /* stops before the bound: the speed zero crossing comes first */
@@ -678,21 +678,21 @@ static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
             topology_set(p, s);
         } else {
             /* the derivative at this state and topology is the next step's k1 */
-            memcpy(s->k1, dy, sizeof dy);
-            s->aux_tau = a.tau;
-            s->wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
-            watch_eval(p, s, y, &a, s->wdir, s->wcache);
-            s->k1_valid = 1;
+            memcpy(s->work.k1, dy, sizeof dy);
+            s->work.tau = a.tau;
+            s->work.wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
+            watch_eval(p, s, y, &a, s->work.wdir, s->work.w);
+            s->work.valid = 1;
             return;
         }
     }
-    s->k1_valid = 0;
+    s->work.valid = 0;
 }
 
 static void resolve(const bc_plant_params *p, bc_plant_state *s)
 {
     conduction_from_gates(p, s);
-    s->k1_valid = 0;
+    s->work.valid = 0;
     resolve_open(p, s);
 }
 
@@ -1029,7 +1029,7 @@ void bc_plant_set_inputs(const bc_plant_params *p, bc_plant_state *s, double ome
             pieces_locate(p, s);
         }
     }
-    s->k1_valid = 0;
+    s->work.valid = 0;
     resolve_open(p, s);
 }
 
@@ -1189,17 +1189,17 @@ static int process_due(const bc_plant_params *p, bc_plant_state *s)
 
 static void ensure_k1(const bc_plant_params *p, bc_plant_state *s)
 {
-    if (s->k1_valid) {
+    if (s->work.valid) {
         return;
     }
     double y[NY];
     aux_t a;
     pack(s, y);
-    rhs(p, s, y, s->k1, &a);
-    s->aux_tau = a.tau;
-    s->wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
-    watch_eval(p, s, y, &a, s->wdir, s->wcache);
-    s->k1_valid = 1;
+    rhs(p, s, y, s->work.k1, &a);
+    s->work.tau = a.tau;
+    s->work.wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
+    watch_eval(p, s, y, &a, s->work.wdir, s->work.w);
+    s->work.valid = 1;
 }
 
 /* ---------------------------------------------------------------------------------------------------------- */
@@ -1261,12 +1261,12 @@ static void hermite_extremes(double h, double f0, double f1, double d0, double d
     }
 }
 
-/* After a step of length h from (y0, k0 = f(y0), tau0) to the current state (y1, k1 = f(y1), tau_e in aux_tau):
+/* After a step of length h from (y0, k0 = f(y0), tau0) to the current state (y1, k1 = f(y1), tau_e in work.tau):
  * update the extremes, including the torque's turning points inside the step, and tell the observer. */
 static void track_extremes(const bc_plant_params *p, bc_plant_state *s, double h, const double *y0,
                            const double *k0, double tau0, const double *y1, const double *k1)
 {
-    double tau1 = s->aux_tau;
+    double tau1 = s->work.tau;
     if (tau1 < s->tau_min) s->tau_min = tau1;
     if (tau1 > s->tau_max) s->tau_max = tau1;
     if (h > 0.0) {
@@ -1313,7 +1313,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             /* nothing left to integrate at this instant (an angle bound at the current angle, rounding) */
             if (angle_step) {
                 angles_cross(p, s, th_ev);
-                s->k1_valid = 0;
+                s->work.valid = 0;
             }
             if (++zero_len > MAX_ZERO_LENGTH_EVENTS) {
                 s->flags |= BC_PLANT_CHATTER;
@@ -1324,26 +1324,26 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                 continue;
             }
         }
-        rk4(p, s, y0, s->k1, h, y1);
+        rk4(p, s, y0, s->work.k1, h, y1);
         rhs(p, s, y1, k1n, &a1);
         /* watched functions: the first that goes negative inside the step is an event */
-        int dir_om = s->wdir;
+        int dir_om = s->work.wdir;
         watch_eval(p, s, y1, &a1, dir_om, g1);
         int w_hit = -1;
         double h_hit = h;
         int any_neg = 0;
         for (int w = 0; w < NW; ++w) any_neg |= g1[w] < 0.0;
         if (any_neg && zero_len <= MAX_ZERO_LENGTH_EVENTS) {
-            memcpy(g0, s->wcache, sizeof g0); /* the watches at the step start */
+            memcpy(g0, s->work.w, sizeof g0); /* the watches at the step start */
             for (int w = 0; w < NW; ++w) {
                 if (g1[w] < 0.0) {
                     double guess = -1.0;
                     if (w < W_OPEN_LO && g0[w] > 0.0) { /* a diode current: its derivative is known at both ends */
                         int x = w - W_DIODE;
                         double sg = s->cond[x] == BC_COND_D_L ? 1.0 : -1.0;
-                        guess = hermite_zero(h, g0[w], g1[w], sg * s->k1[Y_I + x], sg * k1n[Y_I + x]);
+                        guess = hermite_zero(h, g0[w], g1[w], sg * s->work.k1[Y_I + x], sg * k1n[Y_I + x]);
                     }
-                    double hw = root_find(p, s, y0, s->k1, h, w, dir_om, g0[w], g1[w], guess, &rtry);
+                    double hw = root_find(p, s, y0, s->work.k1, h, w, dir_om, g0[w], g1[w], guess, &rtry);
                     if (w_hit < 0 || hw < h_hit) {
                         w_hit = w;
                         h_hit = hw;
@@ -1362,15 +1362,15 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                 memcpy(k1n, rbest.dy, sizeof k1n);
                 a1 = rbest.a;
             } else if (h_hit < h) {
-                rk4(p, s, y0, s->k1, h_hit, y1);
+                rk4(p, s, y0, s->work.k1, h_hit, y1);
                 rhs(p, s, y1, k1n, &a1);
             }
-            double tau0 = s->aux_tau;
+            double tau0 = s->work.tau;
             unpack(s, y1);
             s->t = (h_hit < h) ? s->t + h_hit : t_stop;
             if (p->mech == BC_MECH_IMPOSED) s->omega = y0[Y_OM];
-            s->aux_tau = a1.tau;
-            track_extremes(p, s, h_hit < h ? h_hit : h, y0, s->k1, tau0, y1, k1n);
+            s->work.tau = a1.tau;
+            track_extremes(p, s, h_hit < h ? h_hit : h, y0, s->work.k1, tau0, y1, k1n);
             apply_event(p, s, w_hit, &a1);
             s->n_events += 1;
             s->n_steps += 1;
@@ -1381,7 +1381,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                     s->hold_open |= 1 << (w_hit - W_DIODE);
                     s->cond[w_hit - W_DIODE] = BC_COND_OPEN;
                     topology_set(p, s);
-                    s->k1_valid = 0;
+                    s->work.valid = 0;
                 }
                 ++zero_len;
             } else {
@@ -1391,14 +1391,14 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             wrap_angle(p, s);
             continue;
         }
-        double tau0 = s->aux_tau;
+        double tau0 = s->work.tau;
         unpack(s, y1);
         s->t = t_stop;
-        s->aux_tau = a1.tau;
-        track_extremes(p, s, h, y0, s->k1, tau0, y1, k1n);
-        memcpy(s->k1, k1n, sizeof k1n);
-        memcpy(s->wcache, g1, sizeof g1);
-        s->k1_valid = 1;
+        s->work.tau = a1.tau;
+        track_extremes(p, s, h, y0, s->work.k1, tau0, y1, k1n);
+        memcpy(s->work.k1, k1n, sizeof k1n);
+        memcpy(s->work.w, g1, sizeof g1);
+        s->work.valid = 1;
         s->n_steps += 1;
         zero_len = 0;
         s->hold_open = 0;
@@ -1437,8 +1437,8 @@ void bc_plant_output(const bc_plant_params *p, const bc_plant_state *s, bc_plant
 void bc_plant_reset_extremes(const bc_plant_params *p, bc_plant_state *s)
 {
     ensure_k1(p, s);
-    s->tau_min = s->aux_tau;
-    s->tau_max = s->aux_tau;
+    s->tau_min = s->work.tau;
+    s->tau_max = s->work.tau;
     for (int x = 0; x < 3; ++x) {
         s->i_peak[x] = fabs(s->i[x]);
     }
