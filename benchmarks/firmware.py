@@ -35,16 +35,24 @@ def controller_sources() -> list[Path]:
     return sorted((CTRL / "src").glob("*.c"))
 
 
+def _targets(kind: str) -> list[str]:
+    """Names of ``core/firmware/targets.txt`` built as ``kind`` ("harness" or "cost")."""
+    out = []
+    for line in (CORE / "firmware" / "targets.txt").read_text().splitlines():
+        words = line.split("#", 1)[0].split()
+        if words and kind in words[1:]:
+            out.append(words[0])
+    return out
+
+
 def harness_names() -> list[str]:
-    text = (CORE / "firmware" / "harness.c").read_text()
-    return list(dict.fromkeys(m.lower() for m in re.findall(r"defined\(BC_FW_(\w+)\)", text)))
+    """Controllers of the bare-metal harness (core/firmware/harness.c), as listed in targets.txt."""
+    return _targets("harness")
 
 
 def cost_names() -> list[str]:
-    """Targets of the host tools (core/firmware/targets.c)."""
-    text = (CORE / "firmware" / "targets.c").read_text()
-    names = re.findall(r'\{"(\w+)", [A-Z_| ]+, \w+_init, \w+_step,', text)
-    return [n for n in names if n != "canary"]  # the canary exists only in the test of the fuzz checks
+    """Targets of the host tools (core/firmware/targets.c), as listed in targets.txt."""
+    return _targets("cost")
 
 
 def arm_sizes(tmp: Path) -> dict[str, tuple[int, int]]:

@@ -55,3 +55,11 @@ def test_make_firmware_cross_compiles_exactly_the_ctrl_half(tmp_path):
     built = {p.stem for p in tmp_path.glob("*.o")}
     assert built == {p.stem for p in fw.controller_sources()}
     assert not built & {p.stem for p in (fw.CORE / "host" / "src").glob("*.c")}
+
+
+def test_a_target_without_its_harness_branch_fails_the_build(tmp_path):
+    require_tool("arm-none-eabi-gcc")
+    cmd = ["arm-none-eabi-gcc", *fw.ARM, *fw.WARN, "-DBC_FW_NOT_A_CONTROLLER", f"-I{fw.CTRL / 'include'}", "-c",
+           str(fw.CORE / "firmware" / "harness.c"), "-o", str(tmp_path / "x.o")]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    assert proc.returncode != 0 and "targets.txt" in proc.stderr
