@@ -16,6 +16,9 @@
  * t_x = -i_x / (di_x/dt) (bc_inv_first_zero); bc_inv_advance moves the currents to the end of the piece and, if a
  * phase opened there, sets it to exactly 0 and gives its rounding residue to the first other connected phase (the
  * sum of the currents stays zero). Callers loop: classify, slopes, first zero, advance, until the time is used.
+ *
+ * Header-only (static inline): the callers run it several times per sample inside their solvers, and a call across
+ * translation units cost them about 12 % more instructions per step (benchmarks/firmware.py).
  */
 #ifndef BC_INVERTER_H
 #define BC_INVERTER_H
@@ -24,13 +27,56 @@
 
 /* Slopes di_x/dt of the connected phases (0 for open ones); returns the number of connected phases, or
  * BC_INV_NO_PATH (slopes all 0) if fewer than two. */
-int bc_inv_slopes(const float u[3], const float a[3], const float b[3], const int conn[3], float L, float slope[3]);
+static inline int bc_inv_slopes(const float u[3], const float a[3], const float b[3], const int conn[3], float L,
+                                float slope[3])
+{
+    int n = 0;
+    float sum = 0.0f;
+    for (int x = 0; x < 3; ++x) {
+        slope[x] = 0.0f;
+        if (conn[x]) {
+            ++n;
+            sum += u[x] - a[x] - b[x];
+        }
+    }
+    if (n < 2) return BC_INV_NO_PATH;
+    float vn = sum / (float)n;
+    for (int x = 0; x < 3; ++x) slope[x] = conn[x] ? (u[x] - a[x] - b[x] - vn) / L : 0.0f;
+    return n;
+}
 
 /* The first diode-only phase whose current reaches zero within h_max: returns its index and its time in *h, or -1
  * and *h = h_max. */
-int bc_inv_first_zero(const int diode[3], const float i[3], const float slope[3], float h_max, float *h);
+static inline int bc_inv_first_zero(const int diode[3], const float i[3], const float slope[3], float h_max,
+                                    float *h)
+{
+    int z = -1;
+    *h = h_max;
+    for (int x = 0; x < 3; ++x) {
+        if (diode[x] && i[x] * slope[x] < 0.0f) {
+            float t = -i[x] / slope[x];
+            if (t < *h) {
+                *h = t;
+                z = x;
+            }
+        }
+    }
+    return z;
+}
 
 /* i_x += slope_x h; if z >= 0 phase z opens: i_z = 0 and its residue goes to the first other connected phase. */
-void bc_inv_advance(const int conn[3], const float slope[3], float h, int z, float i[3]);
+static inline void bc_inv_advance(const int conn[3], const float slope[3], float h, int z, float i[3])
+{
+    for (int x = 0; x < 3; ++x) i[x] += slope[x] * h;
+    if (z < 0) return;
+    float r = i[z]; /* rounding residue: keep the sum zero */
+    i[z] = 0.0f;
+    for (int x = 0; x < 3; ++x) {
+        if (x != z && conn[x]) {
+            i[x] += r;
+            return;
+        }
+    }
+}
 
 #endif /* BC_INVERTER_H */

@@ -14,8 +14,9 @@
  *                         shrinks from both sides instead of regula falsi's one-sided crawl: BC_ROOT_ILLINOIS
  *                         halves it when the same end stayed twice in a row (the Illinois method, superlinear),
  *                         BC_ROOT_HALVE every time it stays (bc_sixstep's predictive solve has always used it;
- *                         kept so its duties stay bit for bit what they were; slower on a smooth root). Stops when |g(d)| <= tol,
- *                         b - a < width, g(d) is not finite, or after max_it evaluations; returns the last d
+ *                         kept so its duties stay bit for bit what they were; slower on a smooth root).
+ *                         Stops when |g(d)| <= tol, b - a < width, g(d) is not finite, or after max_it
+ *                         evaluations; returns the last d
  *                         (evaluated, or the next estimate when max_it ran out), clamped to the final bracket
  *                         (NaN only if the first estimate is NaN: callers test isfinite on the result).
  */
