@@ -33,13 +33,15 @@ static inline int bc_inv_slopes(const float u[3], const float a[3], const float 
     int n = 0;
     float sum = 0.0f;
     for (int x = 0; x < 3; ++x) {
-        slope[x] = 0.0f;
         if (conn[x]) {
             ++n;
             sum += u[x] - a[x] - b[x];
         }
     }
-    if (n < 2) return BC_INV_NO_PATH;
+    if (n < 2) {
+        slope[0] = slope[1] = slope[2] = 0.0f;
+        return BC_INV_NO_PATH;
+    }
     float vn = sum / (float)n;
     for (int x = 0; x < 3; ++x) slope[x] = conn[x] ? (u[x] - a[x] - b[x] - vn) / L : 0.0f;
     return n;
