@@ -6,7 +6,9 @@ from setuptools import Extension, setup
 from setuptools.command.build_ext import build_ext
 
 HERE = Path(__file__).parent
-SOURCES = sorted(str(p.relative_to(HERE)) for p in (HERE / "core" / "src").glob("*.c"))
+# core/ctrl: the controllers (what runs on an MCU); core/host: plant, sensors, runner, binding (docs/design.md)
+SOURCES = sorted(str(p.relative_to(HERE)) for half in ("ctrl", "host")
+                 for p in (HERE / "core" / half / "src").glob("*.c"))
 FLAGS = ["-std=c99", "-O3", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wdouble-promotion"]
 
 
@@ -22,7 +24,7 @@ setup(
         Extension(
             "bldclab._bccore",
             sources=SOURCES,
-            include_dirs=["core/include"],
+            include_dirs=["core/ctrl/include", "core/host/include"],
             extra_compile_args=FLAGS,
             libraries=["m"],
             py_limited_api=False,

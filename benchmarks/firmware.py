@@ -1,6 +1,7 @@
 """Firmware table: each controller cross-compiled for a Cortex-M4F and its cost per step.
 
-- Flash and RAM per controller: the controllers (not the plant) are built with Debian's gcc-arm-none-eabi and
+- Flash and RAM per controller: the controllers (``core/ctrl/src/*.c``, exactly what ``make -C core firmware``
+  cross-compiles; never the plant side in ``core/host``) are built with Debian's gcc-arm-none-eabi and
   newlib (``-mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard``, C99, the project's warnings as errors), linked
   into the bare-metal harness ``core/firmware/harness.c`` one controller at a time with ``--gc-sections``; the cost
   is the image size minus the empty harness (libm functions a controller pulls in are included).
@@ -25,26 +26,33 @@ CORE = ROOT / "core"
 WARN = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wdouble-promotion", "-Werror"]
 ARM = ["-mcpu=cortex-m4", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard", "-mthumb", "-Os", "-ffunction-sections",
        "-fdata-sections"]
-PLANT_SIDE = {"bc_plant.c", "bc_emf.c", "bc_sensors.c", "bc_sim.c"}
+CTRL = CORE / "ctrl"
 SCENARIOS = ("run", "edge", "invalid", "nan")
 
 
 def controller_sources() -> list[Path]:
-    """Core sources that run on the MCU: everything but the plant side and the host binding."""
-    srcs = (CORE / "src").glob("*.c")
-    return sorted(p for p in srcs if p.name not in PLANT_SIDE and not p.name.startswith("bc_bind"))
+    """Core sources that run on the MCU: the ctrl half of the core (the host half is plant, runner, binding)."""
+    return sorted((CTRL / "src").glob("*.c"))
+
+
+def _targets(kind: str) -> list[str]:
+    """Names of ``core/firmware/targets.txt`` built as ``kind`` ("harness" or "cost")."""
+    out = []
+    for line in (CORE / "firmware" / "targets.txt").read_text().splitlines():
+        words = line.split("#", 1)[0].split()
+        if words and kind in words[1:]:
+            out.append(words[0])
+    return out
 
 
 def harness_names() -> list[str]:
-    text = (CORE / "firmware" / "harness.c").read_text()
-    return list(dict.fromkeys(m.lower() for m in re.findall(r"defined\(BC_FW_(\w+)\)", text)))
+    """Controllers of the bare-metal harness (core/firmware/harness.c), as listed in targets.txt."""
+    return _targets("harness")
 
 
 def cost_names() -> list[str]:
-    """Targets of the host tools (core/firmware/targets.c)."""
-    text = (CORE / "firmware" / "targets.c").read_text()
-    names = re.findall(r'\{"(\w+)", [A-Z_| ]+, \w+_init, \w+_step,', text)
-    return [n for n in names if n != "canary"]  # the canary exists only in the test of the fuzz checks
+    """Targets of the host tools (core/firmware/targets.c), as listed in targets.txt."""
+    return _targets("cost")
 
 
 def arm_sizes(tmp: Path) -> dict[str, tuple[int, int]]:
@@ -52,7 +60,7 @@ def arm_sizes(tmp: Path) -> dict[str, tuple[int, int]]:
     out = {}
     for name in ["none", *harness_names()]:
         elf = tmp / f"{name}.elf"
-        cmd = ["arm-none-eabi-gcc", *ARM, *WARN, f"-DBC_FW_{name.upper()}", f"-I{CORE / 'include'}",
+        cmd = ["arm-none-eabi-gcc", *ARM, *WARN, f"-DBC_FW_{name.upper()}", f"-I{CTRL / 'include'}",
                str(CORE / "firmware" / "harness.c"), *map(str, controller_sources()), "-Wl,--gc-sections",
                "--specs=nosys.specs", "-lm", "-o", str(elf)]
         subprocess.run(cmd, check=True, capture_output=True, text=True)
@@ -65,7 +73,7 @@ def arm_sizes(tmp: Path) -> dict[str, tuple[int, int]]:
 
 def instruction_counts(tmp: Path, n: int) -> dict[str, dict[str, float]]:
     exe = tmp / "cost"
-    subprocess.run(["cc", "-O2", "-g", *WARN[:1], f"-I{CORE / 'include'}", str(CORE / "firmware" / "cost.c"),
+    subprocess.run(["cc", "-O2", "-g", *WARN[:1], f"-I{CTRL / 'include'}", str(CORE / "firmware" / "cost.c"),
                     str(CORE / "firmware" / "targets.c"), *map(str, controller_sources()), "-lm", "-o", str(exe)],
                    check=True)
     out: dict[str, dict[str, float]] = {}

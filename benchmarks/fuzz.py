@@ -25,7 +25,7 @@ def build(name: str, tmp: Path) -> Path:
     """Build the fuzz binary of one target."""
     exe = tmp / f"fuzz_{name}"
     cmd = ["clang", "-O1", "-g", "-fsanitize=fuzzer,address,undefined", "-fno-sanitize-recover=all",
-           f'-DBC_FUZZ_ONLY="{name}"', f"-I{fw.CORE / 'include'}", str(fw.CORE / "firmware" / "fuzz.c"),
+           f'-DBC_FUZZ_ONLY="{name}"', f"-I{fw.CTRL / 'include'}", str(fw.CORE / "firmware" / "fuzz.c"),
            str(fw.CORE / "firmware" / "targets.c"), *map(str, fw.controller_sources()), "-lm", "-o", str(exe)]
     subprocess.run(cmd, check=True, capture_output=True, text=True)
     return exe

@@ -42,10 +42,28 @@ def test_every_registered_controller_is_in_the_firmware_harness():
 def test_cost_harness_runs_every_scenario(tmp_path):
     require_tool("cc")
     exe = tmp_path / "cost"
-    subprocess.run(["cc", "-O2", "-I", str(fw.CORE / "include"), str(fw.CORE / "firmware" / "cost.c"),
+    subprocess.run(["cc", "-O2", "-I", str(fw.CTRL / "include"), str(fw.CORE / "firmware" / "cost.c"),
                     str(fw.CORE / "firmware" / "targets.c"), *map(str, fw.controller_sources()), "-lm", "-o", str(exe)],
                    check=True)
     for name in fw.cost_names():
         for sc in fw.SCENARIOS:
             out = subprocess.run([str(exe), name, sc, "2000"], check=True, capture_output=True, text=True).stdout
             assert out.startswith(f"{name} {sc} 2000")
+
+
+def test_make_firmware_cross_compiles_exactly_the_ctrl_half(tmp_path):
+    require_tool("arm-none-eabi-gcc")
+    proc = subprocess.run(["make", "-C", str(fw.CORE), "firmware", f"FW_BUILD={tmp_path}"], capture_output=True,
+                          text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    built = {p.stem for p in tmp_path.glob("*.o")}
+    assert built == {p.stem for p in fw.controller_sources()}
+    assert not built & {p.stem for p in (fw.CORE / "host" / "src").glob("*.c")}
+
+
+def test_a_target_without_its_harness_branch_fails_the_build(tmp_path):
+    require_tool("arm-none-eabi-gcc")
+    cmd = ["arm-none-eabi-gcc", *fw.ARM, *fw.WARN, "-DBC_FW_NOT_A_CONTROLLER", f"-I{fw.CTRL / 'include'}", "-c",
+           str(fw.CORE / "firmware" / "harness.c"), "-o", str(tmp_path / "x.o")]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    assert proc.returncode != 0 and "targets.txt" in proc.stderr

@@ -32,7 +32,7 @@ def test_fuzz_checks_catch_a_wrong_controller(tmp_path):
     require_tool("clang")
     exe = tmp_path / "fuzz_canary"
     cmd = ["clang", "-O1", "-g", "-fsanitize=fuzzer,address,undefined", "-DBC_FUZZ_CANARY", '-DBC_FUZZ_ONLY="canary"',
-           f"-I{fz.fw.CORE / 'include'}", str(fz.fw.CORE / "firmware" / "fuzz.c"),
+           f"-I{fz.fw.CTRL / 'include'}", str(fz.fw.CORE / "firmware" / "fuzz.c"),
            str(fz.fw.CORE / "firmware" / "targets.c"), *map(str, fz.fw.controller_sources()), "-lm", "-o", str(exe)]
     subprocess.run(cmd, check=True, capture_output=True)
     _, finding, log = fz.run(exe, 60, tmp_path)

@@ -7,8 +7,8 @@ PY=${PYTHON:-.venv/bin/python}
 SUFFIX=$($PY -c "import sysconfig; print(sysconfig.get_config_var('EXT_SUFFIX'))")
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
-FLAGS="-std=c99 -O3 -fPIC -Wall -Wextra -Wpedantic -Wconversion -Wdouble-promotion -Icore/include"
-for f in core/src/*.c; do
+FLAGS="-std=c99 -O3 -fPIC -Wall -Wextra -Wpedantic -Wconversion -Wdouble-promotion -Icore/ctrl/include -Icore/host/include"
+for f in core/ctrl/src/*.c core/host/src/*.c; do
     cc $FLAGS -c "$f" -o "$TMP/$(basename "$f" .c).o" &
 done
 wait

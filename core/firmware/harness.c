@@ -1,7 +1,8 @@
 /*
  * harness.c - bare-metal harness for the controllers: the image an MCU would run, minus the peripherals.
- * Built for a Cortex-M4F by benchmarks/firmware.py with exactly one BC_FW_<NAME> defined (or none, for the
- * baseline), so each controller's flash and RAM cost is the difference to the baseline image.
+ * Built for a Cortex-M4F by benchmarks/firmware.py with exactly one BC_FW_<NAME> defined (a "harness" line of
+ * targets.txt, or BC_FW_NONE for the baseline), so each controller's flash and RAM cost is the difference to the
+ * baseline image.
  * Measurements come from volatile locations (as if from ADC and timer registers); the leg commands go to volatile
  * locations (as if to the timer's compare registers).
  */
@@ -56,9 +57,11 @@ static const bc_lu_params P = LU4KW_LU_PARAMS;
 static bc_lu_state S;
 #define INIT() bc_lu_init(&P, &S)
 #define STEP(in, out) bc_lu_step(&P, &S, in, out)
-#else
+#elif defined(BC_FW_NONE)
 #define INIT() 0
 #define STEP(in, out) ((out)->diag[0] = (in)->ref)
+#else
+#error "define BC_FW_NONE or the BC_FW_<NAME> of a target listed in targets.txt"
 #endif
 
 int main(void)

@@ -63,5 +63,23 @@ int main(void)
             }
         }
     }
+    /* named constants: each has a group and a name, names are unique, flag bits are distinct single bits */
+    int n_flag = 0;
+    uint64_t bits = 0u;
+    CHECK(bc_const_count() > 40, "constants listed: %d", (int)bc_const_count());
+    CHECK(bc_const_get(-1) == 0 && bc_const_get(bc_const_count()) == 0, "constants out of range: null");
+    for (int32_t j = 0; j < bc_const_count(); ++j) {
+        const bc_const_desc *k = bc_const_get(j);
+        CHECK(k != 0 && k->group && k->name && strncmp(k->name, "BC_", 3) == 0, "constant %d named", (int)j);
+        for (int32_t q = 0; q < j; ++q) CHECK(strcmp(bc_const_get(q)->name, k->name) != 0, "%s listed once", k->name);
+        if (strcmp(k->group, "flag") == 0) {
+            ++n_flag;
+            uint64_t v = (uint64_t)k->value;
+            CHECK(v != 0u && (v & (v - 1u)) == 0u && !(bits & v), "%s is a bit of its own", k->name);
+            bits |= v;
+        }
+    }
+    CHECK(n_flag == 5 && bits == (BC_FLAG_SAFE | BC_FLAG_HALL_INVALID | BC_FLAG_OVERCURRENT | BC_FLAG_BAD_INPUT |
+                                  BC_FLAG_SATURATED), "every controller flag listed");
     return bc_test_summary("test_layout");
 }

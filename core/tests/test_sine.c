@@ -204,7 +204,7 @@ static void test_params(void)
     static bc_sine_state s;
     sine_params(&p, &f);
     CHECK(bc_sine_init(&p, &s) == BC_OK, "htm parameters accepted");
-    CHECK(s.mode == BC_SINE_MODE_START && s.tripped == 0, "starts in the square-wave mode");
+    CHECK(s.mode == BC_SINE_MODE_START && s.guard.latched == 0, "starts in the square-wave mode");
     memset(&q, 0, sizeof q);
     CHECK(bc_sine_init(&q, &s) == BC_ERR_PARAM, "zeroed parameters rejected");
     CHECK(bc_sine_init(0, &s) == BC_ERR_PARAM && bc_sine_init(&p, 0) == BC_ERR_PARAM, "NULL rejected");
@@ -292,7 +292,7 @@ static void test_safe_states(void)
     in.theta_enc = NAN;
     bc_sine_step(&pe, &s, &in, &out);
     CHECK(out.flags == SAFE_BAD, "NaN encoder angle");
-    /* over-current on the derived phase c, latched until init */
+    /* over-current on the derived phase c, latched until every |i| < i_max / 2 (bc_guard.h) */
     CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
     rotor_in(&r, 1e-3, 10.0f, &in);
     in.i_abc[0] = 60.0f;
@@ -300,9 +300,27 @@ static void test_safe_states(void)
     bc_sine_step(&p, &s, &in, &out);
     CHECK(out.flags == (BC_FLAG_SAFE | BC_FLAG_OVERCURRENT), "over-current on the derived phase: 0x%x", out.flags);
     rotor_in(&r, 2e-3, 10.0f, &in);
+    in.i_abc[0] = 60.0f;
+    in.i_abc[1] = -60.0f; /* below i_max = 100 A, above i_max / 2 */
     bc_sine_step(&p, &s, &in, &out);
     CHECK(out.flags == (BC_FLAG_SAFE | BC_FLAG_OVERCURRENT) && out.leg[0].mode == BC_LEG_OFF, "trip latched");
-    CHECK(bc_sine_init(&p, &s) == BC_OK && s.tripped == 0, "init clears the trip");
+    rotor_in(&r, 3e-3, 10.0f, &in);
+    in.v_dc = NAN; /* invalid measurements neither re-arm nor clear */
+    in.i_abc[0] = 1.0f;
+    in.i_abc[1] = -1.0f;
+    bc_sine_step(&p, &s, &in, &out);
+    CHECK(out.flags == SAFE_BAD && s.guard.latched == 1, "bad input keeps the latch: 0x%x", out.flags);
+    rotor_in(&r, 4e-3, 10.0f, &in);
+    in.i_abc[0] = 49.0f;
+    in.i_abc[1] = -49.0f;
+    bc_sine_step(&p, &s, &in, &out);
+    CHECK(!(out.flags & BC_FLAG_SAFE) && s.guard.latched == 0, "re-armed below i_max / 2: 0x%x", out.flags);
+    CHECK(bc_sine_init(&p, &s) == BC_OK && s.guard.latched == 0, "init clears the trip");
+    /* the DC bus above v_max is bad input (bc_guard.h) */
+    rotor_in(&r, 5e-3, 10.0f, &in);
+    in.v_dc = 97.0f;
+    bc_sine_step(&p, &s, &in, &out);
+    CHECK(out.flags == SAFE_BAD, "v_dc > v_max: 0x%x", out.flags);
 }
 
 /* Random and extreme inputs, every option: the output is always finite, duties in [0, 1], modes valid. */
@@ -361,7 +379,7 @@ static void test_fuzz(void)
             }
             for (int j = 0; j < BC_DIAG_N; ++j) bad_out += !isfinite(out.diag[j]);
             n_sine += s.mode == BC_SINE_MODE_SINE;
-            if (s.tripped) (void)bc_sine_init(&p, &s);
+            if (s.guard.latched) (void)bc_sine_init(&p, &s);
         }
     }
     CHECK(bad_out == 0, "every output finite, duties in [0, 1]: %d bad", bad_out);

@@ -1,14 +1,21 @@
 """The binding to the C core: one shared library, loaded with ctypes.
 
-Nothing here restates a C struct by hand. At import the library describes itself (``core/src/bc_bind.c``): every
+Nothing here restates a C struct by hand. At import the library describes itself (``core/host/src/bc_bind.c``): every
 struct the host fills or reads, with member offsets and sizes taken from the compiler, the trace fields of
-``BC_TRACE_FIELDS``, and the registry of controllers. numpy structured dtypes are built from that description and
-checked against the C ``sizeof`` of each struct, so a stale or mismatched library fails loudly at import.
+``BC_TRACE_FIELDS``, the named constants (enum values and flag bits, by group) and the registry of controllers.
+numpy structured dtypes are built from that description and checked against the C ``sizeof`` of each struct, so a
+stale or mismatched library fails loudly at import.
+
+The contract in the other direction: :meth:`Core.filled` returns a parameter record only when every member the C
+library lists was given (and nothing else), so a member added in C and forgotten in Python fails at once; the C
+constants are read from the library (``BC_FLAG_SAFE`` etc. as attributes of this module, :func:`decode_flags`), never
+restated; :class:`CParams` owns the arrays a record points to, so no caller handles ctypes lifetimes.
 """
 
 from __future__ import annotations
 
 import ctypes
+from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -16,8 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from ._version import __version__
+from .errors import BldclabError
 
-__all__ = ["Controller", "Core", "core"]
+__all__ = ["CParams", "Controller", "Core", "core", "decode_flags"]
 
 _BASE = {"f8": np.float64, "f4": np.float32, "i4": np.int32, "u4": np.uint32, "i8": np.int64, "u8": np.uint64,
          "ptr": np.uintp}
@@ -30,6 +38,10 @@ class _FieldDesc(ctypes.Structure):
 
 class _StructDesc(ctypes.Structure):
     _fields_ = (("name", ctypes.c_char_p), ("size", ctypes.c_uint32))
+
+
+class _ConstDesc(ctypes.Structure):
+    _fields_ = (("group", ctypes.c_char_p), ("name", ctypes.c_char_p), ("value", ctypes.c_int64))
 
 
 class _CtrlInfo(ctypes.Structure):
@@ -63,6 +75,27 @@ class Controller:
     init_ptr: int
     step_ptr: int
     diag: tuple[str, ...]
+
+
+class CParams:
+    """A filled C parameter record and the arrays its pointers refer to, kept alive as long as this object.
+
+    Parameters
+    ----------
+    record : numpy.ndarray
+        One-element record of the controller's params struct (what C reads).
+    buffers : iterable of object
+        Arrays (or other :class:`CParams`) whose memory the record points to.
+    """
+
+    def __init__(self, record: np.ndarray, buffers: Iterable[object] = ()) -> None:
+        self.record = record
+        self._buffers = tuple(buffers)
+
+    @property
+    def address(self) -> int:
+        """Address of the record (what a C ``const void *params`` receives)."""
+        return int(self.record.ctypes.data)
 
 
 def _library_path() -> Path:
@@ -99,6 +132,9 @@ class Core:
         lib.bc_acc_count.restype = ctypes.c_int32
         lib.bc_acc_name.restype = ctypes.c_char_p
         lib.bc_acc_name.argtypes = (ctypes.c_int32,)
+        lib.bc_const_count.restype = ctypes.c_int32
+        lib.bc_const_get.restype = ctypes.POINTER(_ConstDesc)
+        lib.bc_const_get.argtypes = (ctypes.c_int32,)
         lib.bc_ctrl_count.restype = ctypes.c_int32
         lib.bc_ctrl_get.restype = ctypes.POINTER(_CtrlInfo)
         lib.bc_ctrl_get.argtypes = (ctypes.c_int32,)
@@ -134,6 +170,13 @@ class Core:
             raise ImportError("bldclab core: trace row size does not match BC_TRACE_FIELDS")
 
         self.acc_names = tuple(lib.bc_acc_name(j).decode() for j in range(lib.bc_acc_count()))
+        self.constants: dict[str, int] = {}
+        self.groups: dict[str, dict[str, int]] = {}
+        for j in range(lib.bc_const_count()):
+            k = lib.bc_const_get(j).contents
+            name = k.name.decode()
+            self.constants[name] = int(k.value)
+            self.groups.setdefault(k.group.decode(), {})[name] = int(k.value)
         self.controllers: dict[str, Controller] = {}
         for j in range(lib.bc_ctrl_count()):
             c = lib.bc_ctrl_get(j).contents
@@ -163,6 +206,57 @@ class Core:
         """Return a zeroed one-element record of C struct ``name`` (its memory is what C sees)."""
         return np.zeros(1, dtype=self.dtypes[name])
 
+    def filled(self, name: str, **fields: object) -> np.ndarray:
+        """Return a one-element record of C struct ``name`` with every member set from ``fields``.
+
+        Parameters
+        ----------
+        name : str
+            C struct name, e.g. ``"bc_sixstep_params"``.
+        **fields
+            One value per member the library lists (arrays for array members, a record for a nested struct).
+
+        Raises
+        ------
+        BldclabError
+            Naming the struct and every member left unset and every name that is not a member: a member added
+            in C and not filled here fails instead of being passed as zero.
+        """
+        dt = self.dtypes[name]
+        members = dt.names or ()
+        missing = [m for m in members if m not in fields]
+        unknown = sorted(set(fields) - set(members))
+        if missing or unknown:
+            parts = ([f"members left unset: {', '.join(missing)}"] if missing else []) + (
+                [f"not members: {', '.join(unknown)}"] if unknown else [])
+            raise BldclabError(f"core.{name}", "; ".join(parts))
+        rec = np.zeros(1, dtype=dt)
+        for m in members:
+            rec[m] = fields[m]
+        return rec
+
+    def const(self, name: str) -> int:
+        """Return the value of the C constant ``name`` (e.g. ``"BC_FLAG_SAFE"``), read from the library."""
+        try:
+            return self.constants[name]
+        except KeyError:
+            raise KeyError(f"bldclab core: no constant {name!r} in the library's table") from None
+
+    def decode_flags(self, value: int) -> str:
+        """Return the controller flags in ``value`` as names, e.g. ``"SAFE|OVERCURRENT"`` ("" for none).
+
+        Bits the library does not name are shown in hex (``"0x40"``).
+        """
+        v = int(value)
+        names = []
+        for name, bit in sorted(self.groups["flag"].items(), key=lambda kv: kv[1]):
+            if v & bit:
+                names.append(name.removeprefix("BC_FLAG_"))
+                v &= ~bit
+        if v:
+            names.append(hex(v))
+        return "|".join(names)
+
     def opaque(self, name: str) -> np.ndarray:
         """Return zeroed, 8-byte aligned memory of ``sizeof(name)`` bytes for a struct the host does not read."""
         n = (self.sizes[name] + 7) // 8
@@ -182,6 +276,21 @@ class Core:
         """Call a controller's C step once (for tests of the C code from Python)."""
         fn = _STEP(ctrl.step_ptr)
         fn(params.ctypes.data, state.ctypes.data, inp.ctypes.data, out.ctypes.data)
+
+
+def decode_flags(value: int) -> str:
+    """Return the controller flags in ``value`` as names, e.g. ``"SAFE|OVERCURRENT"`` (:meth:`Core.decode_flags`)."""
+    return core().decode_flags(value)
+
+
+def __getattr__(name: str) -> int:
+    """Return a C constant as a module attribute (``_core.BC_FLAG_SAFE``), read from the library on first use."""
+    if name.startswith("BC_"):
+        try:
+            return core().constants[name]
+        except KeyError:
+            pass
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @cache

@@ -1,8 +1,8 @@
 """Controller choices for :func:`bldclab.simulate`: each names a C controller and fills its parameters.
 
-The C code is what runs (``core/include/bldc/``); these frozen dataclasses only choose it and its settings. What the
-per-sample reference ``Scenario.ref`` means depends on the controller (see each class). One module per controller
-family; adding one: a module here with a :class:`Control` subclass, and its import below.
+The C code is what runs (``core/ctrl/include/bldc/``); these frozen dataclasses only choose it and its settings.
+What the per-sample reference ``Scenario.ref`` means depends on the controller (see each class). One module per
+controller family; adding one: a module here with a :class:`Control` subclass, and its import below.
 """
 
 from __future__ import annotations

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import math
-from abc import ABC, abstractmethod
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
+from .._core import CParams
 from ..errors import BldclabError
 
 if TYPE_CHECKING:
@@ -15,6 +15,7 @@ if TYPE_CHECKING:
     from ..model.motor import Drive
 
 __all__ = ["Control", "check_number"]
+
 
 
 def check_number(name: str, v: object, *, allow_zero: bool = False, allow_none: bool = False) -> None:
@@ -32,15 +33,41 @@ def check_number(name: str, v: object, *, allow_zero: bool = False, allow_none: 
         raise BldclabError(f"control.{name}", f"must be a finite number {'>=' if allow_zero else '>'} 0, got {v!r}")
 
 
-class Control(ABC):
-    """Base class: the C registry name and how to fill the parameter struct."""
+class Control:
+    """Base class: the C registry name and how to fill the parameter struct.
+
+    A subclass implements :meth:`c_record` (``core.filled`` of its params struct, so every C member is set).
+    """
 
     c_name: ClassVar[str] = ""
     ref_meaning: ClassVar[str] = ""
 
-    @abstractmethod
+    def c_record(self, drive: Drive, core: Core, n_samples: int) -> CParams:
+        """Return the filled C parameter record, owning the arrays it points to.
+
+        Parameters
+        ----------
+        drive : Drive
+            The drive the controller is configured for.
+        core : Core
+            The loaded C library (dtypes, constants).
+        n_samples : int
+            Samples the run will take (controllers that replay a table check its length).
+        """
+        if type(self).c_params is Control.c_params:
+            raise NotImplementedError(f"{type(self).__name__} implements neither c_record nor c_params")
+        keep: list[object] = []
+        rec = self.c_params(drive, core, keep, n_samples)
+        return CParams(rec, keep)
+
     def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:
-        """Return the filled C parameter record; arrays it points to are appended to ``keep``."""
+        """Return :meth:`c_record`'s record and append its owner to ``keep`` (the runner's older calling form).
+
+        Kept for the runner and for controllers written against it; new code calls :meth:`c_record`.
+        """
+        params = self.c_record(drive, core, n_samples)
+        keep.append(params)
+        return params.record
 
     def with_delay(self, delay: int) -> Control:
         """Return the controller configured for the runner's computation delay (samples, 0 or 1).

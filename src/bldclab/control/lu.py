@@ -1,4 +1,4 @@
-"""Paper 2's torque controller and its two comparison methods (``core/include/bldc/bc_lu.h``).
+"""Paper 2's torque controller and its two comparison methods (``core/ctrl/include/bldc/bc_lu.h``).
 
 H. Lu, L. Zhang, W. Qu, *A New Torque Control Method for Torque Ripple Minimization of BLDC Motors With Un-Ideal
 Back EMF*, IEEE Trans. Power Electron. 2008. Two-phase conduction with bipolar chopping; the duties ``D_n``
@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 
+from .._core import CParams
 from ..errors import BldclabError
 from ..model.analytic import r_total
 from ..model.design import max_bandwidth, pi_gains
@@ -28,7 +29,7 @@ if TYPE_CHECKING:
 
 __all__ = ["Lu"]
 
-_METHOD = {"lu": 0, "lu-no-do": 1, "rect": 2}
+_METHOD = {"lu": "BC_LU_TORQUE", "lu-no-do": "BC_LU_NO_DO", "rect": "BC_LU_RECT"}  # C constants (bldclab._core)
 
 #: ``rect``'s current-loop bandwidth when the drive allows it (Hz).
 DEFAULT_BANDWIDTH_HZ = 1000.0
@@ -196,28 +197,29 @@ class Lu(Control):
     def with_delay(self, delay: int) -> Control:  # noqa: D102 - Control.with_delay
         return self if delay == self.delay else dataclasses.replace(self, delay=delay)
 
-    def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:  # noqa: D102
+    def c_record(self, drive: Drive, core: Core, n_samples: int) -> CParams:  # noqa: D102
         m, inv = drive.motor, drive.inverter
         tables = self.shape_tables(drive)
-        keep.append(tables)
         kp, ki = self.gains(drive) if self.method == "rect" else (0.0, 0.0)
-        rec = core.record("bc_lu_params")
-        rec["f"][0] = [tables.ctypes.data + x * tables.strides[0] for x in range(3)]
-        rec["n"] = tables.shape[1]
-        rec["p"] = m.p
-        rec["method"] = _METHOD[self.method]
-        rec["delay"] = self.delay
-        rec["order"] = (2 if self.mean_law else 1) if self.switching_order else 0
-        rec["L"] = m.L
-        rec["R"] = r_total(drive) if self.model_R else 0.0
-        rec["ts"] = 0.5 / inv.f_pwm
-        rec["i_max"] = 3.0 * m.I_N if self.i_max is None else self.i_max
-        rec["i_zero"] = 0.01 * m.I_N if self.i_zero is None else self.i_zero
-        rec["v_max"] = 2.0 * inv.V_dc
-        rec["k_phi"] = m.k_phi
-        rec["kp"] = kp
-        rec["ki"] = ki
-        rec["f_tick"] = drive.sensors.f_tick
-        rec["omega_min"] = 0.01 * m.p * drive.Omega_0 if self.omega_min is None else self.omega_min
-        rec["theta_offset"] = self.theta_offset
-        return rec
+        rec = core.filled(
+            "bc_lu_params",
+            f=[tables.ctypes.data + x * tables.strides[0] for x in range(3)],
+            n=tables.shape[1],
+            p=m.p,
+            method=core.const(_METHOD[self.method]),
+            delay=self.delay,
+            order=(2 if self.mean_law else 1) if self.switching_order else 0,
+            L=m.L,
+            R=r_total(drive) if self.model_R else 0.0,
+            ts=0.5 / inv.f_pwm,
+            i_max=3.0 * m.I_N if self.i_max is None else self.i_max,
+            i_zero=0.01 * m.I_N if self.i_zero is None else self.i_zero,
+            v_max=2.0 * inv.V_dc,
+            k_phi=m.k_phi,
+            kp=kp,
+            ki=ki,
+            f_tick=drive.sensors.f_tick,
+            omega_min=0.01 * m.p * drive.Omega_0 if self.omega_min is None else self.omega_min,
+            theta_offset=self.theta_offset,
+        )
+        return CParams(rec, [tables])

@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._core import CParams
+from .._core import core as load_core
 from ..errors import BldclabError
 from .base import Control
 
@@ -16,9 +18,6 @@ if TYPE_CHECKING:
     from ..model.motor import Drive
 
 __all__ = ["OpenLoop", "SixStepVoltage"]
-
-
-_MODES = {"off": 0, "pwm": 1, "high": 2, "low": 3}
 
 
 @dataclass(frozen=True, eq=False)
@@ -43,28 +42,24 @@ class OpenLoop(Control):
         d = np.asarray(self.duties, dtype=float)
         if m.ndim != 2 or m.shape[1] != 3 or d.shape != m.shape:
             raise BldclabError("control.modes", f"modes and duties need shape (N, 3), got {m.shape} and {d.shape}")
-        if not np.all(np.isin(m, list(_MODES.values()))):
+        if not np.all(np.isin(m, list(load_core().groups["leg"].values()))):  # BC_LEG_*, from the library
             raise BldclabError("control.modes", "modes must be 0 (off), 1 (pwm), 2 (high) or 3 (low)")
         if not np.all(np.isfinite(d)) or np.any(d < 0.0) or np.any(d > 1.0):
             raise BldclabError("control.duties", "duties must be finite and within [0, 1]")
         object.__setattr__(self, "modes", m.astype(np.int32))
         object.__setattr__(self, "duties", d)
 
-    def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:  # noqa: D102
-        cmd = np.zeros((len(self.modes), 3), dtype=core.dtypes["bc_leg_cmd"])  # type: ignore[arg-type]
+    def c_record(self, drive: Drive, core: Core, n_samples: int) -> CParams:  # noqa: D102
+        cmd = np.zeros((np.shape(self.modes)[0], 3), dtype=core.dtypes["bc_leg_cmd"])
         cmd["mode"] = self.modes
         cmd["duty"] = self.duties
-        keep.append(cmd)
-        rec = core.record("bc_table_params")
-        rec["cmd"] = cmd.ctypes.data
-        rec["n"] = cmd.shape[0]
-        return rec
+        return CParams(core.filled("bc_table_params", cmd=cmd.ctypes.data, n=cmd.shape[0]), [cmd])
 
     def describe(self) -> dict[str, object]:  # noqa: D102
-        return {"controller": self.c_name, "samples": len(self.modes)}  # type: ignore[arg-type]
+        return {"controller": self.c_name, "samples": int(np.shape(self.modes)[0])}
 
 
-_CHOP = {"high": 0, "low": 1, "bipolar": 2, "sync": 3}
+_CHOP = {"high": "BC_SIXV_HIGH", "low": "BC_SIXV_LOW", "bipolar": "BC_SIXV_BIPOLAR", "sync": "BC_SIXV_SYNC"}
 
 
 @dataclass(frozen=True)
@@ -89,7 +84,5 @@ class SixStepVoltage(Control):
         if self.chopping not in _CHOP:
             raise BldclabError("control.chopping", f"must be one of {', '.join(_CHOP)}, got {self.chopping!r}")
 
-    def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:  # noqa: D102
-        rec = core.record("bc_sixv_params")
-        rec["chop"] = _CHOP[self.chopping]
-        return rec
+    def c_record(self, drive: Drive, core: Core, n_samples: int) -> CParams:  # noqa: D102
+        return CParams(core.filled("bc_sixv_params", chop=core.const(_CHOP[self.chopping])))

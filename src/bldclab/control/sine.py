@@ -1,4 +1,4 @@
-"""Sinusoidal current supply of a PM BLDC motor, paper 1 section V (``core/include/bldc/bc_sine.h``).
+"""Sinusoidal current supply of a PM BLDC motor, paper 1 section V (``core/ctrl/include/bldc/bc_sine.h``).
 
 d,q current control on the Hall-interpolated angle (paper 1 (46)), torque reference to current by (45), current
 limits that keep the modulation linear ((8), and above the base speed the largest current whose voltage fits, from
@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 
+from .._core import CParams
 from ..errors import BldclabError
 from ..model.analytic import i_sN, r_total
 from ..model.design import pi_gains
@@ -27,8 +28,9 @@ if TYPE_CHECKING:
 
 __all__ = ["Sine", "fundamental_k1"]
 
-_ANGLE = {"hall": 0, "encoder": 1}
-_LIMIT = {"hexagon": 0, "circle": 1}
+# the settings' C constants (values read from the library: bldclab._core)
+_ANGLE = {"hall": "BC_SINE_ANGLE_HALL", "encoder": "BC_SINE_ANGLE_ENCODER"}
+_LIMIT = {"hexagon": "BC_SINE_LIMIT_HEX", "circle": "BC_SINE_LIMIT_CIRCLE"}
 PAPER1_BANDWIDTH_HZ = 1000.0  # paper 1's current-loop crossover (Hz)
 
 
@@ -234,49 +236,49 @@ class Sine(Control):
     def with_delay(self, delay: int) -> Control:  # noqa: D102 - Control.with_delay: the square-wave start's delay
         return self if delay == self.start.delay else dataclasses.replace(self, start=self.start.with_delay(delay))
 
-    def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:  # noqa: D102
+    def c_record(self, drive: Drive, core: Core, n_samples: int) -> CParams:  # noqa: D102
         m, inv, sen = drive.motor, drive.inverter, drive.sensors
-        rec = core.record("bc_sine_params")
-        R = r_total(drive)
         kp, ki = self.gains(drive)
         k1 = fundamental_k1(drive)
-        rec["p"] = m.p
-        rec["R"] = R
-        rec["L"] = m.L
-        rec["k_phi"] = m.k_phi
-        rec["k_1"] = k1
-        rec["ts"] = 0.5 / inv.f_pwm
-        rec["kp"] = kp
-        rec["ki"] = ki
-        rec["v_max"] = 2.0 * inv.V_dc
-        rec["i_s_max"] = i_sN(drive)
-        rec["i_max"] = 2.0 * m.I_N if self.i_max is None else self.i_max
-        rec["speed_limit"] = int(self.speed_limit)
-        rec["decouple"] = int(self.decoupling)
-        rec["advance"] = self.advance
-        rec["limit"] = _LIMIT[self.limit]
-        rec["overmod"] = int(self.overmodulation)
-        rec["emf_ff"] = int(self.emf_feedforward)
-        rec["emf_n"] = self.emf_points
         th = np.arange(self.emf_points) * (2.0 * math.pi / self.emf_points)
-        for x, shape in enumerate(m.emf.shapes):
-            tab = np.ascontiguousarray(shape(th), dtype=np.float32)
-            keep.append(tab)
-            rec["emf_k"][0, x] = tab.ctypes.data
-        rec["angle"] = _ANGLE[self.angle]
+        tabs = [np.ascontiguousarray(shape(th), dtype=np.float32) for shape in m.emf.shapes]
         on = 0.1 * m.Omega_nominal if self.handoff_speed is None else float(self.handoff_speed)
-        rec["f_tick"] = sen.f_tick
-        rec["omega_on"] = m.p * on
-        rec["omega_off"] = m.p * on * (1.0 - self.handoff_hysteresis)
-        rec["omega_min"] = 0.25 * m.p * on * (1.0 - self.handoff_hysteresis)  # Hall speed valid well below omega_off
-        rec["theta_offset"] = 0.0
         start = self.start if self.start.reference == "torque" else dataclasses.replace(self.start, reference="torque")
-        rec["six"][0] = start.c_params(drive, core, keep, n_samples)[0]
-        rec["flying_start"] = int(self.flying_start)
-        rec["speed_loop"] = int(self.speed_loop)
+        six = start.c_record(drive, core, n_samples)
         wb = 2.0 * math.pi * self.speed_bandwidth_hz
         kp_w = drive.mechanics.J * wb if self.speed_kp is None else self.speed_kp
-        rec["kp_w"] = kp_w
-        rec["ki_w"] = kp_w * wb / 4.0 if self.speed_ki is None else self.speed_ki
-        rec["tau_max"] = 1.5 * k1 * i_sN(drive) if self.tau_max is None else self.tau_max
-        return rec
+        rec = core.filled(
+            "bc_sine_params",
+            p=m.p,
+            R=r_total(drive),
+            L=m.L,
+            k_phi=m.k_phi,
+            k_1=k1,
+            ts=0.5 / inv.f_pwm,
+            kp=kp,
+            ki=ki,
+            v_max=2.0 * inv.V_dc,
+            i_s_max=i_sN(drive),
+            i_max=2.0 * m.I_N if self.i_max is None else self.i_max,
+            speed_limit=int(self.speed_limit),
+            decouple=int(self.decoupling),
+            advance=self.advance,
+            limit=core.const(_LIMIT[self.limit]),
+            overmod=int(self.overmodulation),
+            emf_ff=int(self.emf_feedforward),
+            emf_n=self.emf_points,
+            emf_k=[t.ctypes.data for t in tabs],
+            angle=core.const(_ANGLE[self.angle]),
+            f_tick=sen.f_tick,
+            omega_on=m.p * on,
+            omega_off=m.p * on * (1.0 - self.handoff_hysteresis),
+            omega_min=0.25 * m.p * on * (1.0 - self.handoff_hysteresis),  # Hall speed valid well below omega_off
+            theta_offset=0.0,
+            six=six.record[0],
+            flying_start=int(self.flying_start),
+            speed_loop=int(self.speed_loop),
+            kp_w=kp_w,
+            ki_w=kp_w * wb / 4.0 if self.speed_ki is None else self.speed_ki,
+            tau_max=1.5 * k1 * i_sN(drive) if self.tau_max is None else self.tau_max,
+        )
+        return CParams(rec, [*tabs, six])

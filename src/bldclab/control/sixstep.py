@@ -1,4 +1,6 @@
-"""Real square-wave (120-degree) current-controlled supply, paper 1 section IV.A (``core/include/bldc/bc_sixstep.h``).
+"""Real square-wave (120-degree) current-controlled supply, paper 1 section IV.A (``bc_sixstep.h``).
+
+The C controller is ``core/ctrl/include/bldc/bc_sixstep.h``.
 
 Hall commutation with the outgoing phase left to freewheel through its diode, the current of the incoming phase
 regulated by a PI, a hysteresis band or a predictive ("deadbeat") law, with a selectable chopping pattern. The
@@ -12,8 +14,7 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar, Literal
 
-import numpy as np
-
+from .._core import CParams
 from ..errors import BldclabError
 from ..model.analytic import r_total
 from ..model.design import pi_gains
@@ -25,9 +26,11 @@ if TYPE_CHECKING:
 
 __all__ = ["SixStep"]
 
-_REG = {"pi": 0, "hysteresis": 1, "predictive": 2}
-_CHOP = {"bipolar": 0, "high": 1, "pwm-on-pwm": 2, "sync": 3}
-_REF = {"current": 0, "torque": 1}
+# the settings' C constants (values read from the library: bldclab._core)
+_REG = {"pi": "BC_SIXSTEP_PI", "hysteresis": "BC_SIXSTEP_HYST", "predictive": "BC_SIXSTEP_PRED"}
+_CHOP = {"bipolar": "BC_SIXSTEP_BIPOLAR", "high": "BC_SIXSTEP_HIGH", "pwm-on-pwm": "BC_SIXSTEP_PWMPWM",
+         "sync": "BC_SIXSTEP_SYNC"}
+_REF = {"current": 0, "torque": 1}  # ref_torque, a 0/1 switch
 
 
 @dataclass(frozen=True)
@@ -133,31 +136,32 @@ class SixStep(Control):
         kp, ki = pi_gains(2.0 * r_total(drive), 2.0 * drive.motor.L, self.bandwidth_hz, self.phase_margin_deg)
         return (kp if self.kp is None else float(self.kp)), (ki if self.ki is None else float(self.ki))
 
-    def with_delay(self, delay: int) -> Control:  # noqa: D102 - Control.with_delay
+    def with_delay(self, delay: int) -> SixStep:  # noqa: D102 - Control.with_delay
         return self if delay == self.delay else dataclasses.replace(self, delay=delay)
 
-    def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:  # noqa: D102
+    def c_record(self, drive: Drive, core: Core, n_samples: int) -> CParams:  # noqa: D102
         m, inv = drive.motor, drive.inverter
         kp, ki = self.gains(drive)
-        rec = core.record("bc_sixstep_params")
-        rec["reg"] = _REG[self.regulation]
-        rec["chop"] = _CHOP[self.chopping]
-        rec["ref_torque"] = _REF[self.reference]
-        rec["delay"] = self.delay
-        rec["advance"] = int(self.advance)
-        rec["emf_ff"] = int(self.emf_feedforward)
-        rec["regen"] = int(self.regen)
-        rec["p"] = m.p
-        rec["ts"] = 0.5 / inv.f_pwm
-        rec["R"] = r_total(drive)
-        rec["L"] = m.L
-        rec["k_e"] = 2.0 * m.k_phi
-        rec["kp"] = kp
-        rec["ki"] = ki
-        rec["band"] = 0.1 * m.I_N if self.band is None else self.band
-        rec["i_max"] = 2.0 * m.I_N if self.i_max is None else self.i_max
-        rec["v_max"] = 2.0 * inv.V_dc
-        rec["f_tick"] = drive.sensors.f_tick
-        rec["omega_min"] = 0.01 * m.p * drive.Omega_0 if self.omega_min is None else self.omega_min
-        rec["theta_offset"] = self.theta_offset
-        return rec
+        return CParams(core.filled(
+            "bc_sixstep_params",
+            reg=core.const(_REG[self.regulation]),
+            chop=core.const(_CHOP[self.chopping]),
+            ref_torque=_REF[self.reference],
+            delay=self.delay,
+            advance=int(self.advance),
+            emf_ff=int(self.emf_feedforward),
+            regen=int(self.regen),
+            p=m.p,
+            ts=0.5 / inv.f_pwm,
+            R=r_total(drive),
+            L=m.L,
+            k_e=2.0 * m.k_phi,
+            kp=kp,
+            ki=ki,
+            band=0.1 * m.I_N if self.band is None else self.band,
+            i_max=2.0 * m.I_N if self.i_max is None else self.i_max,
+            v_max=2.0 * inv.V_dc,
+            f_tick=drive.sensors.f_tick,
+            omega_min=0.01 * m.p * drive.Omega_0 if self.omega_min is None else self.omega_min,
+            theta_offset=self.theta_offset,
+        ))

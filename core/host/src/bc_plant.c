@@ -44,8 +44,10 @@ static double h_max_of(const bc_plant_params *p)
 /* ---------------------------------------------------------------------------------------------------------- */
 /* back-EMF shapes and cogging at an angle inside the current pieces                                          */
 
+/* k_x(th) of the three phases and, if dk is non-null, dk_x/dth (tables: the piece's slope; Fourier: the series
+ * differentiated term by term, sum_m m (y_m cos - x_m sin)). */
 static void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s, double th,
-                      double *restrict k)
+                      double *restrict k, double *restrict dk)
 {
     int trig = 0;
     double c = 0.0, sn = 0.0;
@@ -53,6 +55,7 @@ static void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *r
         const bc_emf_shape *sh = &p->emf[x];
         if (sh->kind == BC_EMF_TABLE) {
             k[x] = s->piece[x].k0 + s->piece[x].slope * (th - s->piece[x].lo);
+            if (dk) dk[x] = s->piece[x].slope;
             continue;
         }
         if (!trig) {
@@ -63,14 +66,16 @@ static void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *r
         /* cos and sin of the local angle th - PHI[x] by rotation, then harmonics by recurrence */
         double c1 = c * COS_PHI[x] + sn * SIN_PHI[x];
         double s1 = sn * COS_PHI[x] - c * SIN_PHI[x];
-        double cm = 1.0, sm = 0.0, acc = 0.0;
+        double cm = 1.0, sm = 0.0, acc = 0.0, acc_d = 0.0;
         for (int32_t m = 0; m < sh->n; ++m) {
             acc += sh->x[m] * cm + sh->y[m] * sm;
+            if (dk) acc_d += (double)m * (sh->y[m] * cm - sh->x[m] * sm);
             double cn = cm * c1 - sm * s1;
             sm = sm * c1 + cm * s1;
             cm = cn;
         }
         k[x] = acc;
+        if (dk) dk[x] = acc_d;
     }
 }
 
@@ -95,7 +100,7 @@ static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restric
     const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
     const double th = y[Y_TH], om = y[Y_OM];
     double k[3];
-    shapes_at(p, s, th, k);
+    shapes_at(p, s, th, k, 0);
     const double e0 = om * k[0], e1 = om * k[1], e2 = om * k[2];
     const double R = p->R, V_f = p->V_f;
     /* terminals from the precomputed conduction coefficients: v_x = up v_bus + U0 - r i (no branches) */
@@ -496,7 +501,7 @@ static double angle_event(const bc_plant_params *p, const bc_plant_state *s, dou
     if (p->mech == BC_MECH_IMPOSED) {
         return w0 > 0.0 ? delta / w0 : HUGE_VAL;
     }
-    double acc = s->k1[Y_OM] * (double)s->dir;
+    double acc = s->work.k1[Y_OM] * (double)s->dir;
     double disc = w0 * w0 + 2.0 * acc * delta;
     if (disc < 0.0) {
         return HUGE_VAL; /* stops before the bound: the speed zero crossing comes first */
@@ -673,21 +678,21 @@ static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
             topology_set(p, s);
         } else {
             /* the derivative at this state and topology is the next step's k1 */
-            memcpy(s->k1, dy, sizeof dy);
-            s->aux_tau = a.tau;
-            s->wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
-            watch_eval(p, s, y, &a, s->wdir, s->wcache);
-            s->k1_valid = 1;
+            memcpy(s->work.k1, dy, sizeof dy);
+            s->work.tau = a.tau;
+            s->work.wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
+            watch_eval(p, s, y, &a, s->work.wdir, s->work.w);
+            s->work.valid = 1;
             return;
         }
     }
-    s->k1_valid = 0;
+    s->work.valid = 0;
 }
 
 static void resolve(const bc_plant_params *p, bc_plant_state *s)
 {
     conduction_from_gates(p, s);
-    s->k1_valid = 0;
+    s->work.valid = 0;
     resolve_open(p, s);
 }
 
@@ -1024,7 +1029,7 @@ void bc_plant_set_inputs(const bc_plant_params *p, bc_plant_state *s, double ome
             pieces_locate(p, s);
         }
     }
-    s->k1_valid = 0;
+    s->work.valid = 0;
     resolve_open(p, s);
 }
 
@@ -1184,17 +1189,17 @@ static int process_due(const bc_plant_params *p, bc_plant_state *s)
 
 static void ensure_k1(const bc_plant_params *p, bc_plant_state *s)
 {
-    if (s->k1_valid) {
+    if (s->work.valid) {
         return;
     }
     double y[NY];
     aux_t a;
     pack(s, y);
-    rhs(p, s, y, s->k1, &a);
-    s->aux_tau = a.tau;
-    s->wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
-    watch_eval(p, s, y, &a, s->wdir, s->wcache);
-    s->k1_valid = 1;
+    rhs(p, s, y, s->work.k1, &a);
+    s->work.tau = a.tau;
+    s->work.wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
+    watch_eval(p, s, y, &a, s->work.wdir, s->work.w);
+    s->work.valid = 1;
 }
 
 /* ---------------------------------------------------------------------------------------------------------- */
@@ -1207,31 +1212,7 @@ static double tau_rate(const bc_plant_params *p, const bc_plant_state *s, const 
 {
     const double th = y[Y_TH], om = y[Y_OM];
     double k[3], dk[3];
-    shapes_at(p, s, th, k);
-    int trig = 0;
-    double c = 0.0, sn = 0.0;
-    for (int x = 0; x < 3; ++x) {
-        const bc_emf_shape *sh = &p->emf[x];
-        if (sh->kind == BC_EMF_TABLE) {
-            dk[x] = s->piece[x].slope;
-            continue;
-        }
-        if (!trig) {
-            c = cos(th);
-            sn = sin(th);
-            trig = 1;
-        }
-        double c1 = c * COS_PHI[x] + sn * SIN_PHI[x];
-        double s1 = sn * COS_PHI[x] - c * SIN_PHI[x];
-        double cm = 1.0, sm = 0.0, acc = 0.0;
-        for (int32_t m = 0; m < sh->n; ++m) {
-            acc += (double)m * (sh->y[m] * cm - sh->x[m] * sm);
-            double cn = cm * c1 - sm * s1;
-            sm = sm * c1 + cm * s1;
-            cm = cn;
-        }
-        dk[x] = acc;
-    }
+    shapes_at(p, s, th, k, dk);
     double r = 0.0;
     for (int x = 0; x < 3; ++x) r += k[x] * dy[Y_I + x] + (double)p->p * om * dk[x] * y[Y_I + x];
     if (p->n_cog > 0) {
@@ -1280,12 +1261,12 @@ static void hermite_extremes(double h, double f0, double f1, double d0, double d
     }
 }
 
-/* After a step of length h from (y0, k0 = f(y0), tau0) to the current state (y1, k1 = f(y1), tau_e in aux_tau):
+/* After a step of length h from (y0, k0 = f(y0), tau0) to the current state (y1, k1 = f(y1), tau_e in work.tau):
  * update the extremes, including the torque's turning points inside the step, and tell the observer. */
 static void track_extremes(const bc_plant_params *p, bc_plant_state *s, double h, const double *y0,
                            const double *k0, double tau0, const double *y1, const double *k1)
 {
-    double tau1 = s->aux_tau;
+    double tau1 = s->work.tau;
     if (tau1 < s->tau_min) s->tau_min = tau1;
     if (tau1 > s->tau_max) s->tau_max = tau1;
     if (h > 0.0) {
@@ -1332,7 +1313,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             /* nothing left to integrate at this instant (an angle bound at the current angle, rounding) */
             if (angle_step) {
                 angles_cross(p, s, th_ev);
-                s->k1_valid = 0;
+                s->work.valid = 0;
             }
             if (++zero_len > MAX_ZERO_LENGTH_EVENTS) {
                 s->flags |= BC_PLANT_CHATTER;
@@ -1343,26 +1324,26 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                 continue;
             }
         }
-        rk4(p, s, y0, s->k1, h, y1);
+        rk4(p, s, y0, s->work.k1, h, y1);
         rhs(p, s, y1, k1n, &a1);
         /* watched functions: the first that goes negative inside the step is an event */
-        int dir_om = s->wdir;
+        int dir_om = s->work.wdir;
         watch_eval(p, s, y1, &a1, dir_om, g1);
         int w_hit = -1;
         double h_hit = h;
         int any_neg = 0;
         for (int w = 0; w < NW; ++w) any_neg |= g1[w] < 0.0;
         if (any_neg && zero_len <= MAX_ZERO_LENGTH_EVENTS) {
-            memcpy(g0, s->wcache, sizeof g0); /* the watches at the step start */
+            memcpy(g0, s->work.w, sizeof g0); /* the watches at the step start */
             for (int w = 0; w < NW; ++w) {
                 if (g1[w] < 0.0) {
                     double guess = -1.0;
                     if (w < W_OPEN_LO && g0[w] > 0.0) { /* a diode current: its derivative is known at both ends */
                         int x = w - W_DIODE;
                         double sg = s->cond[x] == BC_COND_D_L ? 1.0 : -1.0;
-                        guess = hermite_zero(h, g0[w], g1[w], sg * s->k1[Y_I + x], sg * k1n[Y_I + x]);
+                        guess = hermite_zero(h, g0[w], g1[w], sg * s->work.k1[Y_I + x], sg * k1n[Y_I + x]);
                     }
-                    double hw = root_find(p, s, y0, s->k1, h, w, dir_om, g0[w], g1[w], guess, &rtry);
+                    double hw = root_find(p, s, y0, s->work.k1, h, w, dir_om, g0[w], g1[w], guess, &rtry);
                     if (w_hit < 0 || hw < h_hit) {
                         w_hit = w;
                         h_hit = hw;
@@ -1381,15 +1362,15 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                 memcpy(k1n, rbest.dy, sizeof k1n);
                 a1 = rbest.a;
             } else if (h_hit < h) {
-                rk4(p, s, y0, s->k1, h_hit, y1);
+                rk4(p, s, y0, s->work.k1, h_hit, y1);
                 rhs(p, s, y1, k1n, &a1);
             }
-            double tau0 = s->aux_tau;
+            double tau0 = s->work.tau;
             unpack(s, y1);
             s->t = (h_hit < h) ? s->t + h_hit : t_stop;
             if (p->mech == BC_MECH_IMPOSED) s->omega = y0[Y_OM];
-            s->aux_tau = a1.tau;
-            track_extremes(p, s, h_hit < h ? h_hit : h, y0, s->k1, tau0, y1, k1n);
+            s->work.tau = a1.tau;
+            track_extremes(p, s, h_hit < h ? h_hit : h, y0, s->work.k1, tau0, y1, k1n);
             apply_event(p, s, w_hit, &a1);
             s->n_events += 1;
             s->n_steps += 1;
@@ -1400,7 +1381,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                     s->hold_open |= 1 << (w_hit - W_DIODE);
                     s->cond[w_hit - W_DIODE] = BC_COND_OPEN;
                     topology_set(p, s);
-                    s->k1_valid = 0;
+                    s->work.valid = 0;
                 }
                 ++zero_len;
             } else {
@@ -1410,14 +1391,14 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             wrap_angle(p, s);
             continue;
         }
-        double tau0 = s->aux_tau;
+        double tau0 = s->work.tau;
         unpack(s, y1);
         s->t = t_stop;
-        s->aux_tau = a1.tau;
-        track_extremes(p, s, h, y0, s->k1, tau0, y1, k1n);
-        memcpy(s->k1, k1n, sizeof k1n);
-        memcpy(s->wcache, g1, sizeof g1);
-        s->k1_valid = 1;
+        s->work.tau = a1.tau;
+        track_extremes(p, s, h, y0, s->work.k1, tau0, y1, k1n);
+        memcpy(s->work.k1, k1n, sizeof k1n);
+        memcpy(s->work.w, g1, sizeof g1);
+        s->work.valid = 1;
         s->n_steps += 1;
         zero_len = 0;
         s->hold_open = 0;
@@ -1456,8 +1437,8 @@ void bc_plant_output(const bc_plant_params *p, const bc_plant_state *s, bc_plant
 void bc_plant_reset_extremes(const bc_plant_params *p, bc_plant_state *s)
 {
     ensure_k1(p, s);
-    s->tau_min = s->aux_tau;
-    s->tau_max = s->aux_tau;
+    s->tau_min = s->work.tau;
+    s->tau_max = s->work.tau;
     for (int x = 0; x < 3; ++x) {
         s->i_peak[x] = fabs(s->i[x]);
     }

@@ -13,7 +13,7 @@ static int table_init(const void *p, void *s) { return bc_table_init(p, s); }
 static void table_step(const void *p, void *s, const bc_ctrl_in *in, bc_ctrl_out *out) { bc_table_step(p, s, in, out); }
 static const bc_ctrl_info TABLE_INFO = {"table", "bc_table_params", "bc_table_state", table_init, table_step,
                                         {"", "", "", "", "", "", "", ""}};
-const bc_bind_provider bc_bind_openloop_table = {TABLE_FIELDS, 2, TABLE_STRUCTS, 2, &TABLE_INFO};
+const bc_bind_provider bc_bind_openloop_table = {TABLE_FIELDS, 2, TABLE_STRUCTS, 2, &TABLE_INFO, 0, 0};
 
 static const bc_field_desc SIXV_FIELDS[] = {
     BC_BIND_FIELD(bc_sixv_params, chop, "i4"),
@@ -23,4 +23,8 @@ static int sixv_init(const void *p, void *s) { return bc_sixv_init(p, s); }
 static void sixv_step(const void *p, void *s, const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sixv_step(p, s, in, out); }
 static const bc_ctrl_info SIXV_INFO = {"sixv", "bc_sixv_params", "bc_sixv_state", sixv_init, sixv_step,
                                        {"sector", "duty", "", "", "", "", "", ""}};
-const bc_bind_provider bc_bind_openloop_sixv = {SIXV_FIELDS, 1, SIXV_STRUCTS, 2, &SIXV_INFO};
+static const bc_const_desc SIXV_CONSTS[] = {
+    BC_BIND_CONST("sixv_chop", BC_SIXV_HIGH),    BC_BIND_CONST("sixv_chop", BC_SIXV_LOW),
+    BC_BIND_CONST("sixv_chop", BC_SIXV_BIPOLAR), BC_BIND_CONST("sixv_chop", BC_SIXV_SYNC),
+};
+const bc_bind_provider bc_bind_openloop_sixv = {SIXV_FIELDS, 1, SIXV_STRUCTS, 2, &SIXV_INFO, SIXV_CONSTS, 4};

@@ -1,7 +1,8 @@
 /*
  * bc_bind.h - what the host binding (Python, ctypes) needs to drive the core without restating it:
  * the layout of every struct it fills or reads (offsets from the compiler, so they cannot drift), the trace
- * fields (from BC_TRACE_FIELDS), and the registry of controllers with their init/step functions.
+ * fields (from BC_TRACE_FIELDS), the named constants (enum values and flag bits, by group), and the registry of
+ * controllers with their init/step functions.
  * Host-side only: firmware does not link this file.
  */
 #ifndef BC_BIND_H
@@ -34,14 +35,27 @@ typedef struct {
     const char *diag[BC_DIAG_N];                     /* meaning of diag[0..7] ("" unused) */
 } bc_ctrl_info;
 
-/* What one controller contributes to the binding: its structs' layouts and sizes and its registry entry.
- * Each controller has a provider in src/bc_bind_<name>.c; bc_bind.c lists the providers once. */
+/* A named integer constant of the C API (an enum value or a flag bit), in a group of related ones: the host builds
+ * its constants and flag decoders from these instead of restating the numbers. */
+typedef struct {
+    const char *group; /* e.g. "flag", "leg", "sixstep_reg" */
+    const char *name;  /* the C macro's name, e.g. "BC_FLAG_SAFE" */
+    int64_t value;
+} bc_const_desc;
+
+#define BC_BIND_CONST(group, NAME) {group, #NAME, (int64_t)(NAME)}
+
+/* What one controller contributes to the binding: its structs' layouts and sizes, its constants and its registry
+ * entry.
+ * Each controller has a provider in host/src/bc_bind_<name>.c; bc_bind.c lists the providers once. */
 typedef struct {
     const bc_field_desc *fields;
     int32_t n_fields;
     const bc_struct_desc *structs;
     int32_t n_structs;
     const bc_ctrl_info *info;
+    const bc_const_desc *consts;
+    int32_t n_consts;
 } bc_bind_provider;
 
 #define BC_BIND_FIELD(S, member, type) \
@@ -52,6 +66,9 @@ int32_t bc_layout_count(void);
 const bc_field_desc *bc_layout_get(int32_t j);
 int32_t bc_struct_count(void);
 const bc_struct_desc *bc_struct_get(int32_t j);
+
+int32_t bc_const_count(void);
+const bc_const_desc *bc_const_get(int32_t j);
 
 int32_t bc_trace_count(void);
 const char *bc_trace_name(int32_t j);

@@ -42,5 +42,11 @@ static int sine_init(const void *p, void *s) { return bc_sine_init(p, s); }
 static void sine_step(const void *p, void *s, const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sine_step(p, s, in, out); }
 static const bc_ctrl_info SINE_INFO = {"sine", "bc_sine_params", "bc_sine_state", sine_init, sine_step,
                                        {"i_d", "i_q", "i_q_ref", "v_d", "v_q", "theta", "omega_e", "mode"}};
+static const bc_const_desc SINE_CONSTS[] = {
+    BC_BIND_CONST("sine_angle", BC_SINE_ANGLE_HALL), BC_BIND_CONST("sine_angle", BC_SINE_ANGLE_ENCODER),
+    BC_BIND_CONST("sine_limit", BC_SINE_LIMIT_HEX),  BC_BIND_CONST("sine_limit", BC_SINE_LIMIT_CIRCLE),
+    BC_BIND_CONST("sine_mode", BC_SINE_MODE_START),  BC_BIND_CONST("sine_mode", BC_SINE_MODE_SINE),
+};
 const bc_bind_provider bc_bind_sine = {SINE_FIELDS, (int32_t)(sizeof SINE_FIELDS / sizeof SINE_FIELDS[0]),
-                                       SINE_STRUCTS, 2, &SINE_INFO};
+                                       SINE_STRUCTS, 2, &SINE_INFO, SINE_CONSTS,
+                                       (int32_t)(sizeof SINE_CONSTS / sizeof SINE_CONSTS[0])};

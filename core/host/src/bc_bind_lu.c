@@ -19,5 +19,9 @@ static void lu_step(const void *p, void *s, const bc_ctrl_in *in, bc_ctrl_out *o
 static const bc_ctrl_info LU_INFO = {
     "lu", "bc_lu_params", "bc_lu_state", lu_init, lu_step,
     {"mode", "duty", "tau_est", "tau_pred", "theta_est", "omega_est", "i_off", "sector"}};
+static const bc_const_desc LU_CONSTS[] = {
+    BC_BIND_CONST("lu_method", BC_LU_TORQUE), BC_BIND_CONST("lu_method", BC_LU_NO_DO),
+    BC_BIND_CONST("lu_method", BC_LU_RECT),
+};
 const bc_bind_provider bc_bind_lu = {LU_FIELDS, (int32_t)(sizeof LU_FIELDS / sizeof LU_FIELDS[0]), LU_STRUCTS, 2,
-                                     &LU_INFO};
+                                     &LU_INFO, LU_CONSTS, (int32_t)(sizeof LU_CONSTS / sizeof LU_CONSTS[0])};

@@ -8,9 +8,11 @@
  *
  * One sample (T_s = half a PWM period), in this order:
  *
- *  1. Safety. Latched over-current trip (|i_x| > i_max on a measured or derived phase), invalid Hall code,
- *     non-finite measurement or v_dc <= 0: all legs off (BC_FLAG_SAFE with BC_FLAG_OVERCURRENT, _HALL_INVALID or
- *     _BAD_INPUT) and back to the start mode. Only bc_sine_init clears the over-current trip.
+ *  1. Safety. The input guard (bc_guard.h, with i_max and v_max: current reconstruction from i_mask, the DC-bus
+ *     limits 0 < v_dc <= v_max, the hardware fault pin, the over-current trip |i_x| > i_max on a measured or
+ *     derived phase, latched until every |i_x| < i_max / 2 at a sample with valid measurements, or bc_sine_init),
+ *     an invalid Hall code, a non-finite reference (or encoder angle, when used): all legs off (BC_FLAG_SAFE with
+ *     BC_FLAG_OVERCURRENT, _HALL_INVALID and/or _BAD_INPUT) and back to the start mode.
  *  2. Angle and speed from bc_hall: theta(k) = theta_edge + Omega_e (t_k - t_edge), Omega_e = (pi/3) / (time
  *     between the last two edges) (paper 1 (46)); or theta = in->theta_enc (angle = BC_SINE_ANGLE_ENCODER, a
  *     reference for comparison). The speed is always bc_hall's. omega_m = Omega_e / p. While the rotor turns one
@@ -122,6 +124,7 @@
 
 #include <stdint.h>
 
+#include "bldc/bc_guard.h"
 #include "bldc/bc_hall.h"
 #include "bldc/bc_pi.h"
 #include "bldc/bc_sixstep.h"
@@ -151,7 +154,7 @@ typedef struct {
     float ts;       /* sampling period, s (> 0): half the PWM period */
     float kp;       /* d,q PI proportional gain, V/A (>= 0) */
     float ki;       /* d,q PI integral gain, V/(A s) (>= 0) */
-    float v_max;    /* bound of the d,q PI integrators, V (> 0) */
+    float v_max;    /* bound of the d,q PI integrators and largest plausible DC-bus measurement, V (> 0) */
     float i_s_max;  /* I_s,N: limit of |i_q,ref|, A (> 0) */
     float i_max;    /* over-current trip, A (> 0) */
     int32_t speed_limit; /* 1: |i_q,ref| <= I_s,sat above base speed (from the shape tables if given, else (23)
@@ -193,7 +196,8 @@ typedef struct {
     bc_pi_state pi_w;
     bc_sixstep_state six;  /* the start controller, re-initialised whenever the start mode is entered */
     int32_t mode;    /* BC_SINE_MODE_* */
-    int32_t tripped; /* over-current trip latched */
+    bc_guard_params guard_p; /* derived in init: i_max, v_max */
+    bc_guard_state guard;    /* input guard: the over-current latch (bc_guard.h) */
     int32_t six_run; /* start mode: the square-wave controller runs (0: coasting, flying_start) */
     int32_t n_quiet; /* samples since the last Hall edge while coasting */
     /* shape-aware speed limit (5.), filled by bc_sine_init: line-to-line values (pairs ab, bc, ca) at the angles

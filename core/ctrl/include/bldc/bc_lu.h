@@ -94,10 +94,11 @@
  * duties saturate instead of dividing by ~0 (only a wrong angle puts the pair near a zero crossing). Omega_e = 0
  * (standstill, no two Hall edges yet): the angle is the middle of the sector and every law still holds.
  *
- * Safety: invalid Hall code (000, 111) -> all legs off, BC_FLAG_HALL_INVALID | BC_FLAG_SAFE. Non-finite measured
- * current, fewer than two measured phases, v_dc non-finite, <= 0 or > v_max, non-finite reference -> all legs off,
- * BC_FLAG_BAD_INPUT | BC_FLAG_SAFE. |i_x| > i_max on any measured or reconstructed phase -> all legs off,
- * BC_FLAG_OVERCURRENT | BC_FLAG_SAFE, latched until every |i_x| < i_max / 2 at a sample (or bc_lu_init).
+ * Safety: the input guard (bc_guard.h, with i_max and v_max: current reconstruction from i_mask, the DC-bus limits
+ * 0 < v_dc <= v_max, the hardware fault pin, the over-current trip |i_x| > i_max latched until every |i_x| < i_max / 2
+ * at a sample with valid measurements, or bc_lu_init) gives BC_FLAG_BAD_INPUT or BC_FLAG_OVERCURRENT; an invalid
+ * Hall code (000, 111) adds BC_FLAG_HALL_INVALID, a non-finite reference BC_FLAG_BAD_INPUT. Any of them: all legs
+ * off, BC_FLAG_SAFE.
  * Output duties are finite and in [0, 1] for any input.
  *
  * Diagnostics: diag[0] mode (-1 safe, 0 normal, 1 commutation D_c/D_s, 2 D_o, 3 mean law), [1] duty computed (D_n,
@@ -112,6 +113,7 @@
 
 #include <stdint.h>
 
+#include "bldc/bc_guard.h"
 #include "bldc/bc_hall.h"
 #include "bldc/bc_pi.h"
 #include "bldc/bc_types.h"
@@ -166,7 +168,8 @@ typedef struct {
     float lever_min;       /* derived in init: 1e-3 max |f|, V s/rad */
     float tol;             /* derived in init: torque tolerance of the ordered solve, 1e-4 max |f| i_max, N m */
     bc_lu_plan applied;    /* the output in force over the current sample (delay 1: the previous output) */
-    int32_t oc_latched;    /* over-current trip latched */
+    bc_guard_params guard_p; /* derived in init: i_max, v_max */
+    bc_guard_state guard;    /* input guard: the over-current latch (bc_guard.h) */
     int32_t parity;        /* 0: the sample being taken is at a carrier valley (the next half period rises) */
     int32_t dir;           /* RECT: sign of the last torque reference (+1, -1; 0 none yet) */
     int32_t dcm;           /* order 2: the PWM period under way conducts discontinuously (mean law) */

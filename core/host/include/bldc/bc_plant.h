@@ -192,6 +192,18 @@ typedef struct {
  * The runner (bc_sim) uses it for the continuous PWM-period moving average of the torque. */
 typedef void (*bc_plant_step_fn)(void *ctx, double t, const double *acc, double tau);
 
+/* The integrator's work memory: the derivative, the electrical torque and the watched functions at the current
+ * state, reused as the first stage of the next RK4 step. Private to bc_plant.c: it lives inside bc_plant_state only
+ * so that the state stays one caller-owned block (no malloc); the binding does not describe it, and the plant
+ * invalidates it (valid = 0) whenever it changes the state itself (init, inputs, half-period start, events). */
+typedef struct {
+    int32_t valid;              /* 1: the members below hold the current state's values */
+    int32_t wdir;               /* speed sign the watches were evaluated with */
+    double k1[5 + BC_ACC_N];    /* derivative at the current state */
+    double tau;                 /* tau_e at the current state, N m */
+    double w[BC_PLANT_NW];      /* watched functions at the current state */
+} bc_plant_work;
+
 typedef struct {
     double t;               /* time, s */
     double i[3];            /* phase currents, A */
@@ -257,16 +269,11 @@ typedef struct {
     double i_peak[3];        /* largest |i_x| since then */
     bc_plant_step_fn on_step; /* NULL or called after every accepted step (not copied meaningfully: a runner sets it) */
     void *on_step_ctx;
-    /* integrator cache */
-    int32_t k1_valid;
-    double k1[5 + BC_ACC_N];
-    double aux_tau;          /* tau_e at the current state (valid with k1) */
-    double wcache[BC_PLANT_NW]; /* watched functions at the current state (valid with k1) */
-    int32_t wdir;               /* speed sign the watches were evaluated with */
     /* statistics */
     uint32_t flags;          /* BC_PLANT_* */
     int64_t n_steps;         /* accepted RK4 steps */
     int64_t n_events;        /* located events (zero crossings, re-conductions) */
+    bc_plant_work work;      /* private to bc_plant.c (see bc_plant_work): never read or written by a caller */
 } bc_plant_state;
 
 /* Validate params and set the initial state at time t0 (a half-period boundary), electrical angle theta0,

@@ -3,10 +3,11 @@
 
 #include <math.h>
 
+#include "bldc/bc_math.h"
+
 static int finite_pos(float v) { return isfinite(v) && v > 0.0f; }
 static int finite_nonneg(float v) { return isfinite(v) && v >= 0.0f; }
 static int is_flag(int32_t v) { return v == 0 || v == 1; }
-static float clampf(float v, float lo, float hi) { return v < lo ? lo : (v > hi ? hi : v); }
 static float table_k(const float *k, int32_t n, float theta);
 
 /* Length of the alpha-beta vector of line values v_ab, v_bc, v_ca: alpha = (v_ab - v_ca) / 3, beta = v_bc / sqrt(3). */
@@ -107,7 +108,8 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->piw_p.u_max = p->speed_loop ? p->tau_max : 1.0f;
     if (bc_pi_init(&s->piw_p, &s->pi_w) != BC_OK) return BC_ERR_PARAM;
     s->mode = BC_SINE_MODE_START;
-    s->tripped = 0;
+    s->guard_p = (bc_guard_params){.i_max = p->i_max, .v_max = p->v_max};
+    if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
     s->six_run = !p->flying_start;
     s->n_quiet = 0;
     s->lim_shape = 0;
@@ -130,7 +132,7 @@ static float table_k(const float *k, int32_t n, float theta)
     int32_t j = (int32_t)u;
     if (j < 0) j = 0;
     if (j > n - 1) j = n - 1;
-    float frac = clampf(u - (float)j, 0.0f, 1.0f);
+    float frac = bc_clampf(u - (float)j, 0.0f, 1.0f);
     int32_t j1 = (j + 1 < n) ? j + 1 : 0;
     return k[j] + frac * (k[j1] - k[j]); /* k = k_j + (k_j+1 - k_j) frac */
 }
@@ -146,7 +148,7 @@ static float hex_scale(const float f[3], const float g[3], float lim)
         if (gxy > 0.0f && fxy + gxy > lim) k = fminf(k, (lim - fxy) / gxy);
         if (gxy < 0.0f && fxy + gxy < -lim) k = fminf(k, (-lim - fxy) / gxy);
     }
-    return clampf(k, 0.0f, 1.0f);
+    return bc_clampf(k, 0.0f, 1.0f);
 }
 
 /* Largest k in [0, 1] with |F + k G| <= r (alpha-beta vectors), assuming |F| <= r:
@@ -161,7 +163,7 @@ static float circle_scale(bc_ab F, bc_ab G, float r)
     if (sum <= r * r) return 1.0f;
     float disc = fg * fg - gg * (ff - r * r);
     float k = (-fg + sqrtf(fmaxf(disc, 0.0f))) / gg;
-    return isfinite(k) ? clampf(k, 0.0f, 1.0f) : 0.0f;
+    return isfinite(k) ? bc_clampf(k, 0.0f, 1.0f) : 0.0f;
 }
 
 /* Line-to-line spread max - min of three values. */
@@ -229,11 +231,11 @@ static float i_sat_shape(const bc_sine_params *p, const bc_sine_state *s, float 
                 /* |E + I G|^2 = r^2: I = (-E.G + sqrt((E.G)^2 + |G|^2 (r^2 - |E|^2))) / |G|^2 */
                 float gg = ga * ga + gb * gb, eg = ea * ga + eb * gb;
                 float i = (-eg + sqrtf(fmaxf(eg * eg + gg * (r2 - ee), 0.0f))) / gg;
-                best = isfinite(i) ? clampf(i, 0.0f, best) : 0.0f;
+                best = isfinite(i) ? bc_clampf(i, 0.0f, best) : 0.0f;
             }
         }
     }
-    return isfinite(best) ? clampf(best, 0.0f, cap) : 0.0f;
+    return isfinite(best) ? bc_clampf(best, 0.0f, cap) : 0.0f;
 }
 
 /* Enter the start mode: the square-wave controller starts afresh, the d,q integrators are cleared (the hand-off
@@ -264,41 +266,19 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     }
     out->flags = 0u;
 
-    /* 1. safety (fault_pin: the inverter's hardware protection has tripped, its gates are off) */
-    if (s->tripped || in->fault_pin) {
-        go_safe(p, s, out, BC_FLAG_OVERCURRENT);
-        return;
-    }
-    uint32_t mask = in->i_mask & 7u;
-    int n_meas = (int)(mask & 1u) + (int)((mask >> 1) & 1u) + (int)((mask >> 2) & 1u);
-    int bad = !(isfinite(in->v_dc) && in->v_dc > 0.0f) || n_meas < 2;
-    for (int x = 0; x < 3; ++x) {
-        if (((mask >> x) & 1u) && !isfinite(in->i_abc[x])) bad = 1;
-    }
-    if (p->angle == BC_SINE_ANGLE_ENCODER && !isfinite(in->theta_enc)) bad = 1;
-    if (p->speed_loop ? !isfinite(in->omega_ref) : !isfinite(in->ref)) bad = 1;
+    /* 1. safety: the input guard (bc_guard.h), the Hall code, the reference and the encoder angle if used */
     bc_hall_out h;
     bc_hall_step(&s->hall_p, &s->hall, in, &h); /* keeps the edge bookkeeping even when the output is safe */
-    if (bad) {
-        go_safe(p, s, out, BC_FLAG_BAD_INPUT);
+    float i3[3];
+    uint32_t why = bc_guard_step(&s->guard_p, &s->guard, in, i3);
+    if (!h.valid) why |= BC_FLAG_HALL_INVALID;
+    if (p->angle == BC_SINE_ANGLE_ENCODER && !isfinite(in->theta_enc)) why |= BC_FLAG_BAD_INPUT;
+    if (p->speed_loop ? !isfinite(in->omega_ref) : !isfinite(in->ref)) why |= BC_FLAG_BAD_INPUT;
+    if (why) {
+        go_safe(p, s, out, why);
         return;
     }
-    bc_abc i;
-    i.a = (mask & 1u) ? in->i_abc[0] : 0.0f;
-    i.b = (mask & 2u) ? in->i_abc[1] : 0.0f;
-    i.c = (mask & 4u) ? in->i_abc[2] : 0.0f;
-    if (!(mask & 1u)) i.a = -(i.b + i.c); /* the unmeasured phase from i_a + i_b + i_c = 0 */
-    if (!(mask & 2u)) i.b = -(i.a + i.c);
-    if (!(mask & 4u)) i.c = -(i.a + i.b);
-    if (!(fabsf(i.a) <= p->i_max && fabsf(i.b) <= p->i_max && fabsf(i.c) <= p->i_max)) {
-        s->tripped = 1;
-        go_safe(p, s, out, BC_FLAG_OVERCURRENT);
-        return;
-    }
-    if (!h.valid) {
-        go_safe(p, s, out, BC_FLAG_HALL_INVALID);
-        return;
-    }
+    bc_abc i = {i3[0], i3[1], i3[2]};
 
     /* 2. angle and speed */
     float theta = (p->angle == BC_SINE_ANGLE_ENCODER) ? bc_wrap_2pi(in->theta_enc) : h.theta;
@@ -339,7 +319,7 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
         /* square-wave start: bc_sixstep with the torque limited to a square-wave current of I_N */
         float tau_lim = p->six.k_e * (0.5f * BC_SQRT3_F) * p->i_s_max;
         bc_ctrl_in in6 = *in;
-        in6.ref = clampf(tau, -tau_lim, tau_lim);
+        in6.ref = bc_clampf(tau, -tau_lim, tau_lim);
         bc_sixstep_step(&p->six, &s->six, &in6, out);
         if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, in6.ref);
         for (int j = 0; j < BC_DIAG_N; ++j) out->diag[j] = 0.0f;
@@ -358,7 +338,7 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
         i_lim = s->lim_shape ? i_sat_shape(p, s, v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f, i_lim)
                              : fminf(i_lim, i_sat(p, v_dc, omega_e));
     }
-    float iq_ref = clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
+    float iq_ref = bc_clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
     float id_ref = 0.0f;
     if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, 1.5f * p->k_1 * iq_ref);
 

@@ -5,8 +5,8 @@
 #include <math.h>
 
 #include "bldc/bc_commutation.h"
-
-static float clampf(float v, float lo, float hi) { return v < lo ? lo : (v > hi ? hi : v); }
+#include "bldc/bc_inverter.h"
+#include "bldc/bc_math.h"
 
 /* |lev| below lev_min is replaced by lev_min with lev's sign (+ for 0 or NaN): a denominator never near 0. */
 static float guard(float lev, float lev_min)
@@ -73,7 +73,7 @@ float bc_lu_extinction(const bc_lu_params *p, const bc_lu_point *x, int pos, int
     float end = i_f + slope_off(p, x, off) * p->ts;
     if ((i_f > 0.0f && end > 0.0f) || (i_f < 0.0f && end < 0.0f)) return p->ts;
     float t_x = p->ts * i_f / (i_f - end); /* |i_f - end| >= |i_f| > i_zero: no division by ~0 */
-    return clampf(t_x, 0.0f, p->ts);
+    return bc_clampf(t_x, 0.0f, p->ts);
 }
 
 void bc_lu_predict(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan *plan, float i_next[3])
@@ -135,11 +135,12 @@ static void segment(const bc_lu_params *p, const bc_lu_point *x, const float r_d
     float v = x->v_dc, w = x->omega_m;
     float eps = 1e-6f * p->i_max;
     for (int ev = 0; ev < 4 && tau > 0.0f; ++ev) {
-        float u[3], slope[3];
-        int conn[3], diode[3], n = 0;
+        float u[3], wf[3], slope[3];
+        int conn[3], diode[3];
         for (int k = 0; k < 3; ++k) {
             diode[k] = 0;
             conn[k] = 1;
+            wf[k] = w * x->f[k];
             if (leg[k] == SEG_HI) {
                 u[k] = v;
             } else if (leg[k] == SEG_LO) {
@@ -155,44 +156,24 @@ static void segment(const bc_lu_params *p, const bc_lu_point *x, const float r_d
                 conn[k] = 0; /* open */
                 i[k] = 0.0f;
             }
-            n += conn[k];
         }
-        if (n < 2) { /* no circuit: no current (for the rest of the part: no torque) */
+        /* the circuit (bc_inverter.h): terms (u_x - w f_x) - R i_x(0) */
+        if (bc_inv_slopes(u, wf, r_drop, conn, p->L, slope) == BC_INV_NO_PATH) {
+            /* no circuit: no current (for the rest of the part: no torque) */
             for (int k = 0; k < 3; ++k) i[k] = 0.0f;
             if (dry) *dry = 1;
             return;
         }
-        float v_n = 0.0f;
-        for (int k = 0; k < 3; ++k) {
-            if (conn[k]) v_n += u[k] - w * x->f[k] - r_drop[k];
-        }
-        v_n /= (float)n;
-        for (int k = 0; k < 3; ++k) slope[k] = conn[k] ? (u[k] - w * x->f[k] - r_drop[k] - v_n) / p->L : 0.0f;
         /* the first diode current to reach zero ends the part early */
-        float t_ev = tau;
-        int who = -1;
-        for (int k = 0; k < 3; ++k) {
-            if (diode[k] && i[k] * slope[k] < 0.0f) {
-                float t = -i[k] / slope[k];
-                if (t < t_ev) {
-                    t_ev = t;
-                    who = k;
-                }
-            }
-        }
+        float t_ev;
+        int who = bc_inv_first_zero(diode, i, slope, tau, &t_ev);
         /* the currents are linear over the piece: its torque integral is t_ev T(mid-piece) (shapes frozen) */
         if (area) {
             float t_mid = 0.0f;
             for (int k = 0; k < 3; ++k) t_mid += x->f[k] * (i[k] + 0.5f * slope[k] * t_ev);
             *area += t_ev * t_mid;
         }
-        for (int k = 0; k < 3; ++k) i[k] += slope[k] * t_ev;
-        if (who >= 0) {
-            float r = i[who]; /* rounding residue: keep the sum zero */
-            i[who] = 0.0f;
-            int other = who == 0 ? 1 : 0;
-            i[other] += r;
-        }
+        bc_inv_advance(conn, slope, t_ev, who, i);
         if (dry && fabsf(i[0]) <= eps && fabsf(i[1]) <= eps && fabsf(i[2]) <= eps) *dry = 1; /* none left */
         tau -= t_ev;
         if (who < 0) break;
@@ -211,7 +192,7 @@ static void ordered(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_pla
     int on[3] = {SEG_OFF, SEG_OFF, SEG_OFF}, off[3] = {SEG_OFF, SEG_OFF, SEG_OFF};
     float d = 0.0f;
     if (plan->kind == BC_LU_PAIR || plan->kind == BC_LU_DO) {
-        d = clampf(plan->duty, 0.0f, 1.0f);
+        d = bc_clampf(plan->duty, 0.0f, 1.0f);
         on[plan->pos] = SEG_HI; /* S = +1 */
         on[plan->neg] = SEG_LO;
         if (plan->kind == BC_LU_DO) {
@@ -267,6 +248,20 @@ static float pair_torque(const bc_lu_params *p, const bc_lu_point *x, bc_lu_plan
     return t_mean;
 }
 
+typedef struct {
+    const bc_lu_params *p;
+    const bc_lu_point *x;
+    bc_lu_plan *plan;
+    float t_ref, sgn;
+    int rising, mean;
+} pair_goal;
+
+static float pair_gap(float d, void *ctx)
+{
+    const pair_goal *g = (const pair_goal *)ctx;
+    return g->sgn * (pair_torque(g->p, g->x, g->plan, g->rising, d, g->mean) - g->t_ref);
+}
+
 /* Root of sgn (pair_torque(d) - T*) on [0, 1] (see bc_lu_solve_pair). */
 static float solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
                         float d0, float tol, int mean)
@@ -295,7 +290,7 @@ static float solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, in
             G_OF(0.0f, ga);
             if (ga > 0.0f) return -ga * d0 / fmaxf(gb - ga, 1e-30f); /* too much even at zero duty */
         }
-        d = clampf(a - ga * (b - a) / fmaxf(gb - ga, 1e-30f), a, b);
+        d = bc_clampf(a - ga * (b - a) / fmaxf(gb - ga, 1e-30f), a, b);
     } else {
         if (d0 >= 0.0f && d0 <= 1.0f) {
             G_OF(d0, g);
@@ -308,27 +303,10 @@ static float solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, in
         if (ga > 0.0f) return d0 < 0.0f ? d0 : -ga / range;        /* too much even at zero duty */
         d = (d0 > 0.0f && d0 < 1.0f) ? d0 : a - ga * (b - a) / range;
     }
-    /* Illinois (modified regula falsi) on the bracket [a, b], g(a) <= 0 <= g(b) */
-    int side = 0;
-    for (int it = 0; it < 40; ++it) {
-        G_OF(d, g);
-        if (fabsf(g) <= tol || b - a < 1e-7f) break;
-        if (g < 0.0f) {
-            a = d;
-            ga = g;
-            if (side == -1) gb *= 0.5f;
-            side = -1;
-        } else {
-            b = d;
-            gb = g;
-            if (side == 1) ga *= 0.5f;
-            side = 1;
-        }
-        d = a - ga * (b - a) / fmaxf(gb - ga, 1e-30f);
-        d = clampf(d, a, b);
-    }
+    /* Illinois (modified regula falsi, bc_root_bracket) on the bracket [a, b], g(a) <= 0 <= g(b) */
 #undef G_OF
-    return d;
+    pair_goal goal = {p, x, &plan, t_ref, sgn, rising, mean};
+    return bc_root_bracket(pair_gap, &goal, a, b, ga, gb, d, tol, 1e-7f, 40, BC_ROOT_ILLINOIS);
 }
 
 float bc_lu_solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
@@ -468,7 +446,8 @@ int bc_lu_init(const bc_lu_params *p, bc_lu_state *s)
     s->applied.off = 2;
     s->applied.sig = 0;
     s->applied.duty = 0.0f;
-    s->oc_latched = 0;
+    s->guard_p = (bc_guard_params){.i_max = p->i_max, .v_max = p->v_max};
+    if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
     s->dir = 0;
     s->dcm = 0;
     s->t_first = 0.0f;
@@ -486,27 +465,6 @@ static void go_safe(bc_lu_state *s, bc_ctrl_out *out, uint32_t why)
     s->applied.kind = BC_LU_SAFE;
     s->applied.duty = 0.0f;
     bc_pi_reset(&s->pi_p, &s->pi, 0.0f);
-}
-
-/* The measured currents, the unmeasured one reconstructed (sum zero); 0 if fewer than two are measured or a
- * measured one is not finite. */
-static int currents(const bc_ctrl_in *in, float i[3])
-{
-    uint32_t m = in->i_mask & 7u;
-    int n = 0, missing = -1;
-    for (int x = 0; x < 3; ++x) {
-        if (m & (1u << x)) {
-            if (!isfinite(in->i_abc[x])) return 0;
-            i[x] = in->i_abc[x];
-            ++n;
-        } else {
-            i[x] = 0.0f;
-            missing = x;
-        }
-    }
-    if (n < 2) return 0;
-    if (n == 2) i[missing] = -(i[0] + i[1] + i[2]); /* i_a + i_b + i_c = 0 */
-    return 1;
 }
 
 /* The one-step model the parameters ask for: ordered (order = 1) or averaged. */
@@ -537,7 +495,7 @@ static float rect_duty(const bc_lu_params *p, bc_lu_state *s, const bc_lu_point 
     /* u = k_p e + x (pair voltage, V);  D = 1/2 + u / (2 V);  realised u = (2 D - 1) V (anti-windup) */
     float u = bc_pi_output(&s->pi_p, &s->pi, e, 0.0f);
     float d = 0.5f + u / (2.0f * x->v_dc);
-    float u_real = (2.0f * clampf(d, 0.0f, 1.0f) - 1.0f) * x->v_dc;
+    float u_real = (2.0f * bc_clampf(d, 0.0f, 1.0f) - 1.0f) * x->v_dc;
     bc_pi_update(&s->pi_p, &s->pi, e, u, u_real);
     return d;
 }
@@ -559,27 +517,15 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
     bc_hall_step(&s->hall_p, &s->hall, in, &h);
     out->diag[4] = h.theta;
     out->diag[5] = h.omega_e;
-    if (!h.valid) {
-        go_safe(s, out, BC_FLAG_HALL_INVALID);
-        return;
-    }
 
-    /* measurements */
+    /* measurements, DC bus, hardware and software over-current trips: the input guard (bc_guard.h) */
     bc_lu_point x0;
     float v = in->v_dc, t_ref = in->ref;
-    if (!currents(in, x0.i) || !isfinite(v) || !(v > 0.0f) || !(v <= p->v_max) || !isfinite(t_ref)) {
-        go_safe(s, out, BC_FLAG_BAD_INPUT);
-        return;
-    }
-    if (in->fault_pin) { /* the inverter's hardware protection has tripped: its gates are off; stay safe */
-        go_safe(s, out, BC_FLAG_OVERCURRENT);
-        return;
-    }
-    float i_peak = fmaxf(fabsf(x0.i[0]), fmaxf(fabsf(x0.i[1]), fabsf(x0.i[2])));
-    if (s->oc_latched && i_peak < 0.5f * p->i_max) s->oc_latched = 0;
-    if (!(i_peak <= p->i_max)) s->oc_latched = 1;
-    if (s->oc_latched) {
-        go_safe(s, out, BC_FLAG_OVERCURRENT);
+    uint32_t why = bc_guard_step(&s->guard_p, &s->guard, in, x0.i);
+    if (!h.valid) why |= BC_FLAG_HALL_INVALID;
+    if (!isfinite(t_ref)) why |= BC_FLAG_BAD_INPUT;
+    if (why) {
+        go_safe(s, out, why);
         return;
     }
     x0.v_dc = v;
@@ -644,7 +590,7 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
             if (lever > s->lever_min) {
                 float d_zero, d_hold;
                 bc_lu_do_bounds(p, &x1, pos, neg, &d_zero, &d_hold);
-                d = clampf(bc_lu_do(p, &x1, pos, neg, t_ref, s->lever_min), d_zero, d_hold);
+                d = bc_clampf(bc_lu_do(p, &x1, pos, neg, t_ref, s->lever_min), d_zero, d_hold);
                 plan.kind = BC_LU_DO;
                 plan.sig = sig > 0.0f ? 1 : -1;
                 mode = 2.0f;
@@ -657,16 +603,16 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
          * current does not stop under the end-value duty either, the period is continuous: nothing to solve. */
         bc_lu_plan trial = plan;
         float t_first;
-        int dcm = deferred || period_dry(p, &x1, &trial, clampf(d, 0.0f, 1.0f), &t_first);
+        int dcm = deferred || period_dry(p, &x1, &trial, bc_clampf(d, 0.0f, 1.0f), &t_first);
         float guess = s->d_mean > 0.0f ? s->d_mean : d;
         s->d_mean = 0.0f;
         if (dcm) {
             float d_m = bc_lu_solve_pair_mean(p, &x1, pos, neg, t_ref, 1, guess, s->tol, 1);
-            if (period_dry(p, &x1, &trial, clampf(d_m, 0.0f, 1.0f), &s->t_first)) {
+            if (period_dry(p, &x1, &trial, bc_clampf(d_m, 0.0f, 1.0f), &s->t_first)) {
                 d = d_m;
                 mode = 3.0f;
                 s->dcm = 1;
-                s->d_mean = clampf(d_m, 0.0f, 1.0f); /* the next period's first guess */
+                s->d_mean = bc_clampf(d_m, 0.0f, 1.0f); /* the next period's first guess */
             } else if (deferred) {
                 d = bc_lu_solve_pair(p, &x1, pos, neg, t_ref, 1, d, s->tol);
             }
@@ -689,7 +635,7 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
         return;
     }
     if (d < 0.0f || d > 1.0f) out->flags |= BC_FLAG_SATURATED;
-    plan.duty = clampf(d, 0.0f, 1.0f);
+    plan.duty = bc_clampf(d, 0.0f, 1.0f);
 
     if (plan.kind == BC_LU_PAIR) {
         out->leg[pos].mode = BC_LEG_HIGH; /* S = +1: P's upper and N's lower switch on; S = -1: both off */

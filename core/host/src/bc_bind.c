@@ -155,7 +155,25 @@ static const bc_struct_desc STRUCTS[] = {
     S(bc_sim_state),    S(bc_trace_row),    S(bc_ctrl_in),      S(bc_ctrl_out),
 };
 
-/* Controller providers (src/bc_bind_<name>.c): one line each. */
+#define K BC_BIND_CONST
+
+/* Constants shared by every block (bc_types.h) and the plant's (bc_emf.h, bc_plant.h). */
+static const bc_const_desc CONSTS[] = {
+    K("flag", BC_FLAG_SAFE),         K("flag", BC_FLAG_HALL_INVALID),     K("flag", BC_FLAG_OVERCURRENT),
+    K("flag", BC_FLAG_BAD_INPUT),    K("flag", BC_FLAG_SATURATED),
+    K("leg", BC_LEG_OFF),            K("leg", BC_LEG_PWM),                K("leg", BC_LEG_HIGH),
+    K("leg", BC_LEG_LOW),
+    K("err", BC_OK),                 K("err", BC_ERR_PARAM),              K("err", BC_ERR_SIZE),
+    K("err", BC_ERR_INPUT),
+    K("emf", BC_EMF_TABLE),          K("emf", BC_EMF_FOURIER),
+    K("mech", BC_MECH_IMPOSED),      K("mech", BC_MECH_DYNAMIC),
+    K("inverter", BC_INV_SWITCHING), K("inverter", BC_INV_AVERAGE),
+    K("fault", BC_FAULT_NONE),       K("fault", BC_FAULT_PHASE_OPEN),     K("fault", BC_FAULT_HALL_STUCK),
+    K("fault", BC_FAULT_HALL_GLITCH), K("fault", BC_FAULT_CURRENT_OFFSET), K("fault", BC_FAULT_CURRENT_LOSS),
+    K("plant_flag", BC_PLANT_BAD_DUTY), K("plant_flag", BC_PLANT_CHATTER), K("plant_flag", BC_PLANT_HALL_OVERRUN),
+};
+
+/* Controller providers (host/src/bc_bind_<name>.c): one line each. */
 extern const bc_bind_provider bc_bind_openloop_table;
 extern const bc_bind_provider bc_bind_openloop_sixv;
 extern const bc_bind_provider bc_bind_sixstep;
@@ -173,6 +191,7 @@ static const bc_bind_provider *const PROVIDERS[] = {
 #define N_PROVIDERS ((int32_t)(sizeof PROVIDERS / sizeof PROVIDERS[0]))
 #define N_FIELDS ((int32_t)(sizeof FIELDS / sizeof FIELDS[0]))
 #define N_STRUCTS ((int32_t)(sizeof STRUCTS / sizeof STRUCTS[0]))
+#define N_CONSTS ((int32_t)(sizeof CONSTS / sizeof CONSTS[0]))
 
 int32_t bc_layout_count(void)
 {
@@ -208,6 +227,25 @@ const bc_struct_desc *bc_struct_get(int32_t j)
     for (int32_t q = 0; q < N_PROVIDERS; ++q) {
         if (j < PROVIDERS[q]->n_structs) return &PROVIDERS[q]->structs[j];
         j -= PROVIDERS[q]->n_structs;
+    }
+    return 0;
+}
+
+int32_t bc_const_count(void)
+{
+    int32_t n = N_CONSTS;
+    for (int32_t j = 0; j < N_PROVIDERS; ++j) n += PROVIDERS[j]->n_consts;
+    return n;
+}
+
+const bc_const_desc *bc_const_get(int32_t j)
+{
+    if (j < 0) return 0;
+    if (j < N_CONSTS) return &CONSTS[j];
+    j -= N_CONSTS;
+    for (int32_t q = 0; q < N_PROVIDERS; ++q) {
+        if (j < PROVIDERS[q]->n_consts) return &PROVIDERS[q]->consts[j];
+        j -= PROVIDERS[q]->n_consts;
     }
     return 0;
 }

@@ -88,11 +88,11 @@
  *                    end of the bracket the end current is affine in m and the line through the ends is exact;
  *                    otherwise (and on [m_lo, 0], where m < 0 switches both legs) the Illinois method refines it.
  *
- * Safety: an invalid Hall code gives all legs off, BC_FLAG_HALL_INVALID | BC_FLAG_SAFE. A non-finite measured
- * current, V_dc <= 0, V_dc > v_max or non-finite, a non-finite reference or fewer than two measured phases give
- * all legs off, BC_FLAG_BAD_INPUT | BC_FLAG_SAFE. |i_x| > i_max on any (measured or reconstructed) phase gives all
- * legs off and BC_FLAG_OVERCURRENT | BC_FLAG_SAFE, latched until every |i_x| < i_max / 2 at a sample (or
- * bc_sixstep_init). In the safe state the PI integrator and the hysteresis state are reset and the incoming phase
+ * Safety: the input guard (bc_guard.h, with i_max and v_max: current reconstruction from i_mask, the DC-bus limits
+ * 0 < V_dc <= v_max, the hardware fault pin, the over-current trip |i_x| > i_max latched until every |i_x| < i_max / 2
+ * at a sample with valid measurements, or bc_sixstep_init) gives BC_FLAG_BAD_INPUT or BC_FLAG_OVERCURRENT; an
+ * invalid Hall code adds BC_FLAG_HALL_INVALID, a non-finite reference BC_FLAG_BAD_INPUT. Any of them: all legs off,
+ * BC_FLAG_SAFE. In the safe state the PI integrator and the hysteresis state are reset and the incoming phase
  * is forgotten. Output duties are always finite and in [0, 1].
  *
  * Diagnostics: diag[0] sector commanded (-1 safe), [1] i_reg (A), [2] I_ref (A), [3] m (pair voltage / V_dc),
@@ -104,6 +104,7 @@
 
 #include <stdint.h>
 
+#include "bldc/bc_guard.h"
 #include "bldc/bc_hall.h"
 #include "bldc/bc_pi.h"
 #include "bldc/bc_types.h"
@@ -152,7 +153,8 @@ typedef struct {
     int32_t seen;          /* Hall sector seen at the last sample, -1 none */
     int32_t incoming;      /* phase that entered at the last commutation, -1 none */
     int32_t hyst_on;       /* hysteresis: 1 switch on */
-    int32_t oc_latched;    /* over-current trip latched */
+    bc_guard_params guard_p; /* derived in init: i_max, v_max */
+    bc_guard_state guard;    /* input guard: the over-current latch (bc_guard.h) */
 } bc_sixstep_state;
 
 /* Validate the parameters (finite, in range) and reset the state. BC_OK or BC_ERR_PARAM. */

@@ -27,5 +27,12 @@ static void sixstep_step(const void *p, void *s, const bc_ctrl_in *in, bc_ctrl_o
 static const bc_ctrl_info SIXSTEP_INFO = {
     "sixstep", "bc_sixstep_params", "bc_sixstep_state", sixstep_init, sixstep_step,
     {"sector", "i_reg", "i_ref", "duty", "omega_e", "incoming", "chop_leg", "i_out"}};
+static const bc_const_desc SIXSTEP_CONSTS[] = {
+    BC_BIND_CONST("sixstep_reg", BC_SIXSTEP_PI),        BC_BIND_CONST("sixstep_reg", BC_SIXSTEP_HYST),
+    BC_BIND_CONST("sixstep_reg", BC_SIXSTEP_PRED),      BC_BIND_CONST("sixstep_chop", BC_SIXSTEP_BIPOLAR),
+    BC_BIND_CONST("sixstep_chop", BC_SIXSTEP_HIGH),     BC_BIND_CONST("sixstep_chop", BC_SIXSTEP_PWMPWM),
+    BC_BIND_CONST("sixstep_chop", BC_SIXSTEP_SYNC),
+};
 const bc_bind_provider bc_bind_sixstep = {SIXSTEP_FIELDS, (int32_t)(sizeof SIXSTEP_FIELDS / sizeof SIXSTEP_FIELDS[0]),
-                                          SIXSTEP_STRUCTS, 2, &SIXSTEP_INFO};
+                                          SIXSTEP_STRUCTS, 2, &SIXSTEP_INFO, SIXSTEP_CONSTS,
+                                          (int32_t)(sizeof SIXSTEP_CONSTS / sizeof SIXSTEP_CONSTS[0])};

@@ -4,11 +4,11 @@
 #include <math.h>
 
 #include "bldc/bc_commutation.h"
+#include "bldc/bc_inverter.h"
+#include "bldc/bc_math.h"
 
 #define PI3_F (BC_PI_F / 3.0f)
 #define PI6_F (BC_PI_F / 6.0f)
-
-static float clampf(float v, float lo, float hi) { return v < lo ? lo : (v > hi ? hi : v); }
 
 static int fin(float v) { return isfinite(v) ? 1 : 0; }
 
@@ -41,7 +41,8 @@ int bc_sixstep_init(const bc_sixstep_params *p, bc_sixstep_state *s)
     s->seen = -1;
     s->incoming = -1;
     s->hyst_on = 0;
-    s->oc_latched = 0;
+    s->guard_p = (bc_guard_params){.i_max = p->i_max, .v_max = p->v_max};
+    if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
     return BC_OK;
 }
 
@@ -63,7 +64,7 @@ static float trapezoid(float th)
     float k = 1.0f;
     if (th < PI6_F) k = th / PI6_F;
     else if (th > 5.0f * PI6_F) k = (BC_PI_F - th) / PI6_F;
-    return sgn * clampf(k, 0.0f, 1.0f);
+    return sgn * bc_clampf(k, 0.0f, 1.0f);
 }
 
 /* Average terminal voltage u of a leg over a half period from its command and the sign of its current; returns 1 if
@@ -106,49 +107,23 @@ int bc_sixstep_predict(const bc_leg_cmd cmd[3], float v, const float e[3], float
 {
     float left = t;
     int opened = 0;
-    /* at most one segment per diode-only phase opening, plus the last */
+    /* at most one segment per diode-only phase opening, plus the last (the circuit: bc_inverter.h) */
     for (int seg = 0; seg < 4 && left > 0.0f; ++seg) {
-        float u[3], di[3];
-        int conn[3];
-        int n = 0;
-        float sum = 0.0f;
+        float u[3], ri[3], di[3];
+        int conn[3], diode[3];
         for (int x = 0; x < 3; ++x) {
             conn[x] = leg_average(&cmd[x], i[x], v, &u[x]);
-            if (conn[x]) {
-                ++n;
-                sum += u[x] - R * i[x] - e[x];
-            }
+            diode[x] = conn[x] && diode_only(&cmd[x]);
+            ri[x] = R * i[x];
         }
-        if (n < 2) { /* no closed path: no current */
+        if (bc_inv_slopes(u, ri, e, conn, L, di) == BC_INV_NO_PATH) { /* no closed path: no current */
             i[0] = i[1] = i[2] = 0.0f;
             return opened;
         }
-        /* v_n = mean over the connected phases of (u_j - R i_j - e_j);  L di_j/dt = u_j - R i_j - e_j - v_n */
-        float vn = sum / (float)n;
-        for (int x = 0; x < 3; ++x) di[x] = conn[x] ? (u[x] - R * i[x] - e[x] - vn) / L : 0.0f;
-        /* the first diode-only phase whose current reaches zero opens there */
-        float h = left;
-        int z = -1;
-        for (int x = 0; x < 3; ++x) {
-            if (conn[x] && diode_only(&cmd[x]) && i[x] * di[x] < 0.0f) {
-                float tz = -i[x] / di[x];
-                if (tz < h) {
-                    h = tz;
-                    z = x;
-                }
-            }
-        }
-        for (int x = 0; x < 3; ++x) i[x] += di[x] * h;
-        if (z >= 0) {
-            ++opened;
-            float r = i[z]; /* rounding residue: keep the sum zero */
-            i[z] = 0.0f;
-            for (int x = 0; x < 3; ++x)
-                if (x != z && conn[x]) {
-                    i[x] += r;
-                    break;
-                }
-        }
+        float h;
+        int z = bc_inv_first_zero(diode, i, di, left, &h);
+        bc_inv_advance(conn, di, h, z, i);
+        if (z >= 0) ++opened;
         left -= h;
     }
     return opened;
@@ -167,12 +142,12 @@ static void build(int chop, int pos, int neg, int chop_leg, float m, bc_leg_cmd 
     c[pos].mode = BC_LEG_HIGH;
     c[neg].mode = BC_LEG_LOW;
     if (chop == BC_SIXSTEP_BIPOLAR || m < 0.0f) { /* u = (2 d - 1) V,  d = (1 + m)/2 */
-        float d = clampf(0.5f * (1.0f + m), 0.0f, 1.0f);
+        float d = bc_clampf(0.5f * (1.0f + m), 0.0f, 1.0f);
         c[pos].duty = d;
         c[neg].duty = d;
         return;
     }
-    m = clampf(m, 0.0f, 1.0f);
+    m = bc_clampf(m, 0.0f, 1.0f);
     switch (chop) {
     case BC_SIXSTEP_PWMPWM: /* u = m V: one leg chops, the other is fully on */
         c[pos].duty = chop_leg == pos ? m : 1.0f;
@@ -224,33 +199,30 @@ static float pred_end(const pred_ctx *c, float m, int *opened)
     return c->sgn * i[c->x];
 }
 
+typedef struct {
+    const pred_ctx *c;
+    float target;
+} pred_goal;
+
+static float pred_gap(float m, void *ctx)
+{
+    const pred_goal *g = (const pred_goal *)ctx;
+    int op = 0;
+    return pred_end(g->c, m, &op) - g->target;
+}
+
 /* Solve pred_end(m) = target for m in [lo, hi] given f at both ends (f_lo < 0 < f_hi). Without a diode current
  * ending inside the sample at either end, none ends in between (its end time is monotonic in m) and the end
- * current is affine in m: the line through the ends is the solution. Otherwise Illinois on the bracket. */
+ * current is affine in m: the line through the ends is the solution. Otherwise regula falsi on the bracket
+ * (bc_root_bracket, every-time halving; superlinear: 3-6 iterations to the tolerance in practice). */
 static float solve_bracket(const pred_ctx *c, float target, float lo, float hi, float f_lo, float f_hi, int affine)
 {
-    float a = lo, b = hi, fa = f_lo, fb = f_hi;
     float tol = 1e-4f * (1.0f + fabsf(target));
-    float d = a - fa * (b - a) / (fb - fa);
-    if (affine) return fin(d) ? clampf(d, lo, hi) : lo;
-    for (int it = 0; it < 12; ++it) { /* superlinear: 3-6 iterations to the tolerance in practice */
-        int op = 0;
-        d = clampf(d, a, b);
-        float fd = pred_end(c, d, &op) - target;
-        if (!fin(fd)) break;
-        if (fabsf(fd) <= tol || b - a < 1e-6f) break;
-        if ((fd < 0.0f) == (fa < 0.0f)) {
-            a = d;
-            fa = fd;
-            fb *= 0.5f;
-        } else {
-            b = d;
-            fb = fd;
-            fa *= 0.5f;
-        }
-        d = a - fa * (b - a) / (fb - fa);
-    }
-    return fin(d) ? clampf(d, lo, hi) : lo;
+    float d = lo - f_lo * (hi - lo) / (f_hi - f_lo);
+    if (affine) return fin(d) ? bc_clampf(d, lo, hi) : lo;
+    pred_goal g = {c, target};
+    d = bc_root_bracket(pred_gap, &g, lo, hi, f_lo, f_hi, d, tol, 1e-6f, 12, BC_ROOT_HALVE);
+    return fin(d) ? bc_clampf(d, lo, hi) : lo;
 }
 
 /* Solve pred_end(m) = target for m in [m_lo, 1]: first on [0, 1], then on [m_lo, 0]; *sat = 1 if limited. */
@@ -297,45 +269,14 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
     bc_hall_step(&s->hall_p, &s->hall, in, &h);
     out->diag[4] = h.omega_e;
 
-    /* measurements: two measured phases give the third, i_a + i_b + i_c = 0 */
-    uint32_t mask = in->i_mask & 7u;
-    int n_meas = 0, bad = 0;
-    float i[3], sum = 0.0f;
-    for (int x = 0; x < 3; ++x) {
-        i[x] = 0.0f;
-        if (mask & (1u << x)) {
-            ++n_meas;
-            if (!fin(in->i_abc[x])) bad = 1;
-            else {
-                i[x] = in->i_abc[x];
-                sum += i[x];
-            }
-        }
-    }
-    if (n_meas == 2) {
-        for (int x = 0; x < 3; ++x)
-            if (!(mask & (1u << x))) i[x] = -sum;
-    }
+    /* measurements, DC bus, hardware and software over-current trips: the input guard (bc_guard.h) */
+    float i[3];
+    uint32_t why = bc_guard_step(&s->guard_p, &s->guard, in, i);
     float v = in->v_dc;
-    if (n_meas < 2 || !fin(v) || !(v > 0.0f) || v > p->v_max || !fin(in->ref) || !fin(sum)) bad = 1;
-    if (!h.valid || bad) {
-        safe(s, out, (h.valid ? 0u : BC_FLAG_HALL_INVALID) | (bad ? BC_FLAG_BAD_INPUT : 0u));
-        return;
-    }
-
-    /* the inverter's hardware protection has tripped: its gates are off; stay safe */
-    if (in->fault_pin) {
-        safe(s, out, BC_FLAG_OVERCURRENT);
-        return;
-    }
-
-    /* over-current: trip above i_max, latched until every |i| < i_max / 2 */
-    float i_abs = 0.0f;
-    for (int x = 0; x < 3; ++x) i_abs = fabsf(i[x]) > i_abs ? fabsf(i[x]) : i_abs;
-    if (!fin(i_abs) || i_abs > p->i_max) s->oc_latched = 1;
-    else if (s->oc_latched && i_abs < 0.5f * p->i_max) s->oc_latched = 0;
-    if (s->oc_latched) {
-        safe(s, out, BC_FLAG_OVERCURRENT);
+    if (!h.valid) why |= BC_FLAG_HALL_INVALID;
+    if (!fin(in->ref)) why |= BC_FLAG_BAD_INPUT;
+    if (why) {
+        safe(s, out, why);
         return;
     }
 
@@ -386,7 +327,7 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
     float i_reg = sgn * i[x];
     float i_ref = fabsf(ref);
     if (p->ref_torque) i_ref /= p->k_e;
-    i_ref = clampf(i_ref, 0.0f, p->i_max);
+    i_ref = bc_clampf(i_ref, 0.0f, p->i_max);
 
     /* PWM-on-PWM: the incoming phase chops in the first half of the sector, the other one in the second */
     int chop_leg = -1;
@@ -439,11 +380,11 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
         float err = i_ref - i_reg;
         float ff = p->emf_ff ? (e1[pos] - e1[neg] + 2.0f * p->R * i_ref) / v : 0.0f;
         float mu = bc_pi_output(&s->pi_p, &s->pi, err / v, ff);
-        m = clampf(fin(mu) ? mu : 0.0f, m_lo, 1.0f);
+        m = bc_clampf(fin(mu) ? mu : 0.0f, m_lo, 1.0f);
         sat = !(m == mu);
         bc_pi_update(&s->pi_p, &s->pi, err / v, mu, m);
     }
-    m = fin(m) ? clampf(m, m_lo, 1.0f) : 0.0f;
+    m = fin(m) ? bc_clampf(m, m_lo, 1.0f) : 0.0f;
 
     build((int)p->chop, pos, neg, chop_leg, m, out->leg);
     for (int j = 0; j < 3; ++j) { /* never pass on a bad duty */
