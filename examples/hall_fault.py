@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 
 import bldclab as bl
 
-FLAG_SAFE, FLAG_HALL_INVALID, FLAG_OVERCURRENT = 0x1, 0x2, 0x4  # bc_types.h
+FLAG_SAFE, FLAG_HALL_INVALID, FLAG_OVERCURRENT = (bl.flag(n) for n in ("SAFE", "HALL_INVALID", "OVERCURRENT"))
 
 # configure the drive: htm-48v on a dynamometer at half its no-load speed
 drive = bl.load("htm-48v")

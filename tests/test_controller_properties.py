@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 import bldclab as bl
 from bldclab._core import core
 
-FLAG_SAFE = 0x1
+FLAG_SAFE = bl.flag("SAFE")
 CONTROLS = {"sixv": bl.SixStepVoltage(), "sixstep": bl.SixStep(), "sine": bl.Sine(), "lu": bl.Lu(),
             "rect": bl.Lu(method="rect"), "sixstep-pi": bl.SixStep(regulation="pi", chopping="bipolar")}
 USES_CURRENT = {"sixstep", "sine", "lu", "rect", "sixstep-pi"}
@@ -33,11 +33,11 @@ def _setup(name: str, drive: bl.Drive):
     c = core()
     ctl = CONTROLS[name]
     info = c.controllers[ctl.c_name]
-    keep: list[object] = []
-    params = ctl.c_params(drive, c, keep, 0)
+    owner = ctl.c_record(drive, c, 0)  # keeps the arrays the record points to alive
+    params = owner.record
     state = c.opaque(info.state)
     assert c.controller_init(info, params, state) == 0
-    return c, info, params, state, keep
+    return c, info, params, state, owner
 
 
 NAMES = st.sampled_from(sorted(CONTROLS))

@@ -55,11 +55,19 @@ def test_every_params_member_is_filled_and_init_accepts_it(name):
         assert c.controller_init(info, params.record, state) == 0, ctl
 
 
-def test_the_old_calling_form_keeps_the_buffers_alive():
-    c, drive = core(), bl.load("htm-48v")
-    keep: list[object] = []
-    rec = bl.Sine().c_params(drive, c, keep, 10)
-    assert len(keep) == 1 and isinstance(keep[0], CParams) and keep[0].record is rec
+def test_a_controller_without_c_record_is_refused():
+    class Bare(bl.Control):
+        c_name = "sixv"
+
+    d = bl.load("htm-48v")
+    with pytest.raises(NotImplementedError, match="Bare does not implement c_record"):
+        bl.simulate(d, Bare(), bl.Scenario(duration=1e-3, speed=0.3 * d.Omega_0, ref=0.5))
+
+
+def test_flag_bits_come_from_the_library():
+    assert bl.flag("SAFE") == core().const("BC_FLAG_SAFE") and bl.decode_flags(bl.flag("SATURATED")) == "SATURATED"
+    with pytest.raises(KeyError):
+        bl.flag("NO_SUCH_FLAG")
 
 
 def test_filled_names_every_unset_and_unknown_member():

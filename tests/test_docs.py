@@ -107,7 +107,7 @@ def test_developer_guide_explains_how_to_add_a_controller_and_a_shape(site: Path
     guide = _text(_page(site, "developer/add-controller"))
     assert "add a controller" in guide.lower()
     for name in ("bc_bind_mine.c", "PROVIDERS", "core/tests/test_mine.c", "params.h", "harness.c", "targets.c",
-                 "src/bldclab/control/mine.py", "c_params", "with_delay", "test_controller_properties.py"):
+                 "src/bldclab/control/mine.py", "c_record", "with_delay", "test_controller_properties.py"):
         assert name in guide, name
     shape = _text(_page(site, "developer/add-back-emf"))
     assert "c_form" in shape and "BC_EMF_TABLE" in shape and "BC_EMF_FOURIER" in shape

@@ -8,7 +8,7 @@ The layers, lowest first (docs/design.md explains them and where new code goes):
                   ``bldclab.svg`` (dependency-free SVG plots)
   1   model       ``bldclab.model``: motor, back-EMF shapes, motor files, units, catalog, closed forms, design
   2   binding     ``bldclab._core``: the ctypes binding of the C core
-  3   control     ``bldclab.control``: the controllers (their ``c_params`` need the binding)
+  3   control     ``bldclab.control``: the controllers (their ``c_record`` needs the binding)
   4   sim         ``bldclab.sim``: scenario, :func:`simulate`, results, plausibility guards
   5   analysis    ``bldclab.analysis``: experiments, paper 1, paper 2, comparison, faults, identification
   6   sweep       ``bldclab.sweep``: sweep files, controller registry, executors, progress, store

@@ -21,7 +21,7 @@ from bldclab.errors import BldclabError
 
 LU = bl.load("lu-4kw")
 RATED = LU.motor.Omega_nominal  # 3000 rpm: 4 E > V_dc, the DC bus limits the commutation
-SAFE, HALL_INVALID, OVERCURRENT, BAD_INPUT = 0x1, 0x2, 0x4, 0x8
+SAFE, HALL_INVALID, OVERCURRENT, BAD_INPUT = (bl.flag(n) for n in ("SAFE", "HALL_INVALID", "OVERCURRENT", "BAD_INPUT"))
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -131,13 +131,13 @@ def test_simulate_gives_the_controller_the_scenarios_delay(scenario_delay, contr
 def _make(method: str, delay: int, order: int):
     c = core()
     info = c.controllers["lu"]
-    keep: list[object] = []
     ctrl = bl.Lu(method=method, delay=delay, switching_order=order > 0, mean_law=order == 2)
-    params = ctrl.c_params(LU, c, keep, 0)
+    owner = ctrl.c_record(LU, c, 0)  # keeps the arrays the record points to alive
+    params = owner.record
     assert int(params["order"][0]) == order
     state = c.opaque(info.state)
     assert c.controller_init(info, params, state) == 0
-    return c, info, params, state, keep
+    return c, info, params, state, owner
 
 
 _SPECIAL = st.sampled_from([0.0, -0.0, math.nan, math.inf, -math.inf, 3e38, -3e38, 1e-38, 1e30, -1e30])
@@ -241,7 +241,7 @@ def test_overcurrent_trips_and_releases():
 def test_start_from_standstill_and_reverse(method):
     sc = bl.Scenario(duration=0.08, ref=lambda t: np.where(t < 0.04, LU.T_N, -LU.T_N))
     res = bl.simulate(LU, bl.Lu(method=method), sc)
-    assert np.all((res["flags"].astype(int) & ~0x10) == 0), "no trip, no bad input (saturation allowed)"
+    assert np.all((res["flags"].astype(int) & ~bl.flag("SATURATED")) == 0), "no trip, no bad input (saturation allowed)"
     first = res.t < 0.005  # no two Hall edges yet: omega estimate 0, angle at the sector middle
     assert np.any(res["omega_est"][first] == 0.0)
     assert np.mean(res["tau_mean"][first]) == pytest.approx(0.97 * LU.T_N if method == "rect" else LU.T_N,

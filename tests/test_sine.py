@@ -27,8 +27,8 @@ HTM = bl.load("htm-48v")
 HTM0 = HTM.replace(motor__R=0.0)
 THETA_M = an.theta_m(HTM)
 T_SN = an.T_SN_PU * HTM.T_N  # nominal torque with sinusoidal supply (12), N m
-SAT = 0x10  # BC_FLAG_SATURATED
-SAFE = 0x1  # BC_FLAG_SAFE
+SAT = bl.flag("SATURATED")
+SAFE = bl.flag("SAFE")
 
 
 def sine(**kw: object) -> bl.Sine:

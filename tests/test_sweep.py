@@ -262,7 +262,7 @@ class Exploding(bl.Control):
     at_speed: float = 0.0
     c_name: ClassVar[str] = "sixv"
 
-    def c_params(self, drive, core, keep, n_samples):
+    def c_record(self, drive, core, n_samples):
         raise RuntimeError(f"boom at {self.at_speed}")
 
 

@@ -8,6 +8,7 @@ sim, analysis, sweep, report, cli); this module is the top, the only one that im
 
 from __future__ import annotations
 
+from ._core import decode_flags, flag
 from ._version import __version__
 from .analysis import experiments
 from .control import Control, Lu, OpenLoop, Sine, SixStep, SixStepVoltage
@@ -55,7 +56,9 @@ __all__ = [
     "Trapezoid",
     "__version__",
     "catalog",
+    "decode_flags",
     "experiments",
+    "flag",
     "load",
     "simulate",
 ]

@@ -25,7 +25,7 @@ import numpy as np
 from ._version import __version__
 from .errors import BldclabError
 
-__all__ = ["CParams", "Controller", "Core", "core", "decode_flags"]
+__all__ = ["CParams", "Controller", "Core", "core", "decode_flags", "flag"]
 
 _BASE = {"f8": np.float64, "f4": np.float32, "i4": np.int32, "u4": np.uint32, "i8": np.int64, "u8": np.uint64,
          "ptr": np.uintp}
@@ -281,6 +281,17 @@ class Core:
 def decode_flags(value: int) -> str:
     """Return the controller flags in ``value`` as names, e.g. ``"SAFE|OVERCURRENT"`` (:meth:`Core.decode_flags`)."""
     return core().decode_flags(value)
+
+
+def flag(name: str) -> int:
+    """Return the bit of controller flag ``name`` (``"SAFE"``, ``"SATURATED"``, ...; ``BC_FLAG_<name>`` in C).
+
+    Raises
+    ------
+    KeyError
+        For a name the library's table does not have.
+    """
+    return core().const("BC_FLAG_" + name.upper())
 
 
 def __getattr__(name: str) -> int:

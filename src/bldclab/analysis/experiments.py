@@ -26,6 +26,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from .._core import core
 from ..control import Control, Sine, SixStep
 from ..control.sine import fundamental_k1
 from ..errors import BldclabError, PlausibilityError
@@ -177,8 +178,6 @@ _INCOMING = ((0, 1), (2, -1), (1, 1), (0, -1), (2, 1), (1, -1))
 #: rounded back-EMF reaches its line-to-line peak at isolated angles only, so a drive can hold its current slightly
 #: above ``Omega_0``.
 W_MAX = 1.1
-_FLAG_SATURATED = 0x10  # BC_FLAG_SATURATED: the sinusoidal controller's voltage demand left the linear SVM range
-_FLAG_SAFE = 0x1  # BC_FLAG_SAFE: all legs off (a trip)
 
 
 def _square_margin(drive: Drive, w_pu: float, control: Control) -> float:
@@ -212,7 +211,9 @@ def _sine_margin(drive: Drive, w_pu: float, control: Control) -> float:
     ref = 1.5 * fundamental_k1(drive) * analytic.i_sN(drive)  # (45): the torque of i_q = I_s,N
     pt, res = steady_state(drive, control, w_pu * drive.Omega_0, ref, trace=True)
     sel = res.t >= pt.metrics.t0
-    return -float(np.mean((res["flags"][sel].astype(int) & (_FLAG_SATURATED | _FLAG_SAFE)) > 0))
+    # BC_FLAG_SATURATED: the voltage demand left the linear range; BC_FLAG_SAFE: all legs off (a trip)
+    lost = core().const("BC_FLAG_SATURATED") | core().const("BC_FLAG_SAFE")
+    return -float(np.mean((res["flags"][sel].astype(int) & lost) > 0))
 
 
 def base_speed_margin(drive: Drive, supply: str, w_pu: float, control: Control | None = None) -> float:

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from .._core import core
 from ..control import Control
 from ..model.motor import Drive
 from ..sim import Fault, Scenario, simulate
@@ -23,11 +24,10 @@ from .experiments import electrical_period
 
 __all__ = ["FaultCase", "default_faults", "fault_table"]
 
-FLAG_SAFE = 0x1
-FLAG_HALL = 0x2
-FLAG_OC = 0x4
-FLAG_BAD = 0x8
-_FLAG_NAMES = {FLAG_HALL: "hall-invalid", FLAG_OC: "over-current", FLAG_BAD: "bad-input"}
+#: The controller flags that mean "fault detected" (``bc_types.h`` names; their values come from the library) and
+#: how the table names them
+_DETECT = {"BC_FLAG_HALL_INVALID": "hall-invalid", "BC_FLAG_OVERCURRENT": "over-current",
+           "BC_FLAG_BAD_INPUT": "bad-input"}
 
 
 @dataclass(frozen=True)
@@ -104,6 +104,10 @@ def fault_table(drive: Drive, control: Control, ref: float, speed: float, *, i_m
     t_f = periods_before * Te
     duration = t_f + periods_after * Te
     rows = []
+    c = core()
+    detect_mask = 0
+    for name in _DETECT:
+        detect_mask |= c.const(name)
     for case in cases if cases is not None else default_faults():
         d = drive
         if case.hall_error_a:
@@ -118,8 +122,8 @@ def fault_table(drive: Drive, control: Control, ref: float, speed: float, *, i_m
         flags = res.flags.astype(np.int64)
         seen = flags[after]
         any_flag = np.bitwise_or.reduce(seen) if seen.size else 0
-        detect = np.nonzero(after & ((flags & (FLAG_HALL | FLAG_OC | FLAG_BAD)) != 0))[0]
-        safe = np.nonzero(after & ((flags & FLAG_SAFE) != 0))[0]
+        detect = np.nonzero(after & ((flags & detect_mask) != 0))[0]
+        safe = np.nonzero(after & ((flags & c.const("BC_FLAG_SAFE")) != 0))[0]
         # the plant's peak over every integration step after the fault (events included), not only at the samples
         i_abs = max(res.metrics.i_peak) if res.metrics is not None else math.nan
         t_hw = res.meta["stats"]["hw_trip"]
@@ -127,7 +131,7 @@ def fault_table(drive: Drive, control: Control, ref: float, speed: float, *, i_m
         rows.append({
             "fault": case.name,
             "detected": bool(detect.size),
-            "flags": ",".join(n for b, n in _FLAG_NAMES.items() if any_flag & b) or "-",
+            "flags": ",".join(label for name, label in _DETECT.items() if any_flag & c.const(name)) or "-",
             "t_detect_ms": (res.t[detect[0]] - t_f) * 1e3 if detect.size else math.nan,
             "t_safe_ms": (res.t[safe[0]] - t_f) * 1e3 if safe.size else math.nan,
             "hw_trip_ms": (t_hw - t_f) * 1e3 if t_hw is not None else math.nan,

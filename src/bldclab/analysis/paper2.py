@@ -31,6 +31,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
+from .._core import core
 from ..control import Lu
 from ..errors import BldclabError
 from ..model.motor import BackEmf, Drive, Trapezoid
@@ -59,7 +60,6 @@ __all__ = [
 #: The three methods, in the paper's order of presentation (Figs 10, 11, 12).
 METHODS = ("rect", "lu-no-do", "lu")
 
-SATURATED = 0x10  # BC_FLAG_SATURATED (bc_types.h)
 _SECTOR = {1: 0, 3: 1, 2: 2, 6: 3, 4: 4, 5: 5}  # Hall code -> sector (docs/conventions.md)
 _POS = (0, 0, 1, 1, 2, 2)
 _NEG = (1, 2, 2, 0, 0, 1)
@@ -264,6 +264,7 @@ def ripple_stats(res: SimResult, drive: Drive) -> RippleStats:
     i_all = np.stack([res[f"i_{x}"] for x in "abc"])
     t_in = (t >= m.t0) & (t < m.t1)
     dcm = np.all(np.abs(i_all[:, t_in]) < 0.01 * drive.motor.I_N, axis=0)
+    saturated = core().const("BC_FLAG_SATURATED")  # the duty was clamped to [0, 1]
     return RippleStats(
         tau_mean=tau_mean,
         ripple_pp=m.ripple * scale,
@@ -275,7 +276,7 @@ def ripple_stats(res: SimResult, drive: Drive) -> RippleStats:
         n_commutations=len(dips),
         do_share=float(np.mean(mode[inside] == 2.0)) if np.any(inside) else math.nan,
         dcm_share=float(np.mean(dcm)) if dcm.size else math.nan,
-        sat_share=float(np.mean((flags[inside] & SATURATED) != 0)) if np.any(inside) else math.nan,
+        sat_share=float(np.mean((flags[inside] & saturated) != 0)) if np.any(inside) else math.nan,
     )
 
 

@@ -53,21 +53,13 @@ class Control:
             The loaded C library (dtypes, constants).
         n_samples : int
             Samples the run will take (controllers that replay a table check its length).
-        """
-        if type(self).c_params is Control.c_params:
-            raise NotImplementedError(f"{type(self).__name__} implements neither c_record nor c_params")
-        keep: list[object] = []
-        rec = self.c_params(drive, core, keep, n_samples)
-        return CParams(rec, keep)
 
-    def c_params(self, drive: Drive, core: Core, keep: list[object], n_samples: int) -> np.ndarray:
-        """Return :meth:`c_record`'s record and append its owner to ``keep`` (the runner's older calling form).
-
-        Kept for the runner and for controllers written against it; new code calls :meth:`c_record`.
+        Returns
+        -------
+        CParams
+            The record (``.record``) and the arrays it points to, alive as long as it is.
         """
-        params = self.c_record(drive, core, n_samples)
-        keep.append(params)
-        return params.record
+        raise NotImplementedError(f"{type(self).__name__} does not implement c_record")
 
     def with_delay(self, delay: int) -> Control:
         """Return the controller configured for the runner's computation delay (samples, 0 or 1).

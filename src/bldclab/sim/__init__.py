@@ -337,7 +337,9 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         rec["fault"]["t_off"][0, j] = f.t_off
         rec["fault"]["value"][0, j] = f.value
     info = c.controllers[control.c_name]
-    cparams = control.c_params(drive if estimate is None else estimate, c, keep, n)
+    cp = control.c_record(drive if estimate is None else estimate, c, n)
+    keep.append(cp)
+    cparams = cp.record
     cstate = c.opaque(info.state)
     rc = c.controller_init(info, cparams, cstate)
     if rc != 0:
