@@ -20,7 +20,7 @@ from .._core import core
 from .._version import __version__
 from ..control import Control
 from ..errors import BldclabError
-from ..model.motor import Drive, Inverter
+from ..model.motor import Drive
 from . import plausibility as _plaus
 from .results import Metrics, SimResult
 
@@ -28,8 +28,11 @@ __all__ = ["Fault", "Scenario", "simulate"]
 
 Profile = float | ArrayLike | Callable[[NDArray[np.float64]], ArrayLike] | None
 
-_FAULT_KINDS = {"phase_open": (1, "plant"), "hall_stuck": (2, "plant"), "hall_glitch": (3, "plant"),
-                "current_offset": (4, "sensors"), "current_loss": (5, "sensors")}
+#: Fault kind -> (C constant ``BC_FAULT_*``, whose record holds it)
+_FAULT_KINDS = {"phase_open": ("BC_FAULT_PHASE_OPEN", "plant"), "hall_stuck": ("BC_FAULT_HALL_STUCK", "plant"),
+                "hall_glitch": ("BC_FAULT_HALL_GLITCH", "plant"),
+                "current_offset": ("BC_FAULT_CURRENT_OFFSET", "sensors"),
+                "current_loss": ("BC_FAULT_CURRENT_LOSS", "sensors")}
 _MAX_FAULTS = 4
 
 
@@ -205,7 +208,7 @@ def _profile(name: str, value: Profile, t: NDArray[np.float64]) -> tuple[NDArray
     return np.ascontiguousarray(arr), math.nan
 
 
-def _plant_params(drive: Drive, mech: int, h_max: float, keep: list[object]) -> np.ndarray:
+def _plant_params(drive: Drive, imposed: bool, h_max: float, keep: list[object]) -> np.ndarray:
     c = core()
     rec = c.record("bc_plant_params")
     m, inv, mech_p, sen = drive.motor, drive.inverter, drive.mechanics, drive.sensors
@@ -234,8 +237,8 @@ def _plant_params(drive: Drive, mech: int, h_max: float, keep: list[object]) -> 
     rec["r_d"] = inv.r_d
     rec["R_src"] = inv.R_src
     rec["i_trip"] = inv.i_trip
-    rec["inverter"] = Inverter.MODELS.index(inv.model)  # BC_INV_SWITCHING 0, BC_INV_AVERAGE 1
-    rec["mech"] = mech
+    rec["inverter"] = c.const("BC_INV_AVERAGE" if inv.model == "average" else "BC_INV_SWITCHING")
+    rec["mech"] = c.const("BC_MECH_IMPOSED" if imposed else "BC_MECH_DYNAMIC")
     rec["J"] = mech_p.J
     rec["B"] = mech_p.B
     rec["tau_c"] = mech_p.tau_c
@@ -323,11 +326,12 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     t_samples = np.arange(n, dtype=np.float64) * t_half
     imposed = scenario.speed is not None
 
-    plant = _plant_params(drive, 0 if imposed else 1, scenario.h_max, keep)
+    plant = _plant_params(drive, imposed, scenario.h_max, keep)
     sensors = _sensor_params(drive)
     slots = {"plant": 0, "sensors": 0}
     for f in scenario.faults:
-        code, where = _FAULT_KINDS[f.kind]
+        name, where = _FAULT_KINDS[f.kind]
+        code = c.const(name)
         rec = plant if where == "plant" else sensors
         j = slots[where]
         slots[where] += 1
