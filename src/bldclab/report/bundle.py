@@ -254,12 +254,12 @@ def compare_files(res: CompareResult, *, figures: bool = True) -> dict[str, byte
     files: dict[str, bytes] = {
         "simulated.csv": res.simulated.to_csv(index=False).encode(),
         "analytic.csv": res.analytic.to_csv(index=False).encode(),
+        # compare(..., base_speeds=False) leaves them out
+        **({} if res.base_speeds is None else {"base_speeds.csv": res.base_speeds.to_csv(index=False).encode()}),
         "table1.csv": table1_text(t1, "csv").encode(),
         "table1.json": table1_text(t1, "json", res.not_applicable).encode(),
         "verdict.txt": ("\n".join(res.verdict) + "\n").encode(),
     }
-    if res.base_speeds is not None:  # compare(..., base_speeds=False) leaves them out
-        files["base_speeds.csv"] = res.base_speeds.to_csv(index=False).encode()
     figs = comparison_figures(res) if figures else {}
     if figures:
         figs["fig9_torque_0.8pu"] = paper1.fig9(drive)
