@@ -13,7 +13,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import BldclabError
-from ..motor import TWO_PI, Drive
+from ..emf import TWO_PI
+from ..motor import Drive
 from .bases import i_sN, omega_0, r_total
 
 __all__ = [

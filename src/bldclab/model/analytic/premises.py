@@ -10,7 +10,8 @@ import math
 
 import numpy as np
 
-from ..motor import TWO_PI, Drive, Trapezoid
+from ..emf import TWO_PI, Trapezoid
+from ..motor import Drive
 from ._common import SQRT3
 from .bases import r_total
 from .sine import (

@@ -13,7 +13,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ...errors import BldclabError
-from ..motor import TWO_PI, Drive
+from ..emf import TWO_PI
+from ..motor import Drive
 from ._common import _speed
 from .bases import omega_0, t_N
 from .blac import T_BLAC_N_PU, t_blac_pu
