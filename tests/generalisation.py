@@ -24,7 +24,8 @@ from bldclab.analysis.compare import default_controls
 from bldclab.analysis.experiments import steady_state
 from bldclab.model import analytic
 from bldclab.model.catalog.synthetic import paper1_drive
-from bldclab.model.motor import TWO_PI, BackEmf, Drive, Trapezoid
+from bldclab.model.emf import TWO_PI, BackEmf, Trapezoid
+from bldclab.model.motor import Drive
 
 #: Highest carrier drawn (Hz): the catalog's Inverter accepts up to 10 MHz; a drive drawn beyond 2 MHz is redrawn.
 MAX_F_PWM = 2e6

@@ -13,7 +13,7 @@ from scipy.integrate import solve_ivp
 import bldclab
 from bldclab import BackEmf, BldclabError, Fourier, Sinusoid, Table, Trapezoid
 from bldclab.model import analytic as an
-from bldclab.model.motor import TWO_PI
+from bldclab.model.emf import TWO_PI
 
 
 @pytest.fixture(scope="module")

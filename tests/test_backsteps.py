@@ -22,7 +22,7 @@ import pytest
 
 import bldclab as bl
 from bldclab.model.catalog.synthetic import rounded_trapezoid
-from bldclab.model.motor import BackEmf
+from bldclab.model.emf import BackEmf
 
 HTM = bl.load("htm-48v")
 LU4 = bl.load("lu-4kw")

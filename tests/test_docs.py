@@ -87,7 +87,7 @@ def test_api_reference_is_generated_from_the_docstrings(site: Path) -> None:
                  "control.sixstep.SixStep", "control.sine.Sine", "control.lu.Lu"):
         assert f'id="bldclab.{name}"' in control
     motor = _page(site, "reference/motor")
-    assert 'id="bldclab.model.motor.Drive.replace"' in motor and 'id="bldclab.model.motor.Fourier"' in motor
+    assert 'id="bldclab.model.motor.Drive.replace"' in motor and 'id="bldclab.model.emf.Fourier"' in motor
     assert 'id="bldclab.model.design.pi_gains"' in _page(site, "reference/design")
 
 

@@ -24,7 +24,8 @@ from bldclab.analysis.identify import (
     waveform_csv,
 )
 from bldclab.errors import BldclabError
-from bldclab.model.motor import TWO_PI, BackEmf, Drive
+from bldclab.model.emf import TWO_PI, BackEmf
+from bldclab.model.motor import Drive
 
 ROOT = Path(__file__).resolve().parents[1]
 DEG = math.pi / 180.0

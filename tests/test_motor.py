@@ -17,20 +17,8 @@ from hypothesis import strategies as st
 
 from bldclab.errors import BldclabError
 from bldclab.model import catalog
-from bldclab.model.motor import (
-    TWO_PI,
-    BackEmf,
-    Cogging,
-    Drive,
-    Fourier,
-    Inverter,
-    Mechanics,
-    Motor,
-    Sensors,
-    Sinusoid,
-    Table,
-    Trapezoid,
-)
+from bldclab.model.emf import TWO_PI, BackEmf, Cogging, Fourier, Sinusoid, Table, Trapezoid
+from bldclab.model.motor import Drive, Inverter, Mechanics, Motor, Sensors
 from bldclab.model.units import ALIASES, DIMENSIONS, to_si
 
 RPM = TWO_PI / 60.0

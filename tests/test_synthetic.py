@@ -14,7 +14,7 @@ from bldclab.errors import BldclabError
 from bldclab.model import catalog
 from bldclab.model.catalog import synthetic
 from bldclab.model.catalog.synthetic import lu4kw_drive, lu4kw_emf, rounded_trapezoid
-from bldclab.model.motor import TWO_PI, BackEmf, Table, Trapezoid
+from bldclab.model.emf import TWO_PI, BackEmf, Table, Trapezoid
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "src" / "bldclab" / "model" / "catalog" / "lu-4kw.toml"

@@ -15,19 +15,8 @@ from .control import Control, Lu, OpenLoop, Sine, SixStep, SixStepVoltage
 from .errors import BldclabError
 from .model import catalog
 from .model.catalog import load
-from .model.motor import (
-    BackEmf,
-    Cogging,
-    Drive,
-    Fourier,
-    Inverter,
-    Mechanics,
-    Motor,
-    Sensors,
-    Sinusoid,
-    Table,
-    Trapezoid,
-)
+from .model.emf import BackEmf, Cogging, Fourier, Sinusoid, Table, Trapezoid
+from .model.motor import Drive, Inverter, Mechanics, Motor, Sensors
 from .sim import Fault, Scenario, simulate
 from .sim.results import Metrics, SimResult
 

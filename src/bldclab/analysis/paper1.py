@@ -27,7 +27,8 @@ from matplotlib.figure import Figure
 from ..control import Control, OpenLoop, Sine, SixStep
 from ..errors import BldclabError
 from ..model import analytic
-from ..model.motor import BackEmf, Drive, Sinusoid
+from ..model.emf import BackEmf, Sinusoid
+from ..model.motor import Drive
 from ..sim import Scenario, simulate
 from .experiments import electrical_period, steady_state
 

@@ -34,7 +34,8 @@ from numpy.typing import NDArray
 from .._core import core
 from ..control import Lu
 from ..errors import BldclabError
-from ..model.motor import BackEmf, Drive, Trapezoid
+from ..model.emf import BackEmf, Trapezoid
+from ..model.motor import Drive
 from ..sim import Scenario, simulate
 from ..sim.results import SimResult
 from .experiments import electrical_period

@@ -20,7 +20,7 @@ from .._core import CParams
 from ..errors import BldclabError
 from ..model.analytic import r_total
 from ..model.design import max_bandwidth, pi_gains
-from ..model.motor import TWO_PI
+from ..model.emf import TWO_PI
 from .base import Control, check_number
 
 if TYPE_CHECKING:

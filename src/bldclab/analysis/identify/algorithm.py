@@ -37,7 +37,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...errors import BldclabError
-from ...model.motor import TWO_PI, BackEmf, Drive, Table
+from ...model.emf import TWO_PI, BackEmf, Table
+from ...model.motor import Drive
 from ...model.units import to_si
 from .smoothing import _Periodic
 from .waveform import _PHASES, Waveform, read_waveform, waveform_from_columns
@@ -222,7 +223,7 @@ class Identification:
 
     @property
     def emf(self) -> BackEmf:
-        """The identified shapes as a :class:`~bldclab.model.motor.BackEmf` of three tables on a shared grid."""
+        """The identified shapes as a :class:`~bldclab.model.emf.BackEmf` of three tables on a shared grid."""
         th = tuple(float(x) for x in self.theta)
         a, b, c = (Table(th, tuple(float(v) for v in kx)) for kx in self.k)
         return BackEmf((a, b, c))

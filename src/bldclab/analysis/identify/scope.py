@@ -15,7 +15,8 @@ from numpy.typing import NDArray
 
 from ...control import OpenLoop
 from ...errors import BldclabError
-from ...model.motor import TWO_PI, Drive
+from ...model.emf import TWO_PI
+from ...model.motor import Drive
 from ...sim import Scenario, simulate
 from .waveform import _PHASES
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ...model.motor import TWO_PI
+from ...model.emf import TWO_PI
 
 __all__ = [
 ]

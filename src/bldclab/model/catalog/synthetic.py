@@ -60,7 +60,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...errors import BldclabError
-from ..motor import TWO_PI, BackEmf, Drive, Inverter, Mechanics, Motor, Sensors, Table, Trapezoid
+from ..emf import TWO_PI, BackEmf, Table, Trapezoid
+from ..motor import Drive, Inverter, Mechanics, Motor, Sensors
 
 __all__ = [
     "LU4KW_AMPLITUDE",
