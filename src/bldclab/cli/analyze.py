@@ -6,19 +6,15 @@ import argparse
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._files import write_files
 from ..analysis.paper1 import table1_text
-from ..errors import BldclabError
 from ..model import analytic
 from ..model.catalog import load, names
 from ..report import plots
-
-if TYPE_CHECKING:
-    pass
+from .common import check_out_dir
 
 __all__ = [
     "configure_command",
@@ -42,8 +38,7 @@ def configure_command(p: argparse.ArgumentParser) -> None:
 
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab analyze``: print Table I, write the tables and figures with ``--out``."""
-    if args.out is not None and args.out.exists() and not args.out.is_dir():
-        raise BldclabError("--out", f"{str(args.out)!r} exists and is not a directory")
+    check_out_dir(args.out)
     drive = load(args.motor)
     t = analytic.table1(drive)
     reasons = analytic.applicability(drive)

@@ -12,7 +12,7 @@ from ..analysis.compare import compare, speed_grid
 from ..errors import BldclabError
 from ..model import analytic
 from ..report.bundle import compare_command, compare_files, compare_outputs
-from .common import add_inverter_option, load_drive
+from .common import add_inverter_option, check_out_dir, check_speed_range, load_drive, positive_int
 
 __all__ = ["configure_command", "run_command"]
 
@@ -24,7 +24,7 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     p.add_argument("--speeds", type=int, default=32, help="speeds per supply (default 32)")
     p.add_argument("--min-speed", type=float, default=0.05, help="lowest speed, p.u. of Omega_0 (default 0.05)")
     p.add_argument("--max-speed", type=float, default=0.98, help="highest speed, p.u. of Omega_0 (default 0.98)")
-    p.add_argument("--workers", type=int, default=0, help="processes (default: all cores; 1: serial)")
+    p.add_argument("--workers", type=positive_int, help="processes, >= 1 (default: all cores; 1: serial)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (it is shown on a terminal only)")
     p.add_argument("--no-report", action="store_true", help="do not write report.html (docs/report.md)")
     p.add_argument("--pwm-phases", type=int, default=1,
@@ -38,15 +38,13 @@ def run_command(args: argparse.Namespace) -> int:
     drive = load_drive(args)
     if args.speeds < 2:
         raise BldclabError("--speeds", f"needs at least 2, got {args.speeds}")
-    if not 0 < args.min_speed < args.max_speed < 1.5:
-        raise BldclabError("--min-speed", "needs 0 < min-speed < max-speed < 1.5 (p.u. of Omega_0)")
-    if args.workers < 0:
-        raise BldclabError("--workers", f"must be >= 0, got {args.workers}")
+    check_speed_range(args.min_speed, args.max_speed)
     if args.pwm_phases < 1:
         raise BldclabError("--pwm-phases", f"must be >= 1, got {args.pwm_phases}")
     w = speed_grid(args.speeds, args.min_speed, args.max_speed)
     out = args.out if args.out is not None else Path("out") / drive.name
-    res = compare(drive, w, workers=args.workers or None, progress=not args.no_progress and sys.stderr.isatty(),
+    check_out_dir(out)  # before the simulations: a bad --out fails in a second, not after the whole run
+    res = compare(drive, w, workers=args.workers, progress=not args.no_progress and sys.stderr.isatty(),
                   pwm_phases=args.pwm_phases)
     t1 = res.table1
     sim = res.simulated

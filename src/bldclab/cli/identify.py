@@ -13,6 +13,7 @@ from ..analysis.identify import identify
 from ..errors import BldclabError
 from ..model.catalog import load
 from ..model.motor import Drive
+from .common import check_out_file
 
 __all__ = [
     "configure_command",
@@ -51,8 +52,7 @@ def run_command(args: argparse.Namespace) -> int:
         if args.base is None:
             raise BldclabError("--out", "needs --base: a motor file describes a whole drive (R, L, inverter, "
                                "sensors); the shape tables alone are in the --format json report")
-        if out.is_dir():
-            raise BldclabError("--out", f"{str(out)!r} is a directory; give the motor file name")
+        check_out_file(out)
     if args.set_hall_error and out is None:
         raise BldclabError("--set-hall-error", "only applies to the file written with --out")
     base = load(args.base) if args.base is not None else None

@@ -13,7 +13,7 @@ from ..errors import BldclabError
 from ..model.units import to_si
 from ..report import plots
 from ..sim import plausibility as _plaus
-from .common import add_inverter_option, load_drive, parse_speed, summarise
+from .common import add_inverter_option, check_out_dir, load_drive, parse_speed, summarise
 
 __all__ = ["configure_command", "run_command"]
 
@@ -41,6 +41,7 @@ def _list(text: str, parse: Any, field: str) -> list[float]:
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab torque-control``: paper 2's methods compared over a load x speed grid."""
     drive = load_drive(args)
+    check_out_dir(args.out)  # before the simulations
 
     def torque(t: str) -> float:
         if t.endswith("%"):

@@ -1,0 +1,96 @@
+"""The CLI's front: options checked before any work, the discoverability commands (drives, template, check)."""
+
+from __future__ import annotations
+
+import os
+import stat
+import time
+from pathlib import Path
+
+import pytest
+
+from bldclab import cli
+
+pytestmark = pytest.mark.xdist_group("cli_front")
+
+
+def run_main(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    rc = cli.main(list(argv))
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+@pytest.fixture
+def locked_dir(tmp_path: Path) -> Path:
+    """A directory nobody may write into (skipped as root, who may)."""
+    if hasattr(os, "geteuid") and os.geteuid() == 0:
+        pytest.skip("root writes into read-only directories")
+    d = tmp_path / "locked"
+    d.mkdir()
+    d.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    yield d
+    d.chmod(stat.S_IRWXU)
+
+
+COMMANDS_WITH_OUT = [
+    ["compare", "htm-48v", "--speeds", "2"],
+    ["torque-control", "lu-4kw", "--torques", "50%", "--speeds", "0.5 pu", "--methods", "rect"],
+    ["faults", "htm-48v"],
+    ["analyze", "htm-48v"],
+]
+
+
+@pytest.mark.parametrize("argv", COMMANDS_WITH_OUT)
+def test_uncreatable_out_fails_before_the_run(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                              argv: list[str]) -> None:
+    """An --out below a regular file cannot be created: exit 2 at once, one line naming --out."""
+    blocker = tmp_path / "a-file"
+    blocker.write_text("x")
+    target = blocker / "results"
+    t0 = time.perf_counter()
+    rc, out, err = run_main(capsys, *argv, "--out", str(target))
+    elapsed = time.perf_counter() - t0
+    assert rc == 2
+    assert err.startswith("bldclab: error: --out:") and "is not a directory" in err and err.count("\n") == 1
+    assert out == ""
+    assert blocker.read_text() == "x"
+    assert elapsed < 5.0  # not a timing target: a generous bound that the whole run (minutes for compare) misses
+
+
+@pytest.mark.parametrize("argv", COMMANDS_WITH_OUT)
+def test_unwritable_out_fails_before_the_run(capsys: pytest.CaptureFixture[str], locked_dir: Path,
+                                             argv: list[str]) -> None:
+    """An --out that cannot be created fails at once (exit 2, one line naming --out), before any simulation."""
+    target = locked_dir / "results"
+    t0 = time.perf_counter()
+    rc, out, err = run_main(capsys, *argv, "--out", str(target))
+    elapsed = time.perf_counter() - t0
+    assert rc == 2
+    assert err.startswith("bldclab: error: --out:") and "not writable" in err and err.count("\n") == 1
+    assert out == ""
+    assert not target.exists()
+    assert elapsed < 5.0  # not a timing target: a generous bound that the whole run (minutes for compare) misses
+
+
+def test_out_that_is_a_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    f = tmp_path / "file"
+    f.write_text("x")
+    rc, _, err = run_main(capsys, "faults", "htm-48v", "--out", str(f))
+    assert rc == 2 and "--out" in err and "is not a directory" in err
+    assert f.read_text() == "x"
+
+
+@pytest.mark.parametrize("argv, option", [
+    (["compare", "htm-48v", "--workers", "0"], "--workers"),
+    (["report", "htm-48v", "--workers", "0"], "--workers"),
+    (["compare", "htm-48v", "--max-speed", "5"], "--max-speed"),
+    (["compare", "htm-48v", "--min-speed", "0"], "--min-speed"),
+    (["compare", "htm-48v", "--min-speed", "0.5", "--max-speed", "0.4"], "--max-speed"),
+    (["report", "htm-48v", "--max-speed", "5"], "--max-speed"),
+])
+def test_option_errors_name_the_option(capsys: pytest.CaptureFixture[str], tmp_path: Path, argv: list[str],
+                                       option: str) -> None:
+    rc, out, err = run_main(capsys, *argv, "--out", str(tmp_path / "o"))
+    assert rc == 2 and out == ""
+    assert option in err and err.count("\n") == 1
+    assert not (tmp_path / "o").exists()
