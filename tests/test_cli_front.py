@@ -7,9 +7,12 @@ import stat
 import time
 from pathlib import Path
 
+import numpy as np
+import pandas as pd
 import pytest
 
 from bldclab import cli
+from bldclab.analysis.compare import VERDICT_TOLERANCE, _verdict
 
 pytestmark = pytest.mark.xdist_group("cli_front")
 
@@ -94,3 +97,31 @@ def test_option_errors_name_the_option(capsys: pytest.CaptureFixture[str], tmp_p
     assert rc == 2 and out == ""
     assert option in err and err.count("\n") == 1
     assert not (tmp_path / "o").exists()
+
+
+def _sim(t_sine: list[float], t_square: list[float]) -> pd.DataFrame:
+    w = np.linspace(0.1, 0.9, len(t_sine))
+    rows = []
+    for supply, ts in (("sine", t_sine), ("square", t_square)):
+        for x, t in zip(w, ts, strict=True):
+            rows.append({"supply": supply, "Omega_pu": x, "T_pu": t, "TR_avg_pu": 0.1, "eta": 0.9})
+    return pd.DataFrame(rows)
+
+
+def test_verdict_calls_small_differences_equal() -> None:
+    """A difference below the tolerance is "equal", with the tolerance stated; above it the better supply is named."""
+    tol = VERDICT_TOLERANCE["T_pu"]
+    lines = _verdict(_sim([1.0, 1.0, 1.0, 1.0], [1.0 - 0.4 * tol, 1.0 - 0.4 * tol, 0.9, 0.9]))
+    torque = [v for v in lines if v.startswith("mean torque")]
+    assert torque == [
+        f"mean torque: sinusoidal better for Omega in [0.63, 0.90] p.u. (by 0.100 p.u. on average, above the {tol:g} "
+        "p.u. resolved)",
+        f"mean torque: equal for Omega in [0.10, 0.37] p.u. (differences below {tol:g} p.u., what the simulation "
+        "resolves; 0.002 on average)"]
+    assert [v for v in lines if v.startswith("efficiency")] == [
+        "efficiency: equal for Omega in [0.10, 0.90] p.u. (differences below 0.005, what the simulation resolves; "
+        "0.000 on average)"]
+    # a single speed is named as one speed, not as [x, x]
+    one = _verdict(_sim([1.0, 1.0, 1.0], [1.0, 0.5, 1.0]))
+    assert "mean torque: sinusoidal better for Omega = 0.50 p.u. (by 0.500 p.u. on average, above the 0.005 p.u. " \
+           "resolved)" in one

@@ -16,6 +16,8 @@ from .common import add_inverter_option, check_out_dir, check_speed_range, load_
 
 __all__ = ["configure_command", "run_command"]
 
+RPM_PER_RAD_S = 30.0 / math.pi
+
 
 def configure_command(p: argparse.ArgumentParser) -> None:
     """Arguments of ``bldclab compare``."""
@@ -49,24 +51,28 @@ def run_command(args: argparse.Namespace) -> int:
     t1 = res.table1
     sim = res.simulated
     print(f"{drive.name}: square-wave (SixStep, I_N = {drive.motor.I_N:g} A) vs sinusoidal (Sine, "
-          f"T_sN = {analytic.t_sN(drive):.4g} N m), {args.speeds} speeds x 2 supplies in {res.seconds:.1f} s")
+          f"T_sN = {analytic.t_sN(drive):.4g} N m), {args.speeds} speeds x 2 supplies in {res.seconds:.1f} s; "
+          f"Omega_0 = {drive.Omega_0:.4g} rad/s = {drive.Omega_0 * RPM_PER_RAD_S:.4g} rpm")
     bs = {} if res.base_speeds is None else res.base_speeds.set_index("supply").simulated_pu.to_dict()
     print(f"  Theta_m {t1.Theta_m * 1e3:.2f} mrad; base speed (21) sine {t1.Omega_sB_pu:.3f} p.u., (30) square "
           f"{t1.Omega_qB_pu:.3f} p.u.; with R: {t1.Omega_sB_R_pu:.3f} / {t1.Omega_qB_R_pu:.3f} p.u.; simulated: "
           f"{bs.get('sine', math.nan):.3f} / {bs.get('square', math.nan):.3f} p.u.")
     na = "*" if res.not_applicable else ""  # closed-form columns outside paper 1's premises: labelled, kept
-    print(f"  {'Omega':>6} {'T sine':>7} {'T sq':>6} {'(13)/(24)' + na:>10} {'(26)-(32)' + na:>10} | {'TR sine':>7} "
-          f"{'sw':>6} {'(15)/(25)' + na:>10} | {'TR sq':>6} {'sw':>6} {'(27)-(33)' + na:>10} | {'eta sine':>8} "
-          f"{'eta sq':>6}")
+    print(f"  {'Omega':>6} {'rpm':>6} {'T sine':>7} {'T sq':>6} {'(13)/(24)' + na:>10} {'(26)-(32)' + na:>10} | "
+          f"{'TR sine':>7} {'sw':>6} {'(15)/(25)' + na:>10} | {'TR sq':>6} {'sw':>6} {'(27)-(33)' + na:>10} | "
+          f"{'eta sine':>8} {'eta sq':>6}")
     an = res.analytic.set_index("Omega_pu")
-    for wp in w[:: max(1, len(w) // 12)]:
+    for wp in w:  # every speed of the heading
         a = sim[(sim.supply == "sine") & (sim.Omega_pu == wp)].iloc[0]
         b = sim[(sim.supply == "square") & (sim.Omega_pu == wp)].iloc[0]
         r = an.loc[wp]
-        print(f"  {wp:>6.3f} {a.T_pu:>7.3f} {b.T_pu:>6.3f} {r.T_s_pu:>10.3f} {r.T_q_pu:>10.3f} | {a.TR_avg_pu:>7.3f} "
-              f"{a.TR_ma_pu:>6.3f} {r.TR_s_pu:>10.3f} | {b.TR_avg_pu:>6.3f} {b.TR_ma_pu:>6.3f} {r.TR_q_pu:>10.3f} | "
+        rpm = wp * drive.Omega_0 * RPM_PER_RAD_S
+        print(f"  {wp:>6.3f} {rpm:>6.0f} {a.T_pu:>7.3f} {b.T_pu:>6.3f} {r.T_s_pu:>10.3f} {r.T_q_pu:>10.3f} | "
+              f"{a.TR_avg_pu:>7.3f} {a.TR_ma_pu:>6.3f} {r.TR_s_pu:>10.3f} | "
+              f"{b.TR_avg_pu:>6.3f} {b.TR_ma_pu:>6.3f} {r.TR_q_pu:>10.3f} | "
               f"{a.eta:>8.3f} {b.eta:>6.3f}")
-    print(f"  (p.u. of Omega_0, T_N; T: mean torque, {drive.inverter.model} inverter; TR: torque ripple peak to peak "
+    print("  (p.u. of Omega_0, T_N; rpm: the speed in rpm; "
+          f"T: mean torque, {drive.inverter.model} inverter; TR: torque ripple peak to peak "
           "on the averaged inverter (no PWM, the paper-comparable one), sw: the switching drive's, of its "
           "one-PWM-period average; (13)-(33): paper 1, R neglected)")
     if args.pwm_phases > 1:
