@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shlex
 import stat
 import time
 from pathlib import Path
@@ -11,8 +12,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
+import bldclab as bl
 from bldclab import cli
 from bldclab.analysis.compare import VERDICT_TOLERANCE, _verdict
+from bldclab.analysis.identify import sample_path
 
 pytestmark = pytest.mark.xdist_group("cli_front")
 
@@ -125,3 +128,39 @@ def test_verdict_calls_small_differences_equal() -> None:
     one = _verdict(_sim([1.0, 1.0, 1.0], [1.0, 0.5, 1.0]))
     assert "mean torque: sinusoidal better for Omega = 0.50 p.u. (by 0.500 p.u. on average, above the 0.005 p.u. " \
            "resolved)" in one
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# identify: the summary on stdout, the tables on request, the sample record discoverable
+
+
+def test_identify_prints_the_summary_and_writes_the_tables(capsys: pytest.CaptureFixture[str],
+                                                            tmp_path: Path) -> None:
+    rc, out, err = run_main(capsys, "identify", "--write-sample", str(tmp_path / "s.csv"))
+    assert rc == 0 and err == ""
+    assert (tmp_path / "s.csv").read_bytes() == sample_path().read_bytes()
+    command = out.splitlines()[-1]
+    assert command.startswith("identify it: bldclab identify ")
+    argv = shlex.split(command.removeprefix("identify it: bldclab "))
+    argv[argv.index("--out") + 1] = str(tmp_path / "id.toml")
+    rc, out, err = run_main(capsys, *argv, "--tables", str(tmp_path / "t.csv"))
+    assert rc == 0, err
+    assert len(out.splitlines()) < 40  # the summary, not the 360-row table
+    assert f"wrote {tmp_path / 't.csv'} (360 points per phase)" in out and f"wrote {tmp_path / 'id.toml'}" in out
+    tables = pd.read_csv(tmp_path / "t.csv")
+    assert list(tables.columns) == ["theta_deg", "k_a", "k_b", "k_c"] and len(tables) == 360
+    drive = bl.load(tmp_path / "id.toml")
+    # the CSV holds the tables the motor file got (the file's per-phase tables in V s/rad)
+    np.testing.assert_allclose(drive.motor.emf.shapes[0](np.radians(tables.theta_deg)), tables.k_a, atol=1e-6)
+    rc, out, _ = run_main(capsys, *argv[:argv.index("--out")])
+    assert rc == 0 and "360 points per phase: --tables FILE.csv writes them" in out
+
+
+@pytest.mark.parametrize("argv, option", [
+    (["identify", "--speed", "auto"], "WAVEFORM.csv"),
+    (["identify", "x.csv"], "--speed"),
+    (["identify", "x.csv", "--write-sample", "s.csv"], "--write-sample"),
+])
+def test_identify_usage_errors(capsys: pytest.CaptureFixture[str], argv: list[str], option: str) -> None:
+    rc, out, err = run_main(capsys, *argv)
+    assert rc == 2 and out == "" and err.startswith(f"bldclab: error: {option}")
