@@ -6,6 +6,7 @@ import os
 import shlex
 import stat
 import time
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +17,9 @@ import bldclab as bl
 from bldclab import cli
 from bldclab.analysis.compare import VERDICT_TOLERANCE, _verdict
 from bldclab.analysis.identify import sample_path
+from bldclab.cli.drives import SOURCES
+from bldclab.model import analytic as an
+from bldclab.model.catalog import names
 
 pytestmark = pytest.mark.xdist_group("cli_front")
 
@@ -164,3 +168,74 @@ def test_identify_prints_the_summary_and_writes_the_tables(capsys: pytest.Captur
 def test_identify_usage_errors(capsys: pytest.CaptureFixture[str], argv: list[str], option: str) -> None:
     rc, out, err = run_main(capsys, *argv)
     assert rc == 2 and out == "" and err.startswith(f"bldclab: error: {option}")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# discoverability: drives, template, check
+
+
+def test_drives_lists_every_built_in_drive(capsys: pytest.CaptureFixture[str]) -> None:
+    rc, out, err = run_main(capsys, "drives")
+    assert rc == 0 and err == ""
+    lines = out.splitlines()
+    assert lines[0].split()[:3] == ["name", "back-EMF", "V_dc"]
+    for name in names():
+        d = bl.load(name)
+        row = next(line for line in lines if line.startswith(name + " "))
+        assert SOURCES[name] in row
+        cells = row.split()
+        assert f"{d.inverter.V_dc:g}" in cells and str(d.motor.p) in cells
+        assert f"{d.Omega_0 * 30 / np.pi:.0f}" in cells
+
+
+@pytest.mark.parametrize("name", names())
+def test_template_round_trips(tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str) -> None:
+    """The template of a drive loads back to the same drive; every field has a comment with its unit."""
+    f = tmp_path / "my.toml"
+    rc, out, _ = run_main(capsys, "template", "--from", name, "--out", str(f))
+    assert rc == 0 and out.startswith(f"wrote {f}")
+    assert bl.load(f) == bl.load(name)
+    text = f.read_text()
+    assert tomllib.loads(text)  # valid TOML
+    lines = text.splitlines()
+    for j, line in enumerate(lines):
+        key = line.split("=")[0].strip()
+        if "=" in line and not line.startswith(("#", " ", "[")) and key.isidentifier():
+            assert lines[j - 1].startswith(f"# {key}: "), line  # the comment above names the field
+
+
+def test_template_to_stdout_loads(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    rc, out, _ = run_main(capsys, "template")
+    assert rc == 0
+    f = tmp_path / "t.toml"
+    f.write_text(out)
+    assert bl.load(f) == bl.load("htm-48v")
+    assert "# R: Ohm: phase resistance" in out and "# [motor.cogging]" in out
+
+
+def test_check_prints_the_derived_quantities(capsys: pytest.CaptureFixture[str]) -> None:
+    rc, out, err = run_main(capsys, "check", "htm-48v")
+    assert rc == 0 and err == ""
+    d = bl.load("htm-48v")
+    # htm-48v: Omega_0 = 48 V / (2 * 0.32 V s/rad) = 75 rad/s; L/R = 75 uH / 50 mOhm = 1.5 ms;
+    # f_e = 8 * 75 / (2 pi) = 95.49 Hz; 14 kHz / (6 f_e) = 24.43 PWM periods per sixth of a period
+    assert "75 rad/s = 716.197 rpm" in out and "1.5 ms" in out and "95.493 Hz" in out and "24.43" in out
+    assert f"{an.theta_m(d):.6g} rad" in out and "32 N m" in out and "0.32 V s/rad" in out
+    assert "closed forms (bldclab analyze) apply" in out
+    rc, out, _ = run_main(capsys, "check", "lu-4kw")
+    assert rc == 0
+    for reason in an.applicability(bl.load("lu-4kw")):
+        assert reason in out
+
+
+@pytest.mark.parametrize("content, field", [
+    ("[motor]\np = 0\n", "motor.emf"),
+    ('[motor]\np = 2\nR = "1 V"\n', "motor"),
+    ("not toml ===", "file"),
+])
+def test_check_bad_file(tmp_path: Path, capsys: pytest.CaptureFixture[str], content: str, field: str) -> None:
+    f = tmp_path / "bad.toml"
+    f.write_text(content)
+    rc, out, err = run_main(capsys, "check", str(f))
+    assert rc == 2 and out == ""
+    assert err.startswith("bldclab: error: ") and err.count("\n") == 1 and field in err
