@@ -239,3 +239,13 @@ def test_check_bad_file(tmp_path: Path, capsys: pytest.CaptureFixture[str], cont
     rc, out, err = run_main(capsys, "check", str(f))
     assert rc == 2 and out == ""
     assert err.startswith("bldclab: error: ") and err.count("\n") == 1 and field in err
+
+
+def test_analyze_gives_the_speeds_in_rpm(capsys: pytest.CaptureFixture[str]) -> None:
+    rc, out, _ = run_main(capsys, "analyze", "htm-48v")
+    assert rc == 0
+    # Omega_0 = 75 rad/s = 716.2 rpm; (21): 0.955224 * 75 = 71.64 rad/s = 684.1 rpm
+    assert out.splitlines()[-1].startswith("speeds: Omega_0 75 rad/s = 716.2 rpm; base speed sinusoidal (21) "
+                                           "71.64 rad/s = 684.1 rpm")
+    rc, out, _ = run_main(capsys, "analyze", "htm-48v", "--format", "json")
+    assert rc == 0 and "rpm" not in out.splitlines()[-1]

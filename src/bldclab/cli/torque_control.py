@@ -62,11 +62,12 @@ def run_command(args: argparse.Namespace) -> int:
     summarise(caught, len(table))
     print(f"{drive.name}: torque control methods (paper 2); ripple in % of the mean torque, dip of the "
           "non-commutated current")
-    cols = ["method", "torque_pct", "speed_rpm", "tau_mean_pct_ref", "dcm_pct", "ripple_pp", "ripple_rms",
-            "ripple_ma_pp", "ripple_ma_rms", "dip_A", "dip_pct"]
-    shown = table.assign(dcm_pct=100.0 * table["dcm_share"])
+    cols = ["method", "torque_pct", "speed_rad_s", "speed_rpm", "tau_mean_pct_ref", "dcm_pct", "ripple_pp",
+            "ripple_rms", "ripple_ma_pp", "ripple_ma_rms", "dip_A", "dip_pct"]
+    shown = table.assign(dcm_pct=100.0 * table["dcm_share"], speed_rad_s=table["speed"])
     print(shown[cols].to_string(index=False, float_format=lambda v: f"{v:.2f}"))
-    print("  (tau_mean_pct_ref: mean torque in % of the reference; dcm_pct: % of the time without phase current, "
+    print("  (speed_rad_s, speed_rpm: the imposed speed; "
+          "tau_mean_pct_ref: mean torque in % of the reference; dcm_pct: % of the time without phase current, "
           "discontinuous conduction within the PWM period)")
     for _, row in table.iterrows():
         cause = paper2.shortfall_cause(row)
