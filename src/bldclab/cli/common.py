@@ -26,12 +26,18 @@ __all__ = ["CONTROLS", "add_inverter_option", "check_out_dir", "check_out_file",
 CONTROLS = ("square", "sine", "sixv", "lu", "lu-no-do", "rect")
 
 
-def parse_speed(text: str, drive: Drive) -> float:
-    """Read a speed: ``"0.5 pu"`` (of ``Omega_0``), ``"300 rpm"``, ``"31.4 rad/s"`` or a number in rad/s."""
+def parse_speed(text: str, drive: Drive, option: str = "--speed") -> float:
+    """Read a speed: ``"0.5 pu"`` (of ``Omega_0``), ``"300 rpm"``, ``"31.4 rad/s"`` or a number in rad/s.
+
+    ``option`` is the option named in the error.
+    """
     m = re.fullmatch(r"\s*([-+]?[\d.]+(?:[eE][-+]?\d+)?)\s*pu\s*", text)
     if m:
-        return float(m.group(1)) * drive.Omega_0
-    return to_si(text, "speed", "--speed")
+        try:
+            return float(m.group(1)) * drive.Omega_0
+        except ValueError:
+            raise BldclabError(option, f"cannot read {text!r}") from None
+    return to_si(text, "speed", option)
 
 
 def control_of(name: str, drive: Drive, handoff: float | None = None) -> tuple[Control, float, str]:

@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from .._files import write_atomic
+from ..errors import BldclabError
 from ..model.catalog import load
 from .common import check_out_file
 
@@ -152,7 +153,12 @@ def configure_command(p: argparse.ArgumentParser) -> None:
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab template``: print or write the commented motor file."""
     check_out_file(args.out)
-    text = template(args.source)
+    try:
+        text = template(args.source)
+    except BldclabError as exc:
+        if exc.field != "MOTOR":
+            raise
+        raise BldclabError("--from", exc.problem) from None
     if args.out is None:
         sys.stdout.write(text)
     else:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -53,10 +54,19 @@ def run_command(args: argparse.Namespace) -> int:
 
     torques = _list(args.torques, torque, "--torques")
     if args.speeds:
-        speeds = _list(args.speeds, lambda t: parse_speed(t, drive), "--speeds")
+        speeds = _list(args.speeds, lambda t: parse_speed(t, drive, "--speeds"), "--speeds")
     else:
         speeds = list(paper2.default_grid(drive)[1])
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    for method in methods:
+        if method not in paper2.METHODS:
+            raise BldclabError("--methods", f"unknown method {method!r}; choose from {', '.join(paper2.METHODS)}")
+    if not methods:
+        raise BldclabError("--methods", "needs at least one method")
+    for option, values in (("--torques", torques), ("--speeds", speeds)):
+        for v in values:
+            if not (math.isfinite(v) and v > 0):
+                raise BldclabError(option, f"needs values > 0, got {v:g} (SI)")
     with _plaus.collect() as caught:
         table = paper2.compare_methods(drive, torques, speeds, methods)
     summarise(caught, len(table))
