@@ -39,6 +39,15 @@ def test_compare_ideal_drive_follows_the_closed_forms():
     assert any(v.startswith("torque ripple (averaged inverter): square-wave better") for v in res.verdict)
 
 
+def test_compare_verdict_states_its_resolution(compare_htm48v):
+    """Every comparison in verdict.txt names the smallest difference it counts (VERDICT_TOLERANCE)."""
+    lines = (compare_htm48v / "verdict.txt").read_text().splitlines()
+    measures = [v for v in lines if v.startswith(("mean torque", "torque ripple", "efficiency"))]
+    assert measures
+    for v in measures:
+        assert " resolved)" in v or "what the simulation resolves" in v, v
+
+
 def test_compare_cli_writes_everything(compare_htm48v):
     """The session's run (tests/conftest.py): ``bldclab compare htm-48v --speeds 6 --workers 2``."""
     out = compare_htm48v
@@ -62,6 +71,12 @@ def test_compare_pwm_phases_and_base_speeds(tmp_path, capsys):
     assert rc == 0
     text = capsys.readouterr().out
     assert "simulated: 0.869 / 0.877 p.u." in text and "over 2 PWM-grid phases" in text
+    # the table has one row per speed of the heading ("3 speeds"), each with its rpm
+    rows = [line.split() for line in text.splitlines() if line.lstrip().startswith(("0.", "1."))]
+    assert "3 speeds x 2 supplies" in text and len(rows) == 3
+    omega_0 = bl.load("htm-48v").Omega_0
+    assert [float(r[1]) for r in rows] == pytest.approx([w * omega_0 * 30 / np.pi for w in (0.05, 0.515, 0.98)],
+                                                        abs=0.5)
     sim = pd.read_csv(out / "simulated.csv")
     for key in ("T_pu", "TR_pu", "TR_ma_pu"):
         assert np.all(sim[f"{key}_min"] <= sim[key] + 1e-12) and np.all(sim[key] <= sim[f"{key}_max"] + 1e-12)

@@ -78,7 +78,8 @@ def test_torque_control_warns_and_names_the_cause(capsys):
     """rect at 25 % load (discontinuous current, sampled-current PI) misses its reference: the CLI says why; lu does
     not get a warning; a saturated duty is named as the DC bus's limit."""
     assert main(["torque-control", "lu-4kw", "--torques", "25%", "--speeds", "1000 rpm"]) == 0
-    err = capsys.readouterr().err
+    out, err = capsys.readouterr()
+    assert "speed_rad_s" in out and "104.72" in out and "1000.00" in out  # the speed in rad/s beside rpm
     assert "warning: rect at 25 % of T_N, 1000 rpm" in err and "discontinuous" in err
     assert "warning: lu " not in err and "warning: lu-no-do" not in err
     row = {"method": "lu", "tau_mean_pct_ref": 80.0, "sat_share": 0.2, "dcm_share": 0.3}

@@ -13,7 +13,7 @@ result has been computed, so an error leaves no half-written output.
 from __future__ import annotations
 
 import argparse
-import os  # noqa: F401  (bldclab.cli.os: the tests fail os.replace through it)
+import os  # bldclab.cli.os: the tests fail os.replace through it
 import sys
 import warnings
 from collections.abc import Callable, Sequence
@@ -24,7 +24,7 @@ from .._files import write_files
 from .._version import __version__
 from ..analysis.paper1 import table1_text
 from ..errors import BldclabError, PlausibilityWarning
-from . import analyze, compare, faults, identify, report, simulate, sweep, torque_control
+from . import analyze, check, compare, drives, faults, identify, report, simulate, sweep, template, torque_control
 
 __all__ = ["COMMANDS", "Command", "build_parser", "main", "table1_text", "write_files"]
 
@@ -79,6 +79,12 @@ class Command:
 
 #: The subcommands, in the order ``bldclab --help`` lists them. Add new ones here.
 COMMANDS: tuple[Command, ...] = (
+    Command("drives", "list the built-in drives: back-EMF, V_dc, I_N, pole pairs, PWM, speeds, source",
+            drives.configure_command, drives.run_command),
+    Command("template", "write a commented motor file to start from (every field with its unit)",
+            template.configure_command, template.run_command),
+    Command("check", "validate a motor file and print its derived quantities (bases, L/R, PWM per commutation)",
+            check.configure_command, check.run_command),
     Command("analyze", "paper 1 closed forms for a motor: Table I, characteristics, Figs 7-8",
             analyze.configure_command, analyze.run_command),
     Command("sweep", "run many simulations (grid or list of cases) on processes or Dask into a resumable store",
@@ -161,4 +167,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         sys.stderr.write(f"{PROG}: interrupted\n")
         return 130
+    except BrokenPipeError:  # stdout closed early (``bldclab drives | head``): stop quietly, like other tools
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # so that the interpreter's final flush does not fail again
+        return 141
 

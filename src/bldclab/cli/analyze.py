@@ -3,22 +3,20 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._files import write_files
 from ..analysis.paper1 import table1_text
-from ..errors import BldclabError
 from ..model import analytic
 from ..model.catalog import load, names
+from ..model.motor import Drive
 from ..report import plots
-
-if TYPE_CHECKING:
-    pass
+from .common import check_out_dir
 
 __all__ = [
     "configure_command",
@@ -42,8 +40,7 @@ def configure_command(p: argparse.ArgumentParser) -> None:
 
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab analyze``: print Table I, write the tables and figures with ``--out``."""
-    if args.out is not None and args.out.exists() and not args.out.is_dir():
-        raise BldclabError("--out", f"{str(args.out)!r} exists and is not a directory")
+    check_out_dir(args.out)
     drive = load(args.motor)
     t = analytic.table1(drive)
     reasons = analytic.applicability(drive)
@@ -66,7 +63,20 @@ def run_command(args: argparse.Namespace) -> int:
                 files[f"{stem}.{ext}"] = plots.figure_bytes(fig, ext, dpi=150, dated=False)
         write_files(args.out, files)
     sys.stdout.write(text)
+    if args.format == "table":  # csv and json stay machine-readable
+        sys.stdout.write(_speeds_in_rpm(drive, t) + "\n")
     return 0
+
+
+def _speeds_in_rpm(drive: Drive, t: analytic.Table1) -> str:
+    """Return one line with the table's speeds in rad/s and rpm."""
+    w0 = drive.Omega_0
+
+    def both(pu: float) -> str:
+        return f"{pu * w0:.4g} rad/s = {pu * w0 * 30.0 / math.pi:.4g} rpm"
+
+    return (f"speeds: Omega_0 {both(1.0)}; base speed sinusoidal (21) {both(t.Omega_sB_pu)}, square-wave (30) "
+            f"{both(t.Omega_qB_pu)}; with R {both(t.Omega_sB_R_pu)} / {both(t.Omega_qB_R_pu)}")
 
 
 def _int_at_least(lo: int) -> Callable[[str], int]:

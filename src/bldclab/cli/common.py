@@ -6,8 +6,10 @@ The drive from MOTOR and ``--inverter``, controllers by their CLI names, speeds 
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import warnings
+from pathlib import Path
 
 from ..control import Control, Lu, Sine, SixStep, SixStepVoltage
 from ..errors import BldclabError, PlausibilityWarning
@@ -17,18 +19,25 @@ from ..model.motor import Drive, Inverter
 from ..model.units import to_si
 from ..sim import plausibility as _plaus
 
-__all__ = ["CONTROLS", "add_inverter_option", "control_of", "load_drive", "parse_speed", "summarise"]
+__all__ = ["CONTROLS", "add_inverter_option", "check_out_dir", "check_out_file", "check_speed_range", "control_of",
+           "load_drive", "parse_speed", "positive_int", "summarise"]
 
 
 CONTROLS = ("square", "sine", "sixv", "lu", "lu-no-do", "rect")
 
 
-def parse_speed(text: str, drive: Drive) -> float:
-    """Read a speed: ``"0.5 pu"`` (of ``Omega_0``), ``"300 rpm"``, ``"31.4 rad/s"`` or a number in rad/s."""
+def parse_speed(text: str, drive: Drive, option: str = "--speed") -> float:
+    """Read a speed: ``"0.5 pu"`` (of ``Omega_0``), ``"300 rpm"``, ``"31.4 rad/s"`` or a number in rad/s.
+
+    ``option`` is the option named in the error.
+    """
     m = re.fullmatch(r"\s*([-+]?[\d.]+(?:[eE][-+]?\d+)?)\s*pu\s*", text)
     if m:
-        return float(m.group(1)) * drive.Omega_0
-    return to_si(text, "speed", "--speed")
+        try:
+            return float(m.group(1)) * drive.Omega_0
+        except ValueError:
+            raise BldclabError(option, f"cannot read {text!r}") from None
+    return to_si(text, "speed", option)
 
 
 def control_of(name: str, drive: Drive, handoff: float | None = None) -> tuple[Control, float, str]:
@@ -64,3 +73,84 @@ def summarise(caught: list[str], runs: int) -> None:
     if line:
         warnings.warn(line, PlausibilityWarning, stacklevel=2)
 
+
+
+def check_out_dir(path: Path | None, option: str = "--out") -> None:
+    """Check before any work that ``path`` can be used as an output directory.
+
+    The directory need not exist: its nearest existing ancestor must be a writable directory (it is created when
+    the results are written). Nothing is created here, so a rejected option leaves nothing behind.
+
+    Parameters
+    ----------
+    path : Path or None
+        The directory the command will write into; None: nothing to check.
+    option : str
+        The option the user typed, named in the error.
+
+    Raises
+    ------
+    BldclabError
+        ``option``: the path is an existing file, or its existing ancestor is not a writable directory.
+    """
+    if path is None:
+        return
+    if path.exists() and not path.is_dir():
+        raise BldclabError(option, f"{str(path)!r} exists and is not a directory")
+    _check_writable(path, option)
+
+
+def check_out_file(path: Path | None, option: str = "--out") -> None:
+    """Check before any work that the file ``path`` can be written (its directory created if missing).
+
+    Parameters
+    ----------
+    path : Path or None
+        The file the command will write; None: nothing to check.
+    option : str
+        The option the user typed, named in the error.
+
+    Raises
+    ------
+    BldclabError
+        ``option``: the path is a directory, or its directory cannot be created or written.
+    """
+    if path is None:
+        return
+    if path.is_dir():
+        raise BldclabError(option, f"{str(path)!r} is a directory; give a file name")
+    _check_writable(path.parent if str(path.parent) else Path("."), option)
+
+
+def _check_writable(path: Path, option: str) -> None:
+    """Raise unless the nearest existing ancestor of ``path`` (itself included) is a writable directory."""
+    probe = path.absolute()
+    while not probe.exists():
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if not probe.is_dir():
+        raise BldclabError(option, f"cannot create {str(path)!r}: {str(probe)!r} is not a directory")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise BldclabError(option, f"cannot write {str(path)!r}: directory {str(probe)!r} is not writable")
+
+
+def positive_int(text: str) -> int:
+    """Argparse type: an integer >= 1 (``--workers``, ``--speeds`` counts)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
+
+
+def check_speed_range(lo: float, hi: float) -> None:
+    """Check ``--min-speed`` and ``--max-speed`` (p.u. of Omega_0), naming the option that is wrong."""
+    if not 0 < lo < 1.5:
+        raise BldclabError("--min-speed", f"must be in (0, 1.5) p.u. of Omega_0, got {lo:g}")
+    if not 0 < hi < 1.5:
+        raise BldclabError("--max-speed", f"must be in (0, 1.5) p.u. of Omega_0, got {hi:g}")
+    if lo >= hi:
+        raise BldclabError("--max-speed", f"must be above --min-speed ({lo:g}), got {hi:g}")

@@ -12,9 +12,11 @@ from ..analysis.compare import compare, speed_grid
 from ..errors import BldclabError
 from ..model import analytic
 from ..report.bundle import compare_command, compare_files, compare_outputs
-from .common import add_inverter_option, load_drive
+from .common import add_inverter_option, check_out_dir, check_speed_range, load_drive, positive_int
 
 __all__ = ["configure_command", "run_command"]
+
+RPM_PER_RAD_S = 30.0 / math.pi
 
 
 def configure_command(p: argparse.ArgumentParser) -> None:
@@ -24,7 +26,7 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     p.add_argument("--speeds", type=int, default=32, help="speeds per supply (default 32)")
     p.add_argument("--min-speed", type=float, default=0.05, help="lowest speed, p.u. of Omega_0 (default 0.05)")
     p.add_argument("--max-speed", type=float, default=0.98, help="highest speed, p.u. of Omega_0 (default 0.98)")
-    p.add_argument("--workers", type=int, default=0, help="processes (default: all cores; 1: serial)")
+    p.add_argument("--workers", type=positive_int, help="processes, >= 1 (default: all cores; 1: serial)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (it is shown on a terminal only)")
     p.add_argument("--no-report", action="store_true", help="do not write report.html (docs/report.md)")
     p.add_argument("--pwm-phases", type=int, default=1,
@@ -38,37 +40,39 @@ def run_command(args: argparse.Namespace) -> int:
     drive = load_drive(args)
     if args.speeds < 2:
         raise BldclabError("--speeds", f"needs at least 2, got {args.speeds}")
-    if not 0 < args.min_speed < args.max_speed < 1.5:
-        raise BldclabError("--min-speed", "needs 0 < min-speed < max-speed < 1.5 (p.u. of Omega_0)")
-    if args.workers < 0:
-        raise BldclabError("--workers", f"must be >= 0, got {args.workers}")
+    check_speed_range(args.min_speed, args.max_speed)
     if args.pwm_phases < 1:
         raise BldclabError("--pwm-phases", f"must be >= 1, got {args.pwm_phases}")
     w = speed_grid(args.speeds, args.min_speed, args.max_speed)
     out = args.out if args.out is not None else Path("out") / drive.name
-    res = compare(drive, w, workers=args.workers or None, progress=not args.no_progress and sys.stderr.isatty(),
+    check_out_dir(out)  # before the simulations: a bad --out fails in a second, not after the whole run
+    res = compare(drive, w, workers=args.workers, progress=not args.no_progress and sys.stderr.isatty(),
                   pwm_phases=args.pwm_phases)
     t1 = res.table1
     sim = res.simulated
     print(f"{drive.name}: square-wave (SixStep, I_N = {drive.motor.I_N:g} A) vs sinusoidal (Sine, "
-          f"T_sN = {analytic.t_sN(drive):.4g} N m), {args.speeds} speeds x 2 supplies in {res.seconds:.1f} s")
+          f"T_sN = {analytic.t_sN(drive):.4g} N m), {args.speeds} speeds x 2 supplies in {res.seconds:.1f} s; "
+          f"Omega_0 = {drive.Omega_0:.4g} rad/s = {drive.Omega_0 * RPM_PER_RAD_S:.4g} rpm")
     bs = {} if res.base_speeds is None else res.base_speeds.set_index("supply").simulated_pu.to_dict()
     print(f"  Theta_m {t1.Theta_m * 1e3:.2f} mrad; base speed (21) sine {t1.Omega_sB_pu:.3f} p.u., (30) square "
           f"{t1.Omega_qB_pu:.3f} p.u.; with R: {t1.Omega_sB_R_pu:.3f} / {t1.Omega_qB_R_pu:.3f} p.u.; simulated: "
           f"{bs.get('sine', math.nan):.3f} / {bs.get('square', math.nan):.3f} p.u.")
     na = "*" if res.not_applicable else ""  # closed-form columns outside paper 1's premises: labelled, kept
-    print(f"  {'Omega':>6} {'T sine':>7} {'T sq':>6} {'(13)/(24)' + na:>10} {'(26)-(32)' + na:>10} | {'TR sine':>7} "
-          f"{'sw':>6} {'(15)/(25)' + na:>10} | {'TR sq':>6} {'sw':>6} {'(27)-(33)' + na:>10} | {'eta sine':>8} "
-          f"{'eta sq':>6}")
+    print(f"  {'Omega':>6} {'rpm':>6} {'T sine':>7} {'T sq':>6} {'(13)/(24)' + na:>10} {'(26)-(32)' + na:>10} | "
+          f"{'TR sine':>7} {'sw':>6} {'(15)/(25)' + na:>10} | {'TR sq':>6} {'sw':>6} {'(27)-(33)' + na:>10} | "
+          f"{'eta sine':>8} {'eta sq':>6}")
     an = res.analytic.set_index("Omega_pu")
-    for wp in w[:: max(1, len(w) // 12)]:
+    for wp in w:  # every speed of the heading
         a = sim[(sim.supply == "sine") & (sim.Omega_pu == wp)].iloc[0]
         b = sim[(sim.supply == "square") & (sim.Omega_pu == wp)].iloc[0]
         r = an.loc[wp]
-        print(f"  {wp:>6.3f} {a.T_pu:>7.3f} {b.T_pu:>6.3f} {r.T_s_pu:>10.3f} {r.T_q_pu:>10.3f} | {a.TR_avg_pu:>7.3f} "
-              f"{a.TR_ma_pu:>6.3f} {r.TR_s_pu:>10.3f} | {b.TR_avg_pu:>6.3f} {b.TR_ma_pu:>6.3f} {r.TR_q_pu:>10.3f} | "
+        rpm = wp * drive.Omega_0 * RPM_PER_RAD_S
+        print(f"  {wp:>6.3f} {rpm:>6.0f} {a.T_pu:>7.3f} {b.T_pu:>6.3f} {r.T_s_pu:>10.3f} {r.T_q_pu:>10.3f} | "
+              f"{a.TR_avg_pu:>7.3f} {a.TR_ma_pu:>6.3f} {r.TR_s_pu:>10.3f} | "
+              f"{b.TR_avg_pu:>6.3f} {b.TR_ma_pu:>6.3f} {r.TR_q_pu:>10.3f} | "
               f"{a.eta:>8.3f} {b.eta:>6.3f}")
-    print(f"  (p.u. of Omega_0, T_N; T: mean torque, {drive.inverter.model} inverter; TR: torque ripple peak to peak "
+    print("  (p.u. of Omega_0, T_N; rpm: the speed in rpm; "
+          f"T: mean torque, {drive.inverter.model} inverter; TR: torque ripple peak to peak "
           "on the averaged inverter (no PWM, the paper-comparable one), sw: the switching drive's, of its "
           "one-PWM-period average; (13)-(33): paper 1, R neglected)")
     if args.pwm_phases > 1:

@@ -9,7 +9,7 @@ from .._files import write_files
 from ..analysis.faults import fault_table
 from ..model.catalog import load
 from ..sim import plausibility as _plaus
-from .common import control_of, parse_speed, summarise
+from .common import check_out_dir, control_of, parse_speed, summarise
 
 __all__ = ["configure_command", "run_command"]
 
@@ -25,6 +25,7 @@ def configure_command(p: argparse.ArgumentParser) -> None:
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab faults``: each injected fault, detection, time to the safe state, peak current."""
     drive = load(args.motor)
+    check_out_dir(args.out)  # before the simulations
     speed = parse_speed(args.speed, drive)
     ctl, ref, _ = control_of(args.control, drive, handoff=0.02 * drive.Omega_0)
     i_max = float(getattr(ctl, "i_max", None) or 2.0 * drive.motor.I_N)

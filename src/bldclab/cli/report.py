@@ -14,6 +14,7 @@ from ..errors import BldclabError
 from ..model.catalog import load
 from ..report.bundle import motor_results, read_results
 from ..report.html import REPORT, WAVEFORM_SPEEDS, Results, render
+from .common import check_out_file, check_speed_range, positive_int
 
 __all__ = [
     "configure_command",
@@ -34,7 +35,7 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     p.add_argument("--waveform-speeds", help='motor only: per-unit speeds of the waveform panels (default "0.3,0.8")')
     p.add_argument("--torque-control", action="store_true",
                    help="motor only: also compare paper 2's torque control methods (table and torque traces)")
-    p.add_argument("--workers", type=int, default=0, help="motor only: processes (default: all cores; 1: serial)")
+    p.add_argument("--workers", type=positive_int, help="motor only: processes, >= 1 (default: all cores; 1: serial)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -54,7 +55,7 @@ def _motor_only(args: argparse.Namespace) -> list[str]:
     out = [name for name, v in given if v is not None]
     if args.torque_control:
         out.append("--torque-control")
-    if args.workers:
+    if args.workers is not None:
         out.append("--workers")
     return out
 
@@ -76,19 +77,17 @@ def run_command(args: argparse.Namespace) -> int:
         hi = 0.98 if args.max_speed is None else args.max_speed
         if n < 2:
             raise BldclabError("--speeds", f"needs at least 2, got {n}")
-        if not 0 < lo < hi < 1.5:
-            raise BldclabError("--min-speed", "needs 0 < min-speed < max-speed < 1.5 (p.u. of Omega_0)")
-        if args.workers < 0:
-            raise BldclabError("--workers", f"must be >= 0, got {args.workers}")
+        check_speed_range(lo, hi)
         wspeeds = _speeds_list(args.waveform_speeds) if args.waveform_speeds is not None else list(WAVEFORM_SPEEDS)
         out = args.out if args.out is not None else Path("out") / drive.name / REPORT
+        check_out_file(out / REPORT if out.is_dir() else out)  # before the simulations
         parts = ["bldclab", "report", str(args.source), "--out", str(out), "--speeds", str(n), "--min-speed",
                  f"{lo:g}", "--max-speed", f"{hi:g}", "--waveform-speeds", ",".join(f"{v:g}" for v in wspeeds)]
         if args.torque_control:
             parts.append("--torque-control")
         command = shlex.join(parts)
         files = motor_results(drive, speed_grid(n, lo, hi), command=command, motor_source=str(args.source),
-                              workers=args.workers or None, waveform_speeds=wspeeds,
+                              workers=args.workers, waveform_speeds=wspeeds,
                               torque_control=args.torque_control,
                               progress=not args.no_progress and sys.stderr.isatty())
         results = Results.from_files(files, source=f"a comparison run by this command ({drive.name})")

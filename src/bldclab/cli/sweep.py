@@ -9,6 +9,7 @@ from pathlib import Path
 from .._files import write_atomic
 from ..errors import BldclabError
 from ..sweep import Dask, Executor, Processes, Serial, Sweep, run
+from .common import check_out_file
 
 __all__ = [
     "configure_command",
@@ -58,6 +59,7 @@ def run_command(args: argparse.Namespace) -> int:
     path = _store_path(args.sweep, args.store)
     if args.csv is not None and not args.csv.parent.is_dir():
         raise BldclabError("--csv", f"directory {str(args.csv.parent)!r} does not exist")
+    check_out_file(args.csv, "--csv")
     executor: Executor
     if args.serial:
         executor = Serial()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -13,7 +14,7 @@ from ..errors import BldclabError
 from ..model.units import to_si
 from ..report import plots
 from ..sim import plausibility as _plaus
-from .common import add_inverter_option, load_drive, parse_speed, summarise
+from .common import add_inverter_option, check_out_dir, load_drive, parse_speed, summarise
 
 __all__ = ["configure_command", "run_command"]
 
@@ -41,6 +42,7 @@ def _list(text: str, parse: Any, field: str) -> list[float]:
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab torque-control``: paper 2's methods compared over a load x speed grid."""
     drive = load_drive(args)
+    check_out_dir(args.out)  # before the simulations
 
     def torque(t: str) -> float:
         if t.endswith("%"):
@@ -52,20 +54,30 @@ def run_command(args: argparse.Namespace) -> int:
 
     torques = _list(args.torques, torque, "--torques")
     if args.speeds:
-        speeds = _list(args.speeds, lambda t: parse_speed(t, drive), "--speeds")
+        speeds = _list(args.speeds, lambda t: parse_speed(t, drive, "--speeds"), "--speeds")
     else:
         speeds = list(paper2.default_grid(drive)[1])
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    for method in methods:
+        if method not in paper2.METHODS:
+            raise BldclabError("--methods", f"unknown method {method!r}; choose from {', '.join(paper2.METHODS)}")
+    if not methods:
+        raise BldclabError("--methods", "needs at least one method")
+    for option, values in (("--torques", torques), ("--speeds", speeds)):
+        for v in values:
+            if not (math.isfinite(v) and v > 0):
+                raise BldclabError(option, f"needs values > 0, got {v:g} (SI)")
     with _plaus.collect() as caught:
         table = paper2.compare_methods(drive, torques, speeds, methods)
     summarise(caught, len(table))
     print(f"{drive.name}: torque control methods (paper 2); ripple in % of the mean torque, dip of the "
           "non-commutated current")
-    cols = ["method", "torque_pct", "speed_rpm", "tau_mean_pct_ref", "dcm_pct", "ripple_pp", "ripple_rms",
-            "ripple_ma_pp", "ripple_ma_rms", "dip_A", "dip_pct"]
-    shown = table.assign(dcm_pct=100.0 * table["dcm_share"])
+    cols = ["method", "torque_pct", "speed_rad_s", "speed_rpm", "tau_mean_pct_ref", "dcm_pct", "ripple_pp",
+            "ripple_rms", "ripple_ma_pp", "ripple_ma_rms", "dip_A", "dip_pct"]
+    shown = table.assign(dcm_pct=100.0 * table["dcm_share"], speed_rad_s=table["speed"])
     print(shown[cols].to_string(index=False, float_format=lambda v: f"{v:.2f}"))
-    print("  (tau_mean_pct_ref: mean torque in % of the reference; dcm_pct: % of the time without phase current, "
+    print("  (speed_rad_s, speed_rpm: the imposed speed; "
+          "tau_mean_pct_ref: mean torque in % of the reference; dcm_pct: % of the time without phase current, "
           "discontinuous conduction within the PWM period)")
     for _, row in table.iterrows():
         cause = paper2.shortfall_cause(row)

@@ -1,0 +1,79 @@
+"""``bldclab check``: validate a motor file and print what follows from it (bases, time constants, PWM, paper 1)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from ..model import analytic
+from ..model.catalog import load
+from ..model.motor import Drive
+from .drives import drive_kind
+
+__all__ = ["configure_command", "derived", "run_command"]
+
+RPM_PER_RAD_S = 30.0 / math.pi
+
+
+def configure_command(p: argparse.ArgumentParser) -> None:
+    """Declare the arguments of ``bldclab check``."""
+    p.add_argument("motor", metavar="MOTOR", help="motor TOML file (or a built-in drive name) to validate")
+
+
+def derived(drive: Drive) -> list[tuple[str, str, str]]:
+    """Return the derived quantities of a drive as ``(name, value with unit, meaning)`` rows.
+
+    Parameters
+    ----------
+    drive : Drive
+        The drive.
+
+    Returns
+    -------
+    list of tuple of str
+        Speed and torque bases, motor constant, paper 1's ``Theta_m``, the electrical time constant, the electrical
+        frequency at ``Omega_0`` and the PWM periods per commutation interval (a sixth of an electrical period).
+    """
+    m, inv = drive.motor, drive.inverter
+    r = m.R + inv.R_on
+    tau = m.L / r if r > 0 else math.inf
+    f_e = m.p * drive.Omega_0 / (2.0 * math.pi)
+    rows = [
+        ("Omega_0", f"{drive.Omega_0:.6g} rad/s = {drive.Omega_0 * RPM_PER_RAD_S:.6g} rpm",
+         "no-load speed V_dc / (2 k_phi), the speed base (paper 1 (2))"),
+        ("Omega_N", f"{m.Omega_nominal:.6g} rad/s = {m.Omega_nominal * RPM_PER_RAD_S:.6g} rpm",
+         "rated speed" + (" (given)" if m.Omega_N is not None else " (V_N - 2 R I_N) / (2 k_phi), paper 1 (2)")),
+        ("T_N", f"{drive.T_N:.6g} N m", "torque base 2 k_phi I_N (paper 1 (6))"),
+        ("k_phi", f"{m.k_phi:.6g} V s/rad", "motor constant: half the peak line-to-line back-EMF per rad/s"),
+        ("back-EMF", drive_kind(drive), "shape kind"),
+        ("Theta_m", f"{analytic.theta_m(drive):.6g} rad", "p L I_N / (2 k_phi), paper 1 (22)"),
+        ("L/R", "infinite (R = 0)" if math.isinf(tau) else f"{tau * 1e3:.6g} ms",
+         "electrical time constant, R + R_on"),
+        ("f_e at Omega_0", f"{f_e:.6g} Hz", "electrical frequency p Omega_0 / (2 pi)"),
+        ("PWM per commutation", f"{inv.f_pwm / (6.0 * f_e):.4g}",
+         "PWM periods in a sixth of an electrical period at Omega_0"),
+    ]
+    if not math.isinf(tau):
+        rows.append(("PWM per L/R", f"{inv.f_pwm * tau:.4g}", "PWM periods in the electrical time constant"))
+    return rows
+
+
+def run_command(args: argparse.Namespace) -> int:
+    """Run ``bldclab check``: load the file (one error line and exit 2 if it is bad), print the derived quantities."""
+    drive = load(args.motor)
+    print(f"{args.motor}: valid motor file, drive {drive.name!r} (V_dc {drive.inverter.V_dc:g} V, I_N "
+          f"{drive.motor.I_N:g} A, p = {drive.motor.p}, f_pwm {drive.inverter.f_pwm:g} Hz, "
+          f"{drive.inverter.model} inverter)")
+    rows = derived(drive)
+    w0 = max(len(r[0]) for r in rows)
+    w1 = max(len(r[1]) for r in rows)
+    for name, value, meaning in rows:
+        print(f"  {name:<{w0}}  {value:<{w1}}  {meaning}")
+    reasons = analytic.applicability(drive)
+    if reasons:
+        print("paper 1's closed forms (bldclab analyze) do not describe this drive exactly, because:")
+        for reason in reasons:
+            print(f"  - {reason}")
+    else:
+        print("paper 1's closed forms (bldclab analyze) apply: ideal trapezoid, R negligible, V_dc = V_N")
+    return 0

@@ -1,0 +1,167 @@
+"""``bldclab template``: a commented motor file to start from, every field with its unit and meaning.
+
+The file is a drive's :meth:`~bldclab.model.motor.Drive.to_toml` (so it loads back to the same drive) with a comment
+above every field; optional parts the drive does not use are shown commented out.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+from pathlib import Path
+
+from .._files import write_atomic
+from ..errors import BldclabError
+from ..model.catalog import load
+from .common import check_out_file
+
+__all__ = ["FIELDS", "configure_command", "run_command", "template"]
+
+#: (table, key) -> "unit: meaning" written above the field. Units are those of the numbers bldclab writes (SI);
+#: a string with a unit ("75 uH", "640 rpm", "120 deg") is accepted too (docs/motor-files.md).
+FIELDS: dict[tuple[str, str], str] = {
+    ("", "name"): "the drive's name (default: the file name without .toml)",
+    ("", "description"): "free text: where the numbers come from, which are assumed",
+    ("motor", "p"): "pole pairs (integer >= 1)",
+    ("motor", "R"): "Ohm: phase resistance (>= 0)",
+    ("motor", "L"): "H: phase inductance L_self - M (> 0)",
+    ("motor", "V_N"): "V: nominal voltage",
+    ("motor", "I_N"): "A: nominal current, the square-wave current amplitude of the rating",
+    ("motor", "Omega_N"): "rad/s: rated speed (optional; default (V_N - 2 R I_N) / (2 k_phi))",
+    ("motor", "T_peak"): "N m: peak torque (optional, informative)",
+    ("motor.emf", "kind"): "back-EMF shape: trapezoid (k_phi, flat_top), sinusoid (k_1), fourier (a, b), table "
+                           "(theta, k or k_a/k_b/k_c)",
+    ("motor.emf", "k_phi"): "V s/rad: flat-top back-EMF per mechanical rad/s",
+    ("motor.emf", "flat_top"): "rad: width of the flat top in electrical angle (2.0944 rad = 120 deg)",
+    ("motor.emf", "k_1"): "V s/rad: peak phase back-EMF per mechanical rad/s",
+    ("motor.emf", "a"): "V s/rad (see unit): cosine coefficients, index = harmonic order",
+    ("motor.emf", "b"): "V s/rad (see unit): sine coefficients, index = harmonic order",
+    ("motor.emf", "unit"): "unit of the shape values (default V s/rad)",
+    ("motor.emf", "theta"): "rad (see theta_unit): the phase's own electrical angle, one period",
+    ("motor.emf", "theta_unit"): "unit of theta (default rad)",
+    ("motor.emf", "k"): "V s/rad: shape values at theta, the same for the three phases",
+    ("motor.emf", "k_a"): "V s/rad: phase a's shape values at theta",
+    ("motor.emf", "k_b"): "V s/rad: phase b's shape values at theta",
+    ("motor.emf", "k_c"): "V s/rad: phase c's shape values at theta",
+    ("inverter", "V_dc"): "V: DC bus voltage",
+    ("inverter", "f_pwm"): "Hz: PWM carrier frequency (controllers sample at 2 f_pwm)",
+    ("inverter", "t_dead"): "s: dead time (below a quarter PWM period)",
+    ("inverter", "R_on"): "Ohm: switch on-resistance",
+    ("inverter", "V_f"): "V: diode forward voltage",
+    ("inverter", "r_d"): "Ohm: diode slope resistance",
+    ("inverter", "R_src"): "Ohm: DC source internal resistance",
+    ("inverter", "i_trip"): "A: hardware over-current trip, latched (0: none)",
+    ("inverter", "model"): "switching (every gate edge) or average (half-period averages, no PWM ripple)",
+    ("motor.cogging", "orders"): "harmonic orders n_j in the mechanical angle (integers >= 1)",
+    ("motor.cogging", "amplitudes"): "N m: amplitudes A_j of sum_j A_j sin(n_j theta_m + phi_j)",
+    ("motor.cogging", "phases"): "rad: phases phi_j",
+    ("mechanics", "J"): "kg m^2: inertia of rotor and load",
+    ("mechanics", "B"): "N m s/rad: viscous friction",
+    ("mechanics", "tau_c"): "N m: Coulomb friction",
+    ("sensors", "current_phases"): "measured phase currents: two or three of a, b, c",
+    ("sensors", "current_gain"): "-: gain of each current sensor (a, b, c)",
+    ("sensors", "current_offset"): "A: offset of each current sensor (a, b, c)",
+    ("sensors", "current_noise"): "A: standard deviation of the current measurement noise",
+    ("sensors", "current_lsb"): "A: current quantisation step (0: none)",
+    ("sensors", "vdc_gain"): "-: gain of the DC-bus voltage measurement",
+    ("sensors", "vdc_offset"): "V: offset of the DC-bus voltage measurement",
+    ("sensors", "vdc_noise"): "V: standard deviation of its noise",
+    ("sensors", "vdc_lsb"): "V: its quantisation step (0: none)",
+    ("sensors", "hall_error"): "rad: electrical angle error of each Hall sensor (a, b, c)",
+    ("sensors", "hall_delay"): "s: delay of every Hall edge",
+    ("sensors", "f_tick"): "Hz: capture-timer frequency time-stamping the Hall edges",
+    ("sensors", "seed"): "seed of the noise generator (integer >= 0)",
+}
+
+#: Optional fields and tables shown commented out when the drive does not use them.
+_OPTIONAL: dict[str, list[str]] = {
+    "motor": ["# Omega_N = 67.0  # rad/s (optional)", "# T_peak = 100.0  # N m (optional)"],
+    "motor.emf": ["", "# [motor.cogging]  # optional: cogging torque sum_j A_j sin(n_j theta_m + phi_j), theta_m the "
+                  "mechanical angle",
+                  "# orders = [48]      # n_j: harmonic orders in the mechanical angle (integers >= 1)",
+                  "# amplitudes = [0.3] # A_j: N m",
+                  "# phases = [0.0]     # phi_j: rad"],
+    "inverter": ["# model: switching (every gate edge) or average (half-period averages, no PWM ripple)",
+                 '# model = "switching"'],
+}
+
+_KEY = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)\s*=")
+_TABLE = re.compile(r"^\[([A-Za-z0-9_.]+)\]\s*$")
+
+HEADER = """\
+# bldclab motor file (format: docs/motor-files.md). Numbers are SI (the unit is in the comment above each field);
+# a string with a unit works too: R = "50 mOhm", L = "75 uH", Omega_N = "640 rpm", flat_top = "120 deg".
+# Check it with: bldclab check FILE.toml
+"""
+
+
+def template(source: str) -> str:
+    """Return the commented motor file of a drive.
+
+    Parameters
+    ----------
+    source : str
+        A built-in drive name or a motor file path.
+
+    Returns
+    -------
+    str
+        TOML text that loads back (:func:`bldclab.model.catalog.load`) to the same drive.
+    """
+    drive = load(source)
+    out = [HEADER.rstrip("\n"), f"# Written by bldclab template from {source}.", ""]
+    table = ""
+    present: set[str] = set()
+
+    def close(tbl: str) -> None:
+        extra = [line for line in _OPTIONAL.get(tbl, []) if not any(
+            line.startswith((f"# {k} =", f"# {k}:")) for k in present)]
+        if tbl == "motor.emf" and drive.motor.cogging is not None:
+            extra = []
+        if extra:
+            out.extend(extra)
+
+    for line in drive.to_toml().splitlines():
+        m = _TABLE.match(line)
+        if m:
+            while out and out[-1] == "":
+                out.pop()
+            close(table)
+            out.append("")
+            table, present = m.group(1), set()
+            out.append(line)
+            continue
+        k = _KEY.match(line)
+        if k:
+            present.add(k.group(1))
+            doc = FIELDS.get((table, k.group(1)))
+            if doc:
+                out.append(f"# {k.group(1)}: {doc}")
+        out.append(line)
+    close(table)
+    return "\n".join(out).rstrip("\n") + "\n"
+
+
+def configure_command(p: argparse.ArgumentParser) -> None:
+    """Declare the arguments of ``bldclab template``."""
+    p.add_argument("--from", dest="source", metavar="MOTOR", default="htm-48v",
+                   help="drive to start from: built-in name (bldclab drives) or motor file (default: htm-48v)")
+    p.add_argument("--out", type=Path, metavar="FILE.toml", help="write the file here (default: standard output)")
+
+
+def run_command(args: argparse.Namespace) -> int:
+    """Run ``bldclab template``: print or write the commented motor file."""
+    check_out_file(args.out)
+    try:
+        text = template(args.source)
+    except BldclabError as exc:
+        if exc.field != "MOTOR":
+            raise
+        raise BldclabError("--from", exc.problem) from None
+    if args.out is None:
+        sys.stdout.write(text)
+    else:
+        write_atomic(args.out, text.encode(), "--out")
+        print(f"wrote {args.out} (check it: bldclab check {args.out})")
+    return 0

@@ -1,0 +1,258 @@
+"""The CLI's front: options checked before any work, the discoverability commands (drives, template, check)."""
+
+from __future__ import annotations
+
+import os
+import shlex
+import stat
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import bldclab as bl
+from bldclab import cli
+from bldclab.analysis.compare import VERDICT_TOLERANCE, _verdict
+from bldclab.analysis.identify import sample_path
+from bldclab.cli.drives import SOURCES
+from bldclab.model import analytic as an
+from bldclab.model.catalog import names
+
+pytestmark = pytest.mark.xdist_group("cli_front")
+
+
+def run_main(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    rc = cli.main(list(argv))
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+@pytest.fixture
+def locked_dir(tmp_path: Path) -> Path:
+    """A directory nobody may write into (skipped as root, who may)."""
+    if hasattr(os, "geteuid") and os.geteuid() == 0:
+        pytest.skip("root writes into read-only directories")
+    d = tmp_path / "locked"
+    d.mkdir()
+    d.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    yield d
+    d.chmod(stat.S_IRWXU)
+
+
+COMMANDS_WITH_OUT = [
+    ["compare", "htm-48v", "--speeds", "2"],
+    ["torque-control", "lu-4kw", "--torques", "50%", "--speeds", "0.5 pu", "--methods", "rect"],
+    ["faults", "htm-48v"],
+    ["analyze", "htm-48v"],
+]
+
+
+@pytest.mark.parametrize("argv", COMMANDS_WITH_OUT)
+def test_uncreatable_out_fails_before_the_run(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                              argv: list[str]) -> None:
+    """An --out below a regular file cannot be created: exit 2 at once, one line naming --out."""
+    blocker = tmp_path / "a-file"
+    blocker.write_text("x")
+    target = blocker / "results"
+    t0 = time.perf_counter()
+    rc, out, err = run_main(capsys, *argv, "--out", str(target))
+    elapsed = time.perf_counter() - t0
+    assert rc == 2
+    assert err.startswith("bldclab: error: --out:") and "is not a directory" in err and err.count("\n") == 1
+    assert out == ""
+    assert blocker.read_text() == "x"
+    assert elapsed < 5.0  # not a timing target: a generous bound that the whole run (minutes for compare) misses
+
+
+@pytest.mark.parametrize("argv", COMMANDS_WITH_OUT)
+def test_unwritable_out_fails_before_the_run(capsys: pytest.CaptureFixture[str], locked_dir: Path,
+                                             argv: list[str]) -> None:
+    """An --out that cannot be created fails at once (exit 2, one line naming --out), before any simulation."""
+    target = locked_dir / "results"
+    t0 = time.perf_counter()
+    rc, out, err = run_main(capsys, *argv, "--out", str(target))
+    elapsed = time.perf_counter() - t0
+    assert rc == 2
+    assert err.startswith("bldclab: error: --out:") and "not writable" in err and err.count("\n") == 1
+    assert out == ""
+    assert not target.exists()
+    assert elapsed < 5.0  # not a timing target: a generous bound that the whole run (minutes for compare) misses
+
+
+def test_out_that_is_a_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    f = tmp_path / "file"
+    f.write_text("x")
+    rc, _, err = run_main(capsys, "faults", "htm-48v", "--out", str(f))
+    assert rc == 2 and "--out" in err and "is not a directory" in err
+    assert f.read_text() == "x"
+
+
+@pytest.mark.parametrize("argv, option", [
+    (["compare", "htm-48v", "--workers", "0"], "--workers"),
+    (["report", "htm-48v", "--workers", "0"], "--workers"),
+    (["compare", "htm-48v", "--max-speed", "5"], "--max-speed"),
+    (["compare", "htm-48v", "--min-speed", "0"], "--min-speed"),
+    (["compare", "htm-48v", "--min-speed", "0.5", "--max-speed", "0.4"], "--max-speed"),
+    (["report", "htm-48v", "--max-speed", "5"], "--max-speed"),
+    (["torque-control", "lu-4kw", "--speeds", "3 xx"], "--speeds"),
+    (["torque-control", "lu-4kw", "--speeds", "0 pu"], "--speeds"),
+    (["torque-control", "lu-4kw", "--torques", "0%"], "--torques"),
+    (["torque-control", "lu-4kw", "--methods", "foo"], "--methods"),
+    (["faults", "htm-48v", "--speed", "3 xx"], "--speed"),
+    (["template", "--from", "no-such-drive"], "--from"),
+])
+def test_option_errors_name_the_option(capsys: pytest.CaptureFixture[str], tmp_path: Path, argv: list[str],
+                                       option: str) -> None:
+    rc, out, err = run_main(capsys, *argv, "--out", str(tmp_path / "o"))
+    assert rc == 2 and out == ""
+    assert err.startswith(f"bldclab: error: {option}:") or err.startswith(f"bldclab: error: argument {option}:")
+    assert err.count("\n") == 1
+    assert not (tmp_path / "o").exists()
+
+
+def _sim(t_sine: list[float], t_square: list[float]) -> pd.DataFrame:
+    w = np.linspace(0.1, 0.9, len(t_sine))
+    rows = []
+    for supply, ts in (("sine", t_sine), ("square", t_square)):
+        for x, t in zip(w, ts, strict=True):
+            rows.append({"supply": supply, "Omega_pu": x, "T_pu": t, "TR_avg_pu": 0.1, "eta": 0.9})
+    return pd.DataFrame(rows)
+
+
+def test_verdict_calls_small_differences_equal() -> None:
+    """A difference below the tolerance is "equal", with the tolerance stated; above it the better supply is named."""
+    tol = VERDICT_TOLERANCE["T_pu"]
+    lines = _verdict(_sim([1.0, 1.0, 1.0, 1.0], [1.0 - 0.4 * tol, 1.0 - 0.4 * tol, 0.9, 0.9]))
+    torque = [v for v in lines if v.startswith("mean torque")]
+    assert torque == [
+        f"mean torque: sinusoidal better for Omega in [0.63, 0.90] p.u. (by 0.100 p.u. on average, above the {tol:g} "
+        "p.u. resolved)",
+        f"mean torque: equal for Omega in [0.10, 0.37] p.u. (differences below {tol:g} p.u., what the simulation "
+        "resolves; 0.002 on average)"]
+    assert [v for v in lines if v.startswith("efficiency")] == [
+        "efficiency: equal for Omega in [0.10, 0.90] p.u. (differences below 0.005, what the simulation resolves; "
+        "0.000 on average)"]
+    # a single speed is named as one speed, not as [x, x]
+    one = _verdict(_sim([1.0, 1.0, 1.0], [1.0, 0.5, 1.0]))
+    assert "mean torque: sinusoidal better for Omega = 0.50 p.u. (by 0.500 p.u. on average, above the 0.005 p.u. " \
+           "resolved)" in one
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# identify: the summary on stdout, the tables on request, the sample record discoverable
+
+
+def test_identify_prints_the_summary_and_writes_the_tables(capsys: pytest.CaptureFixture[str],
+                                                            tmp_path: Path) -> None:
+    rc, out, err = run_main(capsys, "identify", "--write-sample", str(tmp_path / "s.csv"))
+    assert rc == 0 and err == ""
+    assert (tmp_path / "s.csv").read_bytes() == sample_path().read_bytes()
+    command = out.splitlines()[-1]
+    assert command.startswith("identify it: bldclab identify ")
+    argv = shlex.split(command.removeprefix("identify it: bldclab "))
+    argv[argv.index("--out") + 1] = str(tmp_path / "id.toml")
+    rc, out, err = run_main(capsys, *argv, "--tables", str(tmp_path / "t.csv"))
+    assert rc == 0, err
+    assert len(out.splitlines()) < 40  # the summary, not the 360-row table
+    assert f"wrote {tmp_path / 't.csv'} (360 points per phase)" in out and f"wrote {tmp_path / 'id.toml'}" in out
+    tables = pd.read_csv(tmp_path / "t.csv")
+    assert list(tables.columns) == ["theta_deg", "k_a", "k_b", "k_c"] and len(tables) == 360
+    drive = bl.load(tmp_path / "id.toml")
+    # the CSV holds the tables the motor file got (the file's per-phase tables in V s/rad)
+    np.testing.assert_allclose(drive.motor.emf.shapes[0](np.radians(tables.theta_deg)), tables.k_a, atol=1e-6)
+    rc, out, _ = run_main(capsys, *argv[:argv.index("--out")])
+    assert rc == 0 and "360 points per phase: --tables FILE.csv writes them" in out
+
+
+@pytest.mark.parametrize("argv, option", [
+    (["identify", "--speed", "auto"], "WAVEFORM.csv"),
+    (["identify", "x.csv"], "--speed"),
+    (["identify", "x.csv", "--write-sample", "s.csv"], "--write-sample"),
+])
+def test_identify_usage_errors(capsys: pytest.CaptureFixture[str], argv: list[str], option: str) -> None:
+    rc, out, err = run_main(capsys, *argv)
+    assert rc == 2 and out == "" and err.startswith(f"bldclab: error: {option}")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# discoverability: drives, template, check
+
+
+def test_drives_lists_every_built_in_drive(capsys: pytest.CaptureFixture[str]) -> None:
+    rc, out, err = run_main(capsys, "drives")
+    assert rc == 0 and err == ""
+    lines = out.splitlines()
+    assert lines[0].split()[:3] == ["name", "back-EMF", "V_dc"]
+    for name in names():
+        d = bl.load(name)
+        row = next(line for line in lines if line.startswith(name + " "))
+        assert SOURCES[name] in row
+        cells = row.split()
+        assert f"{d.inverter.V_dc:g}" in cells and str(d.motor.p) in cells
+        assert f"{d.Omega_0 * 30 / np.pi:.0f}" in cells
+
+
+@pytest.mark.parametrize("name", names())
+def test_template_round_trips(tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str) -> None:
+    """The template of a drive loads back to the same drive; every field has a comment with its unit."""
+    f = tmp_path / "my.toml"
+    rc, out, _ = run_main(capsys, "template", "--from", name, "--out", str(f))
+    assert rc == 0 and out.startswith(f"wrote {f}")
+    assert bl.load(f) == bl.load(name)
+    text = f.read_text()
+    assert tomllib.loads(text)  # valid TOML
+    lines = text.splitlines()
+    for j, line in enumerate(lines):
+        key = line.split("=")[0].strip()
+        if "=" in line and not line.startswith(("#", " ", "[")) and key.isidentifier():
+            assert lines[j - 1].startswith(f"# {key}: "), line  # the comment above names the field
+
+
+def test_template_to_stdout_loads(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    rc, out, _ = run_main(capsys, "template")
+    assert rc == 0
+    f = tmp_path / "t.toml"
+    f.write_text(out)
+    assert bl.load(f) == bl.load("htm-48v")
+    assert "# R: Ohm: phase resistance" in out and "# [motor.cogging]" in out
+
+
+def test_check_prints_the_derived_quantities(capsys: pytest.CaptureFixture[str]) -> None:
+    rc, out, err = run_main(capsys, "check", "htm-48v")
+    assert rc == 0 and err == ""
+    d = bl.load("htm-48v")
+    # htm-48v: Omega_0 = 48 V / (2 * 0.32 V s/rad) = 75 rad/s; L/R = 75 uH / 50 mOhm = 1.5 ms;
+    # f_e = 8 * 75 / (2 pi) = 95.49 Hz; 14 kHz / (6 f_e) = 24.43 PWM periods per sixth of a period
+    assert "75 rad/s = 716.197 rpm" in out and "1.5 ms" in out and "95.493 Hz" in out and "24.43" in out
+    assert f"{an.theta_m(d):.6g} rad" in out and "32 N m" in out and "0.32 V s/rad" in out
+    assert "closed forms (bldclab analyze) apply" in out
+    rc, out, _ = run_main(capsys, "check", "lu-4kw")
+    assert rc == 0
+    for reason in an.applicability(bl.load("lu-4kw")):
+        assert reason in out
+
+
+@pytest.mark.parametrize("content, field", [
+    ("[motor]\np = 0\n", "motor.emf"),
+    ('[motor]\np = 2\nR = "1 V"\n', "motor"),
+    ("not toml ===", "file"),
+])
+def test_check_bad_file(tmp_path: Path, capsys: pytest.CaptureFixture[str], content: str, field: str) -> None:
+    f = tmp_path / "bad.toml"
+    f.write_text(content)
+    rc, out, err = run_main(capsys, "check", str(f))
+    assert rc == 2 and out == ""
+    assert err.startswith("bldclab: error: ") and err.count("\n") == 1 and field in err
+
+
+def test_analyze_gives_the_speeds_in_rpm(capsys: pytest.CaptureFixture[str]) -> None:
+    rc, out, _ = run_main(capsys, "analyze", "htm-48v")
+    assert rc == 0
+    # Omega_0 = 75 rad/s = 716.2 rpm; (21): 0.955224 * 75 = 71.64 rad/s = 684.1 rpm
+    assert out.splitlines()[-1].startswith("speeds: Omega_0 75 rad/s = 716.2 rpm; base speed sinusoidal (21) "
+                                           "71.64 rad/s = 684.1 rpm")
+    rc, out, _ = run_main(capsys, "analyze", "htm-48v", "--format", "json")
+    assert rc == 0 and "rpm" not in out.splitlines()[-1]
