@@ -127,6 +127,7 @@ static const bc_field_desc FIELDS[] = {
 
     F(bc_sim_state, plant, "bc_plant_state"),
     F(bc_sim_state, k, "i8"),
+    F(bc_sim_state, flags_seen, "u4"),
     F(bc_sim_state, m, "bc_sim_metrics"),
 
     F(bc_ctrl_in, i_abc, "f4"),

@@ -281,6 +281,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         memset(&co, 0, sizeof co);
         cfg->ctrl.step(cfg->ctrl.params, cfg->ctrl.state, &ci, &co);
         s->last = co;
+        s->flags_seen |= co.flags;
         s->last_in = ci;
 
         /* 3. apply */

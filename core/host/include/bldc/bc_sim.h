@@ -137,6 +137,7 @@ typedef struct {
     bc_leg_cmd pending[3];     /* controller output waiting for the next sample (delay 1) */
     bc_ctrl_out last;          /* last controller output */
     bc_ctrl_in last_in;        /* last measurements */
+    uint32_t flags_seen;       /* BC_FLAG_* bits the controller raised at any sample so far (OR) */
     bc_sim_metrics m;
     double m_acc0[BC_ACC_N];   /* acc[] at the metric window start */
     double ma_prev;            /* previous half-period mean torque in the window (sample-grid average) */
