@@ -94,6 +94,8 @@ static const bc_field_desc FIELDS[] = {
     F(bc_sim_metrics, w_l1, "f8"),
     F(bc_sim_metrics, w_kin0, "f8"),
     F(bc_sim_metrics, w_kin1, "f8"),
+    F(bc_sim_metrics, th0, "f8"),
+    F(bc_sim_metrics, th1, "f8"),
     F(bc_sim_metrics, tau_min, "f8"),
     F(bc_sim_metrics, tau_max, "f8"),
     F(bc_sim_metrics, tau_ma_min, "f8"),

@@ -592,7 +592,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     st = c.view(state, "bc_sim_state")[0]
     metrics = None
     if int(st["m"]["state"]) == 2:
-        metrics = Metrics.from_c(st["m"], c.acc_names, imposed, _omega_integral(st, rows, scenario, imposed))
+        metrics = Metrics.from_c(st["m"], c.acc_names, imposed, _omega_integral(st, scenario, imposed, drive.motor.p))
 
     signals: dict[str, NDArray[np.float64]] = {}
     units: dict[str, str] = {}
@@ -674,17 +674,12 @@ def _guards_after(drive: Drive, res: SimResult, imposed: bool, check: str) -> li
     return _plaus.apply(findings, check, stacklevel=4)
 
 
-def _omega_integral(st: np.void, rows: np.ndarray, scenario: Scenario, imposed: bool) -> float:
-    """Integral of the speed over the metric window: from the angle travelled (exact)."""
+def _omega_integral(st: np.void, scenario: Scenario, imposed: bool, p: int) -> float:
+    """Integral of the mechanical speed over the metric window (rad): the electrical angle travelled over p."""
     m = st["m"]
-    dt = float(m["t1"] - m["t0"])
     if imposed and isinstance(scenario.speed, int | float) and not isinstance(scenario.speed, bool):
-        return float(scenario.speed) * dt
-    if rows.size:
-        sel = (rows["t"] >= m["t0"]) & (rows["t"] < m["t1"])
-        if np.any(sel):
-            return float(np.mean(rows["omega_m"][sel])) * dt
-    return float(st["plant"]["omega"]) * dt
+        return float(scenario.speed) * float(m["t1"] - m["t0"])
+    return float(m["th1"] - m["th0"]) / p
 
 
 def _describe_scenario(s: Scenario) -> dict[str, Any]:

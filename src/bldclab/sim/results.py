@@ -71,7 +71,8 @@ class Metrics:
     tau_std : float
         Root-mean-square deviation of the torque from its mean (N m).
     omega_mean : float
-        Mean mechanical speed (rad/s).
+        Mean mechanical speed (rad/s): the angle the rotor travelled over the window (tracked in C at every step)
+        over the window's length; independent of the trace.
     p_src, p_Rsrc, p_cu, p_sw, p_diode, p_emf, p_cog, p_fric, p_load : float
         Mean powers (W): from the DC source; lost in the source resistance, the windings, the switches, the diodes;
         converted to mechanical (``sum e i``); cogging; friction; to the load.
