@@ -24,6 +24,9 @@ from bldclab.cli import main
     (["--speed", "0 s: 100 rpm, 1 s: 0 rpm"], "--speed", "--mechanics"),
     (["--speed", "0 s: 100 rpm, 1 s 3 rpm"], "--speed", "point 2"),
     (["--mechanics", "--load", "0.1 s: 3 V"], "--load", "torque"),
+    (["--speed-ref", "300 rpm"], "--speed-ref", "--mechanics"),
+    (["--control", "sine", "--mechanics", "--speed-ref", "0 s: 3 N m"], "--speed-ref", "speed"),
+    (["--control", "sine", "--mechanics", "--speed-ref", "300 rpm", "--torque", "3 N m"], "--speed-ref", "drop"),
 ])
 def test_option_errors_name_the_option_and_come_before_the_run(argv, option, words, tmp_path, capsys, monkeypatch):
     def no_run(*a, **k):
@@ -75,3 +78,14 @@ def test_no_trace_writes_no_trace_file(tmp_path, capsys):
     assert main(["simulate", "htm-48v", "--periods", "2", "--no-trace", "--out", str(out)]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "result.npz"]
     assert "trace_rows                   0" in capsys.readouterr().out
+
+
+@pytest.mark.filterwarnings("ignore:scenario.window")
+def test_speed_ref_profile_drives_the_speed_loop(capsys):
+    """A ramp to 300 rpm through the sine controller's speed loop: the window's mean speed is near the reference
+    (the 5 Hz loop still settles: 10 % band), far from the 0 rpm a torque reference of 0 would give."""
+    rc = main(["simulate", "htm-48v", "--control", "sine", "--mechanics", "--speed-ref",
+               "0 s: 0 rpm, 0.1 s: 300 rpm", "--duration", "0.3 s", "--no-trace", "--format", "json"])
+    assert rc == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["speed_rpm"] == pytest.approx(300, rel=0.1)

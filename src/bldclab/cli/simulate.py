@@ -8,13 +8,14 @@ import json
 import math
 import sys
 import time
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
 from .._core import decode_flags
 from .._files import write_files
 from ..analysis.experiments import electrical_period
+from ..control import Sine
 from ..errors import BldclabError
 from ..model.units import to_si
 from ..report import plots
@@ -46,6 +47,9 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     ref.add_argument("--torque", help='torque reference, e.g. "20 N m" (sine, lu, rect)')
     ref.add_argument("--current", help='current reference, e.g. "50 A" (square)')
     ref.add_argument("--duty", type=float, help="duty in [-1, 1] (sixv)")
+    p.add_argument("--speed-ref",
+                   help='speed reference for a speed loop (--control sine with --mechanics; the loop sets the '
+                        'torque): "1000 rpm", "0.5 pu"' + _PROFILE_HELP.format(u="rpm", v=1000))
     p.add_argument("--load", help='load torque, needs --mechanics: "10 N m"' + _PROFILE_HELP.format(u="N m", v=10))
     p.add_argument("--periods", type=float,
                    help="simulated electrical periods at the imposed speed (default 6; not with --mechanics)")
@@ -99,11 +103,25 @@ def _check_options(args: argparse.Namespace) -> None:
                                "--duration")
     elif args.load is not None:
         raise BldclabError("--load", "needs --mechanics (with an imposed speed the dynamometer takes any load)")
+    if args.speed_ref is not None:
+        if args.control != "sine" or not args.mechanics:
+            raise BldclabError("--speed-ref", "needs --control sine and --mechanics (the speed loop of the "
+                               "sinusoidal controller drives the rotor's own dynamics)")
+        if args.torque is not None:
+            raise BldclabError("--speed-ref", "the speed loop sets the torque: drop --torque")
     if args.periods is not None and not (math.isfinite(args.periods) and args.periods > 0):
         raise BldclabError("--periods", f"must be a positive number of electrical periods, got {args.periods:g}")
     for opt, v in (("--trace-sub", args.trace_sub), ("--trace-every", args.trace_every)):
         if v is not None and v < 1:
             raise BldclabError(opt, f"must be an integer >= 1, got {v}")
+
+
+def _speed(text: str, drive: Any, option: str) -> float:
+    """Read one speed (:func:`~bldclab.cli.common.parse_speed`: pu, rpm, rad/s), errors naming ``option``."""
+    try:
+        return parse_speed(text, drive)
+    except BldclabError as exc:
+        raise BldclabError(option, exc.problem) from None
 
 
 def _final(profile: float | Piecewise) -> float:
@@ -124,8 +142,12 @@ def _scenario(args: argparse.Namespace, drive: Any, ref: float) -> Scenario:
     if args.mechanics:
         duration = given if given is not None else 0.5
         load = parse_profile(args.load or "0", "torque", "--load")
-        return Scenario(duration=duration, ref=ref, load_torque=load, window=(0.5 * duration, duration), **trace_kw)
-    speed = parse_profile(args.speed or "0.5 pu", "speed", "--speed", convert=lambda v: parse_speed(v, drive))
+        w_ref = 0.0 if args.speed_ref is None else parse_profile(args.speed_ref, "speed", "--speed-ref",
+                                                                 convert=lambda v: _speed(v, drive, "--speed-ref"))
+        return Scenario(duration=duration, ref=ref, omega_ref=w_ref, load_torque=load,
+                        window=(0.5 * duration, duration), **trace_kw)
+    speed = parse_profile(args.speed or "0.5 pu", "speed", "--speed",
+                          convert=lambda v: _speed(v, drive, "--speed"))
     w_end = _final(speed)
     if w_end == 0:
         raise BldclabError("--speed", "an imposed speed of 0 at the end of the run: use --mechanics to start from "
@@ -180,6 +202,8 @@ def run_command(args: argparse.Namespace) -> int:
     drive = load_drive(args)
     ctl, default_ref, unit = control_of(args.control, drive)
     ref = _reference(args, default_ref, unit)
+    if args.speed_ref is not None and isinstance(ctl, Sine):  # --speed-ref: --control sine, checked above
+        ctl = replace(ctl, speed_loop=True)
     sc = _scenario(args, drive, ref)
     need = trace_bytes(drive, sc)
     if need > TRACE_LIMIT:

@@ -184,8 +184,8 @@ class Scenario:
     duration : float or str
         Simulated time (s, or a string such as ``"200 ms"``); rounded up to whole samples of ``1/(2 f_pwm)``.
     speed : profile, optional
-        Imposed mechanical speed (rad/s, or a string: ``"300 rpm"``, or a piecewise-linear profile such as
-        ``"0 s: 0 rpm, 0.1 s: 1000 rpm"``, see :func:`parse_profile`): the rotor is held by a dynamometer.
+        Imposed mechanical speed (rad/s); also a string, ``"300 rpm"``, or a piecewise-linear profile such as
+        ``"0 s: 0 rpm, 0.1 s: 1000 rpm"`` (see :func:`parse_profile`). The rotor is held by a dynamometer.
         ``None`` (default): the rotor follows ``J dw/dt = tau_e - tau_L - B w - tau_c sign(w)`` with the drive's
         mechanics.
     ref : profile
