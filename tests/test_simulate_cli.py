@@ -89,3 +89,9 @@ def test_speed_ref_profile_drives_the_speed_loop(capsys):
     assert rc == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["speed_rpm"] == pytest.approx(300, rel=0.1)
+
+
+def test_progress_line_on_request(capsys):
+    assert main(["simulate", "htm-48v", "--periods", "2", "--no-trace", "--progress"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("\rsimulating") and "100.0 %" in err and err.endswith("s elapsed)\n")

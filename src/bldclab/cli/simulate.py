@@ -173,6 +173,7 @@ class _Progress:
         self.forced, self.total_s = forced, total_s
         self.start = time.monotonic()
         self.shown = False
+        self.drawn = -math.inf
 
     def __call__(self, done: int, total: int) -> None:
         elapsed = time.monotonic() - self.start
@@ -182,6 +183,9 @@ class _Progress:
             if not (self.forced or (sys.stderr.isatty() and eta > 10.0)):
                 return
             self.shown = True
+        if done < total and elapsed - self.drawn < 0.25:  # redraw four times a second at most
+            return
+        self.drawn = elapsed
         end = "\n" if done == total else ""
         sys.stderr.write(f"\rsimulating {100.0 * done / total:5.1f} % ({self.total_s * done / total:.4g} of "
                          f"{self.total_s:.4g} s simulated, {elapsed:.0f} s elapsed){end}")

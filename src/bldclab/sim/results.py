@@ -254,7 +254,7 @@ class SimResult:
             t_ms = t[sel] * 1e3
             plots = []
             for names, colors, ylabel in ((("i_a", "i_b", "i_c"), ("#1f77b4", "#ff7f0e", "#2ca02c"), "current [A]"),
-                                          (("tau_e", "tau_mean"), ("#888888", "#d62728"), "torque [N m]")):
+                                          (("tau_e",), ("#d62728",), "torque [N m]")):
                 present = [(n, c) for n, c in zip(names, colors, strict=True) if n in self.signals]
                 if present:
                     svg = svg_plot([Series(n, t_ms, self.signals[n][sel], c) for n, c in present], title=ylabel,
