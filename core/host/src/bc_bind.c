@@ -94,6 +94,8 @@ static const bc_field_desc FIELDS[] = {
     F(bc_sim_metrics, w_l1, "f8"),
     F(bc_sim_metrics, w_kin0, "f8"),
     F(bc_sim_metrics, w_kin1, "f8"),
+    F(bc_sim_metrics, th0, "f8"),
+    F(bc_sim_metrics, th1, "f8"),
     F(bc_sim_metrics, tau_min, "f8"),
     F(bc_sim_metrics, tau_max, "f8"),
     F(bc_sim_metrics, tau_ma_min, "f8"),
@@ -127,6 +129,7 @@ static const bc_field_desc FIELDS[] = {
 
     F(bc_sim_state, plant, "bc_plant_state"),
     F(bc_sim_state, k, "i8"),
+    F(bc_sim_state, flags_seen, "u4"),
     F(bc_sim_state, m, "bc_sim_metrics"),
 
     F(bc_ctrl_in, i_abc, "f4"),

@@ -25,6 +25,8 @@ int bc_sim_init(const bc_sim_config *cfg, bc_sim_state *s, double theta0, double
     rc = bc_sensor_init(cfg->sensors, &s->sensors);
     if (rc != BC_OK) return rc;
     s->k = 0;
+    s->th_prev = s->plant.theta;
+    s->th_run = 0.0;
     for (int x = 0; x < 3; ++x) {
         s->pending[x].mode = BC_LEG_OFF;
         s->pending[x].duty = 0.0f;
@@ -135,9 +137,21 @@ static void ma_fold(bc_sim_state *s, double ma)
 /* Every accepted plant step ends here (bc_plant_step_fn): push (t, A, tau_e) into the history and, inside the metric
  * window, evaluate MA(t) = (A(t) - A(t - T)) / T at the new node and at the older nodes shifted by T that fall in
  * the step just ended. */
+/* Add the angle moved since the last call to th_run. A step moves the angle by far less than pi (it is at most
+ * half a PWM period), so the difference taken into [-pi, pi) undoes the plant's wrapping to [0, 2 pi). */
+static void angle_track(bc_sim_state *s)
+{
+    double d = s->plant.theta - s->th_prev;
+    if (d >= BC_PI) d -= BC_TWO_PI;
+    if (d < -BC_PI) d += BC_TWO_PI;
+    s->th_run += d;
+    s->th_prev = s->plant.theta;
+}
+
 static void sim_on_step(void *ctx, double t, const double *acc, double tau)
 {
     bc_sim_state *s = (bc_sim_state *)ctx;
+    angle_track(s);
     double A = acc[BC_ACC_TAU];
     if (s->h_n > 0) {
         int jl = (int)((s->h_n - 1) % BC_SIM_HIST);
@@ -201,6 +215,8 @@ static void metric_start(const bc_sim_config *cfg, bc_sim_state *s)
     memcpy(s->m_acc0, ps->acc, sizeof s->m_acc0);
     s->m.w_l0 = w_mag(cfg->plant, ps);
     s->m.w_kin0 = w_kin(cfg->plant, ps);
+    angle_track(s);
+    s->m.th0 = s->th_run;
     s->m.tau_min = po.tau_e;
     s->m.tau_max = po.tau_e;
     s->m.tau_ma_min = HUGE_VAL;
@@ -224,6 +240,8 @@ static void metric_stop(const bc_sim_config *cfg, bc_sim_state *s)
     for (int j = 0; j < BC_ACC_N; ++j) s->m.E[j] = ps->acc[j] - s->m_acc0[j];
     s->m.w_l1 = w_mag(cfg->plant, ps);
     s->m.w_kin1 = w_kin(cfg->plant, ps);
+    angle_track(s);
+    s->m.th1 = s->th_run;
     s->m.state = 2;
 }
 
@@ -281,6 +299,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         memset(&co, 0, sizeof co);
         cfg->ctrl.step(cfg->ctrl.params, cfg->ctrl.state, &ci, &co);
         s->last = co;
+        s->flags_seen |= co.flags;
         s->last_in = ci;
 
         /* 3. apply */

@@ -6,41 +6,68 @@ import argparse
 import io
 import json
 import math
-from dataclasses import asdict
+import sys
+import time
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
+from .._core import decode_flags
 from .._files import write_files
 from ..analysis.experiments import electrical_period
+from ..control import Sine
 from ..errors import BldclabError
 from ..model.units import to_si
 from ..report import plots
-from ..sim import Scenario, simulate
+from ..sim import CHUNK, Piecewise, Scenario, parse_profile, samples_of, simulate, trace_bytes, trace_rows
 from .common import CONTROLS, add_inverter_option, control_of, load_drive, parse_speed
 
-__all__ = ["configure_command", "run_command"]
+__all__ = ["TRACE_LIMIT", "configure_command", "run_command"]
+
+#: Largest trace (bytes) ``simulate`` keeps; beyond, it asks for --trace-every or --no-trace before running
+TRACE_LIMIT = 2_000_000_000
+
+_RPM = 60.0 / (2.0 * math.pi)
+
+_PROFILE_HELP = ('; or a piecewise-linear profile of "time: value" points, e.g. "0 s: 0 {u}, 0.1 s: {v} {u}" '
+                 "(linear between points, constant after the last; repeat a time for a step)")
 
 
 def configure_command(p: argparse.ArgumentParser) -> None:
     """Arguments of ``bldclab simulate``."""
     p.add_argument("motor", metavar="MOTOR", help="built-in drive name or motor TOML file")
     p.add_argument("--control", choices=CONTROLS, default="square", help="controller (default square)")
-    p.add_argument("--speed", default="0.5 pu",
-                   help='imposed speed: "0.5 pu", "300 rpm", "31.4 rad/s" (default 0.5 pu); with --mechanics: the '
-                        "rotor starts from standstill and this is ignored")
-    p.add_argument("--mechanics", action="store_true", help="rotor dynamics from standstill instead of a dynamometer")
+    p.add_argument("--speed",
+                   help='imposed speed (a dynamometer holds the rotor): "0.5 pu", "300 rpm", "31.4 rad/s" '
+                        "(default 0.5 pu)" + _PROFILE_HELP.format(u="rpm", v=1000) + "; not with --mechanics")
+    p.add_argument("--mechanics", action="store_true",
+                   help="rotor dynamics from standstill (the drive's inertia and friction, --load) instead of a "
+                        "dynamometer")
     ref = p.add_mutually_exclusive_group()
     ref.add_argument("--torque", help='torque reference, e.g. "20 N m" (sine, lu, rect)')
     ref.add_argument("--current", help='current reference, e.g. "50 A" (square)')
     ref.add_argument("--duty", type=float, help="duty in [-1, 1] (sixv)")
-    p.add_argument("--load", default="0", help='load torque with --mechanics, e.g. "10 N m"')
-    p.add_argument("--periods", type=float, default=6.0, help="simulated electrical periods (imposed speed)")
-    p.add_argument("--duration", help='simulated time, e.g. "0.2 s" (overrides --periods)')
-    p.add_argument("--trace-sub", type=int, default=4, help="trace rows per sample (PWM ripple visible)")
+    p.add_argument("--speed-ref",
+                   help='speed reference for a speed loop (--control sine with --mechanics; the loop sets the '
+                        'torque): "1000 rpm", "0.5 pu"' + _PROFILE_HELP.format(u="rpm", v=1000))
+    p.add_argument("--load", help='load torque, needs --mechanics: "10 N m"' + _PROFILE_HELP.format(u="N m", v=10))
+    p.add_argument("--periods", type=float,
+                   help="simulated electrical periods at the imposed speed (default 6; not with --mechanics)")
+    p.add_argument("--duration", help='simulated time, e.g. "0.2 s" (overrides --periods; default with '
+                                      "--mechanics or a --speed profile: 0.5 s)")
+    trace = p.add_mutually_exclusive_group()
+    trace.add_argument("--trace-sub", type=int,
+                       help="trace rows per sample, to see the PWM ripple (default 4, or 1 with --trace-every)")
+    trace.add_argument("--trace-every", type=int, metavar="N",
+                       help="keep one trace row per N samples (long runs: bounded memory; metrics still cover "
+                            "every sample)")
+    trace.add_argument("--no-trace", action="store_true", help="keep no trace: metrics only, least memory")
+    p.add_argument("--progress", action="store_true",
+                   help="show a progress line on stderr (default: on a terminal, for runs over ~10 s wall time)")
     p.add_argument("--out", type=Path, help="write result.npz, trace.csv, metrics.json (and figures) here")
-    p.add_argument("--plot", action="store_true", help="write waveforms.png and .svg (currents, torque, voltages)")
+    p.add_argument("--plot", action="store_true",
+                   help="write waveforms.png and .svg (phase currents, torque, back-EMFs; speed with "
+                        "--mechanics), needs --out")
     p.add_argument("--format", choices=("table", "json"), default="table", help="terminal output")
     add_inverter_option(p)
 
@@ -61,61 +88,173 @@ def _reference(args: argparse.Namespace, default: float, unit: str) -> float:
     return default
 
 
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse option combinations before any work (each error names the option typed)."""
+    if args.plot and args.out is None:
+        raise BldclabError("--plot", "needs --out DIR to write the figures into")
+    if args.plot and args.no_trace:
+        raise BldclabError("--plot", "draws the trace: drop --no-trace (or thin it with --trace-every)")
+    if args.mechanics:
+        if args.speed is not None:
+            raise BldclabError("--speed", "is the dynamometer's imposed speed; with --mechanics the rotor follows "
+                               "its dynamics from standstill: drop one of them")
+        if args.periods is not None:
+            raise BldclabError("--periods", "counts electrical periods at an imposed speed; with --mechanics give "
+                               "--duration")
+    elif args.load is not None:
+        raise BldclabError("--load", "needs --mechanics (with an imposed speed the dynamometer takes any load)")
+    if args.speed_ref is not None:
+        if args.control != "sine" or not args.mechanics:
+            raise BldclabError("--speed-ref", "needs --control sine and --mechanics (the speed loop of the "
+                               "sinusoidal controller drives the rotor's own dynamics)")
+        if args.torque is not None:
+            raise BldclabError("--speed-ref", "the speed loop sets the torque: drop --torque")
+    if args.periods is not None and not (math.isfinite(args.periods) and args.periods > 0):
+        raise BldclabError("--periods", f"must be a positive number of electrical periods, got {args.periods:g}")
+    for opt, v in (("--trace-sub", args.trace_sub), ("--trace-every", args.trace_every)):
+        if v is not None and v < 1:
+            raise BldclabError(opt, f"must be an integer >= 1, got {v}")
+
+
+def _speed(text: str, drive: Any, option: str) -> float:
+    """Read one speed (:func:`~bldclab.cli.common.parse_speed`: pu, rpm, rad/s), errors naming ``option``."""
+    try:
+        return parse_speed(text, drive)
+    except BldclabError as exc:
+        raise BldclabError(option, exc.problem) from None
+
+
+def _final(profile: float | Piecewise) -> float:
+    return profile.values[-1] if isinstance(profile, Piecewise) else profile
+
+
+def _scenario(args: argparse.Namespace, drive: Any, ref: float) -> Scenario:
+    trace_kw: dict[str, Any] = {"trace": not args.no_trace}
+    if args.trace_every is not None:
+        trace_kw["trace_every"] = args.trace_every
+    elif not args.no_trace:
+        trace_kw["trace_sub"] = 4 if args.trace_sub is None else args.trace_sub
+    given: float | None = None
+    if args.duration is not None:
+        given = to_si(args.duration, "time", "--duration")
+        if not (math.isfinite(given) and given > 0):
+            raise BldclabError("--duration", f"must be positive, got {args.duration!r}")
+    if args.mechanics:
+        duration = given if given is not None else 0.5
+        load = parse_profile(args.load or "0", "torque", "--load")
+        w_ref = 0.0 if args.speed_ref is None else parse_profile(args.speed_ref, "speed", "--speed-ref",
+                                                                 convert=lambda v: _speed(v, drive, "--speed-ref"))
+        return Scenario(duration=duration, ref=ref, omega_ref=w_ref, load_torque=load,
+                        window=(0.5 * duration, duration), **trace_kw)
+    speed = parse_profile(args.speed or "0.5 pu", "speed", "--speed",
+                          convert=lambda v: _speed(v, drive, "--speed"))
+    w_end = _final(speed)
+    if w_end == 0:
+        raise BldclabError("--speed", "an imposed speed of 0 at the end of the run: use --mechanics to start from "
+                           "standstill")
+    Te = electrical_period(drive, w_end)
+    if given is not None:
+        duration = given
+    elif isinstance(speed, Piecewise):
+        duration = max(0.5, speed.times[-1] + 2 * Te)
+    else:
+        duration = (6.0 if args.periods is None else args.periods) * Te
+    n_meas = min(2.0, max(duration / Te - 1.0, 0.0))
+    t0 = duration - n_meas * Te if n_meas >= 1 else 0.5 * duration
+    if isinstance(speed, Piecewise):  # measure after the profile's last point when the run leaves room
+        t0 = max(t0, min(speed.times[-1], 0.5 * duration))
+    return Scenario(duration=duration, speed=speed, ref=ref, window=(t0, duration), **trace_kw)
+
+
+class _Progress:
+    """A progress line on stderr, redrawn in place: shown when asked, or on a terminal for a long run."""
+
+    def __init__(self, forced: bool, total_s: float) -> None:
+        self.forced, self.total_s = forced, total_s
+        self.start = time.monotonic()
+        self.shown = False
+        self.drawn = -math.inf
+
+    def __call__(self, done: int, total: int) -> None:
+        elapsed = time.monotonic() - self.start
+        if not self.shown:
+            # on a terminal, only when the run is going to take a while (extrapolated from the first pieces)
+            eta = elapsed * total / max(done, 1)
+            if not (self.forced or (sys.stderr.isatty() and eta > 10.0)):
+                return
+            self.shown = True
+        if done < total and elapsed - self.drawn < 0.25:  # redraw four times a second at most
+            return
+        self.drawn = elapsed
+        end = "\n" if done == total else ""
+        sys.stderr.write(f"\rsimulating {100.0 * done / total:5.1f} % ({self.total_s * done / total:.4g} of "
+                         f"{self.total_s:.4g} s simulated, {elapsed:.0f} s elapsed){end}")
+        sys.stderr.flush()
+
+
+def _fmt_bytes(b: float) -> str:
+    for unit in ("B", "kB", "MB", "GB", "TB"):
+        if b < 1000 or unit == "TB":
+            return f"{b:.3g} {unit}"
+        b /= 1000.0
+    return ""  # unreachable
+
+
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab simulate``."""
+    _check_options(args)
     drive = load_drive(args)
-    if args.trace_sub < 1:
-        raise BldclabError("--trace-sub", f"must be >= 1, got {args.trace_sub}")
     ctl, default_ref, unit = control_of(args.control, drive)
     ref = _reference(args, default_ref, unit)
-    if args.mechanics:
-        duration = to_si(args.duration or "0.5 s", "time", "--duration")
-        load_t = to_si(args.load, "torque", "--load")
-        sc = Scenario(duration=duration, ref=ref, load_torque=load_t, trace_sub=args.trace_sub,
-                      window=(0.5 * duration, duration))
-        speed = None
-    else:
-        speed = parse_speed(args.speed, drive)
-        if speed == 0:
-            raise BldclabError("--speed", "an imposed speed of 0: use --mechanics to start from standstill")
-        Te = electrical_period(drive, speed)
-        duration = to_si(args.duration, "time", "--duration") if args.duration else args.periods * Te
-        if not math.isfinite(duration) or duration <= 0:
-            raise BldclabError("--duration", f"must be positive, got {duration}")
-        n_meas = min(2.0, max(duration / Te - 1.0, 0.0))
-        t0 = duration - n_meas * Te if n_meas >= 1 else 0.5 * duration
-        sc = Scenario(duration=duration, speed=speed, ref=ref, trace_sub=args.trace_sub, window=(t0, duration))
-    res = simulate(drive, ctl, sc)
+    if args.speed_ref is not None and isinstance(ctl, Sine):  # --speed-ref: --control sine, checked above
+        ctl = replace(ctl, speed_loop=True)
+    sc = _scenario(args, drive, ref)
+    need = trace_bytes(drive, sc)
+    if need > TRACE_LIMIT:
+        opt = "--duration" if args.duration is not None else "--periods"
+        raise BldclabError(opt, f"a run of {sc.duration:.4g} s keeps a trace of {trace_rows(drive, sc)} rows, "
+                           f"{_fmt_bytes(need)} (limit {_fmt_bytes(TRACE_LIMIT)}): thin it with --trace-every N or "
+                           "drop it with --no-trace")
+    n = samples_of(drive, sc.duration)
+    progress = _Progress(args.progress, sc.duration) if (args.progress or n > 4 * CHUNK) else None
+    res = simulate(drive, ctl, sc, progress=progress)
     m = res.metrics
-    assert m is not None
+    assert m is not None  # the window ends with the run
+    flags = int(res.meta["controller_flags"])
     summary: dict[str, Any] = {
         "motor": drive.name, "control": args.control, "reference": ref, "reference_unit": unit,
-        "inverter": drive.inverter.model,
-        "speed_rad_s": m.omega_mean, "speed_pu": m.omega_mean / drive.Omega_0, "window_s": [m.t0, m.t1],
+        "inverter": drive.inverter.model, "duration_s": sc.duration,
+        "speed_rad_s": m.omega_mean, "speed_rpm": m.omega_mean * _RPM, "speed_pu": m.omega_mean / drive.Omega_0,
+        "window_s": [m.t0, m.t1],
         "tau_mean_N_m": m.tau_mean, "tau_mean_pu": m.tau_mean / drive.T_N, "ripple_N_m": m.ripple,
         "ripple_pwm_averaged_N_m": m.ripple_ma, "ripple_pct_of_mean": 100 * m.ripple / abs(m.tau_mean)
         if m.tau_mean else math.nan, "tau_rms_deviation_N_m": m.tau_std, "efficiency": m.efficiency,
         "p_dc_W": m.p_src, "p_copper_W": m.p_cu, "p_inverter_W": m.p_sw + m.p_diode + m.p_Rsrc,
         "i_rms_A": list(m.i_rms), "i_peak_A": list(m.i_peak), "energy_balance_residue": m.balance_electrical,
-        "controller_flags": int(np.bitwise_or.reduce(res.flags.astype(np.int64))) if len(res) else 0,
+        "controller_flags": decode_flags(flags) or "none", "controller_flags_bits": flags,
+        "trace_rows": len(res),
         "warnings": list(res.meta.get("warnings", [])),
     }
+    if not sc.trace:
+        summary["trace_rows"] = 0
     if args.format == "json":
         print(json.dumps(summary, indent=2))
     else:
         print(f"{drive.name}, {args.control} control, reference {ref:.4g} {unit}, "
-              f"{'dynamometer' if speed is not None else 'rotor dynamics'}, {drive.inverter.model} inverter")
+              f"{'dynamometer' if sc.speed is not None else 'rotor dynamics'}, {drive.inverter.model} inverter")
         for key, value in summary.items():
-            if key in ("motor", "control", "reference", "reference_unit", "inverter", "warnings"):  # warnings: stderr
+            if key in ("motor", "control", "reference", "reference_unit", "inverter", "warnings",
+                       "controller_flags_bits"):  # warnings: stderr
                 continue
             text = ", ".join(f"{v:.4g}" for v in value) if isinstance(value, list) else (
                 f"{value:.5g}" if isinstance(value, float) else str(value))
             print(f"  {key:<28} {text}")
     if args.out is not None:
         files: dict[str, bytes] = {}
-        buf = io.BytesIO()
-        res.to_pandas().to_csv(buf)
-        files["trace.csv"] = buf.getvalue()
+        if sc.trace:
+            buf = io.BytesIO()
+            res.to_pandas().to_csv(buf)
+            files["trace.csv"] = buf.getvalue()
         files["metrics.json"] = (json.dumps({**summary, "metrics": asdict(m)}, indent=2) + "\n").encode()
         if args.plot:
             fig = res.plot()
@@ -125,8 +264,4 @@ def run_command(args: argparse.Namespace) -> int:
         res.save(args.out / "result.npz")
         for path in [*written, args.out / "result.npz"]:
             print(f"wrote {path}")
-    elif args.plot:
-        raise BldclabError("--plot", "needs --out DIR to write the figures into")
     return 0
-
-

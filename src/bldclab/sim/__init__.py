@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import ctypes
 import dataclasses
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -21,10 +22,11 @@ from .._version import __version__
 from ..control import Control
 from ..errors import BldclabError
 from ..model.motor import Drive
+from ..model.units import to_si
 from . import plausibility as _plaus
 from .results import Metrics, SimResult
 
-__all__ = ["Fault", "Scenario", "simulate"]
+__all__ = ["Fault", "Piecewise", "Scenario", "parse_profile", "simulate", "trace_bytes", "trace_rows"]
 
 Profile = float | ArrayLike | Callable[[NDArray[np.float64]], ArrayLike] | None
 
@@ -34,6 +36,100 @@ _FAULT_KINDS = {"phase_open": ("BC_FAULT_PHASE_OPEN", "plant"), "hall_stuck": ("
                 "current_offset": ("BC_FAULT_CURRENT_OFFSET", "sensors"),
                 "current_loss": ("BC_FAULT_CURRENT_LOSS", "sensors")}
 _MAX_FAULTS = 4
+
+#: Trace fields renamed in results: ``flags`` would collide with pandas' ``DataFrame.flags``
+_RENAMED = {"flags": "ctrl_flags"}
+
+#: Units of the controllers' diagnostic channels, by their label (``Controller.diag``); others are "-"
+_DIAG_UNITS = {"i_d": "A", "i_q": "A", "i_q_ref": "A", "i_reg": "A", "i_ref": "A", "i_out": "A", "i_off": "A",
+               "v_d": "V", "v_q": "V", "theta": "rad", "theta_est": "rad", "omega_e": "rad/s",
+               "omega_est": "rad/s", "tau_est": "N m", "tau_pred": "N m"}
+
+#: Scenario inputs that also take a unit string or a profile string (:func:`parse_profile`), and their dimension
+_UNIT_FIELDS = {"speed": "speed", "omega_ref": "speed", "load_torque": "torque", "v_dc": "voltage"}
+
+
+@dataclass(frozen=True)
+class Piecewise:
+    """A piecewise-linear profile through points ``(t_j, y_j)``: constant before the first and after the last.
+
+    Repeat a time for a step: ``Piecewise((0, 0.1, 0.1, 1), (0, 0, 10, 10))`` is 0 until 0.1 s, then 10.
+
+    Parameters
+    ----------
+    times : tuple of float
+        Non-decreasing times (s).
+    values : tuple of float
+        Values at those times (SI unit of the input).
+    """
+
+    times: tuple[float, ...]
+    values: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        if not self.times or len(self.times) != len(self.values):
+            raise BldclabError("profile", "needs as many times as values, at least one")
+        if any(b < a for a, b in itertools.pairwise(self.times)):
+            raise BldclabError("profile", f"times must not decrease, got {list(self.times)}")
+
+    def __call__(self, t: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Return the profile at times ``t`` (s)."""
+        return np.interp(t, self.times, self.values)
+
+    def __str__(self) -> str:
+        """Return the profile in the syntax :func:`parse_profile` reads (SI units)."""
+        return ", ".join(f"{a:g} s: {b:g}" for a, b in zip(self.times, self.values, strict=True))
+
+
+def parse_profile(text: str, dimension: str, field: str,
+                  convert: Callable[[str], float] | None = None) -> float | Piecewise:
+    """Read a constant (``"300 rpm"``) or a piecewise-linear profile (``"0 s: 0 rpm, 0.1 s: 1000 rpm"``).
+
+    A profile is a comma-separated list of ``time: value`` points, times non-decreasing (a time without a unit is
+    in seconds, a value without a unit in SI); the input is linear between points, constant before the first and
+    after the last; a repeated time makes a step (``"0.2 s: 0 N m, 0.2 s: 5 N m"``).
+
+    Parameters
+    ----------
+    text : str
+        The constant or the profile.
+    dimension : str
+        Dimension of the values (a key of :data:`bldclab.model.units.DIMENSIONS`, e.g. ``"speed"``).
+    field : str
+        Name for error messages (an option such as ``--load`` or a field such as ``scenario.speed``).
+    convert : callable, optional
+        Reads one value (default :func:`bldclab.model.units.to_si` with ``dimension``), e.g. to accept per-unit
+        speeds.
+
+    Returns
+    -------
+    float or Piecewise
+
+    Raises
+    ------
+    BldclabError
+        Naming ``field`` and the point that could not be read.
+    """
+    def value(v: str, where: str) -> float:
+        return convert(v) if convert is not None else to_si(v, dimension, where)
+
+    if ":" not in text:
+        return value(text, field)
+    times, values = [], []
+    for j, point in enumerate(text.split(",")):
+        if point.count(":") != 1:
+            raise BldclabError(field, f"point {j + 1} {point.strip()!r} is not 'time: value' "
+                               "(e.g. '0 s: 0 rpm, 0.1 s: 1000 rpm')")
+        t_text, v_text = point.split(":")
+        times.append(to_si(t_text, "time", f"{field} (time of point {j + 1})"))
+        values.append(value(v_text, f"{field} (value of point {j + 1})"))
+    for j, (ta, tb) in enumerate(itertools.pairwise(times)):
+        if tb < ta:
+            raise BldclabError(field, f"times must not decrease: point {j + 2} ({tb:g} s) is before point {j + 1} "
+                               f"({ta:g} s)")
+    if not all(math.isfinite(v) for v in times + values):
+        raise BldclabError(field, f"every time and value must be finite, got {text!r}")
+    return Piecewise(tuple(times), tuple(values))
 
 
 @dataclass(frozen=True)
@@ -80,23 +176,27 @@ class Scenario:
     """What to simulate.
 
     Every time-varying input (a profile) is a number, an array with one value per sample (half PWM period), or a
-    function of the sample times (s, array) returning such an array.
+    function of the sample times (s, array) returning one value per time. A long run calls the function on
+    pieces of the run (:data:`CHUNK` samples), so it must work elementwise (as ``np.interp`` or ``np.where`` do).
 
     Parameters
     ----------
-    duration : float
-        Simulated time (s); rounded up to whole samples of ``1/(2 f_pwm)``.
+    duration : float or str
+        Simulated time (s, or a string such as ``"200 ms"``); rounded up to whole samples of ``1/(2 f_pwm)``.
     speed : profile, optional
-        Imposed mechanical speed (rad/s): the rotor is held by a dynamometer. ``None`` (default): the rotor
-        follows ``J dw/dt = tau_e - tau_L - B w - tau_c sign(w)`` with the drive's mechanics.
+        Imposed mechanical speed (rad/s); also a string, ``"300 rpm"``, or a piecewise-linear profile such as
+        ``"0 s: 0 rpm, 0.1 s: 1000 rpm"`` (see :func:`parse_profile`). The rotor is held by a dynamometer.
+        ``None`` (default): the rotor follows ``J dw/dt = tau_e - tau_L - B w - tau_c sign(w)`` with the drive's
+        mechanics.
     ref : profile
-        The controller's reference (what it means depends on the controller, e.g. a duty or a torque in N m).
+        The controller's reference (what it means depends on the controller, e.g. a duty or a torque in N m), in
+        SI numbers (its unit depends on the controller, so no unit strings).
     omega_ref : profile
-        Speed reference (rad/s) for controllers with a speed loop.
+        Speed reference (rad/s, or a unit/profile string as for ``speed``) for controllers with a speed loop.
     load_torque : profile
-        Load torque ``tau_L`` (N m), rotor dynamics only.
+        Load torque ``tau_L`` (N m, or ``"10 N m"``, or a profile string), rotor dynamics only.
     v_dc : profile, optional
-        DC source voltage (V); default the inverter's ``V_dc``.
+        DC source voltage (V, or ``"48 V"``, or a profile string); default the inverter's ``V_dc``.
     theta0 : float
         Initial electrical angle (rad).
     omega0 : float, optional
@@ -111,8 +211,10 @@ class Scenario:
         Trace rows per sample (>= 1, with ``trace_every == 1``) to see the PWM ripple.
     trace : bool
         Keep a trace at all (False: metrics only, least memory).
-    window : tuple of float, optional
-        Metric window (t0, t1) in s; ``None``: no metrics.
+    window : tuple of float or str, optional
+        Metric window (t0, t1) in s (numbers or unit strings such as ``"20 ms"``); ``None`` (default): the whole
+        run, start included (the plausibility guards on metrics, energy balance and steady state, check only a
+        window you chose).
     h_max : float
         Longest integration step (s); 0: half a PWM period (events set the steps anyway).
     faults : tuple of Fault
@@ -137,6 +239,15 @@ class Scenario:
     faults: tuple[Fault, ...] = ()
 
     def __post_init__(self) -> None:
+        # unit strings where the dimension is fixed; ref's unit depends on the controller, so it takes numbers
+        if isinstance(self.duration, str):
+            object.__setattr__(self, "duration", to_si(self.duration, "time", "scenario.duration"))
+        for name, dim in _UNIT_FIELDS.items():
+            v = getattr(self, name)
+            if isinstance(v, str):
+                object.__setattr__(self, name, parse_profile(v, dim, f"scenario.{name}"))
+        if self.window is not None and any(isinstance(v, str) for v in self.window):
+            object.__setattr__(self, "window", tuple(to_si(v, "time", "scenario.window") for v in self.window))
         _check_scalar("scenario.duration", self.duration, positive=True)
         _check_scalar("scenario.theta0", self.theta0)
         if self.omega0 is not None:
@@ -180,32 +291,103 @@ def _check_scalar(name: str, v: object, positive: bool = False) -> None:
         raise BldclabError(name, f"must be > 0, got {v}")
 
 
-def _profile(name: str, value: Profile, t: NDArray[np.float64]) -> tuple[NDArray[np.float64] | None, float]:
-    """Return (per-sample array, None-constant) for a profile: ``(None, c)`` for a constant, ``(array, nan)``."""
-    if value is None:
-        return None, 0.0
-    if isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool):
-        _check_scalar(name, value)
-        return None, float(value)
-    if callable(value):
+#: Samples per call into the C runner: the runner's state carries over between calls, so a long run needs the
+#: memory of one piece of its inputs (and of the trace it keeps), whatever its duration.
+CHUNK = 1 << 17
+
+
+def _times(j0: int, j1: int, t_half: float) -> NDArray[np.float64]:
+    """Sample times of samples ``j0 .. j1 - 1`` (s); the same values as ``np.arange(n)[j0:j1] * t_half``."""
+    return np.arange(j0, j1, dtype=np.float64) * t_half
+
+
+class _Profile:
+    """One per-sample input: a constant, a whole array, or a function evaluated on the run's pieces.
+
+    ``first`` is the value at t = 0 and ``peak`` the largest magnitude over the run (for the guards).
+    """
+
+    def __init__(self, name: str, value: Profile, n: int, t_half: float) -> None:
+        self.name, self.n, self.t_half = name, n, t_half
+        self.const = 0.0
+        self.arr: NDArray[np.float64] | None = None
+        self.fn: Callable[[NDArray[np.float64]], ArrayLike] | None = None
+        if value is None:
+            self.first = self.peak = 0.0
+        elif isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool):
+            _check_scalar(name, value)
+            self.const = float(value)
+            self.first, self.peak = self.const, abs(self.const)
+        elif callable(value):
+            self.fn = value
+            self.first, self.peak = math.nan, 0.0
+            for j0, j1 in _chunks(n):
+                a = self._eval(j0, j1)
+                if j0 == 0:
+                    self.first = float(a[0])
+                self.peak = max(self.peak, float(np.max(np.abs(a))))
+                if j1 - j0 == n:  # one piece: keep it rather than call the function again
+                    self.arr, self.fn = a, None
+        else:
+            try:
+                arr = np.asarray(value, dtype=float)
+            except (TypeError, ValueError):
+                raise BldclabError(name, f"expected a number, an array or a function, got {type(value).__name__}"
+                                   ) from None
+            if arr.shape != (n,):
+                raise BldclabError(name, f"needs one value per sample ({n}), got shape {arr.shape}")
+            self._check_finite(arr, 0)
+            self.arr = np.ascontiguousarray(arr)
+            self.first, self.peak = float(arr[0]), float(np.max(np.abs(arr)))
+
+    def _eval(self, j0: int, j1: int) -> NDArray[np.float64]:
+        assert self.fn is not None
+        t = _times(j0, j1, self.t_half)
         try:
-            arr = np.asarray(value(t), dtype=float)
+            arr = np.asarray(self.fn(t), dtype=float)
         except Exception as exc:
-            raise BldclabError(name, f"the function failed on the sample times: {exc}") from None
+            raise BldclabError(self.name, f"the function failed on the sample times: {exc}") from None
         if arr.ndim == 0:
             arr = np.full(t.shape, float(arr))
-    else:
-        try:
-            arr = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
-            raise BldclabError(name, f"expected a number, an array or a function, got {type(value).__name__}"
-                               ) from None
-    if arr.shape != t.shape:
-        raise BldclabError(name, f"needs one value per sample ({t.size}), got shape {arr.shape}")
-    bad = np.nonzero(~np.isfinite(arr))[0]
-    if bad.size:
-        raise BldclabError(name, f"value at sample {int(bad[0])} (t = {t[bad[0]]:.6g} s) is {arr[bad[0]]}")
-    return np.ascontiguousarray(arr), math.nan
+        if arr.shape != t.shape:
+            raise BldclabError(self.name, f"needs one value per sample ({t.size}), got shape {arr.shape}")
+        self._check_finite(arr, j0)
+        return np.ascontiguousarray(arr)
+
+    def _check_finite(self, arr: NDArray[np.float64], j0: int) -> None:
+        bad = np.nonzero(~np.isfinite(arr))[0]
+        if bad.size:
+            k = j0 + int(bad[0])
+            raise BldclabError(self.name, f"value at sample {k} (t = {k * self.t_half:.6g} s) is {arr[bad[0]]}")
+
+    def piece(self, j0: int, j1: int) -> NDArray[np.float64] | None:
+        """Return the values of samples ``j0 .. j1 - 1`` (None for a constant)."""
+        if self.fn is not None:
+            return self._eval(j0, j1)
+        if self.arr is not None:
+            return self.arr[j0:j1]
+        return None
+
+
+def _chunks(n: int) -> list[tuple[int, int]]:
+    return [(j0, min(n, j0 + CHUNK)) for j0 in range(0, n, CHUNK)]
+
+
+def trace_rows(drive: Drive, scenario: Scenario) -> int:
+    """Return the number of trace rows a run of ``scenario`` keeps (0 with ``trace=False``)."""
+    if not scenario.trace:
+        return 0
+    n = samples_of(drive, scenario.duration)
+    return n // scenario.trace_every if scenario.trace_sub == 1 else n * scenario.trace_sub
+
+
+def trace_bytes(drive: Drive, scenario: Scenario) -> int:
+    """Return the memory (bytes) the trace of a run of ``scenario`` takes; the rest of a run is bounded.
+
+    Use it to choose ``trace_every`` (or ``trace=False``) before a long run: the trace is the only part of a run
+    whose size grows with the duration (inputs given as numbers or functions are evaluated piece by piece).
+    """
+    return trace_rows(drive, scenario) * core().trace_dtype.itemsize
 
 
 def _plant_params(drive: Drive, imposed: bool, h_max: float, keep: list[object]) -> np.ndarray:
@@ -272,7 +454,7 @@ def samples_of(drive: Drive, duration: float) -> int:
 
 
 def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str = "error",
-             estimate: Drive | None = None) -> SimResult:
+             estimate: Drive | None = None, progress: Callable[[int, int], None] | None = None) -> SimResult:
     """Simulate the drive in closed loop with a C controller.
 
     Plausibility guards (:mod:`bldclab.sim.plausibility`) run before the run (PWM frequency against ``L/R`` and the
@@ -298,6 +480,9 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         parameter-mismatch studies, e.g. ``estimate=drive.scaled(L=1.2, emf=0.95)``. Default: the plant's own
         ``drive``. Pole pairs and PWM frequency must match the plant's (they are not estimates but the hardware the
         controller runs on).
+    progress : callable, optional
+        Called as ``progress(done, total)`` (samples) after each piece of :data:`CHUNK` samples the C runner
+        completes, e.g. to draw a progress bar.
 
     Returns
     -------
@@ -323,7 +508,6 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     keep: list[object] = []
     n = samples_of(drive, scenario.duration)
     t_half = 0.5 / drive.inverter.f_pwm
-    t_samples = np.arange(n, dtype=np.float64) * t_half
     imposed = scenario.speed is not None
 
     plant = _plant_params(drive, imposed, scenario.h_max, keep)
@@ -351,23 +535,16 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
 
     inputs = c.record("bc_sim_inputs")
     v_dc = drive.inverter.V_dc if scenario.v_dc is None else scenario.v_dc
-    first: dict[str, float] = {}
-    peak: dict[str, float] = {}
+    profiles: dict[str, _Profile] = {}
     for field, name, value in (("ref", "scenario.ref", scenario.ref),
                                ("omega_ref", "scenario.omega_ref", scenario.omega_ref),
                                ("omega", "scenario.speed", scenario.speed),
                                ("tau_load", "scenario.load_torque", scenario.load_torque),
                                ("v_src", "scenario.v_dc", v_dc)):
-        arr, const = _profile(name, value, t_samples)
-        if arr is None:
-            inputs[f"{field}_c"] = const
-            first[field] = const
-            peak[field] = abs(const)
-        else:
-            keep.append(arr)
-            inputs[field] = arr.ctypes.data
-            first[field] = float(arr[0])
-            peak[field] = float(np.max(np.abs(arr)))
+        profiles[field] = prof = _Profile(name, value, n, t_half)
+        inputs[f"{field}_c"] = prof.const
+    first = {k: v.first for k, v in profiles.items()}
+    peak = {k: v.peak for k, v in profiles.items()}
     omega0 = scenario.omega0 if scenario.omega0 is not None else (first["omega"] if imposed else 0.0)
     v0 = first["v_src"]
     issued = _guards_before(drive, control, cparams, imposed, peak, check)
@@ -381,10 +558,9 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     cfg["delay"] = scenario.delay
     cfg["trace_every"] = scenario.trace_every
     cfg["trace_sub"] = scenario.trace_sub
-    if scenario.window is not None:
-        # the run ends at the last whole sample; a window ending within rounding of it closes there
-        t0w, t1w = scenario.window
-        cfg["metric_t0"], cfg["metric_t1"] = t0w, min(t1w, n * t_half)
+    # the run ends at the last whole sample; a window ending within rounding of it closes there
+    t0w, t1w = scenario.window if scenario.window is not None else (0.0, n * t_half)
+    cfg["metric_t0"], cfg["metric_t1"] = t0w, min(t1w, n * t_half)
 
     state = c.opaque("bc_sim_state")
     i0 = np.ascontiguousarray(scenario.i0, dtype=float)
@@ -393,33 +569,42 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     if rc != 0:
         raise BldclabError("drive", "the C plant rejected the parameters (a value out of its physical range)")
 
-    if scenario.trace:
-        n_rows = n // scenario.trace_every if scenario.trace_sub == 1 else n * scenario.trace_sub
-    else:
-        n_rows = 0
+    n_rows = trace_rows(drive, scenario)
     rows = np.zeros(n_rows, dtype=c.trace_dtype)
-    written = ctypes.c_int64(0)
-    rc = c.lib.bc_sim_run(cfg.ctypes.data, state.ctypes.data, inputs.ctypes.data, n,
-                          rows.ctypes.data if n_rows else None, n_rows, ctypes.byref(written))
-    if rc != 0:
-        raise RuntimeError(f"bc_sim_run failed with code {rc}")  # a bug, not bad input: inputs were validated
-    rows = rows[: written.value]
+    n_written = 0
+    for j0, j1 in _chunks(n):
+        pieces = []
+        for field, prof in profiles.items():
+            a = prof.piece(j0, j1)
+            pieces.append(a)  # alive until C has read it
+            inputs[field] = 0 if a is None else a.ctypes.data
+        written = ctypes.c_int64(0)
+        ptr = rows.ctypes.data + n_written * rows.itemsize if n_rows else None
+        rc = c.lib.bc_sim_run(cfg.ctypes.data, state.ctypes.data, inputs.ctypes.data, j1 - j0, ptr,
+                              n_rows - n_written, ctypes.byref(written))
+        if rc != 0:
+            raise RuntimeError(f"bc_sim_run failed with code {rc}")  # a bug, not bad input: inputs were validated
+        n_written += written.value
+        if progress is not None:
+            progress(j1, n)
+    rows = rows[:n_written]
 
     st = c.view(state, "bc_sim_state")[0]
     metrics = None
-    if scenario.window is not None and int(st["m"]["state"]) == 2:
-        metrics = Metrics.from_c(st["m"], c.acc_names, imposed, _omega_integral(st, rows, scenario, imposed))
+    if int(st["m"]["state"]) == 2:
+        metrics = Metrics.from_c(st["m"], c.acc_names, imposed, _omega_integral(st, scenario, imposed, drive.motor.p))
 
     signals: dict[str, NDArray[np.float64]] = {}
     units: dict[str, str] = {}
     docs: dict[str, str] = {}
     for name, unit, doc in zip(c.trace_names, c.trace_units, c.trace_docs, strict=True):
-        out_name = name
+        out_name = _RENAMED.get(name, name)
         if name.startswith("d") and name[1:].isdigit():
             label = info.diag[int(name[1:])]
             if not label:
                 continue
             out_name = label
+            unit = _DIAG_UNITS.get(label, "-")
         signals[out_name] = rows[name]  # a strided view of the record array: no copy
         units[out_name] = unit
         docs[out_name] = doc
@@ -431,14 +616,18 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         "estimate": None if estimate is None else {"name": estimate.name, "toml": estimate.to_toml()},
         "scenario": _describe_scenario(scenario),
         "samples": n,
+        "controller_flags": int(st["flags_seen"]),
         "stats": {"steps": int(plant_st["n_steps"]), "events": int(plant_st["n_events"]),
                   "plant_flags": int(plant_st["flags"]), "e_fault": float(plant_st["e_fault"]),
                   "hw_trip": float(plant_st["t_trip"]) if int(plant_st["tripped"]) else None},
         "final": {"t": float(plant_st["t"]), "i": [float(v) for v in plant_st["i"]],
                   "theta_e": float(plant_st["theta"]), "omega_m": float(plant_st["omega"])},
     }
-    res = SimResult(signals, units, docs, metrics, meta)
+    chosen = scenario.window is not None
+    # the default window (the whole run) is not checked as a measurement: guards see the run as before it existed
+    res = SimResult(signals, units, docs, metrics if chosen else None, meta)
     meta["warnings"] = issued + _guards_after(drive, res, imposed, check)
+    res.metrics = metrics
     return res
 
 
@@ -485,24 +674,21 @@ def _guards_after(drive: Drive, res: SimResult, imposed: bool, check: str) -> li
     return _plaus.apply(findings, check, stacklevel=4)
 
 
-def _omega_integral(st: np.void, rows: np.ndarray, scenario: Scenario, imposed: bool) -> float:
-    """Integral of the speed over the metric window: from the angle travelled (exact)."""
+def _omega_integral(st: np.void, scenario: Scenario, imposed: bool, p: int) -> float:
+    """Integral of the mechanical speed over the metric window (rad): the electrical angle travelled over p."""
     m = st["m"]
-    dt = float(m["t1"] - m["t0"])
     if imposed and isinstance(scenario.speed, int | float) and not isinstance(scenario.speed, bool):
-        return float(scenario.speed) * dt
-    if rows.size:
-        sel = (rows["t"] >= m["t0"]) & (rows["t"] < m["t1"])
-        if np.any(sel):
-            return float(np.mean(rows["omega_m"][sel])) * dt
-    return float(st["plant"]["omega"]) * dt
+        return float(scenario.speed) * float(m["t1"] - m["t0"])
+    return float(m["th1"] - m["th0"]) / p
 
 
 def _describe_scenario(s: Scenario) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for f in dataclasses.fields(s):
         v = getattr(s, f.name)
-        if callable(v):
+        if isinstance(v, Piecewise):
+            out[f.name] = f"profile {v}"
+        elif callable(v):
             out[f.name] = f"function {getattr(v, '__name__', '')}"
         elif isinstance(v, np.ndarray) or (isinstance(v, list | tuple) and len(v) > 8):
             out[f.name] = f"array of {len(v)} values"

@@ -11,11 +11,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._core import decode_flags
 from .._files import write_atomic
 from ..errors import BldclabError
 from ..svg import Series, svg_plot
 
 __all__ = ["Metrics", "SimResult"]
+
+#: Old signal names still accepted by ``res[...]`` / ``res.<name>``
+_ALIASES = {"flags": "ctrl_flags", "ctrl_flags": "flags"}
 
 
 @dataclass(frozen=True)
@@ -67,7 +71,8 @@ class Metrics:
     tau_std : float
         Root-mean-square deviation of the torque from its mean (N m).
     omega_mean : float
-        Mean mechanical speed (rad/s).
+        Mean mechanical speed (rad/s): the angle the rotor travelled over the window (tracked in C at every step)
+        over the window's length; independent of the trace.
     p_src, p_Rsrc, p_cu, p_sw, p_diode, p_emf, p_cog, p_fric, p_load : float
         Mean powers (W): from the DC source; lost in the source resistance, the windings, the switches, the diodes;
         converted to mechanical (``sum e i``); cogging; friction; to the load.
@@ -186,7 +191,8 @@ class SimResult:
         self.meta = meta
 
     def __getitem__(self, name: str) -> NDArray[np.float64]:
-        """Return the signal ``name``."""
+        """Return the signal ``name`` (``"flags"``: the controller flags ``ctrl_flags``, the name before 0.x)."""
+        name = _ALIASES.get(name, name) if name not in self.signals else name
         try:
             return self.signals[name]
         except KeyError:
@@ -197,13 +203,26 @@ class SimResult:
         if name.startswith("_") or name in ("signals", "units", "docs", "metrics", "meta"):
             raise AttributeError(name)
         try:
-            return self.signals[name]
+            return self[name]
         except KeyError:
             raise AttributeError(f"SimResult has no signal {name!r}") from None
 
     def __len__(self) -> int:
         """Return the number of trace rows."""
         return len(self.signals["t"])
+
+    @property
+    def flags_raised(self) -> str:
+        """The controller flags raised at any sample of the run, decoded: ``"SATURATED"``, ``"SAFE|OVERCURRENT"``.
+
+        Empty when the controller raised none. Covers every sample, also with a thinned trace or none (the C
+        runner ORs them); the per-row values are the signal ``ctrl_flags`` (decode with
+        :func:`bldclab.decode_flags`).
+        """
+        bits = self.meta.get("controller_flags")
+        if bits is None:  # a result saved before the runner kept them: from the trace
+            bits = int(np.bitwise_or.reduce(self["ctrl_flags"].astype(np.int64))) if len(self) else 0
+        return decode_flags(int(bits))
 
     @property
     def t(self) -> NDArray[np.float64]:
@@ -235,7 +254,7 @@ class SimResult:
             t_ms = t[sel] * 1e3
             plots = []
             for names, colors, ylabel in ((("i_a", "i_b", "i_c"), ("#1f77b4", "#ff7f0e", "#2ca02c"), "current [A]"),
-                                          (("tau_e", "tau_mean"), ("#888888", "#d62728"), "torque [N m]")):
+                                          (("tau_e",), ("#d62728",), "torque [N m]")):
                 present = [(n, c) for n, c in zip(names, colors, strict=True) if n in self.signals]
                 if present:
                     svg = svg_plot([Series(n, t_ms, self.signals[n][sel], c) for n, c in present], title=ylabel,
@@ -262,12 +281,17 @@ class SimResult:
         return df
 
     def plot(self, signals: tuple[str, ...] | list[str] | None = None, *, fig: Any = None) -> Any:
-        """Plot signals against time, one axis per group (currents, torque, voltages by default).
+        """Plot signals against time, one axis per group.
+
+        The default figure has a title naming the drive, controller and operating point, and panels for the phase
+        currents, the torque (instantaneous ``tau_e`` and its mean over the metric window as a dashed line), the
+        back-EMFs and, for a run with rotor dynamics, the speed (rad/s and rpm). The metric window is shaded on
+        every panel.
 
         Parameters
         ----------
         signals : sequence of str, optional
-            Signals to plot, one axis each; default: currents, torque (instantaneous and window mean), back-EMFs.
+            Signals to plot, one axis each; default: the panels above.
         fig : matplotlib.figure.Figure, optional
             Figure to draw into.
 
@@ -275,23 +299,64 @@ class SimResult:
         -------
         matplotlib.figure.Figure
         """
-        from matplotlib.figure import Figure
+        from matplotlib.figure import Figure  # deferred: matplotlib is heavy and only plots need it
 
         groups: list[tuple[str, ...]]
+        labels: list[str]
         if signals is None:
-            groups = [("i_a", "i_b", "i_c"), ("tau_e", "tau_mean"), ("e_a", "e_b", "e_c")]
+            groups = [("i_a", "i_b", "i_c"), ("tau_e",), ("e_a", "e_b", "e_c")]
+            labels = ["phase current", "torque", "back-EMF"]
+            if self.meta.get("scenario", {}).get("speed", 0) is None and "omega_m" in self.signals:
+                groups.append(("omega_m",))
+                labels.append("speed")
         else:
             groups = [(s,) for s in signals]
-        fig = fig or Figure(figsize=(9, 2.2 * len(groups) + 0.6), layout="constrained")
+            labels = list(signals)
+        fig = fig or Figure(figsize=(9, 2.2 * len(groups) + 0.9), layout="constrained")
         axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
-        for ax, group in zip(axes, groups, strict=True):
+        m = self.metrics
+        t_ms = self.t * 1e3
+        for ax, group, label in zip(axes, groups, labels, strict=True):
             for name in group:
-                ax.plot(self.t * 1e3, self[name], lw=0.9, label=name)
-            ax.set_ylabel(f"[{self.units.get(group[0], '')}]")
-            ax.legend(loc="upper right", fontsize=8, ncols=len(group))
+                ax.plot(t_ms, self[name], lw=0.9, label=name)
+            if m is not None:
+                ax.axvspan(m.t0 * 1e3, m.t1 * 1e3, color="0.9", zorder=0,
+                           label="metric window" if ax is axes[0] else None)
+                if group == ("tau_e",) and signals is None:
+                    ax.hlines(m.tau_mean, m.t0 * 1e3, m.t1 * 1e3, colors="k", linestyles="--", lw=1.2,
+                              label=f"mean {m.tau_mean:.4g} N m")
+            if group == ("omega_m",):
+                sec = ax.secondary_yaxis("right", functions=(lambda w: w * 60.0 / (2 * math.pi),
+                                                             lambda n: n * 2 * math.pi / 60.0))
+                sec.set_ylabel("[rpm]")
+            ax.set_ylabel(f"{label} [{self.units.get(group[0], '')}]")
+            ax.legend(loc="upper right", fontsize=8, ncols=len(group) + 2)
             ax.grid(True, lw=0.3)
         axes[-1].set_xlabel("t [ms]")
+        fig.suptitle(self._title(), fontsize=10)
         return fig
+
+    def _title(self) -> str:
+        """Drive, controller and operating point, for plot titles."""
+        meta = self.meta
+        parts = [str(meta.get("drive", {}).get("name", "")),
+                 str(meta.get("control", {}).get("controller", ""))]
+        sc = meta.get("scenario", {})
+        speed = sc.get("speed")
+        m = self.metrics
+        if speed is None:
+            parts.append("rotor dynamics")
+        if m is not None:
+            parts.append(f"{m.omega_mean:.4g} rad/s ({m.omega_mean * 60 / (2 * math.pi):.4g} rpm)")
+            parts.append(f"tau_mean {m.tau_mean:.4g} N m over [{m.t0 * 1e3:.4g}, {m.t1 * 1e3:.4g}] ms")
+        ref = sc.get("ref")
+        if isinstance(ref, int | float):
+            parts.append(f"ref {ref:.4g}")
+        flags = self.flags_raised if ("controller_flags" in meta or "ctrl_flags" in self.signals
+                                      or "flags" in self.signals) else ""
+        if flags:
+            parts.append(f"flags {flags}")
+        return ", ".join(p for p in parts if p)
 
     # ---------------------------------------------------------------------------------------------------------
     # files

@@ -12,7 +12,10 @@
  * Output: an optional trace (one row per `trace_every` samples, or `trace_sub` rows per sample), each row
  * holding the instantaneous state at its start and means/extremes over its window; and metrics over one
  * window [metric_t0, metric_t1] given in time (not samples), so that a caller can measure exactly whole
- * electrical periods. State is caller-owned: a long run can be done in chunks, the result is the same.
+ * electrical periods. State is caller-owned: a long run can be done in chunks, the result is the same (bldclab's
+ * simulate calls bc_sim_run on pieces of its run, so memory does not grow with the duration). The state also keeps
+ * the OR of every controller flag raised (flags_seen) and the unwrapped electrical angle travelled (th_run, from
+ * which the window's mean speed is (th1 - th0) / (p (t1 - t0)) without a trace).
  */
 #ifndef BC_SIM_H
 #define BC_SIM_H
@@ -91,6 +94,7 @@ typedef struct {
     double E[BC_ACC_N];      /* integrals of bc_plant.h's acc[] over the window */
     double w_l0, w_l1;       /* magnetic energy at t0, t1, J */
     double w_kin0, w_kin1;   /* J omega^2 / 2 at t0, t1, J (dynamic mechanics) */
+    double th0, th1;         /* electrical angle travelled since the start (unwrapped) at t0, t1, rad */
     double tau_min, tau_max; /* extremes of the instantaneous torque, N m */
     double tau_ma_min;       /* extremes of the continuous one-PWM-period moving average of the torque, N m */
     double tau_ma_max;
@@ -137,6 +141,9 @@ typedef struct {
     bc_leg_cmd pending[3];     /* controller output waiting for the next sample (delay 1) */
     bc_ctrl_out last;          /* last controller output */
     bc_ctrl_in last_in;        /* last measurements */
+    uint32_t flags_seen;       /* BC_FLAG_* bits the controller raised at any sample so far (OR) */
+    double th_prev;            /* plant angle at the last step end, rad */
+    double th_run;             /* electrical angle travelled since the start, unwrapped, rad */
     bc_sim_metrics m;
     double m_acc0[BC_ACC_N];   /* acc[] at the metric window start */
     double ma_prev;            /* previous half-period mean torque in the window (sample-grid average) */

@@ -1,0 +1,97 @@
+"""``bldclab simulate``: options checked before the run, memory refused up front, decoded flags, rpm, profiles."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+import bldclab as bl
+from bldclab.cli import main
+
+
+@pytest.mark.parametrize("argv, option, words", [
+    (["--plot"], "--plot", "--out"),
+    (["--plot", "--no-trace", "--out", "OUT"], "--plot", "--no-trace"),
+    (["--load", "3 N m"], "--load", "--mechanics"),
+    (["--mechanics", "--speed", "300 rpm"], "--speed", "--mechanics"),
+    (["--mechanics", "--periods", "4"], "--periods", "--duration"),
+    (["--periods", "0"], "--periods", "positive"),
+    (["--duration", "0 s"], "--duration", "positive"),
+    (["--trace-every", "0"], "--trace-every", ">= 1"),
+    (["--duration", "1000 s"], "--duration", "--trace-every"),
+    (["--speed", "0 s: 100 rpm, 1 s: 0 rpm"], "--speed", "--mechanics"),
+    (["--speed", "0 s: 100 rpm, 1 s 3 rpm"], "--speed", "point 2"),
+    (["--mechanics", "--load", "0.1 s: 3 V"], "--load", "torque"),
+    (["--speed-ref", "300 rpm"], "--speed-ref", "--mechanics"),
+    (["--control", "sine", "--mechanics", "--speed-ref", "0 s: 3 N m"], "--speed-ref", "speed"),
+    (["--control", "sine", "--mechanics", "--speed-ref", "300 rpm", "--torque", "3 N m"], "--speed-ref", "drop"),
+])
+def test_option_errors_name_the_option_and_come_before_the_run(argv, option, words, tmp_path, capsys, monkeypatch):
+    def no_run(*a, **k):
+        raise AssertionError("simulate ran")
+
+    monkeypatch.setattr("bldclab.cli.simulate.simulate", no_run)
+    argv = [str(tmp_path / "o") if a == "OUT" else a for a in argv]
+    assert main(["simulate", "htm-48v", *argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"bldclab: error: {option}") and words in err[0], err
+    assert not (tmp_path / "o").exists()
+
+
+def test_long_run_refusal_states_the_bytes(capsys):
+    assert main(["simulate", "htm-48v", "--duration", "1000 s"]) == 2
+    err = capsys.readouterr().err
+    # 1000 s at 14 kHz, 4 rows per sample, one row of doubles per trace field
+    rows = 1000 * 2 * bl.load("htm-48v").inverter.f_pwm * 4
+    assert f"{rows:.0f} rows" in err and "GB" in err and "--no-trace" in err
+
+
+def test_table_shows_rpm_and_decoded_flags(capsys):
+    assert main(["simulate", "htm-48v", "--speed", "300 rpm", "--periods", "3"]) == 0
+    out = capsys.readouterr().out
+    lines = {ln.split()[0]: ln.split()[1:] for ln in out.splitlines()[1:]}
+    assert float(lines["speed_rpm"][0]) == pytest.approx(300, rel=1e-4)
+    assert float(lines["speed_rad_s"][0]) == pytest.approx(10 * math.pi, rel=1e-4)
+    assert lines["controller_flags"] == ["SATURATED"]  # current-regulated six-step at rated current, half speed
+
+
+def test_profiles_and_thinned_trace(tmp_path, capsys):
+    """A load step with rotor dynamics, trace every 5 samples, written and plotted; the flags in JSON are names."""
+    out = tmp_path / "o"
+    rc = main(["simulate", "htm-48v", "--mechanics", "--load", "0 s: 0 N m, 0.05 s: 0 N m, 0.05 s: 5 N m",
+               "--duration", "0.1 s", "--trace-every", "5", "--out", str(out), "--plot", "--format", "json"])
+    assert rc == 0
+    summary = json.loads(capsys.readouterr().out.split("\nwrote")[0])
+    assert isinstance(summary["controller_flags"], str) and summary["duration_s"] == 0.1
+    n = 0.1 * 2 * bl.load("htm-48v").inverter.f_pwm
+    assert summary["trace_rows"] == round(n) // 5
+    res = bl.SimResult.load(out / "result.npz")
+    assert res.meta["scenario"]["load_torque"].startswith("profile 0 s: 0")
+    assert "ctrl_flags" in (out / "trace.csv").read_text().splitlines()[0].split(",")
+    assert (out / "waveforms.svg").stat().st_size > 10_000
+
+
+def test_no_trace_writes_no_trace_file(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["simulate", "htm-48v", "--periods", "2", "--no-trace", "--out", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "result.npz"]
+    assert "trace_rows                   0" in capsys.readouterr().out
+
+
+@pytest.mark.filterwarnings("ignore:scenario.window")
+def test_speed_ref_profile_drives_the_speed_loop(capsys):
+    """A ramp to 300 rpm through the sine controller's speed loop: the window's mean speed is near the reference
+    (the 5 Hz loop still settles: 10 % band), far from the 0 rpm a torque reference of 0 would give."""
+    rc = main(["simulate", "htm-48v", "--control", "sine", "--mechanics", "--speed-ref",
+               "0 s: 0 rpm, 0.1 s: 300 rpm", "--duration", "0.3 s", "--no-trace", "--format", "json"])
+    assert rc == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["speed_rpm"] == pytest.approx(300, rel=0.1)
+
+
+def test_progress_line_on_request(capsys):
+    assert main(["simulate", "htm-48v", "--periods", "2", "--no-trace", "--progress"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("\rsimulating") and "100.0 %" in err and err.endswith("s elapsed)\n")
