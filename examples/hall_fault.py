@@ -32,7 +32,7 @@ t_fault = T_e
 fault = bl.Fault("hall_stuck", "a", t_on=t_fault, value=1.0)
 res = bl.simulate(drive, control, bl.Scenario(duration=3 * T_e, speed=speed, ref=drive.motor.I_N, faults=(fault,)))
 
-flags = res.flags.astype(int)
+flags = res.ctrl_flags.astype(int)
 k_detect = int(np.argmax(flags & FLAG_HALL_INVALID))
 k_safe = int(np.argmax(flags & FLAG_SAFE))
 i_abs = np.abs(np.stack([res.i_a, res.i_b, res.i_c]))

@@ -41,7 +41,7 @@ def sine(**kw: object) -> bl.Sine:
 def point(drive: bl.Drive, control: bl.Sine, w_pu: float, ref: float = T_SN):
     pt, res = steady_state(drive, control, w_pu * drive.Omega_0, ref, trace=True)
     sel = res.t >= pt.metrics.t0
-    sat = float(np.mean((res["flags"][sel].astype(int) & SAT) > 0))
+    sat = float(np.mean((res["ctrl_flags"][sel].astype(int) & SAT) > 0))
     return pt, res, sel, sat
 
 
@@ -178,7 +178,7 @@ def test_start_from_standstill_hands_off_without_spike():
     win = slice(max(k - int(5e-3 / dt), 0), k + int(10e-3 / dt))
     i_abs = np.abs(np.stack([res["i_a"], res["i_b"], res["i_c"]]))
     assert i_abs[:, win].max() <= 1.2 * HTM.motor.I_N
-    assert not np.any(res["flags"].astype(int) & SAFE)
+    assert not np.any(res["ctrl_flags"].astype(int) & SAFE)
     assert res["omega_m"][-1] > res["omega_m"][k]
 
 

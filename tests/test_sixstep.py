@@ -197,7 +197,7 @@ def test_trace_diagnostics_and_regulated_current():
     sel = steady
     assert np.all(res.i_ref == 30.0)
     assert np.allclose(res.omega_e[sel], HTM.motor.p * 0.5 * HTM.Omega_0, rtol=1e-4)
-    assert np.all(res.flags[res.t >= pt.metrics.t0].astype(int) & 1 == 0)  # never in the safe state
+    assert np.all(res.ctrl_flags[res.t >= pt.metrics.t0].astype(int) & bl.flag("SAFE") == 0)  # never in the safe state
 
 
 # ---------------------------------------------------------------------------------------------------------------

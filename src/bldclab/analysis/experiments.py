@@ -213,7 +213,7 @@ def _sine_margin(drive: Drive, w_pu: float, control: Control) -> float:
     sel = res.t >= pt.metrics.t0
     # BC_FLAG_SATURATED: the voltage demand left the linear range; BC_FLAG_SAFE: all legs off (a trip)
     lost = core().const("BC_FLAG_SATURATED") | core().const("BC_FLAG_SAFE")
-    return -float(np.mean((res["flags"][sel].astype(int) & lost) > 0))
+    return -float(np.mean((res["ctrl_flags"][sel].astype(int) & lost) > 0))
 
 
 def base_speed_margin(drive: Drive, supply: str, w_pu: float, control: Control | None = None) -> float:

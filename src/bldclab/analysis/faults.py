@@ -119,7 +119,7 @@ def fault_table(drive: Drive, control: Control, ref: float, speed: float, *, i_m
                       window=(t_f, duration))
         res = simulate(d, control, sc)
         after = res.t >= t_f
-        flags = res.flags.astype(np.int64)
+        flags = res.ctrl_flags.astype(np.int64)
         seen = flags[after]
         any_flag = np.bitwise_or.reduce(seen) if seen.size else 0
         detect = np.nonzero(after & ((flags & detect_mask) != 0))[0]

@@ -261,7 +261,7 @@ def ripple_stats(res: SimResult, drive: Drive) -> RippleStats:
         dips.append(level - low)
         rel.append((level - low) / level if level > 0 else math.nan)
     mode = np.asarray(res["mode"][: n * sub: sub]) if "mode" in res.signals else np.zeros(n)
-    flags = np.asarray(res["flags"][: n * sub: sub]).astype(np.int64)
+    flags = np.asarray(res["ctrl_flags"][: n * sub: sub]).astype(np.int64)
     i_all = np.stack([res[f"i_{x}"] for x in "abc"])
     t_in = (t >= m.t0) & (t < m.t1)
     dcm = np.all(np.abs(i_all[:, t_in]) < 0.01 * drive.motor.I_N, axis=0)
