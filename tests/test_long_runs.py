@@ -135,3 +135,16 @@ def test_mean_speed_needs_no_trace():
     w = full.omega_m[sel]
     assert m.omega_mean == pytest.approx(np.mean(w), rel=1e-3)
     assert w.min() < m.omega_mean < w.max()  # a run-up: the mean is a real average, not the final speed
+
+
+def test_the_api_refuses_a_trace_it_cannot_hold_before_running():
+    """1000 s of htm-48v with a full trace would take tens of GB: refused at once, naming the cause and the way out."""
+    d = bl.load("htm-48v")
+    sc = bl.Scenario(duration=1000.0, speed=0.5 * d.Omega_0, ref=d.motor.I_N)
+    with pytest.raises(BldclabError) as e:
+        bl.simulate(d, bl.SixStep(), sc)
+    assert e.value.field == "scenario.trace" and "trace_every" in e.value.problem and "GB" in e.value.problem
+    short = bl.Scenario(duration=0.01, speed=0.5 * d.Omega_0, ref=d.motor.I_N)
+    with pytest.raises(BldclabError):
+        bl.simulate(d, bl.SixStep(), short, max_trace_bytes=1000)
+    assert bl.simulate(d, bl.SixStep(), short, max_trace_bytes=None).metrics is not None

@@ -19,13 +19,12 @@ from ..control import Sine
 from ..errors import BldclabError
 from ..model.units import to_si
 from ..report import plots
-from ..sim import CHUNK, Piecewise, Scenario, parse_profile, samples_of, simulate, trace_bytes, trace_rows
+from ..sim import CHUNK, TRACE_LIMIT, Piecewise, Scenario, parse_profile, samples_of, simulate, trace_bytes, trace_rows
 from .common import CONTROLS, add_inverter_option, control_of, load_drive, parse_speed
 
-__all__ = ["TRACE_LIMIT", "configure_command", "run_command"]
+__all__ = ["configure_command", "run_command"]
 
 #: Largest trace (bytes) ``simulate`` keeps; beyond, it asks for --trace-every or --no-trace before running
-TRACE_LIMIT = 2_000_000_000
 
 _RPM = 60.0 / (2.0 * math.pi)
 

@@ -26,7 +26,7 @@ from ..model.units import to_si
 from . import plausibility as _plaus
 from .results import Metrics, SimResult
 
-__all__ = ["Fault", "Piecewise", "Scenario", "parse_profile", "simulate", "trace_bytes", "trace_rows"]
+__all__ = ["TRACE_LIMIT", "Fault", "Piecewise", "Scenario", "parse_profile", "simulate", "trace_bytes", "trace_rows"]
 
 Profile = float | ArrayLike | Callable[[NDArray[np.float64]], ArrayLike] | None
 
@@ -373,6 +373,10 @@ def _chunks(n: int) -> list[tuple[int, int]]:
     return [(j0, min(n, j0 + CHUNK)) for j0 in range(0, n, CHUNK)]
 
 
+#: Default bound on a run's trace (bytes): :func:`simulate` refuses a scenario whose trace would be larger
+TRACE_LIMIT = 2_000_000_000
+
+
 def trace_rows(drive: Drive, scenario: Scenario) -> int:
     """Return the number of trace rows a run of ``scenario`` keeps (0 with ``trace=False``)."""
     if not scenario.trace:
@@ -454,7 +458,8 @@ def samples_of(drive: Drive, duration: float) -> int:
 
 
 def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str = "error",
-             estimate: Drive | None = None, progress: Callable[[int, int], None] | None = None) -> SimResult:
+             estimate: Drive | None = None, progress: Callable[[int, int], None] | None = None,
+             max_trace_bytes: int | None = TRACE_LIMIT) -> SimResult:
     """Simulate the drive in closed loop with a C controller.
 
     Plausibility guards (:mod:`bldclab.sim.plausibility`) run before the run (PWM frequency against ``L/R`` and the
@@ -483,6 +488,9 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     progress : callable, optional
         Called as ``progress(done, total)`` (samples) after each piece of :data:`CHUNK` samples the C runner
         completes, e.g. to draw a progress bar.
+    max_trace_bytes : int or None
+        Refuse (before running) a scenario whose trace would take more memory than this (bytes; default
+        :data:`TRACE_LIMIT`, 2 GB; ``None``: no bound). Everything but the trace is bounded whatever the duration.
 
     Returns
     -------
@@ -503,6 +511,11 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     if not isinstance(control, Control):
         raise BldclabError("control", f"expected a bldclab.control controller, got {type(control).__name__}")
     _check_estimate(drive, estimate)
+    need = trace_bytes(drive, scenario)
+    if max_trace_bytes is not None and need > max_trace_bytes:
+        raise BldclabError("scenario.trace", f"a run of {scenario.duration:.4g} s keeps {trace_rows(drive, scenario)} "
+                           f"trace rows, {need / 1e9:.3g} GB (max_trace_bytes {max_trace_bytes / 1e9:.3g} GB): thin "
+                           "it with trace_every=N, drop it with trace=False, or raise max_trace_bytes")
     c = core()
     control = control.with_delay(scenario.delay)
     keep: list[object] = []
