@@ -286,6 +286,72 @@ static void test_average_model(void)
     CHECK(s.avg[0] == 0 && s.avg[1] == 0, "no averaged leg after the trip");
 }
 
+/* Switching losses at standstill (no back-EMF): one leg chops at duty 0.1 into R L, the other holds its switch on.
+ * Every carrier period has one hard turn-off (at the ripple top) and one hard turn-on (at the ripple bottom, ending
+ * the opposite diode's conduction), so E_swloss = periods (E_on i_lo + E_off i_hi) v_bus / (V_test I_test) and
+ * E_rr = periods E_rr i_lo v_bus / (V_test I_test), i_lo and i_hi the ripple's ends (a near-triangle of 2 A on 48 A). A leg chopping with its own diode
+ * carrying the current (a LOW leg with i > 0) books nothing. */
+static void test_switching_losses(void)
+{
+    for (int lower = 0; lower < 2; ++lower) {
+        fixture f;
+        fixture_htm(&f, BC_MECH_IMPOSED);
+        f.p.E_on = 1e-4;
+        f.p.E_off = 2e-4;
+        f.p.E_rr = 0.5e-4;
+        f.p.V_test = 40.0;
+        f.p.I_test = 50.0;
+        bc_plant_state s;
+        CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, 0.0, I0, 48.0) == BC_OK, "init");
+        bc_leg_cmd c[3];
+        if (lower) {
+            legs(c, BC_LEG_HIGH, 1.0f, BC_LEG_LOW, 0.1f, BC_LEG_OFF, 0.0f); /* the lower switch of b chops, i_b < 0 */
+        } else {
+            legs(c, BC_LEG_HIGH, 0.1f, BC_LEG_LOW, 1.0f, BC_LEG_OFF, 0.0f); /* the upper switch of a chops, i_a > 0 */
+        }
+        long k = 0;
+        run_halves(&f.p, &s, c, 1680, &k); /* 60 ms = 40 L/R */
+        double a0[BC_ACC_N];
+        memcpy(a0, s.acc, sizeof a0);
+        double t0 = s.t;
+        long periods = 200;
+        run_halves(&f.p, &s, c, 2 * periods, &k);
+        double i_mean = sqrt((s.acc[BC_ACC_I2A] - a0[BC_ACC_I2A]) / (s.t - t0));
+        /* ripple: the chopping switch is on for d T with (48 V - 2 R i) across 2 L */
+        double di = (48.0 - 2.0 * f.p.R * i_mean) * 0.1 / f.p.f_pwm / (2.0 * f.p.L);
+        double i_lo = i_mean - 0.5 * di, i_hi = i_mean + 0.5 * di;
+        double k_s = (double)periods * 48.0 / (40.0 * 50.0);
+        double sw = s.acc[BC_ACC_SWLOSS] - a0[BC_ACC_SWLOSS], rr = s.acc[BC_ACC_RR] - a0[BC_ACC_RR];
+        double sw_hand = k_s * (1e-4 * i_lo + 2e-4 * i_hi), rr_hand = k_s * 0.5e-4 * i_lo;
+        CHECK(fabs(sw / sw_hand - 1.0) < 1e-3, "%s leg chopping: E_swloss %.6g J, hand %.6g J",
+              lower ? "lower" : "upper", sw, sw_hand);
+        CHECK(fabs(rr / rr_hand - 1.0) < 1e-3, "E_rr %.6g J, hand %.6g J", rr, rr_hand);
+        /* the circuit's balance is untouched by the booking */
+        double wl = 0.5 * f.p.L * (s.i[0] * s.i[0] + s.i[1] * s.i[1] + s.i[2] * s.i[2]);
+        double out = s.acc[BC_ACC_CU] + s.acc[BC_ACC_SW] + s.acc[BC_ACC_DIODE] + s.acc[BC_ACC_EMF] + wl;
+        CHECK(fabs(s.acc[BC_ACC_SRC] - out) < 1e-8 * s.acc[BC_ACC_SRC], "circuit balance %.3g J", s.acc[BC_ACC_SRC] - out);
+        if (lower) continue;
+        /* soft: leg a now chops its lower switch while i_a > 0 flows through that switch's own diode */
+        legs(c, BC_LEG_LOW, 0.5f, BC_LEG_LOW, 1.0f, BC_LEG_OFF, 0.0f);
+        memcpy(a0, s.acc, sizeof a0);
+        run_halves(&f.p, &s, c, 20, &k);
+        CHECK(s.i[0] > 10.0, "still freewheeling (%.3g A)", s.i[0]);
+        CHECK(s.acc[BC_ACC_SWLOSS] == a0[BC_ACC_SWLOSS] && s.acc[BC_ACC_RR] == a0[BC_ACC_RR],
+              "soft edges book nothing (%.3g J, %.3g J)", s.acc[BC_ACC_SWLOSS] - a0[BC_ACC_SWLOSS],
+              s.acc[BC_ACC_RR] - a0[BC_ACC_RR]);
+    }
+    /* bad switching-loss data */
+    fixture f;
+    bc_plant_state s;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.E_on = -1e-6;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "E_on < 0 rejected");
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.E_rr = 1e-6;
+    f.p.I_test = 10.0;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "E_rr without V_test rejected");
+}
+
 static void test_bad_params(void)
 {
     fixture f;
@@ -330,5 +396,6 @@ int main(void)
     test_six_step_physics();
     test_average_model();
     test_bad_params();
+    test_switching_losses();
     return bc_test_summary("test_plant");
 }

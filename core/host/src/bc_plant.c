@@ -157,6 +157,8 @@ static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restric
     d[BC_ACC_CU] = R * (sq0 + sq1 + sq2);
     d[BC_ACC_SW] = p_sw;
     d[BC_ACC_DIODE] = p_d;
+    d[BC_ACC_SWLOSS] = vbus * (s->tc_swk[0] * a0 + s->tc_swk[1] * a1 + s->tc_swk[2] * a2);
+    d[BC_ACC_RR] = vbus * (s->tc_rrk[0] * a0 + s->tc_rrk[1] * a1 + s->tc_rrk[2] * a2);
     d[BC_ACC_EMF] = e0 * i0 + e1 * i1 + e2 * i2;
     d[BC_ACC_COG] = tau_cog * om;
     d[BC_ACC_FRIC] = t_fric * om;
@@ -197,7 +199,7 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
 {
     int n = 0;
     for (int x = 0; x < 3; ++x) {
-        double up = 0.0, u0 = 0.0, r = 0.0, conn = 1.0, rsw = 0.0, dio = 0.0;
+        double up = 0.0, u0 = 0.0, r = 0.0, conn = 1.0, rsw = 0.0, dio = 0.0, swk = 0.0, rrk = 0.0;
         if (s->avg[x]) {
             /* averaged leg (bc_plant.h): the weighted mean of its gate states */
             const double fu = s->fr_u[x], fo = s->fr_o[x], fs = s->fr_u[x] + s->fr_l[x];
@@ -208,6 +210,13 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
             default: conn = 0.0; break;
             }
             if (s->cond[x] == BC_COND_D_U || s->cond[x] == BC_COND_D_L) r = rsw + fo * p->r_d;
+            /* switching losses (bc_plant.h): PWM legs switch hard at either sign, HIGH legs for i > 0 (D_L in the
+             * off fraction), LOW legs for i < 0 (D_U) */
+            int hard = conn != 0.0 && ((s->fr_u[x] > 0.0 && s->fr_l[x] > 0.0) ||
+                                       (s->fr_u[x] > 0.0 && s->cond[x] == BC_COND_D_L) ||
+                                       (s->fr_l[x] > 0.0 && s->cond[x] == BC_COND_D_U));
+            swk = hard ? p->f_pwm * (p->E_on + p->E_off) * s->sw_inv_vi : 0.0;
+            rrk = hard ? p->f_pwm * p->E_rr * s->sw_inv_vi : 0.0;
             s->tc_lo_a[x] = fu;
             s->tc_lo_b[x] = -fo * p->V_f;
             s->tc_hi_a[x] = fu + fo;
@@ -231,6 +240,8 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
         s->tc_conn[x] = conn;
         s->tc_rsw[x] = rsw;
         s->tc_dio[x] = dio;
+        s->tc_swk[x] = swk;
+        s->tc_rrk[x] = rrk;
         n += conn != 0.0;
     }
     s->tc_n = n;
@@ -523,6 +534,21 @@ static int32_t mode_gate(int32_t mode, int active)
     }
 }
 
+/* Switching losses of the switch `sw` (BC_GATE_U / BC_GATE_L) of leg x turning on (on = 1) or off at the present
+ * state (bc_plant.h): hard if the current flows the switch's forward way (upper: i > 0, lower: i < 0). */
+static void book_edge(const bc_plant_params *p, bc_plant_state *s, int x, int32_t sw, int on)
+{
+    double i = s->i[x];
+    if (!(sw == BC_GATE_U ? i > 0.0 : i < 0.0)) return; /* soft (own diode) or no current */
+    double k = fabs(i) * bc_plant_vbus(p, s) * s->sw_inv_vi;
+    if (on) {
+        s->acc[BC_ACC_SWLOSS] += p->E_on * k;
+        s->acc[BC_ACC_RR] += p->E_rr * k;
+    } else {
+        s->acc[BC_ACC_SWLOSS] += p->E_off * k;
+    }
+}
+
 /* Move the actual gate of leg x toward the desired one at time t (a switch turns on only after the other one
  * has been off for t_dead). Returns 1 if the gate changed. */
 static int gate_update(const bc_plant_params *p, bc_plant_state *s, int x, double t)
@@ -544,6 +570,10 @@ static int gate_update(const bc_plant_params *p, bc_plant_state *s, int x, doubl
         g = BC_GATE_L;
     }
     s->gate[x] = g;
+    if (g != g0 && s->sw_on) {
+        if (g0 != BC_GATE_O) book_edge(p, s, x, g0, 0);
+        if (g != BC_GATE_O) book_edge(p, s, x, g, 1);
+    }
     return g != g0;
 }
 
@@ -917,6 +947,7 @@ static void apply_event(const bc_plant_params *p, bc_plant_state *s, int w, cons
             s->edge_to[x] = -1;
             if (s->gate[x] == BC_GATE_U) s->t_off_u[x] = s->t;
             if (s->gate[x] == BC_GATE_L) s->t_off_l[x] = s->t;
+            if (s->gate[x] != BC_GATE_O && s->sw_on) book_edge(p, s, x, s->gate[x], 0);
             s->gate[x] = BC_GATE_O;
         }
     } else if (w == W_STICK) {
@@ -958,6 +989,10 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
         !finite_nonneg(p->i_trip))
         return BC_ERR_PARAM;
     if (p->inverter != BC_INV_SWITCHING && p->inverter != BC_INV_AVERAGE) return BC_ERR_PARAM;
+    if (!finite_nonneg(p->E_on) || !finite_nonneg(p->E_off) || !finite_nonneg(p->E_rr)) return BC_ERR_PARAM;
+    int sw_on = p->E_on > 0.0 || p->E_off > 0.0 || p->E_rr > 0.0;
+    if (sw_on && !(isfinite(p->V_test) && p->V_test > 0.0 && isfinite(p->I_test) && p->I_test > 0.0))
+        return BC_ERR_PARAM;
     if (p->mech != BC_MECH_IMPOSED && p->mech != BC_MECH_DYNAMIC) return BC_ERR_PARAM;
     if (p->mech == BC_MECH_DYNAMIC && !(isfinite(p->J) && p->J > 0.0)) return BC_ERR_PARAM;
     if (!finite_nonneg(p->B) || !finite_nonneg(p->tau_c) || !finite_nonneg(p->hall_delay)) return BC_ERR_PARAM;
@@ -975,6 +1010,8 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
 
     memset(s, 0, sizeof *s);
     s->t = t0;
+    s->sw_on = sw_on;
+    s->sw_inv_vi = sw_on ? 1.0 / (p->V_test * p->I_test) : 0.0;
     double mean = (i0[0] + i0[1] + i0[2]) / 3.0;
     for (int x = 0; x < 3; ++x) {
         s->i[x] = i0[x] - mean;

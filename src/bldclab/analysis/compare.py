@@ -71,7 +71,8 @@ def _run_point(args: tuple[Drive, str, Control, float, float, int]) -> dict[str,
            "TR_pu": point.ripple_sampled_pu, "TR_inst_pu": point.ripple_pu, "TR_ma_pu": point.ripple_ma_pu,
            "T": point.tau_mean, "TR": point.ripple_sampled, "tau_std_pu": m.tau_std / T_N,
            "eta": point.efficiency,
-           "p_src": m.p_src, "p_cu": m.p_cu, "p_inv": m.p_sw + m.p_diode + m.p_Rsrc, "i_rms": float(np.mean(m.i_rms)),
+           "p_src": m.p_src_total, "p_cu": m.p_cu, "p_inv": m.p_sw + m.p_diode + m.p_Rsrc + m.p_swloss + m.p_rr,
+           "i_rms": float(np.mean(m.i_rms)),
            "i_peak": float(max(m.i_peak)), "balance": m.balance_electrical,
            "_warnings": [f"{supply} at {w_pu:.3g} p.u.: {text}" for text in caught]}
     if pwm_phases > 1:

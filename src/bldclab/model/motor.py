@@ -130,6 +130,15 @@ class Inverter:
         ``"average"``: a leg that switches inside a half PWM period applies its half-period average (the
         averaged inverter of motulator and gym-electric-motor, paper 1's ideal current limiter); diodes, the open
         phase and the trip stay, dead time inside PWM is neglected. Faster, no PWM ripple (docs/plant.md).
+    E_on, E_off, E_rr : float
+        Switching losses (J), >= 0, default 0 (none): a switch's turn-on and turn-off energy and the diode's
+        reverse-recovery energy measured at ``V_test`` and ``I_test`` (datasheet values). The plant books them at
+        each hard gate edge scaled as ``E (|i| / I_test) (v_bus / V_test)``: ``E_off`` when a switch turns off
+        under current, ``E_on + E_rr`` when a switch turns on while the opposite diode carries the current; soft
+        edges (the switch's own diode conducts) and zero-current edges book nothing. The energy comes from the DC
+        source (docs/plant.md, "Switching losses").
+    V_test, I_test : float
+        Test voltage (V) and current (A) of ``E_on``, ``E_off``, ``E_rr``; > 0 when any of them is > 0.
 
     """
 
@@ -142,8 +151,15 @@ class Inverter:
     R_src: float = 0.0
     i_trip: float = 0.0
     model: str = "switching"
+    E_on: float = 0.0
+    E_off: float = 0.0
+    E_rr: float = 0.0
+    V_test: float = 0.0
+    I_test: float = 0.0
 
     MODELS: ClassVar[tuple[str, ...]] = ("switching", "average")
+    #: The switching-loss fields, all 0 by default (a file without them has no switching losses).
+    SWITCHING_LOSS_FIELDS: ClassVar[tuple[str, ...]] = ("E_on", "E_off", "E_rr", "V_test", "I_test")
 
     def __post_init__(self) -> None:
         check_number("V_dc", self.V_dc, lo=0.0, lo_open=True)
@@ -156,6 +172,19 @@ class Inverter:
             check_number(name, getattr(self, name), lo=0.0)
         if self.model not in self.MODELS:
             raise BldclabError("model", f"must be one of {', '.join(self.MODELS)}, got {self.model!r}")
+        for name in self.SWITCHING_LOSS_FIELDS:
+            check_number(name, getattr(self, name), lo=0.0)
+        if self.has_switching_losses:
+            for name in ("V_test", "I_test"):
+                if not getattr(self, name) > 0.0:
+                    raise BldclabError(name, "must be > 0 when E_on, E_off or E_rr is > 0 (the datasheet's test "
+                                       f"{'voltage' if name == 'V_test' else 'current'} the energies scale from), "
+                                       f"got {getattr(self, name):g}")
+
+    @property
+    def has_switching_losses(self) -> bool:
+        """True if any of ``E_on``, ``E_off``, ``E_rr`` is positive."""
+        return self.E_on > 0.0 or self.E_off > 0.0 or self.E_rr > 0.0
 
 
 @dataclass(frozen=True)
@@ -423,7 +452,10 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
                      V_f=inv_s.quantity("V_f", "voltage", 0.0), r_d=inv_s.quantity("r_d", "resistance", 0.0),
                      R_src=inv_s.quantity("R_src", "resistance", 0.0),
                      i_trip=inv_s.quantity("i_trip", "current", 0.0),
-                     model=inv_s.string("model", "switching"))
+                     model=inv_s.string("model", "switching"),
+                     E_on=inv_s.quantity("E_on", "energy", 0.0), E_off=inv_s.quantity("E_off", "energy", 0.0),
+                     E_rr=inv_s.quantity("E_rr", "energy", 0.0), V_test=inv_s.quantity("V_test", "voltage", 0.0),
+                     I_test=inv_s.quantity("I_test", "current", 0.0))
     inv_s.finish()
 
     mech = Mechanics()
@@ -472,6 +504,9 @@ def _drive_to_toml(d: Drive) -> str:
     inv = dataclasses.asdict(d.inverter)
     if inv["model"] == "switching":
         del inv["model"]  # the default: files written before the averaged inverter existed stay as they were
+    if all(inv[k] == 0.0 for k in Inverter.SWITCHING_LOSS_FIELDS):
+        for k in Inverter.SWITCHING_LOSS_FIELDS:
+            del inv[k]  # no switching losses (the default): written as before they existed
     out.append(toml_table("inverter", inv))
     out.append(toml_table("mechanics", dataclasses.asdict(d.mechanics)))
     sen = dataclasses.asdict(d.sensors)

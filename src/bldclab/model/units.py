@@ -30,6 +30,7 @@ DIMENSIONS: dict[str, dict[str, float]] = {
     "emf_constant": {"V s/rad": 1.0, "Vs/rad": 1.0, "N m/A": 1.0, "Nm/A": 1.0},
     "damping": {"N m s/rad": 1.0, "Nms/rad": 1.0},
     "power": {"W": 1.0, "kW": 1e3},
+    "energy": {"J": 1.0, "mJ": 1e-3, "uJ": 1e-6, "nJ": 1e-9},
     "dimensionless": {"": 1.0},
 }
 

@@ -108,6 +108,11 @@ PARAMETERS: dict[str, tuple[tuple[str, str, str], ...]] = {
         ("R_src", "DC source resistance", "Ohm"),
         ("i_trip", "hardware over-current trip (0: none)", "A"),
         ("model", "inverter model: switching (every gate edge) or average (half-period averages)", "-"),
+        ("E_on", "switch turn-on energy at V_test, I_test (0: no switching losses)", "J"),
+        ("E_off", "switch turn-off energy at V_test, I_test", "J"),
+        ("E_rr", "diode reverse-recovery energy at V_test, I_test", "J"),
+        ("V_test", "test voltage of the switching energies", "V"),
+        ("I_test", "test current of the switching energies", "A"),
     ),
     "mechanics": (
         ("J", "inertia of rotor and load", "kg m^2"),

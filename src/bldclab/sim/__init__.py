@@ -424,6 +424,8 @@ def _plant_params(drive: Drive, imposed: bool, h_max: float, keep: list[object])
     rec["R_src"] = inv.R_src
     rec["i_trip"] = inv.i_trip
     rec["inverter"] = c.const("BC_INV_AVERAGE" if inv.model == "average" else "BC_INV_SWITCHING")
+    for name in inv.SWITCHING_LOSS_FIELDS:
+        rec[name] = getattr(inv, name)
     rec["mech"] = c.const("BC_MECH_IMPOSED" if imposed else "BC_MECH_DYNAMIC")
     rec["J"] = mech_p.J
     rec["B"] = mech_p.B

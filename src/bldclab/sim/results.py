@@ -74,19 +74,29 @@ class Metrics:
         Mean mechanical speed (rad/s): the angle the rotor travelled over the window (tracked in C at every step)
         over the window's length; independent of the trace.
     p_src, p_Rsrc, p_cu, p_sw, p_diode, p_emf, p_cog, p_fric, p_load : float
-        Mean powers (W): from the DC source; lost in the source resistance, the windings, the switches, the diodes;
-        converted to mechanical (``sum e i``); cogging; friction; to the load.
+        Mean powers (W): from the DC source into the circuit (``V_src i_dc``); lost in the source resistance, the
+        windings, the switches' and the diodes' conduction; converted to mechanical (``sum e i``); cogging;
+        friction; to the load.
+    p_swloss, p_rr : float
+        Mean switching loss (``E_on``, ``E_off`` booked at hard gate edges) and diode reverse-recovery loss
+        (``E_rr`` at hard turn-ons), W (0 with the default inverter, which has no switching-loss data). The plant
+        switches ideally: these are an accounting on top of the circuit, drawn from the DC source in addition to
+        ``p_src`` (docs/plant.md, "Switching losses").
+    p_src_total : float
+        Total power from the DC source, ``p_src + p_swloss + p_rr`` (W): the input of :attr:`efficiency`.
     dW_L, dW_kin : float
         Change of magnetic and kinetic energy over the window (J).
     balance_electrical : float
-        ``(E_src - E_Rsrc - E_cu - E_sw - E_diode - E_emf - dW_L) / max(|E_src|, |E_emf|)``: the integration's
-        energy residue (dimensionless).
+        ``(E_src_total - E_Rsrc - E_cu - E_sw - E_diode - E_swloss - E_rr - E_emf - dW_L) / max(|E_src_total|,
+        |E_emf|)`` with ``E_src_total = E_src + E_swloss + E_rr``: the integration's energy residue
+        (dimensionless). The booked switching energies enter both sides, so the residue measures the circuit's
+        integration; the booking itself is checked against hand calculations (tests/test_losses.py).
     balance_mechanical : float
         ``(E_emf + E_cog - E_fric - E_load - dW_kin) / max(|E_emf|, ...)`` (dynamic mechanics; 0 otherwise).
     i_rms, i_peak : tuple of float
         Per-phase rms and peak current (A).
     efficiency : float
-        Shaft power ``p_emf + p_cog - p_fric`` over ``p_src`` (motoring; nan if ``p_src <= 0``).
+        Shaft power ``p_emf + p_cog - p_fric`` over ``p_src_total`` (motoring; nan if ``p_src_total <= 0``).
     """
 
     t0: float
@@ -108,10 +118,13 @@ class Metrics:
     tau_std: float
     omega_mean: float
     p_src: float
+    p_src_total: float
     p_Rsrc: float
     p_cu: float
     p_sw: float
     p_diode: float
+    p_swloss: float
+    p_rr: float
     p_emf: float
     p_cog: float
     p_fric: float
@@ -132,8 +145,10 @@ class Metrics:
         p = {k: v / dt for k, v in E.items()}
         dW_L = float(m["w_l1"] - m["w_l0"])
         dW_kin = float(m["w_kin1"] - m["w_kin0"])
-        scale_e = max(abs(E["src"]), abs(E["emf"]), 1e-300)
-        bal_e = (E["src"] - E["Rsrc"] - E["cu"] - E["sw"] - E["diode"] - E["emf"] - dW_L) / scale_e
+        E_src_total = E["src"] + E["swloss"] + E["rr"]
+        scale_e = max(abs(E_src_total), abs(E["emf"]), 1e-300)
+        bal_e = (E_src_total - E["Rsrc"] - E["cu"] - E["sw"] - E["diode"] - E["swloss"] - E["rr"] - E["emf"]
+                 - dW_L) / scale_e
         if imposed:
             bal_m = 0.0
         else:
@@ -147,6 +162,7 @@ class Metrics:
         if int(m["n_ma_grid"]) == 0:
             mg_min = mg_max = math.nan
         shaft = p["emf"] + p["cog"] - p["fric"]
+        p_src_total = E_src_total / dt
         return cls(
             t0=float(m["t0"]), t1=float(m["t1"]), tau_mean=tau_mean, tau_min=float(m["tau_min"]),
             tau_max=float(m["tau_max"]), ripple=float(m["tau_max"] - m["tau_min"]), tau_ma_min=ma_min,
@@ -154,12 +170,13 @@ class Metrics:
             ripple_ma_grid=mg_max - mg_min, ma_lost=int(m["ma_lost"]), tau_s_min=float(m["tau_s_min"]),
             tau_s_max=float(m["tau_s_max"]), ripple_sampled=float(m["tau_s_max"] - m["tau_s_min"]),
             tau_std=math.sqrt(max(E["tau2"] / dt - tau_mean**2, 0.0)), omega_mean=omega_integral / dt,
-            p_src=p["src"], p_Rsrc=p["Rsrc"], p_cu=p["cu"], p_sw=p["sw"], p_diode=p["diode"], p_emf=p["emf"],
+            p_src=p["src"], p_src_total=p_src_total, p_Rsrc=p["Rsrc"], p_cu=p["cu"], p_sw=p["sw"],
+            p_diode=p["diode"], p_swloss=p["swloss"], p_rr=p["rr"], p_emf=p["emf"],
             p_cog=p["cog"], p_fric=p["fric"], p_load=p["load"], dW_L=dW_L, dW_kin=dW_kin,
             balance_electrical=bal_e, balance_mechanical=bal_m,
             i_rms=(math.sqrt(E["i2a"] / dt), math.sqrt(E["i2b"] / dt), math.sqrt(E["i2c"] / dt)),
             i_peak=(float(m["i_peak"][0]), float(m["i_peak"][1]), float(m["i_peak"][2])),
-            efficiency=shaft / p["src"] if p["src"] > 0.0 else math.nan)
+            efficiency=shaft / p_src_total if p_src_total > 0.0 else math.nan)
 
 
 class SimResult:
@@ -402,6 +419,10 @@ class SimResult:
         metrics = None
         if header.get("metrics"):
             kw = header["metrics"]
+            # results saved before the switching losses existed: none were booked
+            kw.setdefault("p_swloss", 0.0)
+            kw.setdefault("p_rr", 0.0)
+            kw.setdefault("p_src_total", kw.get("p_src"))
             for f in fields(Metrics):
                 if f.name in ("i_rms", "i_peak"):
                     kw[f.name] = tuple(kw[f.name])

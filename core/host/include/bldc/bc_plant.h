@@ -49,6 +49,23 @@
  * 1, dead time between such states, the open phase and the trip are those of the switching model. No gate edge
  * falls inside a half period, so steps are as long as h_max (half a PWM period) allows.
  *
+ * Switching losses (an accounting on top of the ideal switches; the circuit above is unchanged). At each gate
+ * edge of a switching leg, with i = i_x and v_bus the bus voltage at the edge:
+ *
+ *     hard turn-off (upper off with i > 0, lower off with i < 0: the current leaves the switch for the opposite
+ *         diode)                                    E_swloss += E_off s,
+ *     hard turn-on (upper on with i > 0, lower on with i < 0: the current commutates from the opposite diode)
+ *                                                    E_swloss += E_on s,   E_rr += E_rr s,
+ *     s = (|i| / I_test) (v_bus / V_test)  (linear in current and voltage, the usual datasheet scaling).
+ *
+ * Soft edges (a switch turning on or off while its own antiparallel diode carries the current) and zero-current
+ * edges book nothing. With t_dead = 0 the opposite device counts as a diode (a hard turn-on books E_rr). The
+ * trip's turn-off is a hard turn-off. The energies are drawn from the DC source on top of V_src i_dc (acc SWLOSS,
+ * RR). Averaged legs have no edges and book the period-average expectation as a power: a PWM leg
+ * f_pwm (E_on + E_off) s (and f_pwm E_rr s) at any current sign, a HIGH leg only for i > 0, a LOW leg only for
+ * i < 0 (otherwise both its edges are soft), with v_bus the half-period mean bus; the edges at the start or
+ * end of an averaged stretch are not booked.
+ *
  * Integration: RK4 between events; lands exactly on gate edges, back-EMF corners and Hall edges (predicted),
  * and on diode current zeros, re-conduction and speed zero crossings (root finding). Powers are integrated
  * as extra states (acc[]) so the energy balance closes to the integration accuracy. Full description:
@@ -88,6 +105,8 @@
     X(CU, cu, "J", "R sum i^2: copper loss")                                                  \
     X(SW, sw, "J", "R_on i^2 in conducting switches")                                         \
     X(DIODE, diode, "J", "(V_f + r_d |i|) |i| in conducting diodes")                          \
+    X(SWLOSS, swloss, "J", "E_on + E_off booked at hard gate edges (switching loss, from the source)") \
+    X(RR, rr, "J", "E_rr booked at hard turn-ons: the opposite diode's reverse recovery")     \
     X(EMF, emf, "J", "sum e_x i_x = tau_em omega_m: electrical to mechanical")               \
     X(COG, cog, "J", "tau_cog omega_m")                                                       \
     X(FRIC, fric, "J", "(B omega + tau_c sign omega) omega: friction loss")                   \
@@ -155,6 +174,11 @@ typedef struct {
     double R_src;           /* DC source resistance, Ohm */
     double i_trip;          /* hardware over-current trip, A: |i_x| reaching it switches every gate off, latched
                                (a comparator on the phase shunts, as gate drivers have); 0: none */
+    double E_on;            /* switching losses (see "Switching losses" above): turn-on energy at (V_test, I_test), J */
+    double E_off;           /* turn-off energy at (V_test, I_test), J */
+    double E_rr;            /* diode reverse-recovery energy at (V_test, I_test), J */
+    double V_test;          /* datasheet test voltage of E_on, E_off, E_rr, V (> 0 if any energy > 0) */
+    double I_test;          /* datasheet test current, A (> 0 if any energy > 0) */
     int32_t inverter;       /* BC_INV_SWITCHING (gate edges) or BC_INV_AVERAGE (half-period averages) */
     /* mechanics */
     int32_t mech;           /* BC_MECH_IMPOSED or BC_MECH_DYNAMIC */
@@ -231,6 +255,8 @@ typedef struct {
     double fr_l[3];         /* ... with the lower switch on */
     double fr_o[3];         /* ... with both off */
     int32_t hold_open;      /* bit x: phase x stays open until time advances (a spurious diode turn-on) */
+    int32_t sw_on;          /* 1 if any of E_on, E_off, E_rr is positive (set at init) */
+    double sw_inv_vi;       /* 1 / (V_test I_test), 1/(V A) (0 without switching losses) */
     /* circuit coefficients of the present conduction states, set whenever they change (internal) */
     double tc_up[3];        /* 1 if tied to the + rail */
     double tc_u0[3];        /* constant part of the terminal source U_x, V */
@@ -238,6 +264,9 @@ typedef struct {
     double tc_conn[3];      /* 1 if connected */
     double tc_rsw[3];       /* switch resistance in series (R_on times the switch fraction), Ohm */
     double tc_dio[3];       /* diode fraction (1 if through a diode) */
+    double tc_swk[3];       /* averaged leg: switching-loss power per volt and ampere, f_pwm (E_on + E_off) / (V I)_test
+                               if the leg switches hard at the current's sign, else 0, W/(V A) */
+    double tc_rrk[3];       /* ... recovery: f_pwm E_rr / (V_test I_test), W/(V A) */
     double tc_lo_a[3], tc_lo_b[3]; /* open phase conducts (i > 0) below U_lo = a v_bus + b, V */
     double tc_hi_a[3], tc_hi_b[3]; /* ... (i < 0) above U_hi = a v_bus + b, V */
     int32_t tc_msrc;        /* averaged legs and R_src > 0: the source drop uses tc_msrc_m */
