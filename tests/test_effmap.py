@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+import re
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -136,3 +138,19 @@ def test_braking_points_return_power_to_the_source(drive):
         assert 0.0 < r.efficiency < 1.0
         assert r.efficiency == pytest.approx((r.p_in - r.p_stored) / r.p_shaft)
         assert abs(r.p_in - r.p_shaft - r.p_loss - r.p_stored) <= BALANCE_WARN * abs(r.p_shaft)
+
+
+@pytest.mark.slow
+def test_report_of_the_directory_shows_the_map_summary(compare_htm48v: Path, tmp_path: Path) -> None:
+    """bldclab effmap written into a compare results directory adds the 'Efficiency maps' section to the report."""
+    d = tmp_path / "res"
+    d.mkdir()
+    for p in compare_htm48v.iterdir():
+        (d / p.name).write_bytes(p.read_bytes())
+    assert main(["effmap", "htm-48v", "--torques", "2", "--speeds", "2", "--workers", "1", "--out", str(d)]) == 0
+    out = tmp_path / "page.html"
+    assert main(["report", str(d), "--out", str(out)]) == 0
+    text = out.read_text(encoding="utf-8")
+    section = re.search(r'<section id="effmap">(.*?)</section>', text, re.S)
+    assert section is not None and "best efficiency" in section.group(1) and "<svg" in section.group(1)
+    assert '<a href="#effmap">' in text and not re.search(r"https?://", text)
