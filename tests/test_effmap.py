@@ -16,6 +16,7 @@ from bldclab.cli import main
 from bldclab.model import analytic
 from bldclab.sim.plausibility import BALANCE_WARN
 from bldclab.sim.results import Metrics
+from conftest import require_module
 
 
 @pytest.fixture(scope="module")
@@ -86,6 +87,18 @@ def test_results_do_not_depend_on_the_workers(small, drive):
     par = efficiency_map(drive, small.torques, small.speeds, workers=2)
     pd.testing.assert_frame_equal(small.points, par.points)
     pd.testing.assert_frame_equal(small.difference, par.difference)
+
+
+@pytest.mark.slow
+def test_a_dask_cluster_gives_the_same_results(small, drive):
+    """The points run on a Dask cluster through its concurrent.futures executor: the same table."""
+    require_module("distributed")
+    import distributed  # optional dependency, imported only when present
+
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        res = efficiency_map(drive, small.torques, small.speeds, executor=client.get_executor())
+    pd.testing.assert_frame_equal(small.points, res.points)
 
 
 def test_lossless_drive_has_unit_efficiency(drive):
