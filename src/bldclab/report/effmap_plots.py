@@ -39,7 +39,7 @@ def _contour(fig: Figure, ax: Axes, res: EffMapResult, z: np.ndarray, label: str
     if ok.sum() >= 4 and x.size >= 2 and y.size >= 2 and np.nanmax(z) > np.nanmin(z):
         filled = ax.contourf(x, y, np.ma.masked_invalid(z), levels=levels, cmap=cmap)
         ax.contour(filled, colors="k", linewidths=0.3)
-        fig.colorbar(filled, ax=ax, label=label)
+        fig.colorbar(filled, ax=ax, label=label, format="%.3g")
     else:
         xx, yy = np.meshgrid(x, y)
         fig.colorbar(ax.scatter(xx[ok], yy[ok], c=z[ok], cmap=cmap, marker="s"), ax=ax, label=label)
@@ -55,9 +55,14 @@ def plot_efficiency_maps(res: EffMapResult) -> Figure:
     fig = _figure(1, len(supplies))
     zs = [res.grid(s, "efficiency") for s in supplies]
     finite = np.concatenate([z[np.isfinite(z)] for z in zs]) if zs else np.array([])
-    lo = float(np.min(finite)) if finite.size else 0.0
-    hi = float(np.max(finite)) if finite.size else 1.0
-    levels = np.linspace(lo, hi, 13) if hi > lo else 12
+    # levels at quantiles of the values (rounded to 0.001): equal areas per colour band, so the wide region of
+    # high efficiency is resolved instead of falling into one band of a linear scale
+    levels: int | np.ndarray = 12
+    if finite.size:
+        q = np.quantile(finite, np.linspace(0.0, 1.0, 13))
+        q[0], q[-1] = np.floor(q[0] * 1e3) / 1e3, np.ceil(q[-1] * 1e3) / 1e3
+        q = np.unique(np.round(q, 3))
+        levels = q if q.size >= 3 else 12
     for j, (s, z) in enumerate(zip(supplies, zs, strict=True)):
         ax = fig.add_subplot(1, len(supplies), j + 1)
         _contour(fig, ax, res, z, "efficiency", levels=levels)
@@ -73,11 +78,15 @@ def plot_difference(res: EffMapResult) -> Figure:
     span = float(np.nanmax(np.abs(z))) if np.isfinite(z).any() else 0.0
     span = max(span, res.resolution)
     _contour(fig, ax, res, z, "eta_sine - eta_square", cmap="RdBu_r", levels=np.linspace(-span, span, 17))
-    if np.isfinite(z).sum() >= 4 and np.nanmin(z) < 0.0 < np.nanmax(z):
-        ax.contour(res.speeds * 30.0 / np.pi, res.torques, np.ma.masked_invalid(z), levels=[0.0], colors="k",
-                   linewidths=1.5)
-    ax.set_title(f"{res.drive.name}: sinusoidal minus square-wave efficiency\n(red: sinusoidal better; black line: "
-                 f"equal; |difference| <= {res.resolution:g} is not resolved)", fontsize=9)
+    rpm, zm = res.speeds * 30.0 / np.pi, np.ma.masked_invalid(z)
+    if np.isfinite(z).sum() >= 4 and res.speeds.size >= 2 and res.torques.size >= 2:
+        if np.nanmin(z) < 0.0 < np.nanmax(z):
+            ax.contour(rpm, res.torques, zm, levels=[0.0], colors="k", linewidths=1.5)
+        bounds = [b for b in (-res.resolution, res.resolution) if np.nanmin(z) < b < np.nanmax(z)]
+        if bounds:
+            ax.contour(rpm, res.torques, zm, levels=bounds, colors="k", linewidths=1.0, linestyles="dashed")
+    ax.set_title(f"{res.drive.name}: eta_sine - eta_square (red: sine better)\nsolid: equal; dashed: "
+                 f"+-{res.resolution:g}, the resolved difference", fontsize=9)
     return fig
 
 
