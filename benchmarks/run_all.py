@@ -33,7 +33,7 @@ from types import ModuleType
 from typing import Any
 
 HERE = Path(__file__).resolve().parent
-GROUPS = ("plant", "sine", "sweep", "memory", "compare", "firmware", "motulator")
+GROUPS = ("plant", "sine", "sweep", "memory", "compare", "effmap", "firmware", "motulator")
 
 
 def load(name: str) -> ModuleType:
@@ -175,6 +175,17 @@ def compare_rows(repeats: int) -> list[Row]:
                 verdict(med <= cs.TARGET), f"32 speeds x 2 supplies, process start to files, median of {repeats}")]
 
 
+def effmap_rows(n: int, workers: int) -> list[Row]:
+    """``effmap.py``: an n x n efficiency map of both supplies on htm-48v, serial and on ``workers`` processes."""
+    em = load("effmap")
+    serial = em.measure(n, 1)
+    par = em.measure(n, workers)
+    note = f"{n} x {n} torque x speed x 2 supplies"
+    return [Row(f"effmap: htm-48v {n} x {n}, 1 process", f"{serial:.2f}", "s wall", "", "", note),
+            Row(f"effmap: htm-48v {n} x {n}, {workers} processes", f"{par:.2f}", "s wall", f"<= {em.TARGET:g}",
+                verdict(par <= em.TARGET), note)]
+
+
 def firmware_rows(steps: int) -> list[Row]:
     """Summary of ``firmware.py``: the sine controller and the costliest controller."""
     fw = load("firmware")
@@ -294,6 +305,7 @@ def main() -> int:
         ("plant", lambda: plant_rows(args.seconds, args.repeats)),
         ("sine", lambda: sine_rows(args.seconds, args.repeats)),
         ("compare", lambda: compare_rows(args.compare_repeats)),
+        ("effmap", lambda: effmap_rows(20, args.workers)),
         ("sweep", lambda: sweep_rows(args.points, args.workers, args.periods, args.sweep_repeats,
                                      "memory" not in skip, True)),
         ("firmware", lambda: firmware_rows(args.firmware_steps)),

@@ -136,7 +136,8 @@ def test_agreement_flags_a_settled_speed_offset(case, run):
 
 @pytest.mark.slow
 def test_run_all_prints_one_table_and_survives_a_missing_motulator(tmp_path):
-    cmd = [sys.executable, str(ROOT / "benchmarks" / "run_all.py"), "--skip", "sine,sweep,memory,compare,firmware",
+    cmd = [sys.executable, str(ROOT / "benchmarks" / "run_all.py"),
+           "--skip", "sine,sweep,memory,compare,effmap,firmware",
            "--seconds", "0.05", "--repeats", "1", "--python", str(tmp_path / "no-python"), "--motulator-venv",
            str(tmp_path / "venv"), "--out", str(tmp_path / "out")]
     proc = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=300)

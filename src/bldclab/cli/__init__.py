@@ -24,7 +24,20 @@ from .._files import write_files
 from .._version import __version__
 from ..analysis.paper1 import table1_text
 from ..errors import BldclabError, PlausibilityWarning
-from . import analyze, check, compare, drives, faults, identify, report, simulate, sweep, template, torque_control
+from . import (
+    analyze,
+    check,
+    compare,
+    drives,
+    effmap,
+    faults,
+    identify,
+    report,
+    simulate,
+    sweep,
+    template,
+    torque_control,
+)
 
 __all__ = ["COMMANDS", "Command", "build_parser", "main", "table1_text", "write_files"]
 
@@ -95,6 +108,8 @@ COMMANDS: tuple[Command, ...] = (
             simulate.configure_command, simulate.run_command),
     Command("compare", "square-wave vs sinusoidal supply: closed forms and simulation over speed (paper 1)",
             compare.configure_command, compare.run_command),
+    Command("effmap", "efficiency and loss maps of both supplies over the torque-speed plane, where each wins",
+            effmap.configure_command, effmap.run_command),
     Command("torque-control", "paper 2's torque control vs its baselines over a load x speed grid",
             torque_control.configure_command, torque_control.run_command),
     Command("faults", "inject sensor, bus and phase faults: detection, time to safe state, peak current",

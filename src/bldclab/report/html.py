@@ -47,6 +47,7 @@ import numpy as np
 import pandas as pd
 
 from .._version import __version__
+from ..analysis.effmap import EffMapResult
 from ..errors import BldclabError
 from ..model import analytic
 from ..model.motor import Drive
@@ -78,7 +79,8 @@ WAVEFORM_SUB = 4
 
 #: Files of a results directory the report reads; the others it lists.
 _KNOWN = ("simulated.csv", "analytic.csv", "table1.json", "verdict.txt", "waveforms.csv", "dynamometer.csv",
-          "methods.csv", "methods_traces.csv", "methods_compared.svg", "faults.csv")
+          "methods.csv", "methods_traces.csv", "methods_compared.svg", "faults.csv", "effmap.csv",
+          "effmap_difference.csv", "effmap_difference.svg")
 
 _SINE, _SQUARE, _GRAY = "#1f77b4", "#d62728", "#7f7f7f"
 _PHASE = {"a": "#1f77b4", "b": "#ff7f0e", "c": "#2ca02c"}
@@ -279,6 +281,10 @@ class Results:
         The optional CSV files.
     methods_svg : str or None
         ``methods_compared.svg`` of ``bldclab torque-control``, made inline-safe.
+    effmap, effmap_difference : pandas.DataFrame or None
+        ``effmap.csv`` and ``effmap_difference.csv`` of ``bldclab effmap`` written into the same directory.
+    effmap_svg : str or None
+        ``effmap_difference.svg`` of ``bldclab effmap``, made inline-safe.
     files : list of str
         Every file of the directory.
     source : str
@@ -297,6 +303,9 @@ class Results:
     methods_traces: pd.DataFrame | None = None
     methods_svg: str | None = None
     faults: pd.DataFrame | None = None
+    effmap: pd.DataFrame | None = None
+    effmap_difference: pd.DataFrame | None = None
+    effmap_svg: str | None = None
     files: list[str] = dataclasses.field(default_factory=list)
     source: str = ""
 
@@ -377,9 +386,17 @@ class Results:
         svg = None
         if files.get("methods_compared.svg"):
             svg = _clean_svg(files["methods_compared.svg"].decode("utf-8", "replace"))
+        emap = _csv(files, "effmap.csv", ("supply", "torque_ref", "speed", "efficiency", "feasible"), source,
+                    required=False)
+        ediff = _csv(files, "effmap_difference.csv", ("torque_ref", "speed", "d_eta", "winner"), source,
+                     required=False)
+        esvg = None
+        if files.get("effmap_difference.svg"):
+            esvg = _clean_svg(files["effmap_difference.svg"].decode("utf-8", "replace"))
         return cls(manifest=manifest, drive=drive, simulated=sim, analytic=an, table1=quantities, verdict=verdict,
                    waveforms=wf, dynamometer=dyno, methods=methods, methods_traces=traces, methods_svg=svg,
-                   faults=faults, files=sorted(files), source=source)
+                   faults=faults, effmap=emap, effmap_difference=ediff if emap is not None else None,
+                   effmap_svg=esvg if emap is not None else None, files=sorted(files), source=source)
 
 
 # ------------------------------------------------------------------------------------------------------------
@@ -751,6 +768,29 @@ def _section_faults(r: Results) -> str:
             'torque after it.</p><div class="scroll">' + _frame_table(r.faults) + "</div></section>")
 
 
+def _section_effmap(r: Results) -> str:
+    if r.effmap is None:
+        return ""
+    pts = r.effmap
+    diff = r.effmap_difference if r.effmap_difference is not None else pd.DataFrame(
+        columns=["torque_ref", "speed", "d_eta", "winner"])
+    buckets = tuple(c for c in pts.columns if c.startswith("p_") and c not in ("p_in", "p_shaft", "p_loss",
+                                                                                 "p_stored"))
+    res = EffMapResult(drive=r.drive, points=pts, difference=diff, torques=np.unique(pts.torque_ref),
+                       speeds=np.unique(pts.speed), buckets=buckets)
+    out = ['<section id="effmap"><h2>7. Efficiency maps over torque and speed</h2>'
+           "<p>From the files <code>bldclab effmap ... --out</code> wrote into this directory (effmap.csv, "
+           "effmap_difference.csv and its figures): both supplies on a torque x speed grid of imposed-speed steady "
+           "states; points the drive cannot reach are marked infeasible and left out of the comparison.</p>",
+           _verdict_list(res.summary())]
+    if r.effmap_svg is not None:
+        out.append(f'<figure class="static">{r.effmap_svg}<figcaption><b>Sinusoidal minus square-wave '
+                   "efficiency</b> on the points both supplies reach (effmap_difference.svg, a static figure); the "
+                   "black line is where they trade places.</figcaption></figure>")
+    out.append("</section>")
+    return "".join(out)
+
+
 def _settings_rows(prefix: str, settings: Any) -> list[list[str]]:
     rows: list[list[str]] = []
     if isinstance(settings, dict):
@@ -848,7 +888,7 @@ def render(results: Results, *, report_command: str, created: str | None = None)
     r = results
     name = r.drive.name or "(unnamed drive)"
     body = [_section_motor(r, page), _section_table1(r), _section_characteristics(r, page),
-            _section_waveforms(r, page), _section_paper2(r, page), _section_faults(r),
+            _section_waveforms(r, page), _section_paper2(r, page), _section_faults(r), _section_effmap(r),
             _section_provenance(r, report_command, created)]
     toc = [("verdict", "Verdict"), ("motor", "Motor"), ("table1", "Table I"), ("characteristics", "Characteristics"),
            ("waveforms", "Waveforms")]
@@ -856,6 +896,8 @@ def render(results: Results, *, report_command: str, created: str | None = None)
         toc.append(("paper2", "Paper 2"))
     if r.faults is not None:
         toc.append(("faults", "Faults"))
+    if r.effmap is not None:
+        toc.append(("effmap", "Efficiency maps"))
     toc.append(("provenance", "How it was produced"))
     nav = "".join(f'<a href="#{k}">{_e(v)}</a>' for k, v in toc)
     n = len(set(r.simulated["Omega_pu"]))

@@ -1,0 +1,71 @@
+"""``bldclab effmap``: efficiency and loss maps of both supplies over the torque-speed plane."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .._files import write_files
+from ..analysis.effmap import FEASIBLE_TOL_PU, efficiency_map
+from ..errors import BldclabError
+from ..report.effmap_plots import plot_difference, plot_efficiency_maps, plot_losses
+from ..report.plots import figure_bytes
+from .common import add_inverter_option, check_out_dir, check_speed_range, load_drive, positive_int
+
+__all__ = ["configure_command", "run_command"]
+
+RPM_PER_RAD_S = 30.0 / math.pi
+
+
+def configure_command(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``bldclab effmap``."""
+    p.add_argument("motor", metavar="MOTOR", help="built-in drive name or motor TOML file")
+    p.add_argument("--out", type=Path, help="directory for effmap.csv and the figures (default out/<motor>-effmap)")
+    p.add_argument("--torques", type=positive_int, default=12, help="torque references, >= 2 (default 12)")
+    p.add_argument("--speeds", type=positive_int, default=12, help="speeds, >= 2 (default 12)")
+    p.add_argument("--min-torque", type=float, default=0.1, help="lowest torque, p.u. of T_N (default 0.1)")
+    p.add_argument("--max-torque", type=float, default=1.0, help="highest torque, p.u. of T_N (default 1.0)")
+    p.add_argument("--min-speed", type=float, default=0.05, help="lowest speed, p.u. of Omega_0 (default 0.05)")
+    p.add_argument("--max-speed", type=float, default=0.95, help="highest speed, p.u. of Omega_0 (default 0.95)")
+    p.add_argument("--generating", action="store_true",
+                   help="map braking (negative torque references) instead of motoring")
+    p.add_argument("--workers", type=positive_int, help="processes, >= 1 (default: all cores; 1: serial)")
+    add_inverter_option(p)
+
+
+def run_command(args: argparse.Namespace) -> int:
+    """Run ``bldclab effmap``."""
+    drive = load_drive(args)
+    for name, n in (("--torques", args.torques), ("--speeds", args.speeds)):
+        if n < 2:
+            raise BldclabError(name, f"needs at least 2, got {n}")
+    check_speed_range(args.min_speed, args.max_speed)
+    if not 0 < args.min_torque < args.max_torque <= 5:
+        raise BldclabError("--max-torque" if args.min_torque > 0 else "--min-torque",
+                           f"needs 0 < --min-torque < --max-torque <= 5 p.u. of T_N, got {args.min_torque:g}, "
+                           f"{args.max_torque:g}")
+    out = args.out if args.out is not None else Path("out") / f"{drive.name}-effmap"
+    check_out_dir(out)  # before the simulations: a bad --out fails in a second, not after the whole run
+    sign = -1.0 if args.generating else 1.0
+    torques = sign * np.linspace(args.min_torque, args.max_torque, args.torques) * drive.T_N
+    speeds = np.linspace(args.min_speed, args.max_speed, args.speeds) * drive.Omega_0
+    res = efficiency_map(drive, torques, speeds, workers=args.workers)
+    mode = "generating (braking)" if args.generating else "motoring"
+    print(f"{drive.name}: efficiency map, {mode}, {args.torques} torques x {args.speeds} speeds x 2 supplies in "
+          f"{res.seconds:.1f} s (T_N = {drive.T_N:.4g} N m, Omega_0 = {drive.Omega_0 * RPM_PER_RAD_S:.4g} rpm; a "
+          f"point is feasible when its mean torque is within {FEASIBLE_TOL_PU:g} T_N of the reference)")
+    for line in res.summary():
+        print(f"  {line}")
+    print(f"  loss buckets: {', '.join(res.buckets)}")
+    files: dict[str, bytes] = {"effmap.csv": res.points.to_csv(index=False).encode(),
+                               "effmap_difference.csv": res.difference.to_csv(index=False).encode()}
+    for stem, fig in (("effmap_efficiency", plot_efficiency_maps(res)), ("effmap_difference", plot_difference(res)),
+                      ("effmap_losses", plot_losses(res))):
+        for fmt in ("png", "svg"):
+            files[f"{stem}.{fmt}"] = figure_bytes(fig, fmt, dated=False)
+    for path in write_files(out, files):
+        print(f"wrote {path}")
+    return 0

@@ -1,0 +1,169 @@
+"""Efficiency maps (bldclab.analysis.effmap, bldclab effmap): energy accounting, envelope, physics, CLI."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import bldclab as bl
+from bldclab.analysis.effmap import FEASIBLE_TOL_PU, LOSS_BUCKETS, NOT_LOSSES, efficiency_map, loss_buckets
+from bldclab.cli import main
+from bldclab.model import analytic
+from bldclab.sim.plausibility import BALANCE_WARN
+from bldclab.sim.results import Metrics
+from conftest import require_module
+
+
+@pytest.fixture(scope="module")
+def drive():
+    return bl.load("htm-48v")
+
+
+@pytest.fixture(scope="module")
+def small(drive):
+    """A 3 x 3 map of both supplies, serial."""
+    T = np.array([0.2, 0.6, 1.0]) * drive.T_N
+    W = np.array([0.1, 0.5, 0.95]) * drive.Omega_0
+    return efficiency_map(drive, T, W, workers=1)
+
+
+def test_every_power_of_the_plant_is_a_loss_bucket_or_named_as_not_one():
+    """A power the plant adds to Metrics must be classified, so that no loss is silently left out of the maps."""
+    powers = {f.name for f in dataclasses.fields(Metrics) if f.name.startswith("p_")}
+    assert powers - set(NOT_LOSSES) - set(LOSS_BUCKETS) == set()
+    assert set(loss_buckets()) == powers - set(NOT_LOSSES)
+
+
+def test_each_point_accounts_for_its_input_power(small):
+    """p_in = p_shaft + sum of the buckets + stored-energy change, to the integration's energy balance."""
+    p = small.points
+    assert len(p) == 18 and set(small.buckets) <= set(p.columns)
+    losses = p[list(small.buckets)].sum(axis=1)
+    assert np.allclose(losses, p.p_loss)
+    scale = np.maximum(p.p_in.abs(), p.p_shaft.abs())
+    assert np.all(np.abs(p.p_in - p.p_shaft - losses - p.p_stored) <= BALANCE_WARN * scale)
+    assert np.all(p[list(small.buckets)] >= 0.0)
+
+
+def test_feasible_motoring_efficiency_is_between_zero_and_one(small, drive):
+    ok = small.points[small.points.feasible]
+    assert len(ok) >= 10
+    assert np.all((ok.efficiency > 0.0) & (ok.efficiency < 1.0))
+    assert np.all(np.abs(ok.tau_mean - ok.torque_ref) <= FEASIBLE_TOL_PU * drive.T_N)
+
+
+def test_points_above_the_envelope_are_flagged_not_dropped(drive):
+    """At 0.95 Omega_0 a torque 30 % above the closed-form limit (R = 0, an upper bound) is infeasible."""
+    w = 0.95
+    ch = analytic.characteristic(drive, np.array([w])).iloc[0]
+    res = efficiency_map(drive, [1.3 * ch.T_q, 0.3 * ch.T_q], [w * drive.Omega_0], supplies=("square",), workers=1)
+    p = res.points.set_index("torque_ref")
+    assert not p.loc[1.3 * ch.T_q, "feasible"] and p.loc[0.3 * ch.T_q, "feasible"]
+    assert p.loc[1.3 * ch.T_q, "tau_mean"] < 1.3 * ch.T_q - FEASIBLE_TOL_PU * drive.T_N
+    assert res.difference.empty  # one supply: nothing to compare
+    assert np.isnan(res.grid("square", "efficiency")[0, 0])
+
+
+def test_difference_map_is_on_the_common_feasible_points(small):
+    d = small.difference
+    p = small.points
+    both = p[p.feasible].groupby(["torque_ref", "speed"]).supply.nunique()
+    assert len(d) == int((both == 2).sum())
+    sq = p[p.supply == "square"].set_index(["torque_ref", "speed"]).efficiency
+    si = p[p.supply == "sine"].set_index(["torque_ref", "speed"]).efficiency
+    for r in d.itertuples():
+        assert r.d_eta == pytest.approx(si[(r.torque_ref, r.speed)] - sq[(r.torque_ref, r.speed)])
+        assert r.winner == ("sine" if r.d_eta > small.resolution else "square" if r.d_eta < -small.resolution
+                            else "equal")
+    assert any(line.startswith("sinusoidal: best efficiency") for line in small.summary())
+
+
+def test_results_do_not_depend_on_the_workers(small, drive):
+    par = efficiency_map(drive, small.torques, small.speeds, workers=2)
+    pd.testing.assert_frame_equal(small.points, par.points)
+    pd.testing.assert_frame_equal(small.difference, par.difference)
+
+
+@pytest.mark.slow
+def test_a_dask_cluster_gives_the_same_results(small, drive):
+    """The points run on a Dask cluster through its concurrent.futures executor: the same table."""
+    require_module("distributed")
+    import distributed  # optional dependency, imported only when present
+
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        res = efficiency_map(drive, small.torques, small.speeds, executor=client.get_executor())
+    pd.testing.assert_frame_equal(small.points, res.points)
+
+
+def test_lossless_drive_has_unit_efficiency(drive):
+    """R = 0, no friction, ideal inverter: every watt drawn reaches the shaft."""
+    assert drive.inverter.R_on == 0 and drive.inverter.V_f == 0 and drive.inverter.R_src == 0
+    ideal = drive.replace(motor__R=0.0, mechanics__B=0.0, mechanics__tau_c=0.0)
+    res = efficiency_map(ideal, [0.5 * drive.T_N], [0.5 * drive.Omega_0], workers=1)
+    for r in res.points.itertuples():
+        assert r.feasible
+        assert r.efficiency == pytest.approx(1.0, abs=BALANCE_WARN), r.supply
+        assert r.p_loss == pytest.approx(0.0, abs=1e-9 * r.p_in)
+
+
+def test_copper_loss_is_the_sum_of_the_phase_rms_currents_squared_times_r(small, drive):
+    """Sinusoidal supply at 0.6 T_N, 0.5 Omega_0: p_cu = R (I_a^2 + I_b^2 + I_c^2) = 3/2 R I^2 for currents of
+    amplitude I = T / (1.5 k_1) (paper 1 (45))."""
+    p = small.points
+    r = p[(p.supply == "sine") & np.isclose(p.torque_ref, 0.6 * drive.T_N)
+          & np.isclose(p.speed, 0.5 * drive.Omega_0)].iloc[0]
+    R = drive.motor.R
+    assert r.p_cu == pytest.approx(R * (r.i_rms_a**2 + r.i_rms_b**2 + r.i_rms_c**2), rel=1e-6)
+    amp = 0.6 * drive.T_N / (1.5 * bl.control.sine.fundamental_k1(drive))
+    assert r.p_cu == pytest.approx(1.5 * R * amp**2, rel=0.02)  # the PWM ripple adds a little
+
+
+def test_cli_writes_the_map_and_refuses_a_bad_out(tmp_path, capsys):
+    out = tmp_path / "map"
+    assert main(["effmap", "htm-48v", "--torques", "2", "--speeds", "2", "--workers", "1", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "best efficiency" in text and "equal within 0.005" in text
+    names = {p.name for p in out.iterdir()}
+    assert {"effmap.csv", "effmap_difference.csv"} <= names
+    for stem in ("effmap_efficiency", "effmap_difference", "effmap_losses"):
+        assert {f"{stem}.png", f"{stem}.svg"} <= names
+    df = pd.read_csv(out / "effmap.csv")
+    assert len(df) == 8 and {"feasible", "efficiency", *loss_buckets()} <= set(df.columns)
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    assert main(["effmap", "htm-48v", "--out", str(blocker)]) == 2
+    assert "--out" in capsys.readouterr().err
+    assert main(["effmap", "htm-48v", "--torques", "1", "--out", str(tmp_path / "x")]) == 2
+    assert not (tmp_path / "x").exists()
+
+
+def test_braking_points_return_power_to_the_source(drive):
+    """A negative torque reference generates: both powers negative, efficiency electrical out / mechanical in."""
+    res = efficiency_map(drive, [-0.5 * drive.T_N], [0.5 * drive.Omega_0], workers=1)
+    for r in res.points.itertuples():
+        assert r.feasible and r.p_in < 0.0 and r.p_shaft < 0.0, r.supply
+        assert 0.0 < r.efficiency < 1.0
+        assert r.efficiency == pytest.approx((r.p_in - r.p_stored) / r.p_shaft)
+        assert abs(r.p_in - r.p_shaft - r.p_loss - r.p_stored) <= BALANCE_WARN * abs(r.p_shaft)
+
+
+@pytest.mark.slow
+def test_report_of_the_directory_shows_the_map_summary(compare_htm48v: Path, tmp_path: Path) -> None:
+    """bldclab effmap written into a compare results directory adds the 'Efficiency maps' section to the report."""
+    d = tmp_path / "res"
+    d.mkdir()
+    for p in compare_htm48v.iterdir():
+        (d / p.name).write_bytes(p.read_bytes())
+    assert main(["effmap", "htm-48v", "--torques", "2", "--speeds", "2", "--workers", "1", "--out", str(d)]) == 0
+    out = tmp_path / "page.html"
+    assert main(["report", str(d), "--out", str(out)]) == 0
+    text = out.read_text(encoding="utf-8")
+    section = re.search(r'<section id="effmap">(.*?)</section>', text, re.S)
+    assert section is not None and "best efficiency" in section.group(1) and "<svg" in section.group(1)
+    assert '<a href="#effmap">' in text and not re.search(r"https?://", text)
