@@ -167,3 +167,17 @@ def test_report_of_the_directory_shows_the_map_summary(compare_htm48v: Path, tmp
     section = re.search(r'<section id="effmap">(.*?)</section>', text, re.S)
     assert section is not None and "best efficiency" in section.group(1) and "<svg" in section.group(1)
     assert '<a href="#effmap">' in text and not re.search(r"https?://", text)
+
+
+def test_switching_losses_enter_the_map_and_the_accounting_still_closes(drive):
+    """With datasheet-like switching and recovery energies on the inverter, the map's input is the source power with
+    those energies, the two buckets are positive, and input = shaft + losses + stored still holds."""
+    lossy = drive.replace(inverter__E_on=40e-6, inverter__E_off=60e-6, inverter__E_rr=10e-6, inverter__V_test=48.0,
+                          inverter__I_test=50.0)
+    res = efficiency_map(lossy, [0.5 * drive.T_N], [0.5 * drive.Omega_0], workers=1)
+    base = efficiency_map(drive, [0.5 * drive.T_N], [0.5 * drive.Omega_0], workers=1)
+    for (_, r), (_, r0) in zip(res.points.iterrows(), base.points.iterrows(), strict=True):
+        assert r.p_swloss > 0 and r.p_rr > 0, r.supply
+        losses = sum(r[b] for b in res.buckets)
+        assert abs(r.p_in - r.p_shaft - losses - r.p_stored) <= BALANCE_WARN * abs(r.p_in)
+        assert r.efficiency < r0.efficiency  # the same point, more loss

@@ -11,17 +11,18 @@ A point is *feasible* when the drive holds the torque asked for: ``|tau_mean - T
 Above the drive's envelope (the current limit, or the voltage the bus can impress at that speed) it delivers less;
 such points are kept in the table with ``feasible = False`` and left out of the maps and the comparison.
 
-The loss buckets are the mean powers of :class:`~bldclab.sim.results.Metrics` named in :data:`LOSS_BUCKETS`
-(the one place to add a new one); the accounting of each point is ``p_src = p_shaft + sum(buckets) + p_stored +
-residue`` with ``p_shaft = p_emf + p_cog - p_fric``, ``p_stored`` the change of the windings' magnetic energy
-over the window divided by its length (zero in an exactly periodic steady state) and a residue of the order of the
-integration's energy balance (:attr:`~bldclab.sim.results.Metrics.balance_electrical`, 1e-9 to 1e-7).
+The loss buckets are the mean powers of :class:`~bldclab.sim.results.Metrics` named in :data:`LOSS_BUCKETS` (the one
+place to add a new one); the accounting of each point is ``p_src_total = p_shaft + sum(buckets) + p_stored +
+residue`` (``p_src_total``: the DC source's power with the switching and recovery energies it supplies) with
+``p_shaft = p_emf + p_cog - p_fric``, ``p_stored`` the change of the windings' magnetic energy over the window
+divided by its length (zero in an exactly periodic steady state) and a residue of the order of the integration's
+energy balance (:attr:`~bldclab.sim.results.Metrics.balance_electrical`, 1e-9 to 1e-7).
 
-The efficiency is ``p_shaft / (p_src - p_stored)`` motoring and ``(p_src - p_stored) / p_shaft`` generating: the
-power the cycle takes from (gives to) the source once the window's left-over change of stored energy is set aside.
-It differs from :attr:`Metrics.efficiency <bldclab.sim.results.Metrics>` (``p_shaft / p_src``) by
-``p_stored / p_src``, a few 1e-4 on the catalog drives, below the :data:`RESOLUTION` of the comparison; with no
-losses it is 1 to the integration's accuracy.
+The efficiency is ``p_shaft / (p_src_total - p_stored)`` motoring and ``(p_src_total - p_stored) / p_shaft``
+generating: the power the cycle takes from (gives to) the source once the window's left-over change of stored energy
+is set aside. It differs from :attr:`Metrics.efficiency <bldclab.sim.results.Metrics>` (``p_shaft / p_src_total``)
+by ``p_stored / p_src_total``, a few 1e-4 on the catalog drives, below the :data:`RESOLUTION` of the comparison;
+with no losses it is 1 to the integration's accuracy.
 """
 
 from __future__ import annotations
@@ -59,12 +60,13 @@ __all__ = [
 ]
 
 #: The loss buckets, by their :class:`~bldclab.sim.results.Metrics` field names (W): source resistance, windings,
-#: switch conduction, diodes, friction. A bucket the plant does not report (yet) is skipped; add a new one here.
-LOSS_BUCKETS: tuple[str, ...] = ("p_Rsrc", "p_cu", "p_sw", "p_diode", "p_fric")
+#: switch conduction, diodes, switching, diode recovery, friction. A bucket the plant does not report (yet) is
+#: skipped; add a new one here.
+LOSS_BUCKETS: tuple[str, ...] = ("p_Rsrc", "p_cu", "p_sw", "p_diode", "p_swloss", "p_rr", "p_fric")
 #: The ``p_*`` fields of :class:`~bldclab.sim.results.Metrics` that are not losses: the input, the load, and the
 #: two that make up the shaft power with friction. Every other ``p_*`` field must be in :data:`LOSS_BUCKETS`
 #: (a test checks it, so a bucket added to the plant is not silently left out of the maps).
-NOT_LOSSES: tuple[str, ...] = ("p_src", "p_load", "p_emf", "p_cog")
+NOT_LOSSES: tuple[str, ...] = ("p_src", "p_src_total", "p_load", "p_emf", "p_cog")
 #: A point is feasible when its mean torque is within this of the reference (p.u. of ``T_N``). Four times the
 #: largest PWM-grid spread of the mean torque measured for :data:`bldclab.analysis.compare.VERDICT_TOLERANCE`
 #: (0.005 p.u.): a point outside it misses its torque because of the drive, not of the simulation.
@@ -132,10 +134,10 @@ def _run_point(job: tuple[Drive, str, Control, float, float, tuple[str, ...]]) -
     p_loss = sum(losses.values())
     p_stored = m.dW_L / (m.t1 - m.t0)  # zero in an exactly periodic steady state
     tol = FEASIBLE_TOL_PU * drive.T_N
-    row.update({"tau_mean": point.tau_mean, "tau_mean_pu": point.tau_mean_pu, "p_in": m.p_src, "p_shaft": shaft,
+    row.update({"tau_mean": point.tau_mean, "tau_mean_pu": point.tau_mean_pu, "p_in": m.p_src_total, "p_shaft": shaft,
                 **losses, "p_loss": p_loss, "p_stored": p_stored,
-                "residue": m.p_src - shaft - p_loss - p_stored,
-                "efficiency": _efficiency(m.p_src - p_stored, shaft), "balance_electrical": m.balance_electrical,
+                "residue": m.p_src_total - shaft - p_loss - p_stored,
+                "efficiency": _efficiency(m.p_src_total - p_stored, shaft), "balance_electrical": m.balance_electrical,
                 "i_rms_a": m.i_rms[0], "i_rms_b": m.i_rms[1], "i_rms_c": m.i_rms[2],
                 "feasible": bool(abs(point.tau_mean - torque) <= tol), "note": "",
                 "_warnings": [f"{supply} at {torque:.4g} N m, {speed:.4g} rad/s: {text}" for text in caught]})
@@ -151,7 +153,8 @@ class EffMapResult:
     drive : Drive
     points : pandas.DataFrame
         One row per supply, torque and speed: ``supply``, ``torque_ref`` (N m), ``torque_ref_pu``, ``speed``
-        (rad/s), ``speed_pu``, ``speed_rpm``, ``tau_mean`` (N m), ``tau_mean_pu``, ``p_in`` (DC source power, W),
+        (rad/s), ``speed_pu``, ``speed_rpm``, ``tau_mean`` (N m), ``tau_mean_pu``, ``p_in`` (DC source power
+        with the switching energies, ``Metrics.p_src_total``, W),
         ``p_shaft`` (W), each bucket of :attr:`buckets` (W), ``p_loss`` (their sum, W), ``p_stored`` (change of
         magnetic energy over the window per second, W), ``residue`` (``p_in - p_shaft - p_loss - p_stored``, W),
         ``efficiency``, ``balance_electrical``, ``i_rms_a`` ... (A), ``feasible`` and ``note`` (why a point has no
