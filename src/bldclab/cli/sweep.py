@@ -9,22 +9,12 @@ from pathlib import Path
 from .._files import write_atomic
 from ..errors import BldclabError
 from ..sweep import Dask, Executor, Processes, Serial, Sweep, run
-from .common import check_out_file
+from .common import check_out_file, positive_int
 
 __all__ = [
     "configure_command",
     "run_command",
 ]
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
-    return value
 
 
 def configure_command(p: argparse.ArgumentParser) -> None:
@@ -34,7 +24,7 @@ def configure_command(p: argparse.ArgumentParser) -> None:
                    help="results store: an SQLite file, or a directory to hold SWEEP.sqlite "
                    "(default: SWEEP.sqlite next to the sweep file); finished cases in it are not run again")
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", metavar="N", type=_positive_int,
+    where.add_argument("--workers", metavar="N", type=positive_int,
                        help="local worker processes (default: one per core)")
     where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run on this Dask cluster")
     where.add_argument("--serial", action="store_true", help="run in this process, one case after the other")
