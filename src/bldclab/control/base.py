@@ -3,16 +3,13 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
-from .._core import CParams
+from .._core import Core, CParams
 from ..errors import BldclabError
-
-if TYPE_CHECKING:
-    from .._core import Core
-    from ..model.motor import Drive
+from ..model.motor import Drive
 
 __all__ = ["Control", "check_number"]
 

@@ -3,19 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar, Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._core import CParams
+from .._core import Core, CParams
 from .._core import core as load_core
 from ..errors import BldclabError
+from ..model.motor import Drive
 from .base import Control
-
-if TYPE_CHECKING:
-    from .._core import Core
-    from ..model.motor import Drive
 
 __all__ = ["OpenLoop", "SixStepVoltage"]
 

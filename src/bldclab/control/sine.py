@@ -11,20 +11,17 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, ClassVar, Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 
-from .._core import CParams
+from .._core import Core, CParams
 from ..errors import BldclabError
 from ..model.analytic import i_sN, r_total
 from ..model.design import pi_gains
+from ..model.motor import Drive
 from .base import Control, check_number
 from .sixstep import SixStep
-
-if TYPE_CHECKING:
-    from .._core import Core
-    from ..model.motor import Drive
 
 __all__ = ["Sine", "fundamental_k1"]
 

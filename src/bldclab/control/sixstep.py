@@ -12,17 +12,14 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar, Literal
+from typing import ClassVar, Literal
 
-from .._core import CParams
+from .._core import Core, CParams
 from ..errors import BldclabError
 from ..model.analytic import r_total
 from ..model.design import pi_gains
+from ..model.motor import Drive
 from .base import Control, check_number
-
-if TYPE_CHECKING:
-    from .._core import Core
-    from ..model.motor import Drive
 
 __all__ = ["SixStep"]
 

@@ -50,16 +50,14 @@ import warnings
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
 import numpy as np
 
+from ..control import Control
 from ..errors import PlausibilityError, PlausibilityWarning
-
-if TYPE_CHECKING:
-    from ..control import Control
-    from ..model.motor import Drive
-    from .results import SimResult
+from ..model.motor import Drive
+from .results import SimResult
 
 __all__ = ["BALANCE_ERROR", "BALANCE_WARN", "CHECK_MODES", "Finding", "apply", "check_pwm", "check_reference",
            "check_result", "check_speed", "check_steady", "collect", "summary"]
