@@ -30,7 +30,7 @@ from ..errors import BldclabError, PlausibilityWarning
 from ..model import analytic
 from ..model.motor import Drive
 from ..sim import plausibility as _plaus
-from .experiments import base_speed, steady_state
+from .experiments import base_speed, map_points, steady_state
 
 __all__ = ["VERDICT_TOLERANCE", "CompareResult", "base_speed_table", "compare", "default_controls", "speed_grid"]
 
@@ -234,20 +234,16 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
     bs_jobs = [(drive, s) for s in SUPPLIES] if base_speeds else []
     show = _progress(len(jobs), progress)
     t0 = time.perf_counter()
-    rows: list[dict[str, Any]] = []
-    bs: list[float] = []
+    rows: list[dict[str, Any]]
+    bs: list[float]
     n_workers = workers or os.cpu_count() or 1
     if n_workers <= 1:
-        for j, job in enumerate(jobs):
-            rows.append(_run_point(job))
-            show(j + 1)
-        bs = [_run_base_speed(job) for job in bs_jobs]
+        rows = map_points(_run_point, jobs, progress=show)
+        bs = map_points(_run_base_speed, bs_jobs)
     else:
         with ProcessPoolExecutor(max_workers=n_workers) as pool:
             bs_futures = [pool.submit(_run_base_speed, job) for job in bs_jobs]  # the longest jobs first
-            for j, row in enumerate(pool.map(_run_point, jobs, chunksize=max(1, len(jobs) // (4 * n_workers)))):
-                rows.append(row)
-                show(j + 1)
+            rows = map_points(_run_point, jobs, pool, chunksize=max(1, len(jobs) // (4 * n_workers)), progress=show)
             bs = [f.result() for f in bs_futures]
     seconds = time.perf_counter() - t0
     caught = [text for row in rows for text in row.pop("_warnings")]

@@ -46,7 +46,7 @@ from ..model.motor import Drive
 from ..sim import plausibility as _plaus
 from ..sim.results import Metrics
 from .compare import VERDICT_TOLERANCE
-from .experiments import steady_state
+from .experiments import map_points, steady_state
 
 __all__ = [
     "FEASIBLE_TOL_PU",
@@ -301,13 +301,11 @@ def efficiency_map(drive: Drive, torques: Sequence[float] | np.ndarray, speeds: 
     jobs = [(drive, s, ctl[s], float(t), float(w), buckets) for s in supplies for t in T for w in W]
     t0 = time.perf_counter()
     n_workers = workers or os.cpu_count() or 1
-    if executor is not None:
-        rows = list(executor.map(_run_point, jobs))
-    elif n_workers <= 1:
-        rows = [_run_point(job) for job in jobs]
+    if executor is not None or n_workers <= 1:
+        rows = map_points(_run_point, jobs, executor)
     else:
         with ProcessPoolExecutor(max_workers=n_workers) as pool:
-            rows = list(pool.map(_run_point, jobs, chunksize=max(1, len(jobs) // (4 * n_workers))))
+            rows = map_points(_run_point, jobs, pool, chunksize=max(1, len(jobs) // (4 * n_workers)))
     seconds = time.perf_counter() - t0
     caught = [text for row in rows for text in row.pop("_warnings")]
     points = pd.DataFrame(rows)

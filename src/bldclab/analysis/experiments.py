@@ -20,7 +20,8 @@ from __future__ import annotations
 import dataclasses
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from concurrent.futures import Executor
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -37,6 +38,7 @@ from ..sim import Profile, Scenario, plausibility, simulate
 from ..sim.results import Metrics, SimResult
 
 __all__ = ["EXPERIMENTS", "Experiment", "PointResult", "Simulate", "SteadyState", "base_speed", "base_speed_margin",
+           "map_points",
            "steady_state"]
 
 
@@ -88,6 +90,45 @@ class PointResult:
         """Return ``max - min`` over the PWM-grid phases of ``tau_mean`` or a ripple (``name``), in p.u. of ``T_N``."""
         lo, hi = getattr(self, f"{name}_range")
         return (hi - lo) / T_N
+
+
+def map_points(fn: Callable[[Any], Any], jobs: Sequence[Any], executor: Executor | None = None, *,
+               chunksize: int = 1, progress: Callable[[int], None] | None = None) -> list[Any]:
+    """Run ``fn`` over ``jobs`` and return the results in the order of the jobs.
+
+    The one way the analyses (``compare``, ``effmap``) run their operating points: serially without an executor,
+    else on it (a process pool, or any :class:`concurrent.futures.Executor`, e.g. a Dask client's).
+
+    Parameters
+    ----------
+    fn : callable
+        A module-level function of one job (picklable for a process pool).
+    jobs : sequence
+        The jobs.
+    executor : concurrent.futures.Executor, optional
+        Where to run them; serially in this process if omitted.
+    chunksize : int
+        Jobs sent to a process-pool worker at a time (> 1 only for a :class:`~concurrent.futures.ProcessPoolExecutor`).
+    progress : callable, optional
+        Called with the number of results done after each one.
+
+    Returns
+    -------
+    list
+        ``[fn(job) for job in jobs]``.
+    """
+    if executor is None:
+        results: Iterable[Any] = map(fn, jobs)
+    elif chunksize > 1:
+        results = executor.map(fn, jobs, chunksize=chunksize)
+    else:
+        results = executor.map(fn, jobs)
+    out = []
+    for j, r in enumerate(results):
+        out.append(r)
+        if progress is not None:
+            progress(j + 1)
+    return out
 
 
 def electrical_period(drive: Drive, speed: float) -> float:
