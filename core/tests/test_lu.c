@@ -754,8 +754,9 @@ static void test_safety(void)
     const float special[] = {0.0f, -0.0f, 1e-38f, 1e38f, -1e38f, NAN, INFINITY, -INFINITY, 3e38f, 1.0f};
     int bad_legs = 0, unsafe_invalid = 0;
     for (int m = 0; m < 3; ++m) {
-        for (int dl = 0; dl < 2; ++dl) {
-            make_params(&p, m, dl);
+        for (int dl = 0; dl < 4; ++dl) {
+            make_params(&p, m, dl & 1);
+            p.l_adapt = dl >= 2 ? 0.5f : 0.0f; /* with and without the inductance adaptation */
             CHECK(bc_lu_init(&p, &s) == BC_OK, "init");
             for (int trial = 0; trial < 3000; ++trial) {
                 bc_ctrl_in b;
@@ -798,6 +799,12 @@ static void test_safety(void)
     q = p;
     q.i_zero = q.i_max;
     CHECK(bc_lu_init(&q, &s) == BC_ERR_PARAM, "i_zero >= i_max");
+    const float bad_gain[] = {-0.1f, 1.5f, NAN, INFINITY};
+    for (int j = 0; j < 4; ++j) {
+        q = p;
+        q.l_adapt = bad_gain[j];
+        CHECK(bc_lu_init(&q, &s) == BC_ERR_PARAM, "l_adapt %g", (double)bad_gain[j]);
+    }
     static float zeros[NT], nans[NT];
     for (int j = 0; j < NT; ++j) nans[j] = j == 7 ? NAN : 0.1f;
     q = p;

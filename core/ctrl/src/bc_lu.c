@@ -415,12 +415,13 @@ int bc_lu_init(const bc_lu_params *p, bc_lu_state *s)
         p->order < 0 || p->order > 2)
         return BC_ERR_PARAM;
     const float v[] = {p->L, p->R, p->ts, p->i_max, p->i_zero, p->v_max, p->k_phi, p->kp, p->ki, p->f_tick,
-                       p->omega_min, p->theta_offset};
+                       p->omega_min, p->theta_offset, p->l_adapt};
     for (unsigned j = 0; j < sizeof v / sizeof v[0]; ++j) {
         if (!isfinite(v[j])) return BC_ERR_PARAM;
     }
     if (!(p->L > 0.0f) || p->R < 0.0f || !(p->ts > 0.0f) || !(p->i_max > 0.0f) || p->i_zero < 0.0f ||
-        !(p->i_zero < p->i_max) || !(p->v_max > 0.0f) || !(p->k_phi > 0.0f) || p->kp < 0.0f || p->ki < 0.0f)
+        !(p->i_zero < p->i_max) || !(p->v_max > 0.0f) || !(p->k_phi > 0.0f) || p->kp < 0.0f || p->ki < 0.0f || p->l_adapt < 0.0f ||
+        p->l_adapt > 1.0f)
         return BC_ERR_PARAM;
     float f_max = 0.0f;
     for (int x = 0; x < 3; ++x) {
@@ -452,6 +453,11 @@ int bc_lu_init(const bc_lu_params *p, bc_lu_state *s)
     s->dcm = 0;
     s->t_first = 0.0f;
     s->d_mean = 0.0f;
+    s->l_hat = p->L;
+    for (int k = 0; k < 3; ++k) s->i_start[k] = s->i_end[k] = 0.0f;
+    s->pred_plan = s->applied;
+    s->pred_rising = 0;
+    s->pred_speed = 0;
     return BC_OK;
 }
 
@@ -464,7 +470,23 @@ static void go_safe(bc_lu_state *s, bc_ctrl_out *out, uint32_t why)
     out->diag[7] = -1.0f;
     s->applied.kind = BC_LU_SAFE;
     s->applied.duty = 0.0f;
+    s->pred_plan.kind = BC_LU_SAFE;
     bc_pi_reset(&s->pi_p, &s->pi, 0.0f);
+}
+
+/* Inductance adaptation (see the header): compare the last step's predicted rise of the pair current with the
+ * measured one, where the interval started with the pair at zero current and F open. */
+static void adapt_l(const bc_lu_params *p, bc_lu_state *s, const float i_now[3])
+{
+    const bc_lu_plan *q = &s->pred_plan;
+    if (q->kind != BC_LU_PAIR || !s->pred_rising) return; /* a rising half: off part, then on part to the end */
+    int pos = q->pos, off = q->off;
+    if (!s->pred_speed || fabsf(s->i_start[off]) > p->i_zero || fabsf(i_now[off]) > p->i_zero) return;
+    float d_pred = s->i_end[pos] - s->i_start[pos], d_meas = i_now[pos] - s->i_start[pos];
+    float th = 0.005f * p->i_max;
+    if (!(fabsf(d_pred) > th) || !(fabsf(d_meas) > th) || (d_pred > 0.0f) != (d_meas > 0.0f)) return;
+    float r = bc_clampf(d_pred / d_meas, 0.5f, 2.0f);
+    s->l_hat = bc_clampf(s->l_hat * (1.0f + p->l_adapt * (r - 1.0f)), 0.25f * p->L, 4.0f * p->L);
 }
 
 /* The one-step model the parameters ask for: ordered (order = 1) or averaged. */
@@ -530,6 +552,13 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
     }
     x0.v_dc = v;
     x0.omega_m = h.omega_e / (float)p->p; /* 0 without a speed estimate (standstill) */
+    bc_lu_params p_adapted;
+    if (p->l_adapt > 0.0f) {
+        adapt_l(p, s, x0.i);
+        p_adapted = *p;
+        p_adapted.L = s->l_hat;
+        p = &p_adapted; /* every model and law below uses L_hat */
+    }
     bc_lu_shapes(p, h.theta, x0.f);
     float t0 = bc_lu_torque(&x0);
     out->diag[2] = t0;
@@ -653,6 +682,15 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
 
     /* the model's torque at the next sample, shapes frozen at theta(k) as in the paper's (8), (16), (23) */
     if (p->delay == 0) model_step(p, &x0, &plan, rising_now, i_pred);
+    if (p->l_adapt > 0.0f) { /* the prediction over [k, k+1] the next step checks */
+        s->pred_plan = p->delay == 1 ? s->applied : plan;
+        s->pred_rising = rising_now;
+        s->pred_speed = h.speed_valid;
+        for (int k = 0; k < 3; ++k) {
+            s->i_start[k] = x0.i[k];
+            s->i_end[k] = i_pred[k];
+        }
+    }
     bc_lu_point xp = x0;
     for (int k = 0; k < 3; ++k) xp.i[k] = i_pred[k];
     s->applied = plan;

@@ -89,6 +89,12 @@ class Lu(Control):
         Slowest speed the Hall estimate reports (electrical rad/s); default ``0.01 p Omega_0``.
     theta_offset : float
         Hall angle correction (electrical rad).
+    adapt_L : float
+        Inductance adaptation gain in [0, 1]; 0 (default) keeps the inductance of the drive description. Where the
+        current stops within the PWM period the laws are feed-forward and the mean torque is ``T_ref L_est / L``
+        (``docs/theory-paper2.md``, 5.2); with ``adapt_L > 0`` the controller fits its inductance to the measured
+        rise of each pulse that starts from zero current (``core/ctrl/include/bldc/bc_lu.h``). 0.05 converges
+        within about 100 PWM periods of discontinuous conduction.
     """
 
     method: Literal["lu", "lu-no-do", "rect"] = "lu"
@@ -105,6 +111,7 @@ class Lu(Control):
     ki: float | None = None
     omega_min: float | None = None
     theta_offset: float = 0.0
+    adapt_L: float = 0.0
     c_name: ClassVar[str] = "lu"
     ref_meaning: ClassVar[str] = "torque, N m"
 
@@ -126,6 +133,9 @@ class Lu(Control):
         if isinstance(self.theta_offset, bool) or not isinstance(self.theta_offset, int | float) or not math.isfinite(
                 self.theta_offset):
             raise BldclabError("control.theta_offset", f"must be a finite number, got {self.theta_offset!r}")
+        a = self.adapt_L
+        if isinstance(a, bool) or not isinstance(a, int | float) or not 0.0 <= a <= 1.0:
+            raise BldclabError("control.adapt_L", f"must be a number in [0, 1], got {a!r}")
 
     def gains(self, drive: Drive) -> tuple[float, float]:
         """Return ``rect``'s PI gains ``(k_p, k_i)`` of the pair-current loop (V/A, V/(A s)).
@@ -218,5 +228,6 @@ class Lu(Control):
             f_tick=drive.sensors.f_tick,
             omega_min=0.01 * m.p * drive.Omega_0 if self.omega_min is None else self.omega_min,
             theta_offset=self.theta_offset,
+            l_adapt=float(self.adapt_L),
         )
         return CParams(rec, [tables])

@@ -94,6 +94,26 @@
  * duties saturate instead of dividing by ~0 (only a wrong angle puts the pair near a zero crossing). Omega_e = 0
  * (standstill, no two Hall edges yet): the angle is the middle of the sector and every law still holds.
  *
+ * Inductance adaptation (l_adapt > 0; not in the paper). Every law above is a model prediction. While the current
+ * is continuous the sampled current feeds back and the end-value laws converge for any inductance estimate below
+ * about 2 L (deadbeat: the error shrinks by 1 - L_est / L per sample). Where the current stops within the PWM period
+ * (light load, or a low L f_pwm) the period starts from zero whatever the last one did: the law is feed-forward
+ * and the mean torque is T* L_est / L (docs/theory-paper2.md, 5.2). The step then fits its inductance to the
+ * measured current: over a rising half period (off part first, then on part) in normal conduction (F open at both
+ * ends), with a valid speed estimate (else the model's back-EMF is zero), the model's rise of the pair current
+ * dI_pred = i_P,pred(k+1) - i_P(k) scales as 1/L_hat and the measured rise dI_meas as 1/L (exactly where the
+ * current starts at zero: the off part is dead, the on part rises under the same voltage). When both rises exceed
+ * 0.5 % of i_max with the same sign:
+ *
+ *     L_hat <- clamp(L_hat (1 + l_adapt (clamp(dI_pred / dI_meas, 1/2, 2) - 1)), L/4, 4 L)
+ *
+ * and every model and law of the step uses L_hat. While the current is continuous and steady the rises are below
+ * the threshold (the samples sit at the ripple's mean) and L_hat holds. With l_adapt = 0 the controller is the one
+ * described above. An error in the back-EMF estimate is absorbed into L_hat (the rise is fitted, not L itself).
+ * Limits (measured in docs/theory-paper2.md, 5.2): where the current stops between samples and the model, with L_hat
+ * above L, does not predict the stop, the ratio is not 1/L and L_hat wanders; the torque is then that of the
+ * non-adaptive law (no worse).
+ *
  * Safety: the input guard (bc_guard.h, with i_max and v_max: current reconstruction from i_mask, the DC-bus limits
  * 0 < v_dc <= v_max, the hardware fault pin, the over-current trip |i_x| > i_max latched until every |i_x| < i_max / 2
  * at a sample with valid measurements, or bc_lu_init) gives BC_FLAG_BAD_INPUT or BC_FLAG_OVERCURRENT; an invalid
@@ -148,6 +168,7 @@ typedef struct {
     float f_tick;       /* Hall capture-timer frequency, Hz (> 0) */
     float omega_min;    /* Hall: slowest speed estimated, electrical rad/s (> 0) */
     float theta_offset; /* Hall: angle correction, electrical rad */
+    float l_adapt;      /* inductance adaptation gain in [0, 1] (0: off, L fixed; see "Inductance adaptation") */
 } bc_lu_params;
 
 /* What an output does over its interval. */
@@ -175,6 +196,12 @@ typedef struct {
     int32_t dcm;           /* order 2: the PWM period under way conducts discontinuously (mean law) */
     float t_first;         /* order 2: the model's mean torque over the period's first half, N m */
     float d_mean;          /* order 2: the last discontinuous period's duty (0: none), the next solve's guess */
+    float l_hat;           /* the inductance the models use: p->L, adapted when l_adapt > 0, H */
+    float i_start[3];      /* adaptation: measured currents at the start of the last step's interval, A */
+    float i_end[3];        /* adaptation: the model's currents at its end (prediction), A */
+    bc_lu_plan pred_plan;  /* adaptation: the output the prediction assumed (SAFE: no prediction to check) */
+    int32_t pred_rising;   /* adaptation: that interval was a rising half period (off part first) */
+    int32_t pred_speed;    /* adaptation: the speed estimate was valid (the model's back-EMF is not 0) */
 } bc_lu_state;
 
 /* An operating point at the start of a step: what the models and laws need. */
