@@ -11,12 +11,13 @@ A point is *feasible* when the drive holds the torque asked for: ``|tau_mean - T
 Above the drive's envelope (the current limit, or the voltage the bus can impress at that speed) it delivers less;
 such points are kept in the table with ``feasible = False`` and left out of the maps and the comparison.
 
-The loss buckets are the mean powers of :class:`~bldclab.sim.results.Metrics` named in :data:`LOSS_BUCKETS` (the one
-place to add a new one); the accounting of each point is ``p_src_total = p_shaft + sum(buckets) + p_stored +
-residue`` (``p_src_total``: the DC source's power with the switching and recovery energies it supplies) with
-``p_shaft = p_emf + p_cog - p_fric``, ``p_stored`` the change of the windings' magnetic energy over the window
-divided by its length (zero in an exactly periodic steady state) and a residue of the order of the integration's
-energy balance (:attr:`~bldclab.sim.results.Metrics.balance_electrical`, 1e-9 to 1e-7).
+The loss buckets are the mean powers of :class:`~bldclab.sim.results.Metrics` named in :data:`LOSS_BUCKETS`
+(:mod:`bldclab.analysis.losses`, the one place to add a new one; re-exported here); the accounting of each point
+is ``p_src_total = p_shaft + sum(buckets) + p_stored + residue`` (``p_src_total``: the DC source's power with the
+switching and recovery energies it supplies) with ``p_shaft = p_emf + p_cog - p_fric``, ``p_stored`` the change
+of the windings' magnetic energy over the window divided by its length (zero in an exactly periodic steady state)
+and a residue of the order of the integration's energy balance
+(:attr:`~bldclab.sim.results.Metrics.balance_electrical`, 1e-9 to 1e-7).
 
 The efficiency is ``p_shaft / (p_src_total - p_stored)`` motoring and ``(p_src_total - p_stored) / p_shaft``
 generating: the power the cycle takes from (gives to) the source once the window's left-over change of stored energy
@@ -27,7 +28,6 @@ with no losses it is 1 to the integration's accuracy.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 import time
@@ -44,9 +44,9 @@ from ..control import Control, Sine, SixStep
 from ..errors import BldclabError, PlausibilityError, PlausibilityWarning
 from ..model.motor import Drive
 from ..sim import plausibility as _plaus
-from ..sim.results import Metrics
 from .compare import VERDICT_TOLERANCE
 from .experiments import map_points, steady_state
+from .losses import LOSS_BUCKETS, NOT_LOSSES, loss_buckets, point_losses
 
 __all__ = [
     "FEASIBLE_TOL_PU",
@@ -59,14 +59,6 @@ __all__ = [
     "map_controls",
 ]
 
-#: The loss buckets, by their :class:`~bldclab.sim.results.Metrics` field names (W): source resistance, windings,
-#: switch conduction, diodes, switching, diode recovery, friction. A bucket the plant does not report (yet) is
-#: skipped; add a new one here.
-LOSS_BUCKETS: tuple[str, ...] = ("p_Rsrc", "p_cu", "p_sw", "p_diode", "p_swloss", "p_rr", "p_fric")
-#: The ``p_*`` fields of :class:`~bldclab.sim.results.Metrics` that are not losses: the input, the load, and the
-#: two that make up the shaft power with friction. Every other ``p_*`` field must be in :data:`LOSS_BUCKETS`
-#: (a test checks it, so a bucket added to the plant is not silently left out of the maps).
-NOT_LOSSES: tuple[str, ...] = ("p_src", "p_src_total", "p_load", "p_emf", "p_cog")
 #: A point is feasible when its mean torque is within this of the reference (p.u. of ``T_N``). Four times the
 #: largest PWM-grid spread of the mean torque measured for :data:`bldclab.analysis.compare.VERDICT_TOLERANCE`
 #: (0.005 p.u.): a point outside it misses its torque because of the drive, not of the simulation.
@@ -77,12 +69,6 @@ RESOLUTION = VERDICT_TOLERANCE["eta"]
 
 SUPPLIES = ("square", "sine")
 _RPM = 30.0 / math.pi
-
-
-def loss_buckets() -> tuple[str, ...]:
-    """Return the loss buckets of :data:`LOSS_BUCKETS` that :class:`~bldclab.sim.results.Metrics` has."""
-    names = {f.name for f in dataclasses.fields(Metrics)}
-    return tuple(b for b in LOSS_BUCKETS if b in names)
 
 
 def map_controls(drive: Drive, lowest_speed: float) -> dict[str, Control]:
@@ -104,15 +90,6 @@ def map_controls(drive: Drive, lowest_speed: float) -> dict[str, Control]:
     return {"square": SixStep(reference="torque"), "sine": Sine(handoff_speed=0.5 * abs(lowest_speed))}
 
 
-def _efficiency(p_in: float, p_shaft: float) -> float:
-    """Motoring: shaft over input power; generating: electrical output over mechanical input; else nan."""
-    if p_in > 0.0 and p_shaft > 0.0:
-        return p_shaft / p_in
-    if p_in < 0.0 and p_shaft < 0.0:
-        return p_in / p_shaft
-    return math.nan
-
-
 def _run_point(job: tuple[Drive, str, Control, float, float, tuple[str, ...]]) -> dict[str, Any]:
     drive, supply, control, torque, speed, buckets = job
     row: dict[str, Any] = {"supply": supply, "torque_ref": torque, "torque_ref_pu": torque / drive.T_N,
@@ -129,15 +106,10 @@ def _run_point(job: tuple[Drive, str, Control, float, float, tuple[str, ...]]) -
                     "note": f"refused: {exc}", "_warnings": []})
         return row
     m = point.metrics
-    shaft = m.p_emf + m.p_cog - m.p_fric
-    losses = {b: float(getattr(m, b)) for b in buckets}
-    p_loss = sum(losses.values())
-    p_stored = m.dW_L / (m.t1 - m.t0)  # zero in an exactly periodic steady state
+    acc = point_losses(m, buckets)
     tol = FEASIBLE_TOL_PU * drive.T_N
-    row.update({"tau_mean": point.tau_mean, "tau_mean_pu": point.tau_mean_pu, "p_in": m.p_src_total, "p_shaft": shaft,
-                **losses, "p_loss": p_loss, "p_stored": p_stored,
-                "residue": m.p_src_total - shaft - p_loss - p_stored,
-                "efficiency": _efficiency(m.p_src_total - p_stored, shaft), "balance_electrical": m.balance_electrical,
+    row.update({"tau_mean": point.tau_mean, "tau_mean_pu": point.tau_mean_pu, **acc,
+                "balance_electrical": m.balance_electrical,
                 "i_rms_a": m.i_rms[0], "i_rms_b": m.i_rms[1], "i_rms_c": m.i_rms[2],
                 "feasible": bool(abs(point.tau_mean - torque) <= tol), "note": "",
                 "_warnings": [f"{supply} at {torque:.4g} N m, {speed:.4g} rad/s: {text}" for text in caught]})
