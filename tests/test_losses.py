@@ -60,8 +60,11 @@ def test_recovery_only_on_hard_turn_on():
     modes = np.tile(np.array([[3, 3, 0]], dtype=np.int32), (n, 1))
     duties = np.tile(np.array([[0.5, 1.0, 0.0]]), (n, 1))
     dur = n / (2 * drive.inverter.f_pwm)
-    # start with current flowing a -> b (freewheeling decay through a's lower side)
-    sc = bl.Scenario(duration=dur, speed=2.0, theta0=0.4, delay=0, window=(0.0, dur), i0=(40.0, -40.0, 0.0))
+    # start with current flowing a -> b (freewheeling decay through a's lower side); the window starts after the
+    # first sample: at t = 0 b's lower switch turns on while b's upper diode carries i_b < 0, a hard turn-on that a
+    # window from 0 holds ([t0, t1) holds the edges at t0)
+    sc = bl.Scenario(duration=dur, speed=2.0, theta0=0.4, delay=0, window=(0.5 / drive.inverter.f_pwm, dur),
+                     i0=(40.0, -40.0, 0.0))
     soft = bl.simulate(drive, bl.OpenLoop(modes, duties), sc).metrics
     assert soft is not None and soft.i_rms[0] > 1.0
     assert soft.p_rr == 0.0 and soft.p_swloss == 0.0
@@ -162,3 +165,34 @@ def test_motor_file_round_trip_and_units(tmp_path):
     p2.write_text(text.replace("E_on = 4e-05", 'E_on = "-1 mJ"'))
     with pytest.raises(BldclabError, match="E_on"):
         bl.load(p2)
+
+
+@pytest.mark.parametrize("trace_sub", [1, 4])
+def test_trace_powers_integrate_to_the_metrics_with_the_switching_energies(trace_sub):
+    """The trace's p_swloss is the gate-edge energies booked inside each row over the row's length, and p_inv
+    includes it: summing p dt over the rows of the metric window gives the metrics' switching plus recovery loss and
+    inverter loss to rounding, and the rows' p_src + p_swloss - p_cu - p_inv - p_emf sums to the change of magnetic
+    energy (the integration's residue)."""
+    drive = HTM.replace(inverter__R_on=0.005, inverter__V_f=0.8, inverter__t_dead=5e-7, **LOSS)
+    om = 0.5 * drive.Omega_0
+    ts = 0.5 / drive.inverter.f_pwm
+    k0, k1 = 400, 1000  # window on controller samples: the trace rows tile it
+    sc = bl.Scenario(duration=(k1 + 4) * ts, speed=om, ref=0.6 * drive.T_N, window=(k0 * ts, k1 * ts),
+                     trace_sub=trace_sub)
+    res = bl.simulate(drive, bl.SixStep(reference="torque"), sc)
+    m = res.metrics
+    assert m is not None and m.p_swloss > 0.5 and m.p_rr > 0.05
+    t = res.t
+    dt = np.diff(t)
+    sel = (t[:-1] >= m.t0 - 1e-12) & (t[:-1] < m.t1 - 1e-12)
+    assert dt[sel].sum() == pytest.approx(m.t1 - m.t0, rel=1e-12)
+    span = m.t1 - m.t0
+    e_sw = float(np.sum(res["p_swloss"][:-1][sel] * dt[sel]))
+    assert e_sw == pytest.approx((m.p_swloss + m.p_rr) * span, rel=1e-9)
+    e_inv = float(np.sum(res["p_inv"][:-1][sel] * dt[sel]))
+    assert e_inv == pytest.approx((m.p_sw + m.p_diode + m.p_Rsrc + m.p_swloss + m.p_rr) * span, rel=1e-9)
+    resid = res["p_src"] + res["p_swloss"] - res["p_cu"] - res["p_inv"] - res["p_emf"]
+    assert float(np.sum(resid[:-1][sel] * dt[sel])) == pytest.approx(m.dW_L, abs=1e-6 * m.p_src_total * span)
+    # impulses: with several rows per sample only the rows holding a gate edge carry energy
+    if trace_sub > 1:
+        assert np.mean(res["p_swloss"][:-1][sel] == 0.0) > 0.2
