@@ -35,7 +35,7 @@ import warnings
 from collections.abc import Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import pandas as pd
@@ -53,7 +53,9 @@ __all__ = [
     "LOSS_BUCKETS",
     "NOT_LOSSES",
     "RESOLUTION",
+    "EffMapJob",
     "EffMapResult",
+    "PointCache",
     "efficiency_map",
     "loss_buckets",
     "map_controls",
@@ -90,7 +92,24 @@ def map_controls(drive: Drive, lowest_speed: float) -> dict[str, Control]:
     return {"square": SixStep(reference="torque"), "sine": Sine(handoff_speed=0.5 * abs(lowest_speed))}
 
 
-def _run_point(job: tuple[Drive, str, Control, float, float, tuple[str, ...]]) -> dict[str, Any]:
+#: One operating point of a map: drive, supply, controller, torque reference (N m), speed (rad/s), loss buckets.
+EffMapJob = tuple[Drive, str, Control, float, float, tuple[str, ...]]
+
+
+class PointCache(Protocol):
+    """Where :func:`efficiency_map` finds points computed before and keeps new ones.
+
+    :class:`bldclab.sweep.effmap_store.EffMapStore` keeps them in a sweep store (:class:`bldclab.sweep.store.Store`).
+    """
+
+    def lookup(self, jobs: Sequence[EffMapJob]) -> list[dict[str, Any] | None]:
+        """Return the stored row of each job, None where there is none."""
+
+    def save(self, job: EffMapJob, row: dict[str, Any]) -> None:
+        """Keep the row of one computed job."""
+
+
+def _run_point(job: EffMapJob) -> dict[str, Any]:
     drive, supply, control, torque, speed, buckets = job
     row: dict[str, Any] = {"supply": supply, "torque_ref": torque, "torque_ref_pu": torque / drive.T_N,
                            "speed": speed, "speed_pu": speed / drive.Omega_0, "speed_rpm": speed * _RPM}
@@ -143,6 +162,8 @@ class EffMapResult:
         Smallest efficiency difference called a win.
     seconds : float
         Wall time of the simulations.
+    cached : int
+        Points taken from the cache (:class:`PointCache`) instead of simulated.
     warnings : list of str
         Plausibility warnings of the runs, each prefixed by its supply and point.
     """
@@ -156,6 +177,7 @@ class EffMapResult:
     resolution: float = RESOLUTION
     seconds: float = 0.0
     warnings: list[str] = field(default_factory=list)
+    cached: int = 0
 
     def grid(self, supply: str, column: str, *, feasible_only: bool = True) -> np.ndarray:
         """Return a column of one supply as a ``(len(torques), len(speeds))`` array (nan where infeasible).
@@ -230,10 +252,33 @@ def _axis(name: str, values: Sequence[float] | np.ndarray) -> np.ndarray:
     return a
 
 
+#: Points per process between two saves to a cache: an interrupted map keeps the chunks it finished.
+_SAVE_CHUNK = 32
+
+
+def _compute(jobs: list[EffMapJob], executor: Executor | None, n_pool: int,
+             cache: PointCache | None) -> list[dict[str, Any]]:
+    """Run the points (``n_pool`` > 0: on a process pool of that many, in chunks).
+
+    With a cache, in steps of :data:`_SAVE_CHUNK` points per process, each saved as it finishes.
+    """
+    step = len(jobs) if cache is None else _SAVE_CHUNK * max(1, n_pool)
+    out: list[dict[str, Any]] = []
+    for a in range(0, len(jobs), max(1, step)):
+        part_jobs = jobs[a:a + step]
+        chunksize = max(1, len(part_jobs) // (4 * n_pool)) if n_pool > 0 else 1
+        part = map_points(_run_point, part_jobs, executor, chunksize=chunksize)
+        if cache is not None:
+            for job, row in zip(part_jobs, part, strict=True):
+                cache.save(job, row)
+        out += part
+    return out
+
+
 def efficiency_map(drive: Drive, torques: Sequence[float] | np.ndarray, speeds: Sequence[float] | np.ndarray,
                    supplies: Sequence[str] = SUPPLIES, workers: int | None = None, *,
                    executor: Executor | None = None, controls: dict[str, Control] | None = None,
-                   resolution: float = RESOLUTION) -> EffMapResult:
+                   resolution: float = RESOLUTION, cache: PointCache | None = None) -> EffMapResult:
     """Map efficiency and losses of the supplies over a torque x speed grid.
 
     Parameters
@@ -254,6 +299,9 @@ def efficiency_map(drive: Drive, torques: Sequence[float] | np.ndarray, speeds: 
         ``{"square": control, "sine": control}`` taking a torque reference; default :func:`map_controls`.
     resolution : float
         Smallest efficiency difference called a win (default :data:`RESOLUTION`).
+    cache : PointCache, optional
+        Points found there are not simulated again; new points are saved to it as each chunk of points finishes
+        (e.g. :class:`bldclab.sweep.effmap_store.EffMapStore`, a sweep store). The result is the same either way.
 
     Returns
     -------
@@ -273,16 +321,21 @@ def efficiency_map(drive: Drive, torques: Sequence[float] | np.ndarray, speeds: 
     jobs = [(drive, s, ctl[s], float(t), float(w), buckets) for s in supplies for t in T for w in W]
     t0 = time.perf_counter()
     n_workers = workers or os.cpu_count() or 1
-    if executor is not None or n_workers <= 1:
-        rows = map_points(_run_point, jobs, executor)
+    found = cache.lookup(jobs) if cache is not None else [None] * len(jobs)
+    todo = [jobs[k] for k, row in enumerate(found) if row is None]
+    if executor is not None or n_workers <= 1 or len(todo) <= 1:
+        new = _compute(todo, executor, 0, cache)
     else:
         with ProcessPoolExecutor(max_workers=n_workers) as pool:
-            rows = map_points(_run_point, jobs, pool, chunksize=max(1, len(jobs) // (4 * n_workers)))
+            new = _compute(todo, pool, n_workers, cache)
+    fresh = iter(new)
+    rows = [row if row is not None else next(fresh) for row in found]
     seconds = time.perf_counter() - t0
     caught = [text for row in rows for text in row.pop("_warnings")]
     points = pd.DataFrame(rows)
     res = EffMapResult(drive=drive, points=points, difference=_difference(points, resolution), torques=T, speeds=W,
-                       buckets=buckets, resolution=resolution, seconds=seconds, warnings=caught)
+                       buckets=buckets, resolution=resolution, seconds=seconds, warnings=caught,
+                       cached=len(jobs) - len(todo))
     line = _plaus.summary(caught, len(jobs))
     if line:
         warnings.warn(line, PlausibilityWarning, stacklevel=2)
