@@ -11,11 +11,14 @@ import pandas as pd
 import pytest
 
 import bldclab as bl
+from bldclab.analysis import effmap as effmap_module
 from bldclab.analysis.effmap import FEASIBLE_TOL_PU, LOSS_BUCKETS, NOT_LOSSES, efficiency_map, loss_buckets
 from bldclab.cli import main
 from bldclab.model import analytic
 from bldclab.sim.plausibility import BALANCE_WARN
 from bldclab.sim.results import Metrics
+from bldclab.sweep.effmap_store import EffMapStore
+from bldclab.sweep.store import Store
 from conftest import require_module
 
 
@@ -181,3 +184,48 @@ def test_switching_losses_enter_the_map_and_the_accounting_still_closes(drive):
         losses = sum(r[b] for b in res.buckets)
         assert abs(r.p_in - r.p_shaft - losses - r.p_stored) <= BALANCE_WARN * abs(r.p_in)
         assert r.efficiency < r0.efficiency  # the same point, more loss
+
+
+def _no_simulation(job):
+    raise AssertionError(f"simulated a point the store holds: {job[1:5]}")
+
+
+def test_a_second_identical_map_reuses_the_stored_points(drive, tmp_path, monkeypatch):
+    """Points are stored in a sweep store under their inputs' key; a second identical map simulates nothing and gives
+    the same tables; another drive or grid point misses the store."""
+    T, W = np.array([0.3, 0.8]) * drive.T_N, np.array([0.4, 0.9]) * drive.Omega_0
+    with Store(tmp_path / "s.sqlite") as st:
+        first = EffMapStore(st)
+        a = efficiency_map(drive, T, W, workers=1, cache=first)
+        assert a.cached == 0 and first.saved == 8 and len(st) == 8
+        with monkeypatch.context() as m:
+            m.setattr(effmap_module, "_run_point", _no_simulation)
+            b = efficiency_map(drive, T, W, workers=1, cache=EffMapStore(st))
+        assert b.cached == 8
+        assert b.points.to_csv(index=False) == a.points.to_csv(index=False)
+        assert b.difference.to_csv(index=False) == a.difference.to_csv(index=False)
+        # a changed drive, and a new speed, are simulated; the old points are still found
+        c = efficiency_map(drive.replace(motor__R=0.06), T, W, workers=1, cache=EffMapStore(st))
+        assert c.cached == 0
+        d = efficiency_map(drive, T, [*W, 0.6 * drive.Omega_0], workers=1, cache=EffMapStore(st))
+        assert d.cached == 8 and len(d.points) == 12
+        assert "effmap_point" in set(st.to_pandas()["experiment"])
+
+
+@pytest.mark.slow
+def test_cli_second_run_uses_its_store(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "map"
+    argv = ["effmap", "htm-48v", "--torques", "2", "--speeds", "2", "--workers", "1", "--out", str(out)]
+    assert main(argv) == 0
+    assert "0 of 8 points found there, 8 simulated" in capsys.readouterr().out
+    assert (out / "effmap.sqlite").is_file()
+    before = {n: (out / n).read_bytes() for n in ("effmap.csv", "effmap_difference.csv")}
+    monkeypatch.setattr(effmap_module, "_run_point", _no_simulation)
+    assert main(argv) == 0
+    assert "8 of 8 points found there, 0 simulated" in capsys.readouterr().out
+    assert {n: (out / n).read_bytes() for n in before} == before
+    # --no-store simulates (and here fails: nothing was simulated in the second run above)
+    with pytest.raises(AssertionError, match="simulated a point"):
+        main([*argv, "--no-store"])
+    assert main([*argv, "--store", str(tmp_path / "none" / "s.sqlite")]) == 2
+    assert "--store" in capsys.readouterr().err

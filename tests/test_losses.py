@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import bldclab as bl
+from bldclab.cli import main
 from bldclab.errors import BldclabError
+from bldclab.model.motor import switching_energies
 
 HTM = bl.load("htm-48v").replace(inverter__i_trip=0.0)
 # illustrative device data (not a catalog part): energies at 48 V, 50 A
@@ -60,8 +63,11 @@ def test_recovery_only_on_hard_turn_on():
     modes = np.tile(np.array([[3, 3, 0]], dtype=np.int32), (n, 1))
     duties = np.tile(np.array([[0.5, 1.0, 0.0]]), (n, 1))
     dur = n / (2 * drive.inverter.f_pwm)
-    # start with current flowing a -> b (freewheeling decay through a's lower side)
-    sc = bl.Scenario(duration=dur, speed=2.0, theta0=0.4, delay=0, window=(0.0, dur), i0=(40.0, -40.0, 0.0))
+    # start with current flowing a -> b (freewheeling decay through a's lower side); the window starts after the
+    # first sample: at t = 0 b's lower switch turns on while b's upper diode carries i_b < 0, a hard turn-on that a
+    # window from 0 holds ([t0, t1) holds the edges at t0)
+    sc = bl.Scenario(duration=dur, speed=2.0, theta0=0.4, delay=0, window=(0.5 / drive.inverter.f_pwm, dur),
+                     i0=(40.0, -40.0, 0.0))
     soft = bl.simulate(drive, bl.OpenLoop(modes, duties), sc).metrics
     assert soft is not None and soft.i_rms[0] > 1.0
     assert soft.p_rr == 0.0 and soft.p_swloss == 0.0
@@ -162,3 +168,91 @@ def test_motor_file_round_trip_and_units(tmp_path):
     p2.write_text(text.replace("E_on = 4e-05", 'E_on = "-1 mJ"'))
     with pytest.raises(BldclabError, match="E_on"):
         bl.load(p2)
+
+
+@pytest.mark.parametrize("trace_sub", [1, 4])
+def test_trace_powers_integrate_to_the_metrics_with_the_switching_energies(trace_sub):
+    """The trace's p_swloss is the gate-edge energies booked inside each row over the row's length, and p_inv
+    includes it: summing p dt over the rows of the metric window gives the metrics' switching plus recovery loss and
+    inverter loss to rounding, and the rows' p_src + p_swloss - p_cu - p_inv - p_emf sums to the change of magnetic
+    energy (the integration's residue)."""
+    drive = HTM.replace(inverter__R_on=0.005, inverter__V_f=0.8, inverter__t_dead=5e-7, **LOSS)
+    om = 0.5 * drive.Omega_0
+    ts = 0.5 / drive.inverter.f_pwm
+    k0, k1 = 400, 1000  # window on controller samples: the trace rows tile it
+    sc = bl.Scenario(duration=(k1 + 4) * ts, speed=om, ref=0.6 * drive.T_N, window=(k0 * ts, k1 * ts),
+                     trace_sub=trace_sub)
+    res = bl.simulate(drive, bl.SixStep(reference="torque"), sc)
+    m = res.metrics
+    assert m is not None and m.p_swloss > 0.5 and m.p_rr > 0.05
+    t = res.t
+    dt = np.diff(t)
+    sel = (t[:-1] >= m.t0 - 1e-12) & (t[:-1] < m.t1 - 1e-12)
+    assert dt[sel].sum() == pytest.approx(m.t1 - m.t0, rel=1e-12)
+    span = m.t1 - m.t0
+    e_sw = float(np.sum(res["p_swloss"][:-1][sel] * dt[sel]))
+    assert e_sw == pytest.approx((m.p_swloss + m.p_rr) * span, rel=1e-9)
+    e_inv = float(np.sum(res["p_inv"][:-1][sel] * dt[sel]))
+    assert e_inv == pytest.approx((m.p_sw + m.p_diode + m.p_Rsrc + m.p_swloss + m.p_rr) * span, rel=1e-9)
+    resid = res["p_src"] + res["p_swloss"] - res["p_cu"] - res["p_inv"] - res["p_emf"]
+    assert float(np.sum(resid[:-1][sel] * dt[sel])) == pytest.approx(m.dW_L, abs=1e-6 * m.p_src_total * span)
+    # impulses: with several rows per sample only the rows holding a gate edge carry energy
+    if trace_sub > 1:
+        assert np.mean(res["p_swloss"][:-1][sel] == 0.0) > 0.2
+
+
+def _with_inverter_keys(tmp_path, **keys: str) -> Path:
+    """htm-48v's motor file with extra ``[inverter]`` keys (values as written in the file)."""
+    text = HTM.to_toml()
+    extra = "".join(f"{k} = {v}\n" for k, v in keys.items())
+    text = text.replace("[inverter]\n", "[inverter]\n" + extra, 1)
+    path = tmp_path / "m.toml"
+    path.write_text(text)
+    return path
+
+
+def test_energies_from_rise_and_fall_times_by_hand(tmp_path):
+    """``t_rise``, ``t_fall``, ``Q_rr`` instead of energies: E_on = V I t_rise / 2 = 48 V 50 A 20 ns / 2 = 24 uJ,
+    E_off = 48 V 50 A 15 ns / 2 = 18 uJ, E_rr = Q_rr V = 100 nC 48 V = 4.8 uJ; V_test, I_test default to the bus
+    voltage and the rated current (48 V, 50 A on htm-48v); given, they are used."""
+    inv = bl.load(_with_inverter_keys(tmp_path, t_rise='"20 ns"', t_fall='"15 ns"', Q_rr='"100 nC"')).inverter
+    assert (inv.V_test, inv.I_test) == (48.0, 50.0)
+    assert inv.E_on == pytest.approx(24e-6, rel=1e-12)
+    assert inv.E_off == pytest.approx(18e-6, rel=1e-12)
+    assert inv.E_rr == pytest.approx(4.8e-6, rel=1e-12)
+    inv2 = bl.load(_with_inverter_keys(tmp_path, t_rise="2e-8", V_test='"60 V"', I_test='"30 A"')).inverter
+    assert inv2.E_on == pytest.approx(0.5 * 60 * 30 * 20e-9, rel=1e-12) and inv2.E_off == inv2.E_rr == 0.0
+    assert (inv2.V_test, inv2.I_test) == (60.0, 30.0)
+    assert switching_energies(48.0, 50.0, 20e-9, 15e-9, 100e-9) == pytest.approx((24e-6, 18e-6, 4.8e-6))
+
+
+def test_switching_loss_from_rise_and_fall_times_at_fixed_duty(tmp_path):
+    """The converted energies drive the plant like datasheet energies: one leg chopping at duty 0.1 books
+    p_swloss = (E_on + E_off) f_pwm (i/I_test)(V/V_test) within 1 % (as for given energies)."""
+    drive = bl.load(_with_inverter_keys(tmp_path, t_rise='"40 ns"', t_fall='"30 ns"', Q_rr='"80 nC"'))
+    drive = drive.replace(inverter__i_trip=0.0)
+    m = _chop(drive, 0.1, 2400).metrics
+    assert m is not None
+    inv = drive.inverter
+    i = m.i_rms[0]
+    k = inv.f_pwm * (inv.V_dc / inv.V_test) / inv.I_test
+    expected = 0.5 * 48.0 * 50.0 * (40e-9 + 30e-9) * k * i  # (E_on + E_off) f_pwm (i / I_test), V = V_test
+    assert m.p_swloss == pytest.approx(expected, rel=0.01)
+    assert m.p_rr == pytest.approx(80e-9 * 48.0 * k * i, rel=0.04)
+
+
+@pytest.mark.parametrize(("keys", "field"), [
+    ({"t_rise": '"20 ns"', "E_on": '"10 uJ"'}, "inverter.t_rise"),
+    ({"Q_rr": '"50 nC"', "E_rr": '"1 uJ"'}, "inverter.Q_rr"),
+    ({"t_fall": '"-5 ns"'}, "inverter.t_fall"),
+    ({"Q_rr": '"5 uH"'}, "inverter.Q_rr"),
+    ({"t_rr": '"20 ns"'}, "inverter.t_rr"),
+])
+def test_rise_fall_times_and_energies_are_exclusive_and_checked(tmp_path, keys, field, capsys):
+    path = _with_inverter_keys(tmp_path, **keys)
+    with pytest.raises(BldclabError, match=field.replace(".", r"\.")) as exc:
+        bl.load(path)
+    if "E_on" in keys:
+        assert "E_on" in str(exc.value) and "not both" in str(exc.value)
+    assert main(["check", str(path)]) == 2
+    assert field in capsys.readouterr().err

@@ -983,8 +983,14 @@ def test_doc_examples_load(tmp_path: Path) -> None:
     assert trapezoid.sensors.hall_error[1] == pytest.approx(1.5 * math.pi / 180)
     assert all(isinstance(s, Table) and len(s.theta) == 24 for s in table.motor.emf.shapes)
     assert not table.motor.emf.is_symmetric
-    snippets = [b for b in blocks if "[motor]" not in b]
+    snippets = [b for b in blocks if "[motor]" not in b and "[inverter]" not in b]
     assert len(snippets) == 1
+    # the [inverter] example with rise and fall times: 48 V 50 A 20 ns / 2 = 24 uJ at the defaults V_dc, I_N
+    inverters = [b for b in blocks if "[inverter]" in b and "[motor]" not in b]
+    assert len(inverters) == 1
+    base_inverter = BASE[BASE.index("[inverter]"):BASE.index("[mechanics]")]
+    inv = Drive.from_toml(write(tmp_path, edited(BASE, [(base_inverter, inverters[0] + "\n")]), "inv.toml")).inverter
+    assert (inv.V_test, inv.I_test) == (48.0, 50.0) and inv.E_on == pytest.approx(24e-6)
     drive = Drive.from_toml(write(tmp_path, edited(BASE, [(TRAPEZOID_EMF, snippets[0])])))
     assert [type(s) for s in drive.motor.emf.shapes] == [Trapezoid, Sinusoid, Fourier]
 

@@ -93,8 +93,10 @@ static void row_close(bc_sim_state *s, bc_trace_row *rows, int64_t cap, int64_t 
     r->tau_max = s->row_tmax;
     r->p_src = (a1[BC_ACC_SRC] - a0[BC_ACC_SRC]) * inv;
     r->p_cu = (a1[BC_ACC_CU] - a0[BC_ACC_CU]) * inv;
+    /* the gate-edge energies (impulses) as the row's mean power: the trace integrates to the metrics' sums */
+    r->p_swloss = (a1[BC_ACC_SWLOSS] - a0[BC_ACC_SWLOSS] + a1[BC_ACC_RR] - a0[BC_ACC_RR]) * inv;
     r->p_inv = (a1[BC_ACC_SW] - a0[BC_ACC_SW] + a1[BC_ACC_DIODE] - a0[BC_ACC_DIODE] + a1[BC_ACC_RSRC] -
-                a0[BC_ACC_RSRC]) * inv;
+                a0[BC_ACC_RSRC]) * inv + r->p_swloss;
     r->p_emf = (a1[BC_ACC_EMF] - a0[BC_ACC_EMF]) * inv;
     r->v_a = (a1[BC_ACC_VA] - a0[BC_ACC_VA]) * inv;
     r->v_b = (a1[BC_ACC_VB] - a0[BC_ACC_VB]) * inv;
@@ -302,7 +304,9 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         s->flags_seen |= co.flags;
         s->last_in = ci;
 
-        /* 3. apply */
+        /* 3. apply; gate edges at t_k book their energies (E_on, E_off, E_rr) here, and belong to a row or metric
+         * window that starts at t_k: [t0, t1) holds the edges at t0, not those at t1 (each edge once per period) */
+        double pre_swloss = ps->acc[BC_ACC_SWLOSS], pre_rr = ps->acc[BC_ACC_RR];
         bc_leg_cmd cmd[3];
         for (int x = 0; x < 3; ++x) {
             cmd[x] = cfg->delay ? s->pending[x] : co.leg[x];
@@ -333,6 +337,10 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
                 }
                 if (!s->row_open) {
                     row_open(cfg, s);
+                    if (q == 0) {
+                        s->row_acc0[BC_ACC_SWLOSS] = pre_swloss;
+                        s->row_acc0[BC_ACC_RR] = pre_rr;
+                    }
                 }
             }
             double t_seg = (q + 1 == sub) ? t_next : t_k + th * (double)(q + 1) / (double)sub;
@@ -340,6 +348,10 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
             if (has_window && s->m.state == 0 && cfg->metric_t0 >= ps->t && cfg->metric_t0 < t_seg) {
                 if (cfg->metric_t0 > ps->t) advance_chunk(cfg, s, cfg->metric_t0);
                 metric_start(cfg, s);
+                if (ps->t == t_k) {
+                    s->m_acc0[BC_ACC_SWLOSS] = pre_swloss;
+                    s->m_acc0[BC_ACC_RR] = pre_rr;
+                }
             }
             if (has_window && s->m.state == 1 && cfg->metric_t1 > ps->t && cfg->metric_t1 <= t_seg) {
                 advance_chunk(cfg, s, cfg->metric_t1);

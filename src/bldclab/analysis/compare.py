@@ -31,8 +31,10 @@ from ..model import analytic
 from ..model.motor import Drive
 from ..sim import plausibility as _plaus
 from .experiments import base_speed, map_points, steady_state
+from .losses import copper_only_efficiency, loss_buckets, point_losses
 
-__all__ = ["VERDICT_TOLERANCE", "CompareResult", "base_speed_table", "compare", "default_controls", "speed_grid"]
+__all__ = ["EFFICIENCY_COUNTS", "VERDICT_TOLERANCE", "CompareResult", "base_speed_table", "compare", "default_controls",
+           "efficiency_table", "speed_grid"]
 
 SUPPLIES = ("square", "sine")
 
@@ -75,6 +77,9 @@ def _run_point(args: tuple[Drive, str, Control, float, float, int]) -> dict[str,
            "i_rms": float(np.mean(m.i_rms)),
            "i_peak": float(max(m.i_peak)), "balance": m.balance_electrical,
            "_warnings": [f"{supply} at {w_pu:.3g} p.u.: {text}" for text in caught]}
+    acc = point_losses(m, loss_buckets())
+    row["_eff"] = {"eta_sim_copper": copper_only_efficiency(m), "eta_sim_full": acc.pop("efficiency"),
+                   "p_m": m.p_emf + m.p_cog, **acc}
     if pwm_phases > 1:
         for key, rng in (("T_pu", point.tau_mean_range), ("TR_pu", point.ripple_sampled_range),
                          ("TR_ma_pu", point.ripple_ma_range)):
@@ -166,6 +171,10 @@ class CompareResult:
     not_applicable : list of str
         Why paper 1's closed forms (the ``analytic`` columns) do not describe this drive
         (:func:`bldclab.model.analytic.applicability`); empty where their premises hold.
+    efficiency : pandas.DataFrame or None
+        :func:`efficiency_table`: per supply and speed the efficiency by each loss count of
+        :data:`EFFICIENCY_COUNTS` (paper 1's copper-only closed forms with 3 P_R and with the consistent 2 R I_N^2,
+        the simulated copper-only and the simulated full-loss efficiency) and the loss buckets (W).
     """
 
     drive: Drive
@@ -178,6 +187,49 @@ class CompareResult:
     seconds: float = 0.0
     warnings: list[str] = field(default_factory=list)
     not_applicable: list[str] = field(default_factory=list)
+    efficiency: pd.DataFrame | None = None
+
+
+#: The efficiency columns of :attr:`CompareResult.efficiency`, each with the loss count it uses.
+EFFICIENCY_COUNTS: dict[str, str] = {
+    "eta_paper_3PR": "paper 1 (38)/(39), copper loss 3 P_R,pu as printed in (36)",
+    "eta_consistent_2PR": "(38)/(39) with the consistent copper loss 2 R I_N^2 (two phases conduct I_N)",
+    "eta_sim_copper": "simulated, copper loss only (the actual currents: commutation and PWM ripple)",
+    "eta_sim_full": "simulated, every loss bucket",
+}
+
+
+def efficiency_table(drive: Drive, simulated: pd.DataFrame) -> pd.DataFrame:
+    """Return paper 1's efficiency comparison extended: closed forms beside the simulated copper-only and full losses.
+
+    Parameters
+    ----------
+    drive : Drive
+    simulated : pandas.DataFrame
+        One row per supply and speed with ``supply``, ``Omega_pu``, ``eta_sim_copper``
+        (:func:`bldclab.analysis.losses.copper_only_efficiency`), ``eta_sim_full`` (the efficiency of
+        :func:`bldclab.analysis.losses.point_losses`) and the powers of
+        :func:`~bldclab.analysis.losses.point_losses` (W).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``supply``, ``Omega_pu``, the four columns of :data:`EFFICIENCY_COUNTS` (``eta_paper_3PR``: (38) square
+        wave, (39) sinusoidal with (36)'s ``3 P_R,pu``, :func:`bldclab.model.analytic.p_lCu_pu`;
+        ``eta_consistent_2PR``: the same with ``2 R I_N^2`` on the base ``T_N Omega_0``,
+        :func:`bldclab.model.analytic.p_lCu_consistent_pu`; both NaN above the base speeds (21), (30)), then
+        ``p_in``, ``p_shaft``, ``p_m`` (electromagnetic power), each loss bucket, ``p_loss``, ``p_stored`` and
+        ``residue`` (W).
+    """
+    df = simulated.copy()
+    th = analytic.theta_m(drive)
+    w = df["Omega_pu"].to_numpy(dtype=float)
+    square = (df["supply"] == "square").to_numpy()
+    for col, pcu in (("eta_paper_3PR", analytic.p_lCu_pu(drive)),
+                     ("eta_consistent_2PR", analytic.p_lCu_consistent_pu(drive))):
+        df[col] = np.where(square, np.asarray(analytic.eta_q(w, th, pcu)), np.asarray(analytic.eta_s(w, th, pcu)))
+    first = ["supply", "Omega_pu", *EFFICIENCY_COUNTS]
+    return df[first + [c for c in df.columns if c not in first]]
 
 
 def _progress(total: int, enabled: bool) -> Callable[[int], None]:
@@ -247,13 +299,16 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
             bs = [f.result() for f in bs_futures]
     seconds = time.perf_counter() - t0
     caught = [text for row in rows for text in row.pop("_warnings")]
+    eff = efficiency_table(drive, pd.DataFrame([{"supply": row["supply"], "Omega_pu": row["Omega_pu"],
+                                                 **row.pop("_eff")} for row in rows]))
     sim = pd.DataFrame(rows)
     an = analytic.characteristic(drive, w)
     t1 = analytic.table1(drive)
     bst = base_speed_table(drive, dict(zip(SUPPLIES, bs, strict=True)), t1) if base_speeds else None
     res = CompareResult(drive=drive, simulated=sim, analytic=an, table1=t1, base_speeds=bst,
-                        pwm_phases=pwm_phases, seconds=seconds)
-    res.verdict = _verdict(sim) + _sampling_notes(sim) + (_base_speed_verdict(bst) if bst is not None else [])
+                        pwm_phases=pwm_phases, seconds=seconds, efficiency=eff)
+    res.verdict = (_verdict(sim) + _efficiency_verdict(eff) + _sampling_notes(sim)
+                   + (_base_speed_verdict(bst) if bst is not None else []))
     res.warnings = caught
     res.not_applicable = analytic.applicability(drive)
     line = _plaus.summary(caught, len(jobs))
@@ -340,4 +395,58 @@ def _verdict(sim: pd.DataFrame) -> list[str]:
                 else:
                     lines.append(f"{name}: {who} for {where} (by {gap:.3f}{unit} on average, above the {tol:g}"
                                  f"{unit} resolved)")
+    return lines
+
+
+_WINNER = {1: "sinusoidal better", -1: "square-wave better", 0: "equal"}
+_NA = 2  # a closed form outside its range (above a base speed)
+
+
+def _winner_states(eff: pd.DataFrame, col: str, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Return speeds and per speed 1 (sinusoidal more efficient), -1 (square wave), 0 (within tol), 2 (n/a)."""
+    sq = eff[eff.supply == "square"].sort_values("Omega_pu")
+    si = eff[eff.supply == "sine"].sort_values("Omega_pu")
+    diff = si[col].to_numpy(dtype=float) - sq[col].to_numpy(dtype=float)
+    state = np.where(np.isnan(diff), _NA, np.where(diff > tol, 1, np.where(diff < -tol, -1, 0)))
+    return sq["Omega_pu"].to_numpy(dtype=float), state
+
+
+def _where(lo: float, hi: float) -> str:
+    return f"Omega in [{lo:.2f}, {hi:.2f}] p.u." if hi > lo else f"Omega = {lo:.2f} p.u."
+
+
+def _efficiency_verdict(eff: pd.DataFrame) -> list[str]:
+    """Say who wins on efficiency by each loss count, and where the full-loss winner differs from a copper-only one.
+
+    The same tolerance as the simulated efficiency's verdict (:data:`VERDICT_TOLERANCE`) for every count.
+    """
+    tol = VERDICT_TOLERANCE["eta"]
+    states = {col: _winner_states(eff, col, tol) for col in EFFICIENCY_COUNTS}
+    lines = []
+    for col, text in EFFICIENCY_COUNTS.items():
+        w, state = states[col]
+        parts = [f"{who} for {_where(lo, hi)}" for value, who in _WINNER.items()
+                 for lo, hi in _ranges(state == value, w)]
+        parts += [f"not defined for {_where(lo, hi)} (above the base speed)" for lo, hi in _ranges(state == _NA, w)]
+        lines.append(f"efficiency by loss count, {text}: " + "; ".join(parts)
+                     + f" (a difference within {tol:g} is equal: the one resolved)")
+    w, full = states["eta_sim_full"]
+    for col, name in (("eta_paper_3PR", "paper 1's (38)/(39) with 3 P_R"),
+                      ("eta_consistent_2PR", "(38)/(39) with 2 R I_N^2"),
+                      ("eta_sim_copper", "the simulated copper-only efficiency")):
+        _, cu = states[col]
+        both = (cu != _NA) & (full != _NA)
+        changed = both & (cu != full)
+        if not np.any(both):
+            continue
+        if not np.any(changed):
+            lines.append(f"efficiency, full losses against {name}: the same winner at every speed compared"
+                         + ("" if np.all(both) else " where both are defined") + f" (above the {tol:g} resolved)")
+            continue
+        for a in (1, -1, 0):
+            for b in (1, -1, 0):
+                for lo, hi in _ranges(changed & (cu == a) & (full == b), w):
+                    lines.append(f"efficiency, full losses against {name}: the verdict changes for {_where(lo, hi)}: "
+                                 f"{_WINNER[a]} with copper loss only, {_WINNER[b]} with every loss (above the "
+                                 f"{tol:g} resolved)")
     return lines

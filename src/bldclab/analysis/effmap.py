@@ -11,12 +11,13 @@ A point is *feasible* when the drive holds the torque asked for: ``|tau_mean - T
 Above the drive's envelope (the current limit, or the voltage the bus can impress at that speed) it delivers less;
 such points are kept in the table with ``feasible = False`` and left out of the maps and the comparison.
 
-The loss buckets are the mean powers of :class:`~bldclab.sim.results.Metrics` named in :data:`LOSS_BUCKETS` (the one
-place to add a new one); the accounting of each point is ``p_src_total = p_shaft + sum(buckets) + p_stored +
-residue`` (``p_src_total``: the DC source's power with the switching and recovery energies it supplies) with
-``p_shaft = p_emf + p_cog - p_fric``, ``p_stored`` the change of the windings' magnetic energy over the window
-divided by its length (zero in an exactly periodic steady state) and a residue of the order of the integration's
-energy balance (:attr:`~bldclab.sim.results.Metrics.balance_electrical`, 1e-9 to 1e-7).
+The loss buckets are the mean powers of :class:`~bldclab.sim.results.Metrics` named in :data:`LOSS_BUCKETS`
+(:mod:`bldclab.analysis.losses`, the one place to add a new one; re-exported here); the accounting of each point
+is ``p_src_total = p_shaft + sum(buckets) + p_stored + residue`` (``p_src_total``: the DC source's power with the
+switching and recovery energies it supplies) with ``p_shaft = p_emf + p_cog - p_fric``, ``p_stored`` the change
+of the windings' magnetic energy over the window divided by its length (zero in an exactly periodic steady state)
+and a residue of the order of the integration's energy balance
+(:attr:`~bldclab.sim.results.Metrics.balance_electrical`, 1e-9 to 1e-7).
 
 The efficiency is ``p_shaft / (p_src_total - p_stored)`` motoring and ``(p_src_total - p_stored) / p_shaft``
 generating: the power the cycle takes from (gives to) the source once the window's left-over change of stored energy
@@ -27,7 +28,6 @@ with no losses it is 1 to the integration's accuracy.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 import time
@@ -35,7 +35,7 @@ import warnings
 from collections.abc import Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import pandas as pd
@@ -44,29 +44,23 @@ from ..control import Control, Sine, SixStep
 from ..errors import BldclabError, PlausibilityError, PlausibilityWarning
 from ..model.motor import Drive
 from ..sim import plausibility as _plaus
-from ..sim.results import Metrics
 from .compare import VERDICT_TOLERANCE
 from .experiments import map_points, steady_state
+from .losses import LOSS_BUCKETS, NOT_LOSSES, loss_buckets, point_losses
 
 __all__ = [
     "FEASIBLE_TOL_PU",
     "LOSS_BUCKETS",
     "NOT_LOSSES",
     "RESOLUTION",
+    "EffMapJob",
     "EffMapResult",
+    "PointCache",
     "efficiency_map",
     "loss_buckets",
     "map_controls",
 ]
 
-#: The loss buckets, by their :class:`~bldclab.sim.results.Metrics` field names (W): source resistance, windings,
-#: switch conduction, diodes, switching, diode recovery, friction. A bucket the plant does not report (yet) is
-#: skipped; add a new one here.
-LOSS_BUCKETS: tuple[str, ...] = ("p_Rsrc", "p_cu", "p_sw", "p_diode", "p_swloss", "p_rr", "p_fric")
-#: The ``p_*`` fields of :class:`~bldclab.sim.results.Metrics` that are not losses: the input, the load, and the
-#: two that make up the shaft power with friction. Every other ``p_*`` field must be in :data:`LOSS_BUCKETS`
-#: (a test checks it, so a bucket added to the plant is not silently left out of the maps).
-NOT_LOSSES: tuple[str, ...] = ("p_src", "p_src_total", "p_load", "p_emf", "p_cog")
 #: A point is feasible when its mean torque is within this of the reference (p.u. of ``T_N``). Four times the
 #: largest PWM-grid spread of the mean torque measured for :data:`bldclab.analysis.compare.VERDICT_TOLERANCE`
 #: (0.005 p.u.): a point outside it misses its torque because of the drive, not of the simulation.
@@ -77,12 +71,6 @@ RESOLUTION = VERDICT_TOLERANCE["eta"]
 
 SUPPLIES = ("square", "sine")
 _RPM = 30.0 / math.pi
-
-
-def loss_buckets() -> tuple[str, ...]:
-    """Return the loss buckets of :data:`LOSS_BUCKETS` that :class:`~bldclab.sim.results.Metrics` has."""
-    names = {f.name for f in dataclasses.fields(Metrics)}
-    return tuple(b for b in LOSS_BUCKETS if b in names)
 
 
 def map_controls(drive: Drive, lowest_speed: float) -> dict[str, Control]:
@@ -104,16 +92,24 @@ def map_controls(drive: Drive, lowest_speed: float) -> dict[str, Control]:
     return {"square": SixStep(reference="torque"), "sine": Sine(handoff_speed=0.5 * abs(lowest_speed))}
 
 
-def _efficiency(p_in: float, p_shaft: float) -> float:
-    """Motoring: shaft over input power; generating: electrical output over mechanical input; else nan."""
-    if p_in > 0.0 and p_shaft > 0.0:
-        return p_shaft / p_in
-    if p_in < 0.0 and p_shaft < 0.0:
-        return p_in / p_shaft
-    return math.nan
+#: One operating point of a map: drive, supply, controller, torque reference (N m), speed (rad/s), loss buckets.
+EffMapJob = tuple[Drive, str, Control, float, float, tuple[str, ...]]
 
 
-def _run_point(job: tuple[Drive, str, Control, float, float, tuple[str, ...]]) -> dict[str, Any]:
+class PointCache(Protocol):
+    """Where :func:`efficiency_map` finds points computed before and keeps new ones.
+
+    :class:`bldclab.sweep.effmap_store.EffMapStore` keeps them in a sweep store (:class:`bldclab.sweep.store.Store`).
+    """
+
+    def lookup(self, jobs: Sequence[EffMapJob]) -> list[dict[str, Any] | None]:
+        """Return the stored row of each job, None where there is none."""
+
+    def save(self, job: EffMapJob, row: dict[str, Any]) -> None:
+        """Keep the row of one computed job."""
+
+
+def _run_point(job: EffMapJob) -> dict[str, Any]:
     drive, supply, control, torque, speed, buckets = job
     row: dict[str, Any] = {"supply": supply, "torque_ref": torque, "torque_ref_pu": torque / drive.T_N,
                            "speed": speed, "speed_pu": speed / drive.Omega_0, "speed_rpm": speed * _RPM}
@@ -129,15 +125,10 @@ def _run_point(job: tuple[Drive, str, Control, float, float, tuple[str, ...]]) -
                     "note": f"refused: {exc}", "_warnings": []})
         return row
     m = point.metrics
-    shaft = m.p_emf + m.p_cog - m.p_fric
-    losses = {b: float(getattr(m, b)) for b in buckets}
-    p_loss = sum(losses.values())
-    p_stored = m.dW_L / (m.t1 - m.t0)  # zero in an exactly periodic steady state
+    acc = point_losses(m, buckets)
     tol = FEASIBLE_TOL_PU * drive.T_N
-    row.update({"tau_mean": point.tau_mean, "tau_mean_pu": point.tau_mean_pu, "p_in": m.p_src_total, "p_shaft": shaft,
-                **losses, "p_loss": p_loss, "p_stored": p_stored,
-                "residue": m.p_src_total - shaft - p_loss - p_stored,
-                "efficiency": _efficiency(m.p_src_total - p_stored, shaft), "balance_electrical": m.balance_electrical,
+    row.update({"tau_mean": point.tau_mean, "tau_mean_pu": point.tau_mean_pu, **acc,
+                "balance_electrical": m.balance_electrical,
                 "i_rms_a": m.i_rms[0], "i_rms_b": m.i_rms[1], "i_rms_c": m.i_rms[2],
                 "feasible": bool(abs(point.tau_mean - torque) <= tol), "note": "",
                 "_warnings": [f"{supply} at {torque:.4g} N m, {speed:.4g} rad/s: {text}" for text in caught]})
@@ -171,6 +162,8 @@ class EffMapResult:
         Smallest efficiency difference called a win.
     seconds : float
         Wall time of the simulations.
+    cached : int
+        Points taken from the cache (:class:`PointCache`) instead of simulated.
     warnings : list of str
         Plausibility warnings of the runs, each prefixed by its supply and point.
     """
@@ -184,6 +177,7 @@ class EffMapResult:
     resolution: float = RESOLUTION
     seconds: float = 0.0
     warnings: list[str] = field(default_factory=list)
+    cached: int = 0
 
     def grid(self, supply: str, column: str, *, feasible_only: bool = True) -> np.ndarray:
         """Return a column of one supply as a ``(len(torques), len(speeds))`` array (nan where infeasible).
@@ -258,10 +252,33 @@ def _axis(name: str, values: Sequence[float] | np.ndarray) -> np.ndarray:
     return a
 
 
+#: Points per process between two saves to a cache: an interrupted map keeps the chunks it finished.
+_SAVE_CHUNK = 32
+
+
+def _compute(jobs: list[EffMapJob], executor: Executor | None, n_pool: int,
+             cache: PointCache | None) -> list[dict[str, Any]]:
+    """Run the points (``n_pool`` > 0: on a process pool of that many, in chunks).
+
+    With a cache, in steps of :data:`_SAVE_CHUNK` points per process, each saved as it finishes.
+    """
+    step = len(jobs) if cache is None else _SAVE_CHUNK * max(1, n_pool)
+    out: list[dict[str, Any]] = []
+    for a in range(0, len(jobs), max(1, step)):
+        part_jobs = jobs[a:a + step]
+        chunksize = max(1, len(part_jobs) // (4 * n_pool)) if n_pool > 0 else 1
+        part = map_points(_run_point, part_jobs, executor, chunksize=chunksize)
+        if cache is not None:
+            for job, row in zip(part_jobs, part, strict=True):
+                cache.save(job, row)
+        out += part
+    return out
+
+
 def efficiency_map(drive: Drive, torques: Sequence[float] | np.ndarray, speeds: Sequence[float] | np.ndarray,
                    supplies: Sequence[str] = SUPPLIES, workers: int | None = None, *,
                    executor: Executor | None = None, controls: dict[str, Control] | None = None,
-                   resolution: float = RESOLUTION) -> EffMapResult:
+                   resolution: float = RESOLUTION, cache: PointCache | None = None) -> EffMapResult:
     """Map efficiency and losses of the supplies over a torque x speed grid.
 
     Parameters
@@ -282,6 +299,9 @@ def efficiency_map(drive: Drive, torques: Sequence[float] | np.ndarray, speeds: 
         ``{"square": control, "sine": control}`` taking a torque reference; default :func:`map_controls`.
     resolution : float
         Smallest efficiency difference called a win (default :data:`RESOLUTION`).
+    cache : PointCache, optional
+        Points found there are not simulated again; new points are saved to it as each chunk of points finishes
+        (e.g. :class:`bldclab.sweep.effmap_store.EffMapStore`, a sweep store). The result is the same either way.
 
     Returns
     -------
@@ -301,16 +321,21 @@ def efficiency_map(drive: Drive, torques: Sequence[float] | np.ndarray, speeds: 
     jobs = [(drive, s, ctl[s], float(t), float(w), buckets) for s in supplies for t in T for w in W]
     t0 = time.perf_counter()
     n_workers = workers or os.cpu_count() or 1
-    if executor is not None or n_workers <= 1:
-        rows = map_points(_run_point, jobs, executor)
+    found = cache.lookup(jobs) if cache is not None else [None] * len(jobs)
+    todo = [jobs[k] for k, row in enumerate(found) if row is None]
+    if executor is not None or n_workers <= 1 or len(todo) <= 1:
+        new = _compute(todo, executor, 0, cache)
     else:
         with ProcessPoolExecutor(max_workers=n_workers) as pool:
-            rows = map_points(_run_point, jobs, pool, chunksize=max(1, len(jobs) // (4 * n_workers)))
+            new = _compute(todo, pool, n_workers, cache)
+    fresh = iter(new)
+    rows = [row if row is not None else next(fresh) for row in found]
     seconds = time.perf_counter() - t0
     caught = [text for row in rows for text in row.pop("_warnings")]
     points = pd.DataFrame(rows)
     res = EffMapResult(drive=drive, points=points, difference=_difference(points, resolution), torques=T, speeds=W,
-                       buckets=buckets, resolution=resolution, seconds=seconds, warnings=caught)
+                       buckets=buckets, resolution=resolution, seconds=seconds, warnings=caught,
+                       cached=len(jobs) - len(todo))
     line = _plaus.summary(caught, len(jobs))
     if line:
         warnings.warn(line, PlausibilityWarning, stacklevel=2)

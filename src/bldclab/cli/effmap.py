@@ -13,6 +13,8 @@ from ..analysis.effmap import FEASIBLE_TOL_PU, efficiency_map
 from ..errors import BldclabError
 from ..report.effmap_plots import plot_difference, plot_efficiency_maps, plot_losses
 from ..report.plots import figure_bytes
+from ..sweep.effmap_store import EffMapStore
+from ..sweep.store import Store
 from .common import add_inverter_option, check_out_dir, check_speed_range, load_drive, positive_int
 
 __all__ = ["configure_command", "run_command"]
@@ -33,7 +35,22 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     p.add_argument("--generating", action="store_true",
                    help="map braking (negative torque references) instead of motoring")
     p.add_argument("--workers", type=positive_int, help="processes, >= 1 (default: all cores; 1: serial)")
+    store = p.add_mutually_exclusive_group()
+    store.add_argument("--store", metavar="DIR|FILE", type=Path,
+                       help="results store (a sweep store: SQLite file, or a directory to hold effmap.sqlite; "
+                            "default: effmap.sqlite in --out): points in it are not simulated again")
+    store.add_argument("--no-store", action="store_true", help="keep no store: simulate every point")
     add_inverter_option(p)
+
+
+def _store_path(out: Path, store: Path | None) -> Path:
+    if store is None:
+        return out / "effmap.sqlite"
+    if store.is_dir():
+        return store / "effmap.sqlite"
+    if not store.parent.is_dir():
+        raise BldclabError("--store", f"directory {str(store.parent)!r} does not exist")
+    return store
 
 
 def run_command(args: argparse.Namespace) -> int:
@@ -52,7 +69,15 @@ def run_command(args: argparse.Namespace) -> int:
     sign = -1.0 if args.generating else 1.0
     torques = sign * np.linspace(args.min_torque, args.max_torque, args.torques) * drive.T_N
     speeds = np.linspace(args.min_speed, args.max_speed, args.speeds) * drive.Omega_0
-    res = efficiency_map(drive, torques, speeds, workers=args.workers)
+    if args.no_store:
+        res = efficiency_map(drive, torques, speeds, workers=args.workers)
+    else:
+        path = _store_path(out, args.store)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with Store(path) as st:
+            res = efficiency_map(drive, torques, speeds, workers=args.workers, cache=EffMapStore(st))
+        print(f"store {path}: {res.cached} of {len(res.points)} points found there, "
+              f"{len(res.points) - res.cached} simulated")
     mode = "generating (braking)" if args.generating else "motoring"
     print(f"{drive.name}: efficiency map, {mode}, {args.torques} torques x {args.speeds} speeds x 2 supplies in "
           f"{res.seconds:.1f} s (T_N = {drive.T_N:.4g} N m, Omega_0 = {drive.Omega_0 * RPM_PER_RAD_S:.4g} rpm; a "

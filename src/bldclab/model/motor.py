@@ -30,6 +30,7 @@ __all__ = [
     "Mechanics",
     "Motor",
     "Sensors",
+    "switching_energies",
 ]
 
 
@@ -185,6 +186,51 @@ class Inverter:
     def has_switching_losses(self) -> bool:
         """True if any of ``E_on``, ``E_off``, ``E_rr`` is positive."""
         return self.E_on > 0.0 or self.E_off > 0.0 or self.E_rr > 0.0
+
+
+#: Motor-file keys of the "from rise/fall times" input of the switching energies (:func:`switching_energies`).
+TRANSITION_FIELDS: tuple[str, ...] = ("t_rise", "t_fall", "Q_rr")
+
+
+def switching_energies(V_test: float, I_test: float, t_rise: float, t_fall: float,
+                       Q_rr: float = 0.0) -> tuple[float, float, float]:
+    """Estimate ``(E_on, E_off, E_rr)`` from a switch's rise and fall times and its diode's recovery charge.
+
+    The linear-transition estimate of hard switching on an inductive, clamped load (the drive's phase current does
+    not change during the edge): at turn-on the current rises in ``t_rise`` while the voltage stays at ``V_test``,
+    at turn-off the voltage rises and the current falls in ``t_fall``; a linear ramp of one against the other
+    dissipates half the rectangle,
+
+        E_on = V_test I_test t_rise / 2,   E_off = V_test I_test t_fall / 2,   E_rr = Q_rr V_test
+
+    (``E_rr``: the recovery charge swept out at the bus voltage, which the turning-on switch mostly dissipates; the
+    usual rough estimate, an upper one for the diode's own share of about ``Q_rr V_test / 4``). Limits: datasheet
+    times are measured in a resistive or gate-charge test circuit, not the drive's inductive switching, and with a
+    given gate resistance; the Miller plateau (voltage and current transitions in sequence, not together), the
+    parasitic inductances and the output-capacitance charge are ignored. Good for an order of magnitude; datasheet
+    energies, where given, are better.
+
+    Parameters
+    ----------
+    V_test : float
+        Voltage at the edge (V), > 0.
+    I_test : float
+        Switched current (A), > 0.
+    t_rise, t_fall : float
+        Current rise time at turn-on and fall time at turn-off (s), >= 0.
+    Q_rr : float
+        Diode reverse-recovery charge (C), >= 0.
+
+    Returns
+    -------
+    tuple of float
+        ``(E_on, E_off, E_rr)`` (J), the energies at ``V_test``, ``I_test`` (:class:`Inverter`'s fields).
+    """
+    check_number("V_test", V_test, lo=0.0, lo_open=True)
+    check_number("I_test", I_test, lo=0.0, lo_open=True)
+    for name, value in (("t_rise", t_rise), ("t_fall", t_fall), ("Q_rr", Q_rr)):
+        check_number(name, value, lo=0.0)
+    return 0.5 * V_test * I_test * t_rise, 0.5 * V_test * I_test * t_fall, Q_rr * V_test
 
 
 @dataclass(frozen=True)
@@ -445,6 +491,7 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
     inv_s = top.sub("inverter")
     if inv_s is None:
         raise BldclabError("inverter", "is missing (an [inverter] table with V_dc and f_pwm is required)")
+    energies = _inverter_energies(inv_s, motor)
     inverter = wrap("inverter", Inverter, V_dc=inv_s.quantity("V_dc", "voltage"),
                      f_pwm=inv_s.quantity("f_pwm", "frequency"),
                      t_dead=inv_s.quantity("t_dead", "time", 0.0),
@@ -452,10 +499,7 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
                      V_f=inv_s.quantity("V_f", "voltage", 0.0), r_d=inv_s.quantity("r_d", "resistance", 0.0),
                      R_src=inv_s.quantity("R_src", "resistance", 0.0),
                      i_trip=inv_s.quantity("i_trip", "current", 0.0),
-                     model=inv_s.string("model", "switching"),
-                     E_on=inv_s.quantity("E_on", "energy", 0.0), E_off=inv_s.quantity("E_off", "energy", 0.0),
-                     E_rr=inv_s.quantity("E_rr", "energy", 0.0), V_test=inv_s.quantity("V_test", "voltage", 0.0),
-                     I_test=inv_s.quantity("I_test", "current", 0.0))
+                     model=inv_s.string("model", "switching"), **energies)
     inv_s.finish()
 
     mech = Mechanics()
@@ -491,6 +535,35 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
     top.finish()
     return Drive(motor=motor, inverter=inverter, mechanics=mech, sensors=sensors, name=name,
                  description=description)
+
+
+def _inverter_energies(inv_s: Section, motor: Motor) -> dict[str, float]:
+    """Return ``E_on``, ``E_off``, ``E_rr``, ``V_test``, ``I_test`` of an ``[inverter]`` table.
+
+    Given as energies, or estimated from ``t_rise``, ``t_fall``, ``Q_rr`` (:func:`switching_energies`; ``V_test``
+    and ``I_test`` default to ``V_dc`` and the motor's ``I_N`` there).
+    """
+    given_e = [k for k in ("E_on", "E_off", "E_rr") if inv_s.has(k)]
+    given_t = [k for k in TRANSITION_FIELDS if inv_s.has(k)]
+    if given_e and given_t:
+        raise BldclabError(inv_s.name(given_t[0]), f"cannot be given with {inv_s.name(given_e[0])}: give the "
+                           "switching energies (E_on, E_off, E_rr) or the rise/fall times and recovery charge "
+                           "(t_rise, t_fall, Q_rr), not both")
+    if not given_t:
+        return {"E_on": inv_s.quantity("E_on", "energy", 0.0), "E_off": inv_s.quantity("E_off", "energy", 0.0),
+                "E_rr": inv_s.quantity("E_rr", "energy", 0.0), "V_test": inv_s.quantity("V_test", "voltage", 0.0),
+                "I_test": inv_s.quantity("I_test", "current", 0.0)}
+    v = inv_s.quantity("V_test", "voltage", None)
+    i = inv_s.quantity("I_test", "current", None)
+    v = inv_s.quantity("V_dc", "voltage") if v is None else v
+    i = motor.I_N if i is None else i
+    times = {"t_rise": inv_s.quantity("t_rise", "time", 0.0), "t_fall": inv_s.quantity("t_fall", "time", 0.0),
+             "Q_rr": inv_s.quantity("Q_rr", "charge", 0.0)}
+    try:
+        e_on, e_off, e_rr = switching_energies(v, i, **times)
+    except BldclabError as exc:
+        raise BldclabError(inv_s.name(exc.field), exc.problem) from None
+    return {"E_on": e_on, "E_off": e_off, "E_rr": e_rr, "V_test": v, "I_test": i}
 
 
 def _drive_to_toml(d: Drive) -> str:

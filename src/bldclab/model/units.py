@@ -31,6 +31,7 @@ DIMENSIONS: dict[str, dict[str, float]] = {
     "damping": {"N m s/rad": 1.0, "Nms/rad": 1.0},
     "power": {"W": 1.0, "kW": 1e3},
     "energy": {"J": 1.0, "mJ": 1e-3, "uJ": 1e-6, "nJ": 1e-9},
+    "charge": {"C": 1.0, "mC": 1e-3, "uC": 1e-6, "nC": 1e-9},
     "dimensionless": {"": 1.0},
 }
 

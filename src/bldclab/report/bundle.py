@@ -235,8 +235,10 @@ def compare_files(res: CompareResult, *, figures: bool = True) -> dict[str, byte
     """Return the result files of a comparison, in the order ``bldclab compare`` writes them.
 
     The one producer of a results directory's data files: ``simulated.csv``, ``analytic.csv``, ``base_speeds.csv``,
-    ``table1.csv``, ``table1.json``, ``verdict.txt``, ``dynamometer.csv`` and, with ``figures``, the PNG and SVG of
-    the torque, ripple and efficiency characteristics and of paper 1's Figs 9, 11 and 12.
+    ``table1.csv``, ``table1.json``, ``verdict.txt``, ``efficiency.csv`` (paper 1's efficiency by loss count
+    beside the simulated ones, :func:`bldclab.analysis.compare.efficiency_table`), ``dynamometer.csv`` and, with
+    ``figures``, the PNG and SVG of the torque, ripple and efficiency characteristics and of paper 1's Figs 9, 11
+    and 12.
     :func:`compare_outputs` adds ``waveforms.csv``, ``manifest.json`` and ``report.html``.
 
     Parameters
@@ -259,6 +261,8 @@ def compare_files(res: CompareResult, *, figures: bool = True) -> dict[str, byte
         "table1.csv": table1_text(t1, "csv").encode(),
         "table1.json": table1_text(t1, "json", res.not_applicable).encode(),
         "verdict.txt": ("\n".join(res.verdict) + "\n").encode(),
+        # compare() results made before the efficiency table existed have none
+        **({} if res.efficiency is None else {"efficiency.csv": res.efficiency.to_csv(index=False).encode()}),
     }
     figs = comparison_figures(res) if figures else {}
     if figures:
@@ -342,7 +346,7 @@ def motor_results(drive: Drive, speeds_pu: Sequence[float], *, command: str, mot
     Returns
     -------
     dict of str to bytes
-        ``simulated.csv``, ``analytic.csv``, ``table1.json``, ``verdict.txt``, ``dynamometer.csv``,
+        ``simulated.csv``, ``analytic.csv``, ``table1.json``, ``verdict.txt``, ``efficiency.csv``, ``dynamometer.csv``,
         ``waveforms.csv``, ``manifest.json`` and, with ``torque_control``, ``methods.csv`` and
         ``methods_traces.csv``.
     """

@@ -47,7 +47,9 @@ import numpy as np
 import pandas as pd
 
 from .._version import __version__
+from ..analysis.compare import EFFICIENCY_COUNTS
 from ..analysis.effmap import EffMapResult
+from ..analysis.losses import loss_buckets
 from ..errors import BldclabError
 from ..model import analytic
 from ..model.motor import Drive
@@ -80,7 +82,7 @@ WAVEFORM_SUB = 4
 #: Files of a results directory the report reads; the others it lists.
 _KNOWN = ("simulated.csv", "analytic.csv", "table1.json", "verdict.txt", "waveforms.csv", "dynamometer.csv",
           "methods.csv", "methods_traces.csv", "methods_compared.svg", "faults.csv", "effmap.csv",
-          "effmap_difference.csv", "effmap_difference.svg")
+          "effmap_difference.csv", "effmap_difference.svg", "efficiency.csv")
 
 _SINE, _SQUARE, _GRAY = "#1f77b4", "#d62728", "#7f7f7f"
 _PHASE = {"a": "#1f77b4", "b": "#ff7f0e", "c": "#2ca02c"}
@@ -285,6 +287,9 @@ class Results:
         ``effmap.csv`` and ``effmap_difference.csv`` of ``bldclab effmap`` written into the same directory.
     effmap_svg : str or None
         ``effmap_difference.svg`` of ``bldclab effmap``, made inline-safe.
+    efficiency : pandas.DataFrame or None
+        ``efficiency.csv``: the efficiency by loss count (:func:`bldclab.analysis.compare.efficiency_table`);
+        None in results written before it existed.
     files : list of str
         Every file of the directory.
     source : str
@@ -306,6 +311,7 @@ class Results:
     effmap: pd.DataFrame | None = None
     effmap_difference: pd.DataFrame | None = None
     effmap_svg: str | None = None
+    efficiency: pd.DataFrame | None = None
     files: list[str] = dataclasses.field(default_factory=list)
     source: str = ""
 
@@ -393,10 +399,14 @@ class Results:
         esvg = None
         if files.get("effmap_difference.svg"):
             esvg = _clean_svg(files["effmap_difference.svg"].decode("utf-8", "replace"))
+        eff = _csv(files, "efficiency.csv", ("supply", "Omega_pu", *EFFICIENCY_COUNTS), source, required=False)
+        if eff is not None:
+            _numeric(eff, "efficiency.csv", ("Omega_pu", *EFFICIENCY_COUNTS), source)
         return cls(manifest=manifest, drive=drive, simulated=sim, analytic=an, table1=quantities, verdict=verdict,
                    waveforms=wf, dynamometer=dyno, methods=methods, methods_traces=traces, methods_svg=svg,
                    faults=faults, effmap=emap, effmap_difference=ediff if emap is not None else None,
-                   effmap_svg=esvg if emap is not None else None, files=sorted(files), source=source)
+                   effmap_svg=esvg if emap is not None else None, efficiency=eff, files=sorted(files),
+                   source=source)
 
 
 # ------------------------------------------------------------------------------------------------------------
@@ -649,6 +659,28 @@ def _section_characteristics(r: Results, page: _Page) -> str:
             f'<div class="grid">{"".join(figs)}</div>{_points_table(r)}</section>')
 
 
+def _section_efficiency(r: Results) -> str:
+    if r.efficiency is None:
+        return ""
+    eff = r.efficiency
+    si = eff[eff.supply == "sine"].set_index("Omega_pu")
+    sq = eff[eff.supply == "square"].set_index("Omega_pu")
+    cols = list(EFFICIENCY_COUNTS)
+    rows = [[w, *[si[c].get(w) for c in cols], *[sq[c].get(w) for c in cols]] for w in sorted(set(eff["Omega_pu"]))]
+    short = ("3 P_R (36)", "2 R I_N\u00b2", "sim., copper", "sim., all losses")
+    head = ["\u03a9 [p.u.]", *[f"sine {h}" for h in short], *[f"square {h}" for h in short]]
+    lines = [v for v in r.verdict if v.startswith("efficiency")]
+    return ('<section id="efficiency"><h2>3b. Efficiency by loss count (paper 1 IV.C extended)</h2>'
+            "<p>Paper 1's copper-only efficiency (38)/(39) with the copper loss as "
+            "printed in (36), <code>3 P_R,pu</code>; the same closed forms with the consistent count <code>2 R "
+            "I_N\u00b2</code> (two phases conduct <code>I_N</code>, on the base <code>T_N \u03a9_0</code>); the "
+            "simulation counting the copper loss of its actual currents only (<code>P_m / (P_m + p_cu)</code>); and "
+            "the simulation with every loss it books (" + ", ".join(f"<code>{_e(b)}</code>" for b in loss_buckets())
+            + "). Closed forms: n/a above the base speeds (21), (30). All columns and the loss buckets in W are in "
+            "efficiency.csv.</p>" + _verdict_list(lines) + '<div class="scroll">'
+            + _html_table(head, rows, [True] * len(head)) + "</div></section>")
+
+
 def _points_table(r: Results) -> str:
     sim = r.simulated
     si = sim[sim.supply == "sine"].set_index("Omega_pu")
@@ -887,11 +919,11 @@ def render(results: Results, *, report_command: str, created: str | None = None)
     page = _Page()
     r = results
     name = r.drive.name or "(unnamed drive)"
-    body = [_section_motor(r, page), _section_table1(r), _section_characteristics(r, page),
+    body = [_section_motor(r, page), _section_table1(r), _section_characteristics(r, page), _section_efficiency(r),
             _section_waveforms(r, page), _section_paper2(r, page), _section_faults(r), _section_effmap(r),
             _section_provenance(r, report_command, created)]
     toc = [("verdict", "Verdict"), ("motor", "Motor"), ("table1", "Table I"), ("characteristics", "Characteristics"),
-           ("waveforms", "Waveforms")]
+           *([("efficiency", "Efficiency counts")] if r.efficiency is not None else []), ("waveforms", "Waveforms")]
     if r.methods is not None or r.methods_traces is not None or r.methods_svg is not None:
         toc.append(("paper2", "Paper 2"))
     if r.faults is not None:

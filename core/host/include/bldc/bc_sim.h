@@ -10,7 +10,10 @@
  *   4. integrate to t_k+1, landing on trace points and metric-window bounds
  *
  * Output: an optional trace (one row per `trace_every` samples, or `trace_sub` rows per sample), each row
- * holding the instantaneous state at its start and means/extremes over its window; and metrics over one
+ * holding the instantaneous state at its start and means/extremes over its window (the powers are the row's
+ * integrals of bc_plant.h's acc[] over its length: p_swloss is the gate-edge energies E_on, E_off, E_rr booked
+ * inside the row divided by its length, included in p_inv; per row p_src + p_swloss = p_cu + p_inv + p_emf +
+ * dW_L/dt up to the integration error, and sum(p dt) over rows equals the metrics' integrals); and metrics over one
  * window [metric_t0, metric_t1] given in time (not samples), so that a caller can measure exactly whole
  * electrical periods. State is caller-owned: a long run can be done in chunks, the result is the same (bldclab's
  * simulate calls bc_sim_run on pieces of its run, so memory does not grow with the duration). The state also keeps
@@ -46,7 +49,8 @@
     X(tau_max, "N m", "largest torque in the window")                                               \
     X(p_src, "W", "mean power from the DC source")                                                  \
     X(p_cu, "W", "mean copper loss")                                                                \
-    X(p_inv, "W", "mean inverter loss (switches, diodes, source resistance)")                       \
+    X(p_inv, "W", "mean inverter loss (switches, diodes, source resistance, p_swloss)")             \
+    X(p_swloss, "W", "E_on, E_off, E_rr booked at the row's gate edges / row length (mean power)")  \
     X(p_emf, "W", "mean electromagnetic power sum e i")                                             \
     X(v_a, "V", "mean terminal voltage a (from the negative rail)")                                 \
     X(v_b, "V", "mean terminal voltage b")                                                          \
