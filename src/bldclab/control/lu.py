@@ -23,6 +23,7 @@ from ..model.design import max_bandwidth, pi_gains
 from ..model.emf import TWO_PI
 from ..model.motor import Drive
 from .base import Control, check_number
+from .hall import check_hall_options, hall_record, normalize_table
 
 __all__ = ["Lu"]
 
@@ -89,6 +90,15 @@ class Lu(Control):
         Slowest speed the Hall estimate reports (electrical rad/s); default ``0.01 p Omega_0``.
     theta_offset : float
         Hall angle correction (electrical rad).
+    hall_angle : {"interp", "pll"}
+        Hall angle estimator: ``interp`` is paper 1's (46), ``pll`` a tracking loop on the edges
+        (``core/ctrl/include/bldc/bc_hall.h``) that averages the edge errors of misplaced sensors.
+    pll_edges : float
+        Time constant of the tracking loop in Hall edges (1 .. 1000).
+    hall_table : sequence of float, optional
+        Calibrated Hall edge angles (rad, electrical): 6 (both directions) or 12 (forward, then backward), e.g.
+        from :func:`bldclab.sim.hallcal.calibrate`; used for the angle, the speed and (six-step with ``advance``)
+        the commutation instant. ``None``: the nominal edges ``pi/6 + j pi/3``.
     """
 
     method: Literal["lu", "lu-no-do", "rect"] = "lu"
@@ -105,6 +115,9 @@ class Lu(Control):
     ki: float | None = None
     omega_min: float | None = None
     theta_offset: float = 0.0
+    hall_angle: Literal["interp", "pll"] = "interp"
+    pll_edges: float = 3.0
+    hall_table: tuple[float, ...] | None = None
     c_name: ClassVar[str] = "lu"
     ref_meaning: ClassVar[str] = "torque, N m"
 
@@ -126,6 +139,10 @@ class Lu(Control):
         if isinstance(self.theta_offset, bool) or not isinstance(self.theta_offset, int | float) or not math.isfinite(
                 self.theta_offset):
             raise BldclabError("control.theta_offset", f"must be a finite number, got {self.theta_offset!r}")
+        if self.hall_angle not in ("interp", "pll"):
+            raise BldclabError("control.hall_angle", f"must be interp or pll, got {self.hall_angle!r}")
+        check_hall_options(self.pll_edges)
+        object.__setattr__(self, "hall_table", normalize_table(self.hall_table))
 
     def gains(self, drive: Drive) -> tuple[float, float]:
         """Return ``rect``'s PI gains ``(k_p, k_i)`` of the pair-current loop (V/A, V/(A s)).
@@ -218,5 +235,6 @@ class Lu(Control):
             f_tick=drive.sensors.f_tick,
             omega_min=0.01 * m.p * drive.Omega_0 if self.omega_min is None else self.omega_min,
             theta_offset=self.theta_offset,
+            **hall_record(core, self.hall_angle == "pll", self.pll_edges, self.hall_table),
         )
         return CParams(rec, [tables])

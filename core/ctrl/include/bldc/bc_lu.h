@@ -148,6 +148,9 @@ typedef struct {
     float f_tick;       /* Hall capture-timer frequency, Hz (> 0) */
     float omega_min;    /* Hall: slowest speed estimated, electrical rad/s (> 0) */
     float theta_offset; /* Hall: angle correction, electrical rad */
+    int32_t hall_mode;       /* Hall angle: BC_HALL_INTERP (46) or BC_HALL_PLL (bc_hall.h) */
+    float hall_pll_edges;    /* BC_HALL_PLL: loop time constant in edges (1 .. 1000) */
+    bc_hall_table hall_table; /* calibrated edge angles (set = 0: nominal; bc_hallcal.h) */
 } bc_lu_params;
 
 /* What an output does over its interval. */
