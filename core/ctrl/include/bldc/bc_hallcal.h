@@ -23,8 +23,9 @@
  *     (max_r T_r - min_r T_r) > speed_tol mean_r T_r, too few edges before t_max, or a result beyond pi/6 of
  *     nominal: failed (BC_HALLCAL_FAIL with the reason), the table is never written.
  *     Convergence: at constant speed one revolution determines the table up to the capture-timer resolution
- *     (2 pi f_e / f_tick); more revolutions average speed ripple and timer jitter (docs/hall-calibration.md gives
- *     the measured accuracy).
+ *     (2 pi f_e / f_tick: measured 1.3e-5 rad at 300 electrical rad/s with a 10 MHz timer, test_hallcal.c); more
+ *     revolutions only average speed ripple and timer jitter. The absolute error is the mean placement error
+ *     (measured on the catalog drives with errors of up to 10 degrees: 0.5 to 3.4 degrees, the widths to 0.001).
  *
  * (b) BC_HALLCAL_OPENLOOP: start-up routine, an open-loop voltage vector (bc_transform: min-max SVM of
  *
@@ -50,7 +51,11 @@
  *     the rotor steps back over by more than one edge: it lost the vector), an over-current or bad measurement
  *     (bc_guard: the legs go off), fewer than n_rev records of an edge in either direction, f_j - b_j outside
  *     [-pi/12, lag_max] (the rotor did not follow), or a result beyond pi/6 of nominal: failed, no table.
- *     Duration t_align + 2 ((n_rev + 1) 2 pi + pi/2) / omega_ol.
+ *     Duration t_align + 2 ((n_rev + 1) 2 pi + pi/2) / omega_ol. Measured (catalog drives, sensors up to 10
+ *     degrees off, omega_ol = 4 pi rad/s, docs/hall-calibration.md): the worst edge within 0.5 degree on htm-48v
+ *     with 1 revolution per direction (no gain from more: a lag that differs between the directions at some
+ *     angles), 1.2 / 0.9 / 0.7 degree on lu-4kw (a high-inertia rotor swinging about the vector) with 1 / 2 / 4
+ *     revolutions, below 0.01 degree on outrunner-24v and servo-2k2 (bldclab.HallCal defaults to 3).
  *
  * Outputs: legs (OPENLOOP: all PWM with the SVM duties while turning, off with BC_FLAG_SAFE when done or failed;
  * SPEED: always off), BC_FLAG_SAFE with BC_FLAG_HALL_INVALID / _BAD_INPUT / _OVERCURRENT at any sample with an
