@@ -16,9 +16,15 @@ import bldclab as bl
 from bldclab._core import core
 
 FLAG_SAFE = bl.flag("SAFE")
+# a calibrated Hall table (edges up to 25 electrical degrees off nominal) for the Hall options
+TABLE = tuple(math.pi / 6 + j * math.pi / 3 + math.radians(d) for j, d in enumerate((25, -25, 10, 0, -7, 3)))
 CONTROLS = {"sixv": bl.SixStepVoltage(), "sixstep": bl.SixStep(), "sine": bl.Sine(), "lu": bl.Lu(),
-            "rect": bl.Lu(method="rect"), "sixstep-pi": bl.SixStep(regulation="pi", chopping="bipolar")}
-USES_CURRENT = {"sixstep", "sine", "lu", "rect", "sixstep-pi"}
+            "rect": bl.Lu(method="rect"), "sixstep-pi": bl.SixStep(regulation="pi", chopping="bipolar"),
+            "sine-pll": bl.Sine(angle="pll", pll_edges=1.0, hall_table=TABLE),
+            "sixstep-cal": bl.SixStep(hall_angle="pll", hall_table=TABLE + TABLE),
+            "lu-pll": bl.Lu(hall_angle="pll", pll_edges=20.0, hall_table=TABLE),
+            "hallcal-ol": bl.HallCal(method="open-loop", align_time=0.0), "hallcal-speed": bl.HallCal()}
+USES_CURRENT = {"sixstep", "sine", "lu", "rect", "sixstep-pi", "sine-pll", "sixstep-cal", "lu-pll", "hallcal-ol"}
 
 floats = st.one_of(st.floats(allow_nan=True, allow_infinity=True, width=32),
                    st.sampled_from([0.0, -0.0, 1e30, -1e30, 50.0, -50.0, 48.0, 300.0, 1e-30]))

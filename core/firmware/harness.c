@@ -28,11 +28,26 @@ static bc_sixv_state S;
 #define STEP(in, out) bc_sixv_step(&P, &S, in, out)
 #elif defined(BC_FW_HALL)
 #include "bldc/bc_hall.h"
-static const bc_hall_params P = {10e6f, 5.0f, 0.0f};
+static const bc_hall_params P = {10e6f, 5.0f, 0.0f, BC_HALL_INTERP, 1.0f, {0, {0}, {0}}};
 static bc_hall_state S;
 static bc_hall_out H;
 #define INIT() bc_hall_init(&P, &S)
 #define STEP(in, out) (bc_hall_step(&P, &S, in, &H), (out)->diag[0] = H.theta)
+#elif defined(BC_FW_HALL_PLL)
+#include "bldc/bc_hall.h"
+#include "params.h"
+static const bc_hall_params P = HALL_PLL_PARAMS;
+static bc_hall_state S;
+static bc_hall_out H;
+#define INIT() bc_hall_init(&P, &S)
+#define STEP(in, out) (bc_hall_step(&P, &S, in, &H), (out)->diag[0] = H.theta)
+#elif defined(BC_FW_HALLCAL)
+#include "bldc/bc_hallcal.h"
+#include "params.h"
+static const bc_hallcal_params P = HTM_HALLCAL_OL_PARAMS;
+static bc_hallcal_state S;
+#define INIT() bc_hallcal_init(&P, &S)
+#define STEP(in, out) bc_hallcal_step(&P, &S, in, out)
 #elif defined(BC_FW_PI)
 #include "bldc/bc_pi.h"
 static const bc_pi_params P = {0.47f, 314.0f, 35.7e-6f, -48.0f, 48.0f};

@@ -6,6 +6,8 @@
 #ifndef BC_FW_PARAMS_H
 #define BC_FW_PARAMS_H
 
+#include "bldc/bc_hall.h"
+#include "bldc/bc_hallcal.h"
 #include "bldc/bc_lu.h"
 #include "bldc/bc_sine.h"
 #include "bldc/bc_sixstep.h"
@@ -16,7 +18,7 @@
     {.reg = BC_SIXSTEP_PRED, .chop = BC_SIXSTEP_PWMPWM, .ref_torque = (REF_TORQUE), .delay = 1, .advance = 1, \
      .emf_ff = 1, .regen = 1, .p = 8, .ts = HTM_TS, .R = 0.05f, .L = 75e-6f, .k_e = 0.64f, .kp = 0.9425f,      \
      .ki = 628.3f, .band = 5.0f, .i_max = 100.0f, .v_max = 96.0f, .f_tick = 10e6f, .omega_min = 6.0f,         \
-     .theta_offset = 0.0f}
+     .theta_offset = 0.0f, .hall_mode = BC_HALL_INTERP, .hall_pll_edges = 1.0f, .hall_table = {0, {0}, {0}}}
 
 /* k_a of the ideal 120-degree trapezoid at 12 points over one electrical period (multiples of 30 degrees). */
 static const float HTM_EMF_12[12] = {0.0f,  0.32f,  0.32f,  0.32f,  0.32f,  0.32f,
@@ -37,6 +39,23 @@ static const float LU_F_12[12] = {0.0f, 0.4f, 0.4f, 0.4f, 0.4f, 0.4f, 0.0f, -0.4
 #define LU4KW_LU_PARAMS                                                                                           \
     {.f = {LU_F_12, LU_F_12, LU_F_12}, .n = 12, .p = 2, .method = BC_LU_TORQUE, .delay = 1, .order = 2,            \
      .L = 0.29e-3f, .R = 0.059f, .ts = 50e-6f, .i_max = 48.0f, .i_zero = 0.16f, .v_max = 600.0f, .k_phi = 0.4f,     \
-     .kp = 3.63f, .ki = 1939.0f, .f_tick = 20e6f, .omega_min = 7.5f, .theta_offset = 0.0f}
+     .kp = 3.63f, .ki = 1939.0f, .f_tick = 20e6f, .omega_min = 7.5f, .theta_offset = 0.0f,               \
+     .hall_mode = BC_HALL_INTERP, .hall_pll_edges = 1.0f, .hall_table = {0, {0}, {0}}}
+
+/* bc_hall in tracking mode with a calibrated edge table (edges a few degrees off nominal). */
+#define HALL_PLL_PARAMS                                                                                           \
+    {.f_tick = 10e6f, .omega_min = 5.0f, .theta_offset = 0.0f, .mode = BC_HALL_PLL, .pll_edges = 3.0f,            \
+     .table = {1, {0.60f, 1.52f, 2.67f, 3.67f, 4.70f, 5.76f}, {0.60f, 1.52f, 2.67f, 3.67f, 4.70f, 5.76f}}}
+
+/* bc_hallcal on htm-48v: the open-loop start-up routine (I_N = 50 A through 50 mOhm + switch, 2 Hz electrical) and
+ * the constant-speed method. */
+#define HTM_HALLCAL_OL_PARAMS                                                                                     \
+    {.method = BC_HALLCAL_OPENLOOP, .n_rev = 2, .f_tick = 10e6f, .ts = HTM_TS, .t_max = 1.0f, .speed_tol = 0.02f, \
+     .v_align = 3.0f, .v_emf = 0.6f, .omega_ol = 12.566f, .t_align = 0.1f, .lag_max = 1.5f, .i_max = 100.0f,  \
+     .v_max = 96.0f}
+#define HTM_HALLCAL_SPEED_PARAMS                                                                                  \
+    {.method = BC_HALLCAL_SPEED, .n_rev = 2, .f_tick = 10e6f, .ts = HTM_TS, .t_max = 1.0f, .speed_tol = 0.02f,    \
+     .v_align = 0.0f, .v_emf = 0.0f, .omega_ol = 0.0f, .t_align = 0.0f, .lag_max = 0.0f, .i_max = 0.0f,           \
+     .v_max = 0.0f}
 
 #endif /* BC_FW_PARAMS_H */

@@ -4,6 +4,7 @@
 #include <math.h>
 
 #include "bldc/bc_hall.h"
+#include "bldc/bc_hallcal.h"
 #include "bldc/bc_openloop.h"
 #include "bldc/bc_pi.h"
 #include "params.h"
@@ -16,7 +17,7 @@ static bc_sixv_state sixv_s;
 static int sixv_init(void) { return bc_sixv_init(&sixv_p, &sixv_s); }
 STEP_FN sixv_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sixv_step(&sixv_p, &sixv_s, in, out); }
 
-static bc_hall_params hall_p = {10e6f, 5.0f, 0.0f};
+static bc_hall_params hall_p = {10e6f, 5.0f, 0.0f, BC_HALL_INTERP, 1.0f, {0, {0}, {0}}};
 static bc_hall_state hall_s;
 static int hall_init(void) { return bc_hall_init(&hall_p, &hall_s); }
 STEP_FN hall_step(const bc_ctrl_in *in, bc_ctrl_out *out)
@@ -25,6 +26,30 @@ STEP_FN hall_step(const bc_ctrl_in *in, bc_ctrl_out *out)
     bc_hall_step(&hall_p, &hall_s, in, &h);
     out->diag[0] = h.theta;
     out->diag[1] = h.omega_e;
+}
+
+static const bc_hall_params hall_pll_p = HALL_PLL_PARAMS;
+static bc_hall_state hall_pll_s;
+static int hall_pll_init(void) { return bc_hall_init(&hall_pll_p, &hall_pll_s); }
+STEP_FN hall_pll_step(const bc_ctrl_in *in, bc_ctrl_out *out)
+{
+    bc_hall_out h;
+    bc_hall_step(&hall_pll_p, &hall_pll_s, in, &h);
+    out->diag[0] = h.theta;
+    out->diag[1] = h.omega_e;
+}
+
+static const bc_hallcal_params hallcal_p = HTM_HALLCAL_OL_PARAMS;
+static bc_hallcal_state hallcal_s;
+static int hallcal_init(void) { return bc_hallcal_init(&hallcal_p, &hallcal_s); }
+STEP_FN hallcal_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_hallcal_step(&hallcal_p, &hallcal_s, in, out); }
+
+static const bc_hallcal_params hallcal_speed_p = HTM_HALLCAL_SPEED_PARAMS;
+static bc_hallcal_state hallcal_speed_s;
+static int hallcal_speed_init(void) { return bc_hallcal_init(&hallcal_speed_p, &hallcal_speed_s); }
+STEP_FN hallcal_speed_step(const bc_ctrl_in *in, bc_ctrl_out *out)
+{
+    bc_hallcal_step(&hallcal_speed_p, &hallcal_speed_s, in, out);
 }
 
 static bc_pi_params pi_p = {0.47f, 314.0f, 35.7e-6f, -48.0f, 48.0f};
@@ -66,6 +91,9 @@ const bc_fw_target bc_fw_targets[] = {
     {"sine", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sine_init, sine_step, 48.0f, 57.7f, 33.7f, 357.0f},
     {"lu", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, lu_init, lu_step, 300.0f, 15.9f, 12.7f, 1000.0f},
     {"hall", BC_IS_BLOCK, hall_init, hall_step, 48.0f, 50.0f, 0.0f, 357.0f},
+    {"hall_pll", BC_IS_BLOCK, hall_pll_init, hall_pll_step, 48.0f, 50.0f, 0.0f, 357.0f},
+    {"hallcal", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, hallcal_init, hallcal_step, 48.0f, 50.0f, 0.0f, 357.0f},
+    {"hallcal_speed", BC_USES_HALL, hallcal_speed_init, hallcal_speed_step, 48.0f, 50.0f, 0.0f, 357.0f},
     {"pi", BC_IS_BLOCK, pi_init, pi_step, 48.0f, 50.0f, 10.0f, 357.0f},
 };
 const int bc_fw_n_targets = (int)(sizeof bc_fw_targets / sizeof bc_fw_targets[0]);

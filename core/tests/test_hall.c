@@ -9,6 +9,7 @@
 #include "bldc/bc_plant.h"
 #include "bldc/bc_sensors.h"
 #include "fixtures.h"
+#include "synth_hall.h"
 
 static double angle_diff(double a, double b)
 {
@@ -29,7 +30,7 @@ static void spin(double omega, double t0, long n, double *err_th, double *err_om
     CHECK(bc_plant_init(&f.p, &ps, t0, 0.3, omega, i0, 48.0) == BC_OK, "plant");
     bc_sensor_state ss;
     CHECK(bc_sensor_init(&f.sp, &ss) == BC_OK, "sensors");
-    bc_hall_params hp = {(float)f.sp.f_tick, 5.0f, 0.0f};
+    bc_hall_params hp = {(float)f.sp.f_tick, 5.0f, 0.0f, BC_HALL_INTERP, 1.0f, {0, {0}, {0}}};
     bc_hall_state hs;
     CHECK(bc_hall_init(&hp, &hs) == BC_OK, "hall");
     bc_leg_cmd off[3] = {{0, 0.0f}, {0, 0.0f}, {0, 0.0f}};
@@ -67,7 +68,7 @@ static void spin(double omega, double t0, long n, double *err_th, double *err_om
 static void test_monotone_angle(void)
 {
     const uint32_t D = 100003u; /* edge interval, ticks: 10 ms at 10 MHz */
-    bc_hall_params hp = {10e6f, 5.0f, 0.0f};
+    bc_hall_params hp = {10e6f, 5.0f, 0.0f, BC_HALL_INTERP, 1.0f, {0, {0}, {0}}};
     for (int dir = -1; dir <= 1; dir += 2) {
         bc_hall_state hs;
         CHECK(bc_hall_init(&hp, &hs) == BC_OK, "init");
@@ -109,6 +110,104 @@ static void test_monotone_angle(void)
     }
 }
 
+/* Run bc_hall on synthetic edges (true angles `truth`) with params hp; return the rms and max angle error over the
+ * samples after `skip` s, and whether the speed was valid there. */
+static void synth_err(const bc_hall_params *hp, const double truth[6], double w0, double a, double t_end, double skip,
+                      double *rms, double *mx)
+{
+    synth_hall g;
+    synth_init(&g, truth, w0, a, 35.714286e-6, 10e6);
+    bc_hall_state hs;
+    CHECK(bc_hall_init(hp, &hs) == BC_OK, "init");
+    double s2 = 0.0;
+    long n = 0;
+    *mx = 0.0;
+    long n_end = (long)(t_end / g.ts);
+    for (long k = 0; k < n_end; ++k) {
+        bc_ctrl_in in;
+        synth_sample(&g, k, &in);
+        bc_hall_out ho;
+        bc_hall_step(hp, &hs, &in, &ho);
+        if ((double)k * g.ts < skip) continue;
+        CHECK(ho.valid && ho.speed_valid && isfinite(ho.theta) && isfinite(ho.omega_e), "valid at %ld", k);
+        double e = angle_diff((double)ho.theta, synth_theta(&g, (double)k * g.ts));
+        s2 += e * e;
+        ++n;
+        if (fabs(e) > *mx) *mx = fabs(e);
+    }
+    *rms = sqrt(s2 / (double)(n > 0 ? n : 1));
+}
+
+/* The edge table: with the true edges the interpolation is exact at constant speed; the nominal table filled in
+ * explicitly matches set = 0 to float rounding; out-of-range tables and PLL settings are rejected. The PLL averages
+ * the misplacement at constant speed and follows a constant acceleration without a steady error. */
+static void test_table_and_pll(void)
+{
+    const double err[3] = {0.08, -0.05, 0.03}; /* sensor a, b, c: edge j belongs to sensor 2 - j % 3 */
+    double truth[6], nominal[6];
+    for (int j = 0; j < 6; ++j) {
+        nominal[j] = BC_PI / 6.0 + (double)j * BC_PI / 3.0;
+        truth[j] = nominal[j] + err[2 - j % 3];
+    }
+    bc_hall_params hp = {10e6f, 5.0f, 0.0f, BC_HALL_INTERP, 3.0f, {0, {0}, {0}}};
+    double rms0, mx0, rms1, mx1;
+    synth_err(&hp, nominal, 300.0, 0.0, 0.2, 0.05, &rms0, &mx0);
+    CHECK(mx0 < 2e-3, "nominal edges, nominal table: max error %.3g rad", mx0);
+    synth_err(&hp, truth, 300.0, 0.0, 0.2, 0.05, &rms0, &mx0);
+    CHECK(mx0 > 0.05, "misplaced edges, nominal table: max error %.3g rad (the misplacement shows)", mx0);
+    bc_hall_params ht = hp;
+    ht.table.set = 1;
+    for (int j = 0; j < 6; ++j) ht.table.fwd[j] = ht.table.bwd[j] = (float)truth[j];
+    synth_err(&ht, truth, 300.0, 0.0, 0.2, 0.05, &rms1, &mx1);
+    CHECK(mx1 < 2e-3, "misplaced edges, true table: max error %.3g rad", mx1);
+    bc_hall_params hn = hp;
+    bc_hall_table_nominal(&hn.table);
+    CHECK(hn.table.set == 1 && fabsf(hn.table.fwd[3] - (float)nominal[3]) < 1e-6f, "nominal table filled");
+    double rmsn, mxn;
+    synth_err(&hn, nominal, 300.0, 0.0, 0.2, 0.05, &rmsn, &mxn);
+    synth_err(&hp, nominal, 300.0, 0.0, 0.2, 0.05, &rms0, &mx0);
+    CHECK(fabs(rmsn - rms0) < 1e-5 && fabs(mxn - mx0) < 1e-5, "explicit nominal table = unset: %.3g vs %.3g", mxn, mx0);
+    /* entry lead: dir (edge - nominal) */
+    CHECK(fabsf(bc_hall_entry_lead(&ht, 1, 1) - (float)err[1]) < 1e-6f, "lead of edge 1 forward");
+    CHECK(fabsf(bc_hall_entry_lead(&ht, 1, -1) - (float)(-err[0])) < 1e-6f, "lead of edge 2 backward");
+    CHECK(bc_hall_entry_lead(&hp, 1, 1) == 0.0f, "no lead without a table");
+    /* rejected settings */
+    bc_hall_state hs;
+    bc_hall_params bad = ht;
+    bad.table.fwd[2] = (float)(nominal[2] + 0.53);
+    CHECK(bc_hall_init(&bad, &hs) == BC_ERR_PARAM, "an edge 30.4 deg off is rejected");
+    bad = ht;
+    bad.table.bwd[4] = NAN;
+    CHECK(bc_hall_init(&bad, &hs) == BC_ERR_PARAM, "NaN edge rejected");
+    bad = hp;
+    bad.mode = BC_HALL_PLL;
+    bad.pll_edges = 0.5f;
+    CHECK(bc_hall_init(&bad, &hs) == BC_ERR_PARAM, "pll_edges < 1 rejected");
+    bad.mode = 7;
+    CHECK(bc_hall_init(&bad, &hs) == BC_ERR_PARAM, "unknown mode rejected");
+
+    /* PLL at constant speed with misplaced edges and no table: smaller error than (46) */
+    bc_hall_params hl = hp;
+    hl.mode = BC_HALL_PLL;
+    double rmsp, mxp;
+    synth_err(&hl, truth, 300.0, 0.0, 0.3, 0.15, &rmsp, &mxp);
+    synth_err(&hp, truth, 300.0, 0.0, 0.3, 0.15, &rms0, &mx0);
+    printf("test_hall: misplaced (4.6/-2.9/1.7 deg), 300 rad/s: (46) rms %.2f max %.2f deg, "
+           "PLL(3) rms %.2f max %.2f deg\n",
+           rms0 * 180.0 / BC_PI, mx0 * 180.0 / BC_PI, rmsp * 180.0 / BC_PI, mxp * 180.0 / BC_PI);
+    CHECK(rmsp < 0.6 * rms0 && mxp < mx0, "PLL rms %.3g vs (46) %.3g rad", rmsp, rms0);
+    /* constant acceleration, exact edges: type 3, no steady error once converged */
+    synth_err(&hl, nominal, 300.0, 3000.0, 0.3, 0.15, &rmsp, &mxp);
+    synth_err(&hp, nominal, 300.0, 3000.0, 0.3, 0.15, &rms0, &mx0);
+    printf("test_hall: 3000 rad/s^2 from 300 rad/s: (46) max %.3f deg, PLL(3) max %.3f deg\n", mx0 * 180.0 / BC_PI,
+           mxp * 180.0 / BC_PI);
+    CHECK(mxp < 2e-3, "PLL under constant acceleration: max error %.3g rad", mxp);
+    /* pll with the true table: exact at constant speed */
+    hl.table = ht.table;
+    synth_err(&hl, truth, 300.0, 0.0, 0.3, 0.15, &rmsp, &mxp);
+    CHECK(mxp < 2e-3, "PLL with the true table: max error %.3g rad", mxp);
+}
+
 int main(void)
 {
     double e_th, e_om;
@@ -127,7 +226,7 @@ int main(void)
     CHECK(e_om < 1e-4 && e_th < 1e-3, "across the tick wrap: speed %.3g, angle %.3g", e_om, e_th);
 
     /* invalid codes and standstill */
-    bc_hall_params hp = {10e6f, 5.0f, 0.0f};
+    bc_hall_params hp = {10e6f, 5.0f, 0.0f, BC_HALL_INTERP, 1.0f, {0, {0}, {0}}};
     bc_hall_state hs;
     CHECK(bc_hall_init(&hp, &hs) == BC_OK, "init");
     bc_ctrl_in in;
@@ -157,8 +256,9 @@ int main(void)
     in.hall = 5u; in.n_edges = 4u; in.tick_edge = 210000000u; in.tick_now = 210000010u;
     bc_hall_step(&hp, &hs, &in, &ho);
     CHECK(ho.speed_valid == 0, "skipped edge: no speed");
-    bc_hall_params bad = {0.0f, 5.0f, 0.0f};
+    bc_hall_params bad = {0.0f, 5.0f, 0.0f, BC_HALL_INTERP, 1.0f, {0, {0}, {0}}};
     CHECK(bc_hall_init(&bad, &hs) == BC_ERR_PARAM, "f_tick = 0 rejected");
     test_monotone_angle();
+    test_table_and_pll();
     return bc_test_summary("test_hall");
 }

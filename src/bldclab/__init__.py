@@ -11,13 +11,14 @@ from __future__ import annotations
 from ._core import decode_flags, flag
 from ._version import __version__
 from .analysis import experiments
-from .control import Control, Lu, OpenLoop, Sine, SixStep, SixStepVoltage
+from .control import Control, HallCal, HallCalibration, Lu, OpenLoop, Sine, SixStep, SixStepVoltage
 from .errors import BldclabError
 from .model import catalog
 from .model.catalog import load
 from .model.emf import BackEmf, Cogging, Fourier, Sinusoid, Table, Trapezoid
 from .model.motor import Drive, Inverter, Mechanics, Motor, Sensors
 from .sim import Fault, Scenario, simulate
+from .sim.hallcal import calibrate as calibrate_hall
 from .sim.results import Metrics, SimResult
 
 __all__ = [
@@ -28,6 +29,8 @@ __all__ = [
     "Drive",
     "Fault",
     "Fourier",
+    "HallCal",
+    "HallCalibration",
     "Inverter",
     "Lu",
     "Mechanics",
@@ -44,6 +47,7 @@ __all__ = [
     "Table",
     "Trapezoid",
     "__version__",
+    "calibrate_hall",
     "catalog",
     "decode_flags",
     "experiments",

@@ -1,9 +1,51 @@
-/* bc_hall.c - Hall sector, speed and angle interpolation. Equations in bc_hall.h. */
+/* bc_hall.c - Hall sector, speed and angle interpolation or tracking. Equations in bc_hall.h. */
 #include "bldc/bc_hall.h"
 
 #include <math.h>
 
 #include "bldc/bc_commutation.h"
+
+#define PI3_F (BC_PI_F / 3.0f)
+#define PI6_F (BC_PI_F / 6.0f)
+#define PI12_F (BC_PI_F / 12.0f)
+
+static float wrap_2pi(float th)
+{
+    th = fmodf(th, BC_TWO_PI_F);
+    if (th < 0.0f) th += BC_TWO_PI_F;
+    if (th >= BC_TWO_PI_F) th = 0.0f;
+    return th;
+}
+
+/* wrap into (-pi, pi] */
+static float wrap_pm(float th)
+{
+    th = wrap_2pi(th);
+    return th > BC_PI_F ? th - BC_TWO_PI_F : th;
+}
+
+void bc_hall_table_nominal(bc_hall_table *t)
+{
+    t->set = 1;
+    for (int j = 0; j < 6; ++j) {
+        t->fwd[j] = bc_sector_angle(j);
+        t->bwd[j] = bc_sector_angle(j);
+    }
+}
+
+int bc_hall_table_check(const bc_hall_table *t)
+{
+    if (t == 0) return BC_ERR_PARAM;
+    if (t->set == 0) return BC_OK;
+    if (t->set != 1) return BC_ERR_PARAM;
+    for (int j = 0; j < 6; ++j) {
+        float a = bc_sector_angle(j);
+        if (!isfinite(t->fwd[j]) || !isfinite(t->bwd[j]) || fabsf(t->fwd[j]) > 64.0f || fabsf(t->bwd[j]) > 64.0f)
+            return BC_ERR_PARAM;
+        if (!(fabsf(wrap_pm(t->fwd[j] - a)) < PI6_F) || !(fabsf(wrap_pm(t->bwd[j] - a)) < PI6_F)) return BC_ERR_PARAM;
+    }
+    return BC_OK;
+}
 
 int bc_hall_init(const bc_hall_params *p, bc_hall_state *s)
 {
@@ -11,6 +53,9 @@ int bc_hall_init(const bc_hall_params *p, bc_hall_state *s)
     if (!(isfinite(p->f_tick) && p->f_tick > 0.0f) || !(isfinite(p->omega_min) && p->omega_min > 0.0f) ||
         !isfinite(p->theta_offset))
         return BC_ERR_PARAM;
+    if (p->mode != BC_HALL_INTERP && p->mode != BC_HALL_PLL) return BC_ERR_PARAM;
+    if (p->mode == BC_HALL_PLL && !(p->pll_edges >= 1.0f && p->pll_edges <= 1000.0f)) return BC_ERR_PARAM;
+    if (bc_hall_table_check(&p->table) != BC_OK) return BC_ERR_PARAM;
     s->code = 0u;
     s->n_edges = 0u;
     s->tick_edge = 0u;
@@ -19,15 +64,23 @@ int bc_hall_init(const bc_hall_params *p, bc_hall_state *s)
     s->dir = 0;
     s->n_run = 0;
     s->started = 0;
+    s->pll_on = 0;
+    s->pll_theta = 0.0f;
+    s->pll_omega = 0.0f;
+    s->pll_acc = 0.0f;
     return BC_OK;
 }
 
-static float wrap_2pi(float th)
+/* Table lookups (set = 1); the nominal expressions are kept in the callers for set = 0. */
+static float fwd_width(const bc_hall_table *t, int s) { return wrap_2pi(t->fwd[(s + 1) % 6] - t->fwd[s]); }
+static float bwd_width(const bc_hall_table *t, int s) { return wrap_2pi(t->bwd[(s + 1) % 6] - t->bwd[s]); }
+
+float bc_hall_entry_lead(const bc_hall_params *p, int sector, int dir)
 {
-    th = fmodf(th, BC_TWO_PI_F);
-    if (th < 0.0f) th += BC_TWO_PI_F;
-    if (th >= BC_TWO_PI_F) th = 0.0f;
-    return th;
+    if (p == 0 || !p->table.set || sector < 0 || sector > 5 || (dir != 1 && dir != -1)) return 0.0f;
+    if (dir > 0) return wrap_pm(p->table.fwd[sector] - bc_sector_angle(sector));
+    int j = (sector + 1) % 6;
+    return -wrap_pm(p->table.bwd[j] - bc_sector_angle(j));
 }
 
 void bc_hall_step(const bc_hall_params *p, bc_hall_state *s, const bc_ctrl_in *in, bc_hall_out *out)
@@ -42,6 +95,7 @@ void bc_hall_step(const bc_hall_params *p, bc_hall_state *s, const bc_ctrl_in *i
         out->omega_e = 0.0f;
         out->theta = 0.0f;
         s->n_run = 0;
+        s->pll_on = 0;
         s->n_edges = in->n_edges;
         return;
     }
@@ -74,15 +128,23 @@ void bc_hall_step(const bc_hall_params *p, bc_hall_state *s, const bc_ctrl_in *i
     out->valid = 1;
     out->sector = sector;
     out->dir = s->dir;
+    const bc_hall_table *tb = &p->table;
+    int fwd = s->dir > 0;
+    /* sector widths: the one just crossed (w_prev) and the one entered (w_cur); pi/3 exactly without a table */
+    float w_prev = PI3_F, w_cur = PI3_F;
+    if (tb->set) {
+        w_prev = fwd ? fwd_width(tb, (sector + 5) % 6) : bwd_width(tb, (sector + 1) % 6);
+        w_cur = fwd ? fwd_width(tb, sector) : bwd_width(tb, sector);
+    }
     float since = (float)(uint32_t)(in->tick_now - s->tick_edge) / p->f_tick; /* s, wrap-safe */
-    float omega = 0.0f;
+    float omega = 0.0f, interval = 0.0f;
     int speed_valid = 0, overdue = 0;
     if (s->n_run >= 2) {
-        float interval = (float)(uint32_t)(s->tick_edge - s->tick_prev) / p->f_tick;
+        interval = (float)(uint32_t)(s->tick_edge - s->tick_prev) / p->f_tick;
         if (interval > 0.0f) {
-            omega = (BC_PI_F / 3.0f) / interval;
-            if (since >= interval) {
-                omega = (BC_PI_F / 3.0f) / since; /* no edge yet: at most this fast */
+            omega = w_prev / interval;
+            if (since >= interval * (w_cur / w_prev)) {
+                omega = w_cur / since; /* no edge yet: at most this fast */
                 overdue = 1;
             }
             speed_valid = omega >= p->omega_min;
@@ -91,15 +153,59 @@ void bc_hall_step(const bc_hall_params *p, bc_hall_state *s, const bc_ctrl_in *i
     if (!speed_valid) {
         out->speed_valid = 0;
         out->omega_e = 0.0f;
-        out->theta = wrap_2pi(bc_sector_angle(sector) + BC_PI_F / 6.0f + p->theta_offset); /* middle of the sector */
+        s->pll_on = 0;
+        float mid = bc_sector_angle(sector) + PI6_F; /* middle of the sector */
+        if (tb->set) {
+            float mf = tb->fwd[sector] + 0.5f * fwd_width(tb, sector);
+            float mb = tb->bwd[sector] + 0.5f * bwd_width(tb, sector);
+            mid = mf + 0.5f * wrap_pm(mb - mf);
+        }
+        out->theta = wrap_2pi(mid + p->theta_offset);
         return;
     }
     float dir = (float)s->dir;
-    float edge_angle = dir > 0.0f ? bc_sector_angle(sector) : bc_sector_angle(sector) + BC_PI_F / 3.0f;
-    /* never beyond the next edge; once the edge is overdue exactly at it (omega since would round either side) */
-    float travel = overdue ? BC_PI_F / 3.0f : omega * since;
-    if (travel > BC_PI_F / 3.0f) travel = BC_PI_F / 3.0f;
+    float edge_angle;
+    if (tb->set) edge_angle = fwd ? tb->fwd[sector] : tb->bwd[(sector + 1) % 6];
+    else edge_angle = fwd ? bc_sector_angle(sector) : bc_sector_angle(sector) + BC_PI_F / 3.0f;
     out->speed_valid = 1;
+    if (p->mode == BC_HALL_PLL) {
+        if (!s->pll_on) { /* start: (46) at this edge */
+            s->pll_on = 1;
+            s->pll_theta = wrap_2pi(edge_angle);
+            s->pll_omega = dir * (w_prev / interval);
+            s->pll_acc = 0.0f;
+        } else if (out->edge) {
+            float r = 1.0f - 1.0f / p->pll_edges;
+            float q = 1.0f - r;
+            float alpha = 1.0f - r * r * r, gamma = 0.5f * q * q * q;
+            float beta = 2.0f - 3.0f * r + r * r * r - gamma;
+            float h2 = interval * interval;
+            float pred = s->pll_theta + s->pll_omega * interval + 0.5f * s->pll_acc * h2;
+            float e = wrap_pm(edge_angle - pred);
+            s->pll_theta = wrap_2pi(pred + alpha * e);
+            s->pll_omega += s->pll_acc * interval + beta * e / interval;
+            s->pll_acc += 2.0f * gamma * e / h2;
+            if (!isfinite(s->pll_omega) || !isfinite(s->pll_theta) || !isfinite(s->pll_acc)) { /* restart */
+                s->pll_theta = wrap_2pi(edge_angle);
+                s->pll_omega = dir * (w_prev / interval);
+                s->pll_acc = 0.0f;
+            }
+        }
+        /* travel from the edge in the direction of motion, within [-pi/12, w_cur + pi/12] */
+        float w_now = s->pll_omega + s->pll_acc * since;
+        float rel = dir * wrap_pm(s->pll_theta + (s->pll_omega + 0.5f * s->pll_acc * since) * since - edge_angle);
+        if (!(rel <= w_cur + PI12_F)) rel = w_cur + PI12_F;
+        if (!(rel >= -PI12_F)) rel = -PI12_F;
+        float w_abs = dir * w_now > 0.0f ? fabsf(w_now) : 0.0f;
+        if (overdue && w_abs > omega) w_abs = omega;
+        if (!isfinite(w_abs)) w_abs = omega;
+        out->omega_e = dir * w_abs;
+        out->theta = wrap_2pi(edge_angle + dir * rel + p->theta_offset);
+        return;
+    }
+    /* never beyond the next edge; once the edge is overdue exactly at it (omega since would round either side) */
+    float travel = overdue ? w_cur : omega * since;
+    if (travel > w_cur) travel = w_cur;
     out->omega_e = dir * omega;
     out->theta = wrap_2pi(edge_angle + dir * travel + p->theta_offset);
 }

@@ -432,8 +432,8 @@ int bc_lu_init(const bc_lu_params *p, bc_lu_state *s)
         }
     }
     if (!(f_max > 0.0f)) return BC_ERR_PARAM; /* no back-EMF: no torque lever */
-    s->hall_p = (bc_hall_params){.f_tick = p->f_tick, .omega_min = p->omega_min,
-                                 .theta_offset = p->theta_offset};
+    s->hall_p = (bc_hall_params){.f_tick = p->f_tick, .omega_min = p->omega_min, .theta_offset = p->theta_offset,
+                                 .mode = p->hall_mode, .pll_edges = p->hall_pll_edges, .table = p->hall_table};
     if (bc_hall_init(&s->hall_p, &s->hall) != BC_OK) return BC_ERR_PARAM;
     s->pi_p = (bc_pi_params){.kp = p->kp, .ki = p->ki, .ts = p->ts,
                              .u_min = -p->v_max, .u_max = p->v_max};

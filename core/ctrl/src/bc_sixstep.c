@@ -27,8 +27,8 @@ int bc_sixstep_init(const bc_sixstep_params *p, bc_sixstep_state *s)
     if (!(p->ts > 0.0f) || p->R < 0.0f || !(p->L > 0.0f) || !(p->k_e > 0.0f) || p->kp < 0.0f || p->ki < 0.0f ||
         !(p->band > 0.0f) || !(p->i_max > 0.0f) || !(p->v_max > 0.0f))
         return BC_ERR_PARAM;
-    s->hall_p = (bc_hall_params){.f_tick = p->f_tick, .omega_min = p->omega_min,
-                                 .theta_offset = p->theta_offset};
+    s->hall_p = (bc_hall_params){.f_tick = p->f_tick, .omega_min = p->omega_min, .theta_offset = p->theta_offset,
+                                 .mode = p->hall_mode, .pll_edges = p->hall_pll_edges, .table = p->hall_table};
     if (bc_hall_init(&s->hall_p, &s->hall) != BC_OK) return BC_ERR_PARAM;
     s->pi_p = (bc_pi_params){.kp = p->kp, .ki = p->ki, .ts = p->ts,
                              .u_min = -1.0f, .u_max = 1.0f};
@@ -293,12 +293,30 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
         float since = (float)(uint32_t)(in->tick_now - in->tick_edge) / p->f_tick;
         travel = w_abs * (since + lead);
     }
-    if (held) {
+    /* calibrated edges: o = how far the edge just crossed lies beyond the nominal one (bc_hall_entry_lead); the
+     * nominal boundary ahead is pi/3 - o away, and with o < 0 (an early edge) the first -o still belong to the
+     * previous nominal sector. Nominal table: o = 0, d_next = pi/3. */
+    float o = bc_hall_entry_lead(&s->hall_p, h.sector, h.dir);
+    float d_next = PI3_F - o;
+    int behind = s->hall_p.table.set && h.dir != 0 && s->sector == (h.sector - h.dir + 6) % 6;
+    if (held && behind && p->advance) {
+        /* holding the previous sector after an early edge: move on at the nominal boundary (or without a speed) */
+        if (!h.speed_valid || travel >= -o) {
+            sector = h.sector;
+            travel = travel >= 0.0f ? travel + o : -1.0f;
+        } else {
+            sector = s->sector;
+            travel += PI3_F + o;
+        }
+    } else if (held) {
         sector = s->sector;
-        travel = travel >= PI3_F ? travel - PI3_F : -1.0f;
-    } else if (p->advance && h.speed_valid && h.dir != 0 && travel >= PI3_F) {
+        travel = travel >= d_next ? travel - d_next : -1.0f;
+    } else if (p->advance && h.edge && behind && o < 0.0f && h.speed_valid && travel >= 0.0f && travel < -o) {
+        sector = s->sector; /* early edge: the commutation waits for the nominal boundary */
+        travel += PI3_F + o;
+    } else if (p->advance && h.speed_valid && h.dir != 0 && travel >= d_next) {
         sector = (sector + (h.dir > 0 ? 1 : 5)) % 6;
-        travel -= PI3_F;
+        travel -= d_next;
     }
     s->seen = h.sector;
     if (sector != s->sector) {

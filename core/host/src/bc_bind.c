@@ -187,6 +187,7 @@ extern const bc_bind_provider bc_bind_openloop_sixv;
 extern const bc_bind_provider bc_bind_sixstep;
 extern const bc_bind_provider bc_bind_sine;
 extern const bc_bind_provider bc_bind_lu;
+extern const bc_bind_provider bc_bind_hallcal;
 
 static const bc_bind_provider *const PROVIDERS[] = {
     &bc_bind_openloop_table,
@@ -194,6 +195,7 @@ static const bc_bind_provider *const PROVIDERS[] = {
     &bc_bind_sixstep,
     &bc_bind_sine,
     &bc_bind_lu,
+    &bc_bind_hallcal,
 };
 
 #define N_PROVIDERS ((int32_t)(sizeof PROVIDERS / sizeof PROVIDERS[0]))

@@ -13,6 +13,7 @@ static const bc_field_desc LU_FIELDS[] = {
     F(bc_lu_params, k_phi, "f4"),     F(bc_lu_params, kp, "f4"),     F(bc_lu_params, ki, "f4"),
     F(bc_lu_params, f_tick, "f4"),    F(bc_lu_params, omega_min, "f4"), F(bc_lu_params, theta_offset, "f4"),
     F(bc_lu_params, l_adapt, "f4"),
+    F(bc_lu_params, hall_mode, "i4"), F(bc_lu_params, hall_pll_edges, "f4"), F(bc_lu_params, hall_table, "bc_hall_table"),
 };
 static const bc_struct_desc LU_STRUCTS[] = {BC_BIND_STRUCT(bc_lu_params), BC_BIND_STRUCT(bc_lu_state)};
 static int lu_init(const void *p, void *s) { return bc_lu_init(p, s); }

@@ -17,6 +17,9 @@ static const bc_field_desc SIXSTEP_FIELDS[] = {
     F(bc_sixstep_params, i_max, "f4"),    F(bc_sixstep_params, v_max, "f4"),
     F(bc_sixstep_params, f_tick, "f4"),   F(bc_sixstep_params, omega_min, "f4"),
     F(bc_sixstep_params, theta_offset, "f4"),
+    F(bc_sixstep_params, hall_mode, "i4"),
+    F(bc_sixstep_params, hall_pll_edges, "f4"),
+    F(bc_sixstep_params, hall_table, "bc_hall_table"),
 };
 static const bc_struct_desc SIXSTEP_STRUCTS[] = {BC_BIND_STRUCT(bc_sixstep_params), BC_BIND_STRUCT(bc_sixstep_state)};
 static int sixstep_init(const void *p, void *s) { return bc_sixstep_init(p, s); }

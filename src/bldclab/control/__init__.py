@@ -8,9 +8,10 @@ controller family; adding one: a module here with a :class:`Control` subclass, a
 from __future__ import annotations
 
 from .base import Control
+from .hallcal import HallCal, HallCalibration
 from .lu import Lu
 from .openloop import OpenLoop, SixStepVoltage
 from .sine import Sine
 from .sixstep import SixStep
 
-__all__ = ["Control", "Lu", "OpenLoop", "Sine", "SixStep", "SixStepVoltage"]
+__all__ = ["Control", "HallCal", "HallCalibration", "Lu", "OpenLoop", "Sine", "SixStep", "SixStepVoltage"]

@@ -23,6 +23,7 @@ from ..model.design import max_bandwidth, pi_gains
 from ..model.emf import TWO_PI
 from ..model.motor import Drive
 from .base import Control, check_number
+from .hall import check_hall_options, hall_record, normalize_table
 
 __all__ = ["Lu"]
 
@@ -95,6 +96,15 @@ class Lu(Control):
         (``docs/theory-paper2.md``, 5.2); with ``adapt_L > 0`` the controller fits its inductance to the measured
         rise of each pulse that starts from zero current (``core/ctrl/include/bldc/bc_lu.h``). 0.05 converges
         within about 100 PWM periods of discontinuous conduction.
+    hall_angle : {"interp", "pll"}
+        Hall angle estimator: ``interp`` is paper 1's (46), ``pll`` a tracking loop on the edges
+        (``core/ctrl/include/bldc/bc_hall.h``) that averages the edge errors of misplaced sensors.
+    pll_edges : float
+        Time constant of the tracking loop in Hall edges (1 .. 1000).
+    hall_table : sequence of float, optional
+        Calibrated Hall edge angles (rad, electrical): 6 (both directions) or 12 (forward, then backward), e.g.
+        from :func:`bldclab.sim.hallcal.calibrate`; used for the angle, the speed and (six-step with ``advance``)
+        the commutation instant. ``None``: the nominal edges ``pi/6 + j pi/3``.
     """
 
     method: Literal["lu", "lu-no-do", "rect"] = "lu"
@@ -112,6 +122,9 @@ class Lu(Control):
     omega_min: float | None = None
     theta_offset: float = 0.0
     adapt_L: float = 0.0
+    hall_angle: Literal["interp", "pll"] = "interp"
+    pll_edges: float = 3.0
+    hall_table: tuple[float, ...] | None = None
     c_name: ClassVar[str] = "lu"
     ref_meaning: ClassVar[str] = "torque, N m"
 
@@ -136,6 +149,10 @@ class Lu(Control):
         a = self.adapt_L
         if isinstance(a, bool) or not isinstance(a, int | float) or not 0.0 <= a <= 1.0:
             raise BldclabError("control.adapt_L", f"must be a number in [0, 1], got {a!r}")
+        if self.hall_angle not in ("interp", "pll"):
+            raise BldclabError("control.hall_angle", f"must be interp or pll, got {self.hall_angle!r}")
+        check_hall_options(self.pll_edges)
+        object.__setattr__(self, "hall_table", normalize_table(self.hall_table))
 
     def gains(self, drive: Drive) -> tuple[float, float]:
         """Return ``rect``'s PI gains ``(k_p, k_i)`` of the pair-current loop (V/A, V/(A s)).
@@ -229,5 +246,6 @@ class Lu(Control):
             omega_min=0.01 * m.p * drive.Omega_0 if self.omega_min is None else self.omega_min,
             theta_offset=self.theta_offset,
             l_adapt=float(self.adapt_L),
+            **hall_record(core, self.hall_angle == "pll", self.pll_edges, self.hall_table),
         )
         return CParams(rec, [tables])

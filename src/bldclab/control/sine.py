@@ -21,12 +21,13 @@ from ..model.analytic import i_sN, r_total
 from ..model.design import pi_gains
 from ..model.motor import Drive
 from .base import Control, check_number
+from .hall import check_hall_options, hall_record, normalize_table
 from .sixstep import SixStep
 
 __all__ = ["Sine", "fundamental_k1"]
 
 # the settings' C constants (values read from the library: bldclab._core)
-_ANGLE = {"hall": "BC_SINE_ANGLE_HALL", "encoder": "BC_SINE_ANGLE_ENCODER"}
+_ANGLE = {"hall": "BC_SINE_ANGLE_HALL", "pll": "BC_SINE_ANGLE_HALL", "encoder": "BC_SINE_ANGLE_ENCODER"}
 _LIMIT = {"hexagon": "BC_SINE_LIMIT_HEX", "circle": "BC_SINE_LIMIT_CIRCLE"}
 PAPER1_BANDWIDTH_HZ = 1000.0  # paper 1's current-loop crossover (Hz)
 
@@ -66,9 +67,17 @@ class Sine(Control):
 
     Parameters
     ----------
-    angle : {"hall", "encoder"}
-        Angle for the d,q transforms: the Hall-interpolated angle (paper 1 (46)), or the encoder (an ideal
-        reference for comparison). The speed comes from the Hall sensors either way.
+    angle : {"hall", "pll", "encoder"}
+        Angle for the d,q transforms: the Hall-interpolated angle (paper 1 (46)), a tracking loop on the Hall edges
+        (``pll``: averages the edge errors of misplaced sensors, time constant ``pll_edges`` edges; its speed is
+        used too, ``docs/hall-calibration.md``), or the encoder (an ideal reference for comparison; the speed then
+        comes from the Hall sensors).
+    pll_edges : float
+        Time constant of the tracking loop in Hall edges (1 .. 1000).
+    hall_table : sequence of float, optional
+        Calibrated Hall edge angles (rad, electrical): 6 (both directions) or 12 (forward, then backward), e.g.
+        from :func:`bldclab.sim.hallcal.calibrate`; also passed to the square-wave start unless it has its own.
+        ``None``: the nominal edges ``pi/6 + j pi/3``.
     emf_feedforward : bool
         Add the back-EMF ``omega_m k_x(theta)`` from the motor's own shapes (tables of ``emf_points`` points) to the
         phase voltage references, so the trapezoid's harmonics do not distort the currents.
@@ -131,7 +140,9 @@ class Sine(Control):
         so that the sine mode takes over after two Hall edges without square-wave braking at high speed.
     """
 
-    angle: Literal["hall", "encoder"] = "hall"
+    angle: Literal["hall", "pll", "encoder"] = "hall"
+    pll_edges: float = 3.0
+    hall_table: tuple[float, ...] | None = None
     emf_feedforward: bool = True
     decoupling: bool = True
     advance: float = 1.5
@@ -158,6 +169,8 @@ class Sine(Control):
     def __post_init__(self) -> None:
         if self.angle not in _ANGLE:
             raise BldclabError("control.angle", f"must be one of {', '.join(_ANGLE)}, got {self.angle!r}")
+        check_hall_options(self.pll_edges)
+        object.__setattr__(self, "hall_table", normalize_table(self.hall_table))
         if self.limit not in _LIMIT:
             raise BldclabError("control.limit", f"must be one of {', '.join(_LIMIT)}, got {self.limit!r}")
         for name in ("emf_feedforward", "decoupling", "overmodulation", "speed_limit", "speed_loop", "flying_start"):
@@ -241,6 +254,8 @@ class Sine(Control):
         tabs = [np.ascontiguousarray(shape(th), dtype=np.float32) for shape in m.emf.shapes]
         on = 0.1 * m.Omega_nominal if self.handoff_speed is None else float(self.handoff_speed)
         start = self.start if self.start.reference == "torque" else dataclasses.replace(self.start, reference="torque")
+        if start.hall_table is None and self.hall_table is not None:
+            start = dataclasses.replace(start, hall_table=self.hall_table)
         six = start.c_record(drive, core, n_samples)
         wb = 2.0 * math.pi * self.speed_bandwidth_hz
         kp_w = drive.mechanics.J * wb if self.speed_kp is None else self.speed_kp
@@ -271,6 +286,7 @@ class Sine(Control):
             omega_off=m.p * on * (1.0 - self.handoff_hysteresis),
             omega_min=0.25 * m.p * on * (1.0 - self.handoff_hysteresis),  # Hall speed valid well below omega_off
             theta_offset=0.0,
+            **hall_record(core, self.angle == "pll", self.pll_edges, self.hall_table),
             six=six.record[0],
             flying_start=int(self.flying_start),
             speed_loop=int(self.speed_loop),

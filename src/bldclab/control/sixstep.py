@@ -20,6 +20,7 @@ from ..model.analytic import r_total
 from ..model.design import pi_gains
 from ..model.motor import Drive
 from .base import Control, check_number
+from .hall import check_hall_options, hall_record, normalize_table
 
 __all__ = ["SixStep"]
 
@@ -78,6 +79,15 @@ class SixStep(Control):
         Slowest speed the Hall estimate reports (electrical rad/s); default ``0.01 p Omega_0``.
     theta_offset : float
         Hall angle correction (electrical rad).
+    hall_angle : {"interp", "pll"}
+        Hall angle estimator: ``interp`` is paper 1's (46), ``pll`` a tracking loop on the edges
+        (``core/ctrl/include/bldc/bc_hall.h``) that averages the edge errors of misplaced sensors.
+    pll_edges : float
+        Time constant of the tracking loop in Hall edges (1 .. 1000).
+    hall_table : sequence of float, optional
+        Calibrated Hall edge angles (rad, electrical): 6 (both directions) or 12 (forward, then backward), e.g.
+        from :func:`bldclab.sim.hallcal.calibrate`; used for the angle, the speed and (six-step with ``advance``)
+        the commutation instant. ``None``: the nominal edges ``pi/6 + j pi/3``.
     """
 
     regulation: Literal["predictive", "pi", "hysteresis"] = "predictive"
@@ -95,6 +105,9 @@ class SixStep(Control):
     i_max: float | None = None
     omega_min: float | None = None
     theta_offset: float = 0.0
+    hall_angle: Literal["interp", "pll"] = "interp"
+    pll_edges: float = 3.0
+    hall_table: tuple[float, ...] | None = None
     c_name: ClassVar[str] = "sixstep"
     ref_meaning: ClassVar[str] = "current amplitude, A (or torque, N m)"
 
@@ -116,6 +129,10 @@ class SixStep(Control):
         if isinstance(self.theta_offset, bool) or not isinstance(self.theta_offset, int | float) or not math.isfinite(
                 self.theta_offset):
             raise BldclabError("control.theta_offset", f"must be a finite number, got {self.theta_offset!r}")
+        if self.hall_angle not in ("interp", "pll"):
+            raise BldclabError("control.hall_angle", f"must be interp or pll, got {self.hall_angle!r}")
+        check_hall_options(self.pll_edges)
+        object.__setattr__(self, "hall_table", normalize_table(self.hall_table))
 
     def gains(self, drive: Drive) -> tuple[float, float]:
         """Return the PI gains ``(k_p, k_i)`` of the line current loop (V/A, V/(A s)).
@@ -161,4 +178,5 @@ class SixStep(Control):
             f_tick=drive.sensors.f_tick,
             omega_min=0.01 * m.p * drive.Omega_0 if self.omega_min is None else self.omega_min,
             theta_offset=self.theta_offset,
+            **hall_record(core, self.hall_angle == "pll", self.pll_edges, self.hall_table),
         ))

@@ -19,6 +19,46 @@
  * moves back from the next edge to the middle when the speed times out).
  *
  * Invalid codes (000, 111) give valid = 0, sector = -1, speed_valid = 0: the caller goes to its safe state.
+ *
+ * Edge table (calibrated edges, bc_hallcal.h). Edge j lies between sector j-1 and sector j (nominal angle
+ * a_j = pi/6 + j pi/3). With table.set = 1 the decoder uses the measured angles instead: fwd[j] where the code
+ * changes j-1 -> j turning forward, bwd[j] where it changes j -> j-1 turning backward (two tables: with hysteresis
+ * and delay a sensor switches at different angles in the two directions; the forward table is all a drive that only
+ * turns forward needs, pass it as both when the backward edges were not measured). Every entry must lie within
+ * pi/6 of its nominal angle (so the edges keep their order and every sector a width > 0). In the equations above
+ * pi/3 becomes the table's sector widths: entering sector s forward at t_k, after crossing sector s-1,
+ *
+ *     theta_edge = fwd[s],   w_prev = fwd[s] - fwd[s-1],   w_cur = fwd[s+1] - fwd[s]        (mod 2 pi, in (0, 2 pi))
+ *     Omega_e = dir w_prev / (t_k - t_(k-1)),   theta(t) = theta_edge + Omega_e (t - t_k),  travel <= w_cur
+ *
+ * (backward, entering s from s+1: theta_edge = bwd[s+1], w_prev = bwd[s+2] - bwd[s+1], w_cur = bwd[s+1] - bwd[s]).
+ * The edge is overdue when the travel reaches w_cur, i.e. t - t_k >= (t_k - t_(k-1)) w_cur / w_prev, and the
+ * speed bound is then w_cur / (t - t_k). The middle of a sector (standstill angle) is the mean of the forward and
+ * backward middles. table.set = 0 is the nominal table (the arrays are ignored; the same as filling them with
+ * bc_hall_table_nominal, up to the rounding of pi/3).
+ *
+ * Tracking estimator (mode = BC_HALL_PLL). A type-3 tracking loop (an alpha-beta-gamma filter: the discrete PLL of
+ * an event-driven phase detector, with speed and acceleration) on the edge angles: at each edge k of a run of
+ * consecutive edges in one direction, h = t_k - t_(k-1), with theta_hat, Omega_hat, A_hat the estimate at the
+ * previous edge,
+ *
+ *     e_k = wrap_(-pi, pi](theta_edge,k - (theta_hat + Omega_hat h + A_hat h^2 / 2))   phase error at the edge
+ *     theta_hat <- theta_hat + Omega_hat h + A_hat h^2 / 2 + alpha e_k
+ *     Omega_hat <- Omega_hat + A_hat h + beta e_k / h,      A_hat <- A_hat + 2 gamma e_k / h^2
+ *     alpha = 1 - r^3,  gamma = (1 - r)^3 / 2,  beta = 2 - 3 r + r^3 - gamma,  r = 1 - 1/pll_edges
+ *
+ * which places the three closed-loop poles of the error (z^3 + (alpha + beta + gamma - 3) z^2 + (3 - 2 alpha -
+ * beta + gamma) z + alpha - 1, at constant h) at z = r: the loop's time constant is pll_edges edges at any speed,
+ * and a constant acceleration leaves no steady error (type 3). pll_edges = 1 is the dead-beat filter (alpha = 1,
+ * beta = 3/2, gamma = 1/2: the parabola through the last three edges). Larger values average the edge errors of
+ * misplaced sensors (a pattern repeating every 6 edges) at the cost of a slower start and of tracking a change of
+ * acceleration more slowly. Between edges theta = theta_hat + Omega_hat tau + A_hat tau^2 / 2 (tau = t - t_k),
+ * kept within [theta_edge - pi/12, theta_edge + w_cur + pi/12] in the direction of motion (the rotor has not yet
+ * crossed the next edge; pi/12 allows for an uncalibrated sensor up to 15 degrees off). The loop starts
+ * (theta_hat = theta_edge, Omega_hat = (46)'s speed, A_hat = 0) with the speed becoming valid and restarts after
+ * a reversal, a skipped edge or a timeout. The speed output is Omega_hat + A_hat tau (0 if its sign is against the
+ * direction of motion), never above (46)'s bound once the edge is overdue; speed_valid and the standstill angle
+ * are (46)'s.
  */
 #ifndef BC_HALL_H
 #define BC_HALL_H
@@ -27,10 +67,22 @@
 
 #include "bldc/bc_types.h"
 
+#define BC_HALL_INTERP 0 /* (46): interpolation from the last edge at the speed of the last interval */
+#define BC_HALL_PLL 1    /* tracking loop on the edges (see above) */
+
 typedef struct {
-    float f_tick;       /* capture timer frequency, Hz (> 0) */
-    float omega_min;    /* electrical rad/s (> 0): slower than this the speed is reported as 0 */
-    float theta_offset; /* electrical rad added to the edge angles (sensor placement correction) */
+    int32_t set; /* 0: nominal edges (the arrays are ignored); 1: the arrays below */
+    float fwd[6]; /* rad electrical: edge j (sectors j-1 | j) as crossed forward (code j-1 -> j) */
+    float bwd[6]; /* rad electrical: edge j as crossed backward (code j -> j-1) */
+} bc_hall_table;
+
+typedef struct {
+    float f_tick;        /* capture timer frequency, Hz (> 0) */
+    float omega_min;     /* electrical rad/s (> 0): slower than this the speed is reported as 0 */
+    float theta_offset;  /* electrical rad added to the edge angles (sensor placement correction) */
+    int32_t mode;        /* BC_HALL_INTERP (0) or BC_HALL_PLL */
+    float pll_edges;     /* BC_HALL_PLL: time constant of the loop in edges, 1 .. 1000 */
+    bc_hall_table table; /* edge angles (set = 0: nominal) */
 } bc_hall_params;
 
 typedef struct {
@@ -42,6 +94,10 @@ typedef struct {
     int32_t dir;        /* direction of the last edge: +1, -1, 0 unknown */
     int32_t n_run;      /* consecutive single edges in the same direction */
     int32_t started;    /* a step has been taken */
+    int32_t pll_on;     /* PLL: the loop is running */
+    float pll_theta;    /* PLL: angle estimate at the last edge, rad (without theta_offset) */
+    float pll_omega;    /* PLL: speed estimate at the last edge, electrical rad/s, signed */
+    float pll_acc;      /* PLL: acceleration estimate, electrical rad/s^2, signed */
 } bc_hall_state;
 
 typedef struct {
@@ -54,7 +110,17 @@ typedef struct {
     float theta;         /* electrical angle, rad, [0, 2 pi) */
 } bc_hall_out;
 
+/* Validate the parameters (finite, f_tick and omega_min > 0, mode, pll_edges, a set table within pi/6 of the
+ * nominal edges) and reset the state. BC_OK or BC_ERR_PARAM. */
 int bc_hall_init(const bc_hall_params *p, bc_hall_state *s);
+/* Fill a table with the nominal edges pi/6 + j pi/3 (both directions), set = 1. */
+void bc_hall_table_nominal(bc_hall_table *t);
+/* Check a table: BC_OK if set = 0, or every entry finite and within pi/6 of its nominal angle; else BC_ERR_PARAM. */
+int bc_hall_table_check(const bc_hall_table *t);
+/* Angle (rad, within (-pi/6, pi/6)) by which the edge through which the rotor entered `sector` turning `dir`
+ * (+1, -1) lies beyond the nominal edge in the direction of motion: dir (theta_edge - nominal); 0 for a nominal
+ * table or an invalid sector/direction. Used by bc_sixstep to commutate at the nominal angle. */
+float bc_hall_entry_lead(const bc_hall_params *p, int sector, int dir);
 void bc_hall_step(const bc_hall_params *p, bc_hall_state *s, const bc_ctrl_in *in, bc_hall_out *out);
 
 #endif /* BC_HALL_H */

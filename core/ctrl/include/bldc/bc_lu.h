@@ -169,6 +169,9 @@ typedef struct {
     float omega_min;    /* Hall: slowest speed estimated, electrical rad/s (> 0) */
     float theta_offset; /* Hall: angle correction, electrical rad */
     float l_adapt;      /* inductance adaptation gain in [0, 1] (0: off, L fixed; see "Inductance adaptation") */
+    int32_t hall_mode;       /* Hall angle: BC_HALL_INTERP (46) or BC_HALL_PLL (bc_hall.h) */
+    float hall_pll_edges;    /* BC_HALL_PLL: loop time constant in edges (1 .. 1000) */
+    bc_hall_table hall_table; /* calibrated edge angles (set = 0: nominal; bc_hallcal.h) */
 } bc_lu_params;
 
 /* What an output does over its interval. */

@@ -15,9 +15,11 @@
  *     BC_FLAG_OVERCURRENT, _HALL_INVALID and/or _BAD_INPUT) and back to the start mode.
  *  2. Angle and speed from bc_hall: theta(k) = theta_edge + Omega_e (t_k - t_edge), Omega_e = (pi/3) / (time
  *     between the last two edges) (paper 1 (46)); or theta = in->theta_enc (angle = BC_SINE_ANGLE_ENCODER, a
- *     reference for comparison). The speed is always bc_hall's. omega_m = Omega_e / p. While the rotor turns one
- *     way and the speed is valid, theta never steps back (it holds at the next edge angle once the edge is
- *     overdue, bc_hall.h); a timed-out speed leaves the sine mode (3.).
+ *     reference for comparison); bc_hall uses the calibrated edge table hall_table and, with hall_mode =
+ *     BC_HALL_PLL, its tracking loop instead of (46) (bc_hall.h). The speed is always bc_hall's.
+ *     omega_m = Omega_e / p. With (46), while the rotor turns one way and the speed is valid, theta never steps
+ *     back (it holds at the next edge angle once the edge is overdue, bc_hall.h; the tracking loop may correct
+ *     backward by a fraction of the phase error at an edge); a timed-out speed leaves the sine mode (3.).
  *  3. Mode. Start (square wave, bc_sixstep) until |Omega_e| >= omega_on with a valid speed; sine until
  *     |Omega_e| < omega_off (hysteresis) or the speed becomes invalid. With flying_start the start mode first
  *     coasts (legs off) until the rotor is known to be slower than omega_on (a valid speed below it, or no Hall
@@ -174,6 +176,9 @@ typedef struct {
     float f_tick;       /* Hall capture timer, Hz (> 0) */
     float omega_min;    /* Hall: slower than this (electrical rad/s) the speed is invalid (> 0) */
     float theta_offset; /* Hall angle correction, electrical rad */
+    int32_t hall_mode;       /* Hall angle: BC_HALL_INTERP (46) or BC_HALL_PLL (bc_hall.h) */
+    float hall_pll_edges;    /* BC_HALL_PLL: loop time constant in edges (1 .. 1000) */
+    bc_hall_table hall_table; /* calibrated edge angles (set = 0: nominal; bc_hallcal.h) */
     /* square-wave start and hand-off */
     float omega_on;         /* electrical rad/s: sine from |Omega_e| >= omega_on (> 0) */
     float omega_off;        /* electrical rad/s: back to start below (0 <= omega_off <= omega_on) */

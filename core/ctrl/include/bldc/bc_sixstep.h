@@ -26,6 +26,14 @@
  * hold also covers the speed estimate timing out (a rotor stopped just before the edge). With advance = 0 the
  * legs follow the Hall sector seen, (D + 1/2) T_s late on average.
  *
+ * Calibrated edges (hall_table set, bc_hall.h). The commutation is due at the *nominal* sector boundary, not at the
+ * misplaced edge: with o = dir (theta_edge - nominal edge) of the edge just crossed (bc_hall_entry_lead), the next
+ * sector is commanded when |Omega_e| (t_k - t_edge + (D + 1/2) T_s) >= pi/3 - o; after an early edge (o < 0) the
+ * sector commanded before it is held while the travel since the edge is below -o (the rotor is still in the
+ * previous nominal sector), then the sector seen follows. Both are monotone: a commanded sector is only ever
+ * replaced by the next one in the direction of motion or by a Hall edge, never stepped back. With the nominal
+ * table o = 0 and this is the rule above. advance = 0 ignores the table for the commutation.
+ *
  * Regulated current. The phase x that entered the pair at the most recent commutation (the incoming phase: the
  * phase of the new pair that was not in the old one; the positive phase before the first commutation) is
  * regulated, as a magnitude: i_reg = +i_x if x is driven positive, -i_x if driven negative. Unmeasured phases are
@@ -141,6 +149,9 @@ typedef struct {
     float f_tick;         /* Hall capture-timer frequency, Hz (> 0) */
     float omega_min;      /* Hall: slowest speed estimated, electrical rad/s (> 0) */
     float theta_offset;   /* Hall: angle correction, electrical rad */
+    int32_t hall_mode;       /* Hall angle: BC_HALL_INTERP (46) or BC_HALL_PLL (bc_hall.h) */
+    float hall_pll_edges;    /* BC_HALL_PLL: loop time constant in edges (1 .. 1000) */
+    bc_hall_table hall_table; /* calibrated edge angles (set = 0: nominal; bc_hallcal.h) */
 } bc_sixstep_params;
 
 typedef struct {
