@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import bldclab as bl
 from bldclab.analysis import hall
@@ -131,6 +133,25 @@ def test_the_edge_check_can_fail(htm):
     assert not sw + n * math.pi <= b  # the ideal edge angle is 10 deg before the observed interval
 
 
+_TIMES = st.one_of(st.just(0.0), st.floats(0.0, 1e6), st.sampled_from([5e-324, 1e-300, 1e-9, 1e300, 1.7e308]))
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                 HealthCheck.function_scoped_fixture])
+@given(err=st.tuples(*[st.floats(-0.5235, 0.5235)] * 3), hyst=st.tuples(*[st.floats(0.0, 1.047)] * 3),
+       delay=st.tuples(_TIMES, _TIMES, _TIMES), tau=st.tuples(_TIMES, _TIMES, _TIMES),
+       direction=st.sampled_from([1.0, -1.0]))
+def test_extreme_hall_errors_keep_the_run_finite(htm, err, hyst, delay, tau, direction):
+    """Any valid Hall model (delays and filters from 0 to the largest double) gives a finite run and valid codes."""
+    d = htm.replace(sensors=Sensors(hall_error=err, hall_hysteresis=hyst, hall_delay=delay, hall_tau=tau))
+    res = bl.simulate(d, SixStep(reference="torque"),
+                      bl.Scenario(duration=0.01, speed=direction * 0.4 * htm.Omega_0, ref=5.0), check="off")
+    sig = res.signals
+    for name in ("i_a", "i_b", "tau_e", "theta_e"):
+        assert np.isfinite(sig[name]).all(), name
+    assert ((sig["hall"] >= 0) & (sig["hall"] <= 7)).all()
+
+
 # ------------------------------------------------------------------------------------------------------------
 # the study
 
@@ -173,14 +194,43 @@ def test_study_table_csv_shape(study):
     assert np.all(np.diff(sq.ripple_sampled_pu.to_numpy()) > 0)
 
 
+def _sine_encoder(drive, speed):
+    return bl.Sine(angle="encoder", handoff_speed=0.25 * speed)
+
+
+def test_a_controller_on_the_encoder_does_not_see_hall_errors(htm):
+    """Control experiment: the same sinusoidal supply on the encoder angle gives the same points under a common
+    offset (equal sectors: its Hall speed estimate is exact, and the angle is the encoder's); with unequal sectors
+    its Hall speed (pi/3 over each edge interval) is wrong sector by sector, and its ripple grows."""
+    res = hall.hall_study(htm, errors=[0.0, 10 * DEG], cases=["common", "alternating"],
+                          variants=[("sine, encoder angle", _sine_encoder)])
+    p = res.points.set_index(["case", "error_deg"])
+    a, b = p.loc[("common", 0.0)], p.loc[("common", 10.0)]
+    # equal up to the capture timer's tick quantisation of the (moved) edge times
+    assert b.tau_mean == pytest.approx(a.tau_mean, rel=1e-6)
+    assert b.ripple_sampled == pytest.approx(a.ripple_sampled, rel=1e-4)
+    assert b.efficiency == pytest.approx(a.efficiency, rel=1e-6)
+    assert p.loc[("alternating", 10.0)].ripple_sampled_pu > 2.0 * a.ripple_sampled_pu
+
+
 def _square_pi(drive, speed):
     return SixStep(reference="torque", regulation="pi")
 
 
 def test_a_variant_is_one_more_pair(htm):
     res = hall.hall_study(htm, errors=[0.0, 4 * DEG], cases=["one"],
-                          variants=[*hall.VARIANTS[:1], ("square-wave, PI", _square_pi)])
-    assert list(dict.fromkeys(res.points.variant)) == ["square-wave", "square-wave, PI"]
+                          variants=[*hall.VARIANTS[:1], ("square-wave, PI", _square_pi),
+                                    ("square-wave, long settling", hall.square_wave, {"settle_periods": 6})])
+    assert list(dict.fromkeys(res.points.variant)) == ["square-wave", "square-wave, PI", "square-wave, long settling"]
+    # without 0 among the errors the zero-error reference still runs
+    only = hall.hall_study(htm, errors=[4 * DEG], cases=["one"], variants=hall.VARIANTS[:1])
+    assert len(only.points) == 1
+    assert only.points.tau_rel.iloc[0] == pytest.approx(only.points.tau_mean.iloc[0] / res.points.tau_mean.iloc[0])
+    pts = res.points.set_index(["variant", "error_deg"])
+    # the keywords reach steady_state: the same controller settled longer measures a (slightly) different window
+    assert pts.loc[("square-wave, long settling", 0.0), "tau_mean"] != pts.loc[("square-wave", 0.0), "tau_mean"]
+    assert pts.loc[("square-wave, long settling", 0.0), "tau_mean"] == pytest.approx(
+        pts.loc[("square-wave", 0.0), "tau_mean"], rel=2e-3)
 
 
 @pytest.mark.parametrize(("kw", "field"), [
@@ -190,6 +240,8 @@ def test_a_variant_is_one_more_pair(htm):
     ({"cases": ["some"]}, "case"),
     ({"variants": []}, "variants"),
     ({"variants": [("a", hall.lu), ("a", hall.lu)]}, "variants"),
+    ({"variants": [("a", hall.lu, 3)]}, "variants"),
+    ({"variants": [("a",)]}, "variants"),
     ({"speed": 0.0}, "speed"),
     ({"torque": math.nan}, "torque"),
 ])

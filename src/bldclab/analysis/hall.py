@@ -11,7 +11,9 @@ patterns of an error ``delta`` (electrical):
   ``60 +- 2 delta`` degrees: the unequal-sector case with the largest spread for a given ``|delta|``).
 
 The controllers are a list of ``(label, factory)`` pairs (:data:`VARIANTS`); a factory takes the drive and the speed
-and returns a :class:`~bldclab.control.Control`. Adding a variant is one more pair. Theory and how to read the
+and returns a :class:`~bldclab.control.Control`. Adding a variant is one more pair; a third element, a mapping of
+:func:`~bldclab.analysis.experiments.steady_state` keywords (e.g. ``{"settle_periods": 20}`` for a controller that
+learns during its first revolutions), changes how that variant's points are run. Theory and how to read the
 results: docs/hall.md.
 """
 
@@ -19,7 +21,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from typing import Any
@@ -33,10 +35,13 @@ from ..model.motor import Drive
 from ..sim import plausibility as _plaus
 from .experiments import map_points, steady_state
 
-__all__ = ["CASES", "DEFAULT_ERRORS_DEG", "VARIANTS", "HallStudyResult", "Variant", "error_pattern", "hall_study"]
+__all__ = ["CASES", "DEFAULT_ERRORS_DEG", "VARIANTS", "Factory", "HallStudyResult", "Variant", "error_pattern",
+           "hall_study"]
 
-#: A controller variant of the study: its label and a factory ``(drive, speed [rad/s]) -> Control``.
-Variant = tuple[str, Callable[[Drive, float], Control]]
+#: Makes a variant's controller for the drive (its Hall errors set) and the speed (rad/s).
+Factory = Callable[[Drive, float], Control]
+#: A controller variant of the study: its label, its factory and, optionally, steady_state keywords for its runs.
+Variant = tuple[str, Factory] | tuple[str, Factory, Mapping[str, Any]]
 
 #: Error patterns (see the module docstring).
 CASES = ("one", "common", "alternating")
@@ -99,11 +104,11 @@ _NAN_ROW = {"tau_mean": math.nan, "tau_mean_pu": math.nan, "ripple_sampled": mat
             "ripple_ma_pu": math.nan, "efficiency": math.nan}
 
 
-def _run(job: tuple[Drive, str, Callable[[Drive, float], Control], float, float]) -> dict[str, Any]:
-    drive, label, factory, speed, torque = job
+def _run(job: tuple[Drive, str, Factory, float, float, Mapping[str, Any]]) -> dict[str, Any]:
+    drive, label, factory, speed, torque, opts = job
     try:
         with _plaus.collect() as caught:
-            point, _ = steady_state(drive, factory(drive, speed), speed, torque)
+            point, _ = steady_state(drive, factory(drive, speed), speed, torque, **opts)
     except PlausibilityError as exc:  # refused by the guards: no measurement
         return {**_NAN_ROW, "note": f"refused: {exc}", "_warnings": []}
     return {"tau_mean": point.tau_mean, "tau_mean_pu": point.tau_mean_pu, "ripple_sampled": point.ripple_sampled,
@@ -148,14 +153,15 @@ class HallStudyResult:
     def table(self) -> str:
         """Return the study as a text table: one line per variant and case, one column group per error."""
         errs = sorted(self.points.error_deg.unique())
-        head = f"{'variant':<14}{'case':<12}{'error (deg)':>11}" + "".join(f"{e:>9.3g}" for e in errs)
+        wv = max([len("variant"), *(len(str(v)) for v in self.points.variant)]) + 2
+        head = f"{'variant':<{wv}}{'case':<12}{'error (deg)':>11}" + "".join(f"{e:>9.3g}" for e in errs)
         lines = [head]
         for (var, case), g in self.points.groupby(["variant", "case"], sort=False):
             g = g.set_index("error_deg")
             for name, col, scale in (("tau/tau0", "tau_rel", 1.0), ("ripple pu", "ripple_sampled_pu", 1.0),
                                      ("eff %", "efficiency", 100.0)):
                 vals = "".join(f"{scale * g.loc[e, col]:>9.4g}" if e in g.index else f"{'':>9}" for e in errs)
-                lines.append(f"{var if name == 'tau/tau0' else '':<14}{case if name == 'tau/tau0' else '':<12}"
+                lines.append(f"{var if name == 'tau/tau0' else '':<{wv}}{case if name == 'tau/tau0' else '':<12}"
                              f"{name:>11}{vals}")
         return "\n".join(lines)
 
@@ -173,9 +179,10 @@ def hall_study(drive: Drive, *, errors: Sequence[float] | None = None, cases: Se
         Placement errors (rad, electrical), each in [0, pi/6) (default :data:`DEFAULT_ERRORS_DEG`).
     cases : sequence of str
         Error patterns (:data:`CASES`, :func:`error_pattern`).
-    variants : sequence of (str, callable)
+    variants : sequence of (str, callable) or (str, callable, mapping)
         ``(label, factory)`` pairs, ``factory(drive, speed) -> Control`` (module-level functions for a process
-        pool). Default :data:`VARIANTS`.
+        pool), optionally with a mapping of :func:`~bldclab.analysis.experiments.steady_state` keywords for that
+        variant's runs. Default :data:`VARIANTS`.
     speed : float, optional
         Imposed mechanical speed (rad/s), default ``0.5 Omega_0``.
     torque : float, optional
@@ -186,7 +193,7 @@ def hall_study(drive: Drive, *, errors: Sequence[float] | None = None, cases: Se
     Returns
     -------
     HallStudyResult
-        The points (the zero-error point is run once per variant and shared by the cases).
+        The points (the zero-error point is run once per variant, always, and shared by the cases).
 
     Raises
     ------
@@ -204,12 +211,16 @@ def hall_study(drive: Drive, *, errors: Sequence[float] | None = None, cases: Se
         raise BldclabError("cases", "is empty")
     for c in cases:
         error_pattern(c, 0.0)
-    labels = [v[0] for v in variants] if variants else []
-    if not labels:
+    if not variants:
         raise BldclabError("variants", "is empty")
+    if not all(isinstance(v, tuple) and len(v) in (2, 3) for v in variants):
+        raise BldclabError("variants", "needs (label, factory) or (label, factory, steady_state keywords) tuples")
+    labels = [v[0] for v in variants]
+    opts: list[Mapping[str, Any]] = [v[2] if len(v) == 3 else {} for v in variants]
     if len(set(labels)) != len(labels) or not all(isinstance(lb, str) and lb for lb in labels) or \
-            not all(callable(v[1]) for v in variants):
-        raise BldclabError("variants", "needs (label, factory) pairs with distinct non-empty labels")
+            not all(callable(v[1]) for v in variants) or not all(isinstance(o, Mapping) for o in opts):
+        raise BldclabError("variants", "needs (label, factory[, keywords]) tuples with distinct non-empty labels, "
+                           "callable factories and a mapping of keywords")
     w = 0.5 * drive.Omega_0 if speed is None else speed
     tq = drive.T_N if torque is None else torque
     for name, v in (("speed", w), ("torque", tq)):
@@ -218,15 +229,18 @@ def hall_study(drive: Drive, *, errors: Sequence[float] | None = None, cases: Se
             raise BldclabError(name, f"must be a finite non-zero number, got {v!r}")
     w, tq = float(w), float(tq)
     keys: list[tuple[str, str, float]] = []
-    jobs: list[tuple[Drive, str, Callable[[Drive, float], Control], float, float]] = []
+    jobs: list[tuple[Drive, str, Factory, float, float, Mapping[str, Any]]] = []
     index: dict[tuple[str, tuple[float, float, float]], int] = {}
-    for label, factory in variants:
+    zero = (0.0, 0.0, 0.0)
+    for (label, factory, *_), opt in zip(variants, opts, strict=True):
+        index[(label, zero)] = len(jobs)  # the reference of tau_rel, run even when 0 is not among the errors
+        jobs.append((drive.replace(sensors__hall_error=zero), label, factory, w, tq, dict(opt)))
         for case in cases:
             for e in errs:
                 pattern = error_pattern(case, float(e))
                 if (label, pattern) not in index:
                     index[(label, pattern)] = len(jobs)
-                    jobs.append((drive.replace(sensors__hall_error=pattern), label, factory, w, tq))
+                    jobs.append((drive.replace(sensors__hall_error=pattern), label, factory, w, tq, dict(opt)))
                 keys.append((label, case, float(e)))
     t0 = time.perf_counter()
     results = map_points(_run, jobs, executor)
@@ -238,12 +252,11 @@ def hall_study(drive: Drive, *, errors: Sequence[float] | None = None, cases: Se
     for label, case, e in keys:
         pattern = error_pattern(case, e)
         r = results[index[(label, pattern)]]
-        base = results[index[(label, (0.0, 0.0, 0.0))]] if (label, (0.0, 0.0, 0.0)) in index else None
-        tau0 = base["tau_mean"] if base is not None else math.nan
+        tau0 = results[index[(label, zero)]]["tau_mean"]
         rows.append({"variant": label, "case": case, "error_deg": math.degrees(e), "hall_error_a": pattern[0],
                      "hall_error_b": pattern[1], "hall_error_c": pattern[2],
                      **{k: v for k, v in r.items() if k != "_warnings"},
-                     "tau_rel": r["tau_mean"] / tau0 if tau0 else math.nan})
+                     "tau_rel": r["tau_mean"] / tau0 if tau0 and math.isfinite(tau0) else math.nan})
     cols = ["variant", "case", "error_deg", "hall_error_a", "hall_error_b", "hall_error_c", "tau_mean", "tau_mean_pu",
             "tau_rel", "ripple_sampled", "ripple_sampled_pu", "ripple_ma_pu", "efficiency", "note"]
     return HallStudyResult(drive=drive.name, speed=w, torque=tq, T_N=drive.T_N, points=pd.DataFrame(rows)[cols],
