@@ -13,7 +13,7 @@ import math
 import sys
 
 import bldclab as bl
-from bldclab.analysis.hall import hall_study
+from bldclab.analysis.hall import VARIANTS, hall_study
 from bldclab.report.hall_plots import plot_hall_study
 
 # configure the drive: htm-48v with realistic sensors besides the placement error the study varies:
@@ -21,8 +21,11 @@ from bldclab.report.hall_plots import plot_hall_study
 drive = bl.load("htm-48v").replace(sensors__hall_hysteresis=math.radians(1.0), sensors__hall_delay=2e-6,
                                    sensors__hall_tau=10e-6)
 
+# configure the control: the study's controllers, (label, factory) pairs; append one to compare another
+variants = list(VARIANTS)
+
 # simulate: every controller, pattern and error at rated torque, 0.5 Omega_0 (steady states at imposed speed)
-res = hall_study(drive, errors=[math.radians(e) for e in (0.0, 2.5, 5.0, 7.5, 10.0)])
+res = hall_study(drive, errors=[math.radians(e) for e in (0.0, 2.5, 5.0, 7.5, 10.0)], variants=variants)
 print(f"{len(res.points)} points in {res.seconds:.2f} s")
 print(res.table())
 
