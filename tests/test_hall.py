@@ -5,6 +5,7 @@ here the trace of a closed-loop run shows every edge inside the sample interval 
 from __future__ import annotations
 
 import math
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 import pytest
@@ -267,3 +268,12 @@ def test_cli_hall_bad_input_exits_2_and_writes_nothing(tmp_path, args):
     out = tmp_path / "h"
     assert main(["hall", "htm-48v", *args, "--out", str(out)]) == 2
     assert not out.exists()
+
+
+@pytest.mark.slow  # starts a process pool
+def test_a_process_pool_gives_the_same_points(htm):
+    kw = {"errors": [0.0, 6 * DEG], "cases": ["one", "alternating"]}
+    serial = hall.hall_study(htm, **kw)
+    with ProcessPoolExecutor(2) as ex:
+        pooled = hall.hall_study(htm, executor=ex, **kw)
+    assert serial.points.equals(pooled.points)
