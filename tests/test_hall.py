@@ -5,6 +5,7 @@ here the trace of a closed-loop run shows every edge inside the sample interval 
 from __future__ import annotations
 
 import math
+import re
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
@@ -277,3 +278,28 @@ def test_a_process_pool_gives_the_same_points(htm):
     with ProcessPoolExecutor(2) as ex:
         pooled = hall.hall_study(htm, executor=ex, **kw)
     assert serial.points.equals(pooled.points)
+
+
+@pytest.mark.slow  # the session's compare run, the study and two reports
+def test_report_of_the_directory_shows_the_hall_section(compare_htm48v, tmp_path):
+    """bldclab hall written into a compare results directory adds the 'Hall errors' section to the report; a
+    hall.csv with a non-number is refused with the file named."""
+    d = tmp_path / "res"
+    d.mkdir()
+    for p in compare_htm48v.iterdir():
+        (d / p.name).write_bytes(p.read_bytes())
+    assert main(["hall", "htm-48v", "--errors", "0,5", "--cases", "one,common", "--out", str(d)]) == 0
+    out = tmp_path / "page.html"
+    assert main(["report", str(d), "--out", str(out)]) == 0
+    text = out.read_text(encoding="utf-8")
+    section = re.search(r'<section id="hall">(.*?)</section>', text, re.S)
+    assert section is not None and "<svg" in section.group(1)
+    for label, _ in hall.VARIANTS:
+        assert label in section.group(1)
+    assert '<a href="#hall">' in text and not re.search(r"https?://", text)
+    csv = (d / "hall.csv").read_text().splitlines()
+    csv[1] = ",".join("x" if j == csv[0].split(",").index("tau_rel") else v for j, v in enumerate(csv[1].split(",")))
+    (d / "hall.csv").write_text("\n".join(csv) + "\n")
+    bad = tmp_path / "bad.html"
+    assert main(["report", str(d), "--out", str(bad)]) == 2
+    assert not bad.exists()
