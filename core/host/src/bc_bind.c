@@ -51,7 +51,9 @@ static const bc_field_desc FIELDS[] = {
     F(bc_plant_params, B, "f8"),
     F(bc_plant_params, tau_c, "f8"),
     F(bc_plant_params, hall_error, "f8"),
+    F(bc_plant_params, hall_hyst, "f8"),
     F(bc_plant_params, hall_delay, "f8"),
+    F(bc_plant_params, hall_tau, "f8"),
     F(bc_plant_params, h_max, "f8"),
     F(bc_plant_params, fault, "bc_fault"),
 

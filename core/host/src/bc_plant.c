@@ -336,21 +336,42 @@ static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double 
 /* ---------------------------------------------------------------------------------------------------------- */
 /* angle pieces: back-EMF segments and Hall intervals                                                          */
 
-static void hall_locate(const bc_plant_params *p, bc_plant_state *s)
+static void hall_raw_toggle(const bc_plant_params *p, bc_plant_state *s, int x);
+
+/* Hall intervals around the current angle for the current direction (bc_plant.h: each sensor switches at
+ * PHI_x - pi/6 + err_x + dir h_x/2 + k pi). keep < 0 (init): the code follows from the angle. keep >= 0 (a
+ * reversal): the sensors keep their bits; one whose bit contradicts its interval is either inside its hysteresis
+ * band (within h_x behind the next bound in the new direction: it holds its state for one more interval) or was
+ * left exactly on a bound (h_x = 0: it switches now). */
+static void hall_locate(const bc_plant_params *p, bc_plant_state *s, int keep)
 {
-    int code = 0;
+    int code = 0, now = 0;
     for (int x = 0; x < 3; ++x) {
-        double base = PHI[x] - BC_PI / 6.0 + p->hall_error[x];
+        double base = PHI[x] - BC_PI / 6.0 + p->hall_error[x] + 0.5 * (double)s->dir * p->hall_hyst[x];
         double m = floor((s->theta - base) / BC_PI);
         double lo = base + m * BC_PI; /* at a threshold: the interval above (moving back crosses at once) */
+        int bit = ((long)m % 2 == 0) ? 1 : 0;
+        if (keep >= 0 && ((keep >> x) & 1) != bit) {
+            double band = s->dir > 0 ? lo + BC_PI - s->theta : s->theta - lo;
+            if (band < p->hall_hyst[x]) {
+                lo += (double)s->dir * BC_PI;
+                bit ^= 1;
+            } else {
+                now |= 1 << x;
+            }
+        }
         s->hseg[x].lo = lo;
         s->hseg[x].hi = lo + BC_PI;
-        long mi = (long)m;
-        if (mi % 2 == 0) {
-            code |= 1 << x;
-        }
+        code |= bit << x;
     }
-    s->hall_raw = code;
+    if (keep < 0) {
+        s->hall_raw = code;
+        return;
+    }
+    s->hall_raw = keep;
+    for (int x = 0; x < 3; ++x) {
+        if (now & (1 << x)) hall_raw_toggle(p, s, x);
+    }
 }
 
 static void pieces_locate(const bc_plant_params *p, bc_plant_state *s)
@@ -363,9 +384,7 @@ static void pieces_locate(const bc_plant_params *p, bc_plant_state *s)
         }
     }
     /* keep the Hall code; only re-derive the intervals around the current angle */
-    int keep = s->hall_raw;
-    hall_locate(p, s);
-    s->hall_raw = keep;
+    hall_locate(p, s, s->hall_raw);
 }
 
 /* The code the controller sees: the delayed sensor code with the active sensor faults applied. */
@@ -402,24 +421,69 @@ static void hall_output_toggle(const bc_plant_params *p, bc_plant_state *s, int 
     hall_refresh(p, s, t);
 }
 
-static void hall_raw_toggle(const bc_plant_params *p, bc_plant_state *s, int x)
+/* Remove entry j of the delayed-edge queue. */
+static void hq_remove(bc_plant_state *s, int j)
 {
-    int bit = 1 << x;
-    s->hall_raw ^= bit;
-    if (p->hall_delay <= 0.0) {
+    int n = s->hq_n - 1 - j;
+    if (n > 0) {
+        memmove(&s->hq_t[j], &s->hq_t[j + 1], (size_t)n * sizeof s->hq_t[0]);
+        memmove(&s->hq_code[j], &s->hq_code[j + 1], (size_t)n * sizeof s->hq_code[0]);
+    }
+    s->hq_n -= 1;
+}
+
+/* An edge of the input bit `bit` seen by the MCU at time t: now if t is not later, else queued in time order
+ * (after entries of the same time). A full queue sees its oldest edge now (flagged). */
+static void hq_push(const bc_plant_params *p, bc_plant_state *s, int32_t bit, double t)
+{
+    if (!(t > s->t)) {
         hall_output_toggle(p, s, bit, s->t);
         return;
     }
-    if (s->hq_n == BC_HALL_QUEUE) { /* overrun: the oldest edge is seen now */
+    if (s->hq_n == BC_HALL_QUEUE) {
         hall_output_toggle(p, s, s->hq_code[0], s->t);
-        memmove(&s->hq_t[0], &s->hq_t[1], (BC_HALL_QUEUE - 1) * sizeof s->hq_t[0]);
-        memmove(&s->hq_code[0], &s->hq_code[1], (BC_HALL_QUEUE - 1) * sizeof s->hq_code[0]);
-        s->hq_n -= 1;
+        hq_remove(s, 0);
         s->flags |= BC_PLANT_HALL_OVERRUN;
     }
-    s->hq_t[s->hq_n] = s->t + p->hall_delay;
-    s->hq_code[s->hq_n] = bit;
+    int j = s->hq_n;
+    while (j > 0 && s->hq_t[j - 1] > t) {
+        s->hq_t[j] = s->hq_t[j - 1];
+        s->hq_code[j] = s->hq_code[j - 1];
+        --j;
+    }
+    s->hq_t[j] = t;
+    s->hq_code[j] = bit;
     s->hq_n += 1;
+}
+
+/* Sensor x switched at the rotor now: its edge reaches the line d_x later and the MCU input through the RC filter
+ * (bc_plant.h). A crossing of the previous input step not reached by the new step's time never happens. */
+static void hall_raw_toggle(const bc_plant_params *p, bc_plant_state *s, int x)
+{
+    int32_t bit = 1 << x;
+    s->hall_raw ^= bit;
+    double t_in = s->t + p->hall_delay[x];
+    double tau = p->hall_tau[x];
+    if (!(tau > 0.0)) {
+        hq_push(p, s, bit, t_in);
+        return;
+    }
+    double u0 = (double)s->hf_u[x];
+    double v = u0 + (s->hf_v[x] - u0) * exp(-(t_in - s->hf_t[x]) / tau);
+    for (int j = s->hq_n - 1; j >= 0; --j) { /* the last queued edge of this input: cancelled if not reached */
+        if (s->hq_code[j] != bit) continue;
+        if (s->hq_t[j] >= t_in) hq_remove(s, j);
+        break;
+    }
+    int32_t u = (s->hall_raw >> x) & 1;
+    s->hf_t[x] = t_in;
+    s->hf_v[x] = v;
+    s->hf_u[x] = u;
+    if (u == 1 && v < 0.5) {
+        hq_push(p, s, bit, t_in + tau * log((1.0 - v) / 0.5));
+    } else if (u == 0 && v > 0.5) {
+        hq_push(p, s, bit, t_in + tau * log(v / 0.5));
+    }
 }
 
 /* Cross every piece/Hall bound reached at angle th_reach in the current direction. Returns 1 if any. */
@@ -974,6 +1038,8 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     for (int x = 0; x < 3; ++x) {
         if (bc_emf_check(&p->emf[x]) != BC_OK) return BC_ERR_PARAM;
         if (!isfinite(p->hall_error[x]) || fabs(p->hall_error[x]) >= BC_PI / 6.0) return BC_ERR_PARAM;
+        if (!finite_nonneg(p->hall_hyst[x]) || p->hall_hyst[x] >= BC_PI / 3.0) return BC_ERR_PARAM;
+        if (!finite_nonneg(p->hall_delay[x]) || !finite_nonneg(p->hall_tau[x])) return BC_ERR_PARAM;
     }
     if (p->n_cog < 0) return BC_ERR_PARAM;
     if (p->n_cog > 0) {
@@ -995,7 +1061,7 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
         return BC_ERR_PARAM;
     if (p->mech != BC_MECH_IMPOSED && p->mech != BC_MECH_DYNAMIC) return BC_ERR_PARAM;
     if (p->mech == BC_MECH_DYNAMIC && !(isfinite(p->J) && p->J > 0.0)) return BC_ERR_PARAM;
-    if (!finite_nonneg(p->B) || !finite_nonneg(p->tau_c) || !finite_nonneg(p->hall_delay)) return BC_ERR_PARAM;
+    if (!finite_nonneg(p->B) || !finite_nonneg(p->tau_c)) return BC_ERR_PARAM;
     if (!isfinite(p->h_max)) return BC_ERR_PARAM;
     for (int j = 0; j < BC_FAULT_MAX; ++j) {
         const bc_fault *f = &p->fault[j];
@@ -1036,10 +1102,15 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
         s->t_off_l[x] = -HUGE_VAL;
         s->cond[x] = BC_COND_OPEN;
     }
+    hall_locate(p, s, -1);
     pieces_locate(p, s);
-    hall_locate(p, s);
     for (int j = 0; j < BC_FAULT_MAX; ++j) s->has_faults |= p->fault[j].kind != BC_FAULT_NONE;
     s->hall_true = s->hall_raw;
+    for (int x = 0; x < 3; ++x) {
+        s->hf_t[x] = t0;
+        s->hf_u[x] = (s->hall_raw >> x) & 1;
+        s->hf_v[x] = (double)s->hf_u[x];
+    }
     s->hall_out = hall_visible(p, s, t0);
     s->t_edge = -HUGE_VAL;
     (void)faults_apply(p, s);
@@ -1214,9 +1285,7 @@ static int process_due(const bc_plant_params *p, bc_plant_state *s)
     }
     while (s->hq_n > 0 && s->hq_t[0] <= s->t) {
         hall_output_toggle(p, s, s->hq_code[0], s->hq_t[0]);
-        memmove(&s->hq_t[0], &s->hq_t[1], (BC_HALL_QUEUE - 1) * sizeof s->hq_t[0]);
-        memmove(&s->hq_code[0], &s->hq_code[1], (BC_HALL_QUEUE - 1) * sizeof s->hq_code[0]);
-        s->hq_n -= 1;
+        hq_remove(s, 0);
     }
     if (changed) {
         resolve(p, s);

@@ -69,7 +69,9 @@ FIELDS: dict[tuple[str, str], str] = {
     ("sensors", "vdc_noise"): "V: standard deviation of its noise",
     ("sensors", "vdc_lsb"): "V: its quantisation step (0: none)",
     ("sensors", "hall_error"): "rad: electrical angle error of each Hall sensor (a, b, c)",
-    ("sensors", "hall_delay"): "s: delay of every Hall edge",
+    ("sensors", "hall_hysteresis"): "rad: electrical hysteresis of the Hall sensors (one value or a, b, c)",
+    ("sensors", "hall_delay"): "s: propagation delay of the Hall edges (one value or a, b, c)",
+    ("sensors", "hall_tau"): "s: RC filter time constant on the Hall lines (one value or a, b, c; 0: none)",
     ("sensors", "f_tick"): "Hz: capture-timer frequency time-stamping the Hall edges",
     ("sensors", "seed"): "seed of the noise generator (integer >= 0)",
 }

@@ -258,6 +258,27 @@ class Mechanics:
         check_number("tau_c", self.tau_c, lo=0.0)
 
 
+def _per_sensor(name: str, v: object, hi: float | None) -> tuple[float, float, float]:
+    """Check a per-Hall-sensor quantity >= 0 (and < ``hi``): a number for all three, or three numbers (a, b, c)."""
+    if isinstance(v, str | bytes) or not isinstance(v, Sequence | np.ndarray | int | float | np.floating | np.integer):
+        raise BldclabError(name, f"expected a number or three numbers (a, b, c), got {type(v).__name__}")
+    if isinstance(v, Sequence | np.ndarray):
+        if len(v) != 3:
+            raise BldclabError(name, f"needs one number or three entries (a, b, c), got {len(v)}")
+        vals = list(v)
+        names = [f"{name}[{j}]" for j in range(3)]
+    else:
+        vals = [v] * 3
+        names = [name] * 3
+    for nm, x in zip(names, vals, strict=True):
+        check_number(nm, x, lo=0.0)
+        if hi is not None and not float(x) < hi:
+            raise BldclabError(nm, f"must be < {math.degrees(hi):.4g} deg electrical ({hi:.6g} rad), got "
+                               f"{math.degrees(float(x)):.4g} deg")
+    a, b, c = (float(x) for x in vals)
+    return (a, b, c)
+
+
 @dataclass(frozen=True)
 class Sensors:
     """Measurement chain seen by the controller.
@@ -275,9 +296,18 @@ class Sensors:
     vdc_gain, vdc_offset, vdc_noise, vdc_lsb : float
         Same for the DC-bus voltage (-, V, V, V).
     hall_error : tuple of float
-        Angle error of each Hall sensor (rad, electrical): its edges move by this angle.
-    hall_delay : float
-        Delay of every Hall edge (s).
+        Placement error of each Hall sensor (rad, electrical), within +-pi/6 (30 degrees): both its edges move by
+        this angle.
+    hall_hysteresis : float or tuple of float
+        Magnetic hysteresis of each Hall sensor (rad, electrical), in [0, pi/3): its edges come half of it late in
+        the direction of travel (forward: at the placed edge + h/2, backward: - h/2). A number is used for all
+        three sensors.
+    hall_delay : float or tuple of float
+        Propagation delay of each sensor's edges (s), >= 0; a number is used for all three.
+    hall_tau : float or tuple of float
+        Time constant (s), >= 0, of a first-order RC filter on each Hall line read by the MCU at half the swing:
+        an edge is seen ``tau ln 2`` late, a pulse shorter than that never; 0 for none. A number is used for all
+        three. The model of all four is in docs/hall.md.
     f_tick : float
         Capture-timer frequency (Hz) used to time-stamp Hall edges.
     seed : int
@@ -295,7 +325,9 @@ class Sensors:
     vdc_noise: float = 0.0
     vdc_lsb: float = 0.0
     hall_error: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    hall_delay: float = 0.0
+    hall_hysteresis: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    hall_delay: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    hall_tau: tuple[float, float, float] = (0.0, 0.0, 0.0)
     f_tick: float = 10e6
     seed: int = 1
 
@@ -314,7 +346,13 @@ class Sensors:
             for j, x in enumerate(v):
                 check_number(f"{name}[{j}]", x)
             object.__setattr__(self, name, tuple(float(x) for x in v))
-        for name in ("current_noise", "current_lsb", "vdc_noise", "vdc_lsb", "hall_delay"):
+        for j, x in enumerate(self.hall_error):
+            if not abs(x) < math.pi / 6.0:
+                raise BldclabError(f"hall_error[{j}]", f"must be within +-30 deg electrical (pi/6 rad), got "
+                                   f"{math.degrees(x):.4g} deg")
+        for name, hi in (("hall_hysteresis", math.pi / 3.0), ("hall_delay", None), ("hall_tau", None)):
+            object.__setattr__(self, name, _per_sensor(name, getattr(self, name), hi))
+        for name in ("current_noise", "current_lsb", "vdc_noise", "vdc_lsb"):
             check_number(name, getattr(self, name), lo=0.0)
         check_number("vdc_gain", self.vdc_gain)
         check_number("vdc_offset", self.vdc_offset)
@@ -515,6 +553,11 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
         kw: dict[str, Any] = {}
         if ss.has("current_phases"):
             kw["current_phases"] = ss.string("current_phases")
+        for key, dim in (("hall_hysteresis", "angle"), ("hall_delay", "time"), ("hall_tau", "time")):
+            if ss.has(key):  # one value for all three sensors, or a list (a, b, c)
+                raw = ss.raw(key)
+                kw[key] = (tuple(to_si(v, dim, f"{ss.name(key)}[{j}]") for j, v in enumerate(raw))
+                           if isinstance(raw, list) else ss.quantity(key, dim))
         for key, dim in (("current_gain", "dimensionless"), ("current_offset", "current"),
                          ("hall_error", "angle")):
             if ss.has(key):
@@ -525,7 +568,7 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
         for key, dim in (("current_noise", "current"), ("current_lsb", "current"),
                          ("vdc_gain", "dimensionless"),
                          ("vdc_offset", "voltage"), ("vdc_noise", "voltage"), ("vdc_lsb", "voltage"),
-                         ("hall_delay", "time"), ("f_tick", "frequency")):
+                         ("f_tick", "frequency")):
             if ss.has(key):
                 kw[key] = ss.quantity(key, dim)
         if ss.has("seed"):
@@ -586,5 +629,11 @@ def _drive_to_toml(d: Drive) -> str:
     sen["current_gain"] = list(sen["current_gain"])
     sen["current_offset"] = list(sen["current_offset"])
     sen["hall_error"] = list(sen["hall_error"])
+    for key in ("hall_hysteresis", "hall_delay", "hall_tau"):
+        v = sen[key]
+        if key != "hall_delay" and all(x == 0.0 for x in v):
+            del sen[key]  # no hysteresis / filter (the default): written as before they existed
+        else:
+            sen[key] = v[0] if v[0] == v[1] == v[2] else list(v)
     out.append(toml_table("sensors", sen))
     return "\n".join(out)

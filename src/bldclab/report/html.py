@@ -82,7 +82,7 @@ WAVEFORM_SUB = 4
 #: Files of a results directory the report reads; the others it lists.
 _KNOWN = ("simulated.csv", "analytic.csv", "table1.json", "verdict.txt", "waveforms.csv", "dynamometer.csv",
           "methods.csv", "methods_traces.csv", "methods_compared.svg", "faults.csv", "effmap.csv",
-          "effmap_difference.csv", "effmap_difference.svg", "efficiency.csv")
+          "effmap_difference.csv", "effmap_difference.svg", "efficiency.csv", "hall.csv", "hall.svg")
 
 _SINE, _SQUARE, _GRAY = "#1f77b4", "#d62728", "#7f7f7f"
 _PHASE = {"a": "#1f77b4", "b": "#ff7f0e", "c": "#2ca02c"}
@@ -134,7 +134,9 @@ PARAMETERS: dict[str, tuple[tuple[str, str, str], ...]] = {
         ("vdc_noise", "DC bus noise (standard deviation)", "V"),
         ("vdc_lsb", "DC bus quantisation step", "V"),
         ("hall_error", "Hall sensor angle errors a, b, c (electrical)", "rad"),
-        ("hall_delay", "Hall edge delay", "s"),
+        ("hall_hysteresis", "Hall sensor hysteresis a, b, c (electrical)", "rad"),
+        ("hall_delay", "Hall edge propagation delays a, b, c", "s"),
+        ("hall_tau", "Hall line RC filter time constants a, b, c", "s"),
         ("f_tick", "capture-timer frequency (Hall edge time stamps)", "Hz"),
         ("seed", "noise generator seed", "-"),
     ),
@@ -290,6 +292,10 @@ class Results:
     efficiency : pandas.DataFrame or None
         ``efficiency.csv``: the efficiency by loss count (:func:`bldclab.analysis.compare.efficiency_table`);
         None in results written before it existed.
+    hall : pandas.DataFrame or None
+        ``hall.csv`` of ``bldclab hall`` written into the same directory.
+    hall_svg : str or None
+        ``hall.svg`` of ``bldclab hall``, made inline-safe.
     files : list of str
         Every file of the directory.
     source : str
@@ -312,6 +318,8 @@ class Results:
     effmap_difference: pd.DataFrame | None = None
     effmap_svg: str | None = None
     efficiency: pd.DataFrame | None = None
+    hall: pd.DataFrame | None = None
+    hall_svg: str | None = None
     files: list[str] = dataclasses.field(default_factory=list)
     source: str = ""
 
@@ -402,11 +410,18 @@ class Results:
         eff = _csv(files, "efficiency.csv", ("supply", "Omega_pu", *EFFICIENCY_COUNTS), source, required=False)
         if eff is not None:
             _numeric(eff, "efficiency.csv", ("Omega_pu", *EFFICIENCY_COUNTS), source)
+        hall = _csv(files, "hall.csv", ("variant", "case", "error_deg", "tau_rel", "ripple_sampled_pu", "efficiency"),
+                    source, required=False)
+        if hall is not None:
+            _numeric(hall, "hall.csv", ("error_deg", "tau_rel", "ripple_sampled_pu", "efficiency"), source)
+        hsvg = None
+        if hall is not None and files.get("hall.svg"):
+            hsvg = _clean_svg(files["hall.svg"].decode("utf-8", "replace"))
         return cls(manifest=manifest, drive=drive, simulated=sim, analytic=an, table1=quantities, verdict=verdict,
                    waveforms=wf, dynamometer=dyno, methods=methods, methods_traces=traces, methods_svg=svg,
                    faults=faults, effmap=emap, effmap_difference=ediff if emap is not None else None,
-                   effmap_svg=esvg if emap is not None else None, efficiency=eff, files=sorted(files),
-                   source=source)
+                   effmap_svg=esvg if emap is not None else None, efficiency=eff, hall=hall, hall_svg=hsvg,
+                   files=sorted(files), source=source)
 
 
 # ------------------------------------------------------------------------------------------------------------
@@ -823,6 +838,32 @@ def _section_effmap(r: Results) -> str:
     return "".join(out)
 
 
+def _section_hall(r: Results) -> str:
+    if r.hall is None:
+        return ""
+    h = r.hall
+    errs = sorted(set(float(e) for e in h.error_deg))
+    rows: list[list[Any]] = []
+    for (var, case), g in h.groupby(["variant", "case"], sort=False):
+        by = {float(e): row for e, row in zip(g.error_deg, g.to_dict("records"), strict=True)}
+        for label, col in (("mean torque / at 0", "tau_rel"), ("ripple (p.u. of T_N)", "ripple_sampled_pu"),
+                           ("efficiency", "efficiency")):
+            rows.append([var, case, label, *(by[e][col] if e in by else math.nan for e in errs)])
+    cols = ["controller", "error pattern", "quantity", *(f"{e:g} deg" for e in errs)]
+    table = _html_table(cols, rows, [False, False, False, *([True] * len(errs))])
+    out = ['<section id="hall"><h2>8. Hall sensor placement error</h2>'
+           "<p>From the files <code>bldclab hall ... --out</code> wrote into this directory (hall.csv, hall.svg): "
+           "each controller at one operating point with the Hall sensors misplaced by the given electrical angle: "
+           "<i>one</i> sensor (a), all three by a <i>common</i> offset, or all three <i>alternating</i> "
+           "(+, -, +). Mean torque relative to the same controller's at zero error; ripple max - min of the torque "
+           "at the controller samples.</p>", f'<div class="scroll">{table}</div>']
+    if r.hall_svg is not None:
+        out.append(f'<figure class="static">{r.hall_svg}<figcaption><b>Torque, ripple and efficiency against the '
+                   "Hall placement error</b> (hall.svg, a static figure).</figcaption></figure>")
+    out.append("</section>")
+    return "".join(out)
+
+
 def _settings_rows(prefix: str, settings: Any) -> list[list[str]]:
     rows: list[list[str]] = []
     if isinstance(settings, dict):
@@ -921,7 +962,7 @@ def render(results: Results, *, report_command: str, created: str | None = None)
     name = r.drive.name or "(unnamed drive)"
     body = [_section_motor(r, page), _section_table1(r), _section_characteristics(r, page), _section_efficiency(r),
             _section_waveforms(r, page), _section_paper2(r, page), _section_faults(r), _section_effmap(r),
-            _section_provenance(r, report_command, created)]
+            _section_hall(r), _section_provenance(r, report_command, created)]
     toc = [("verdict", "Verdict"), ("motor", "Motor"), ("table1", "Table I"), ("characteristics", "Characteristics"),
            *([("efficiency", "Efficiency counts")] if r.efficiency is not None else []), ("waveforms", "Waveforms")]
     if r.methods is not None or r.methods_traces is not None or r.methods_svg is not None:
@@ -930,6 +971,8 @@ def render(results: Results, *, report_command: str, created: str | None = None)
         toc.append(("faults", "Faults"))
     if r.effmap is not None:
         toc.append(("effmap", "Efficiency maps"))
+    if r.hall is not None:
+        toc.append(("hall", "Hall errors"))
     toc.append(("provenance", "How it was produced"))
     nav = "".join(f'<a href="#{k}">{_e(v)}</a>' for k, v in toc)
     n = len(set(r.simulated["Omega_pu"]))

@@ -431,7 +431,9 @@ def _plant_params(drive: Drive, imposed: bool, h_max: float, keep: list[object])
     rec["B"] = mech_p.B
     rec["tau_c"] = mech_p.tau_c
     rec["hall_error"] = sen.hall_error
+    rec["hall_hyst"] = sen.hall_hysteresis
     rec["hall_delay"] = sen.hall_delay
+    rec["hall_tau"] = sen.hall_tau
     rec["h_max"] = h_max
     return rec
 

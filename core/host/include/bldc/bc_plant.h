@@ -66,6 +66,18 @@
  * i < 0 (otherwise both its edges are soft), with v_bus the half-period mean bus; the edges at the start or
  * end of an averaged stretch are not booked.
  *
+ * Hall sensors (docs/hall.md). Sensor x, placed at its nominal edges theta_n = PHI_x - pi/6 + k pi (conventions.md)
+ * plus its placement error err_x, switches where the rotor reaches
+ *     theta_sw = theta_n + err_x + dir h_x / 2          (dir = +1 forward, -1 backward; h_x its hysteresis),
+ * i.e. a magnetic threshold +-B_h on a field ~ sin(theta - theta_n - err_x): both edges come h_x/2 late in the
+ * direction of travel, and a reversal inside the band of width h_x switches nothing. The edge then reaches the
+ * line after the propagation delay d_x and passes a first-order RC filter (time constant tau_x) whose output
+ * level v (0..1) the MCU input reads against half the swing:
+ *     v(t) = u + (v(t_u) - u) exp(-(t - t_u) / tau_x)   after the (delayed) input steps to u at t_u,
+ *     the input switches at t_u + tau_x ln((u - v(t_u)) / (u - 1/2))  if v(t_u) is on the other side of 1/2.
+ * An isolated edge is thus seen d_x + tau_x ln 2 late; a pulse on the line shorter than tau_x ln 2 is never seen.
+ * All switching angles are located exactly (integration events) and every time is exact.
+ *
  * Integration: RK4 between events; lands exactly on gate edges, back-EMF corners and Hall edges (predicted),
  * and on diode current zeros, re-conduction and speed zero crossings (root finding). Powers are integrated
  * as extra states (acc[]) so the energy balance closes to the integration accuracy. Full description:
@@ -186,8 +198,12 @@ typedef struct {
     double B;               /* viscous friction, N m s/rad */
     double tau_c;           /* Coulomb friction, N m */
     /* Hall sensors */
-    double hall_error[3];   /* angle error of each sensor, rad (electrical) */
-    double hall_delay;      /* delay of the edges, s */
+    double hall_error[3];   /* placement error of each sensor, rad (electrical), |.| < pi/6 */
+    double hall_hyst[3];    /* hysteresis of each sensor, rad (electrical), in [0, pi/3): its edges sit dir h/2
+                               past the placed edge (later in the direction of travel, both edges) */
+    double hall_delay[3];   /* propagation delay of each sensor's edges, s */
+    double hall_tau[3];     /* time constant of the RC filter on each sensor line, s (0: none); the MCU input
+                               switches where the filtered level crosses half the swing */
     /* numerics */
     double h_max;           /* longest RK4 step, s (<= 0: half a PWM period) */
     /* injected faults */
@@ -287,9 +303,13 @@ typedef struct {
     double e_fault;         /* magnetic energy lost when a phase with current was disconnected, J */
     uint32_t n_edges;       /* edges seen by the controller */
     double t_edge;          /* time of the last edge seen, s */
-    int32_t hq_n;           /* delayed edges waiting */
+    int32_t hq_n;           /* delayed edges waiting, in time order */
     double hq_t[BC_HALL_QUEUE];
     int32_t hq_code[BC_HALL_QUEUE];
+    /* RC filter of each sensor line (level 0..1): the last input edge (after the propagation delay) at hf_t, the
+       filtered level hf_v there, the input level hf_u since then */
+    double hf_t[3], hf_v[3];
+    int32_t hf_u[3];
     /* integrals and trackers */
     double acc[BC_ACC_N];
     double tau_min, tau_max; /* extreme tau_e since the last bc_plant_reset_extremes: at every step end and, inside
