@@ -1398,6 +1398,17 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             break;
         }
         ensure_k1(p, s);
+        if (p->mech == BC_MECH_DYNAMIC && !s->stuck) {
+            /* the angle pieces and Hall intervals face the way the rotor moves. A speed zero crossing is an event
+             * that turns them; a start from rest is not (no crossing to watch): at rest the rotor moves the way it
+             * accelerates, and a step that left rest with zero acceleration is caught by its speed's sign */
+            double acc = s->work.k1[Y_OM];
+            int nd = s->omega < 0.0 ? -1 : s->omega > 0.0 ? 1 : (acc < 0.0 ? -1 : (acc > 0.0 ? 1 : s->dir));
+            if (nd != s->dir) {
+                s->dir = nd;
+                pieces_locate(p, s);
+            }
+        }
         pack(s, y0);
         /* the step: to the target, a gate edge, a delayed Hall edge, h_max, or an angle bound */
         double t_stop = t_end;
