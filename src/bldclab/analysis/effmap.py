@@ -14,7 +14,7 @@ such points are kept in the table with ``feasible = False`` and left out of the 
 The loss buckets are the mean powers of :class:`~bldclab.sim.results.Metrics` named in :data:`LOSS_BUCKETS` (the one
 place to add a new one); the accounting of each point is ``p_src_total = p_shaft + sum(buckets) + p_stored +
 residue`` (``p_src_total``: the DC source's power with the switching and recovery energies it supplies) with
-``p_shaft = p_emf + p_cog - p_fric``, ``p_stored`` the change of the windings' magnetic energy over the window
+``p_shaft = p_emf + p_cog - p_fric - p_fe``, ``p_stored`` the change of the windings' magnetic energy over the window
 divided by its length (zero in an exactly periodic steady state) and a residue of the order of the integration's
 energy balance (:attr:`~bldclab.sim.results.Metrics.balance_electrical`, 1e-9 to 1e-7).
 
@@ -60,12 +60,12 @@ __all__ = [
 ]
 
 #: The loss buckets, by their :class:`~bldclab.sim.results.Metrics` field names (W): source resistance, windings,
-#: switch conduction, diodes, switching, diode recovery, friction. A bucket the plant does not report (yet) is
-#: skipped; add a new one here.
-LOSS_BUCKETS: tuple[str, ...] = ("p_Rsrc", "p_cu", "p_sw", "p_diode", "p_swloss", "p_rr", "p_fric")
+#: switch conduction, diodes, switching, diode recovery, friction, stator iron. A bucket the plant does not report
+#: (yet) is skipped; add a new one here.
+LOSS_BUCKETS: tuple[str, ...] = ("p_Rsrc", "p_cu", "p_sw", "p_diode", "p_swloss", "p_rr", "p_fric", "p_fe")
 #: The ``p_*`` fields of :class:`~bldclab.sim.results.Metrics` that are not losses: the input, the load, and the
-#: two that make up the shaft power with friction. Every other ``p_*`` field must be in :data:`LOSS_BUCKETS`
-#: (a test checks it, so a bucket added to the plant is not silently left out of the maps).
+#: two that make up the shaft power with friction and iron loss. Every other ``p_*`` field must be in
+#: :data:`LOSS_BUCKETS` (a test checks it, so a bucket added to the plant is not silently left out of the maps).
 NOT_LOSSES: tuple[str, ...] = ("p_src", "p_src_total", "p_load", "p_emf", "p_cog")
 #: A point is feasible when its mean torque is within this of the reference (p.u. of ``T_N``). Four times the
 #: largest PWM-grid spread of the mean torque measured for :data:`bldclab.analysis.compare.VERDICT_TOLERANCE`
@@ -129,7 +129,7 @@ def _run_point(job: tuple[Drive, str, Control, float, float, tuple[str, ...]]) -
                     "note": f"refused: {exc}", "_warnings": []})
         return row
     m = point.metrics
-    shaft = m.p_emf + m.p_cog - m.p_fric
+    shaft = m.p_emf + m.p_cog - m.p_fric - m.p_fe
     losses = {b: float(getattr(m, b)) for b in buckets}
     p_loss = sum(losses.values())
     p_stored = m.dW_L / (m.t1 - m.t0)  # zero in an exactly periodic steady state

@@ -57,6 +57,17 @@ class Motor:
         Peak torque (N m), informative.
     cogging : Cogging, optional
         Cogging torque.
+    P_fe_eddy, P_fe_hyst, P_fe_ex : float
+        Stator iron loss caused by the magnets (W), >= 0, default 0 (none): its eddy-current, hysteresis and
+        excess parts at the speed ``speed_fe_ref`` (a measured no-load loss split by its speed dependence, or a
+        core-loss calculation). The plant evaluates them in the time domain from the back-EMF,
+        ``p_fe = k_fe_e sum e_x^2 + k_fe_h |omega_e| + k_fe_x sum |e_x|^1.5``, with the coefficients
+        (:attr:`k_fe_eddy`, :attr:`k_fe_hyst`, :attr:`k_fe_ex`) that reproduce these powers at ``speed_fe_ref``
+        with this motor's back-EMF shape; the loss acts as a drag torque on the rotor (docs/plant.md, "Iron
+        losses").
+    speed_fe_ref : float, optional
+        Mechanical speed (rad/s) at which ``P_fe_eddy``, ``P_fe_hyst``, ``P_fe_ex`` hold; > 0, required when any
+        of them is > 0.
 
     """
 
@@ -69,6 +80,13 @@ class Motor:
     Omega_N: float | None = None
     T_peak: float | None = None
     cogging: Cogging | None = None
+    P_fe_eddy: float = 0.0
+    P_fe_hyst: float = 0.0
+    P_fe_ex: float = 0.0
+    speed_fe_ref: float | None = None
+
+    #: The iron-loss fields, all 0 / None by default (a file without them has no iron loss).
+    IRON_LOSS_FIELDS: ClassVar[tuple[str, ...]] = ("P_fe_eddy", "P_fe_hyst", "P_fe_ex", "speed_fe_ref")
 
     def __post_init__(self) -> None:
         if isinstance(self.p, bool) or not isinstance(self.p, int | np.integer) or self.p < 1:
@@ -83,6 +101,58 @@ class Motor:
             raise BldclabError("emf", "must be a BackEmf")
         if self.Omega_N is None and self.V_N - 2.0 * self.R * self.I_N <= 0.0:
             raise BldclabError("R", "2 R I_N exceeds V_N: no positive nominal speed")
+        for name in ("P_fe_eddy", "P_fe_hyst", "P_fe_ex"):
+            check_number(name, getattr(self, name), lo=0.0)
+        check_number("speed_fe_ref", self.speed_fe_ref, lo=0.0, lo_open=True, allow_none=True)
+        if self.has_iron_losses and self.speed_fe_ref is None:
+            raise BldclabError("speed_fe_ref", "is missing: P_fe_eddy, P_fe_hyst and P_fe_ex are losses at a "
+                               "reference speed, give it (e.g. speed_fe_ref = \"3000 rpm\")")
+
+    @property
+    def has_iron_losses(self) -> bool:
+        """True if any of ``P_fe_eddy``, ``P_fe_hyst``, ``P_fe_ex`` is positive."""
+        return self.P_fe_eddy > 0.0 or self.P_fe_hyst > 0.0 or self.P_fe_ex > 0.0
+
+    @property
+    def k_fe_eddy(self) -> float:
+        """Eddy coefficient ``k_fe_e = P_fe_eddy / (speed_fe_ref^2 sum_x mean k_x^2)`` (W/V^2), 0 without it.
+
+        The plant's eddy loss ``k_fe_e sum_x e_x^2`` then equals ``P_fe_eddy`` at ``speed_fe_ref``.
+        """
+        if self.P_fe_eddy == 0.0 or self.speed_fe_ref is None:
+            return 0.0
+        return float(self.P_fe_eddy / (self.speed_fe_ref**2 * self.emf.mean_abs_power(2.0)))
+
+    @property
+    def k_fe_hyst(self) -> float:
+        """Hysteresis coefficient ``k_fe_h = P_fe_hyst / (p speed_fe_ref)`` (J/rad), 0 without it.
+
+        Per electrical radian: the plant's hysteresis loss is ``k_fe_h |omega_e|``.
+        """
+        if self.P_fe_hyst == 0.0 or self.speed_fe_ref is None:
+            return 0.0
+        return float(self.P_fe_hyst / (self.p * self.speed_fe_ref))
+
+    @property
+    def k_fe_ex(self) -> float:
+        """Excess coefficient ``k_fe_x = P_fe_ex / (speed_fe_ref^1.5 sum_x mean |k_x|^1.5)`` (W/V^1.5), 0 without it.
+
+        The plant's excess loss is ``k_fe_x sum_x |e_x|^1.5``.
+        """
+        if self.P_fe_ex == 0.0 or self.speed_fe_ref is None:
+            return 0.0
+        return float(self.P_fe_ex / (self.speed_fe_ref**1.5 * self.emf.mean_abs_power(1.5)))
+
+    def iron_loss(self, omega: float) -> float:
+        """Return the mean iron loss (W) the plant books at a constant mechanical speed ``omega`` (rad/s), any load.
+
+        ``P_fe_eddy (w/w_ref)^2 + P_fe_hyst |w/w_ref| + P_fe_ex |w/w_ref|^1.5`` with ``w_ref = speed_fe_ref``: the
+        model's loss depends on the magnets' flux only, not on the current (docs/plant.md, "Iron losses").
+        """
+        if not self.has_iron_losses or self.speed_fe_ref is None:
+            return 0.0
+        r = abs(float(omega)) / self.speed_fe_ref
+        return self.P_fe_eddy * r**2 + self.P_fe_hyst * r + self.P_fe_ex * r**1.5
 
     @property
     def k_phi(self) -> float:
@@ -439,7 +509,10 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
     motor = wrap("motor", Motor, p=ms.integer("p"), R=ms.quantity("R", "resistance"),
                   L=ms.quantity("L", "inductance"), emf=emf, V_N=ms.quantity("V_N", "voltage"),
                   I_N=ms.quantity("I_N", "current"), Omega_N=ms.quantity("Omega_N", "speed", None),
-                  T_peak=ms.quantity("T_peak", "torque", None), cogging=cog)
+                  T_peak=ms.quantity("T_peak", "torque", None), cogging=cog,
+                  P_fe_eddy=ms.quantity("P_fe_eddy", "power", 0.0), P_fe_hyst=ms.quantity("P_fe_hyst", "power", 0.0),
+                  P_fe_ex=ms.quantity("P_fe_ex", "power", 0.0),
+                  speed_fe_ref=ms.quantity("speed_fe_ref", "speed", None))
     ms.finish()
 
     inv_s = top.sub("inverter")
@@ -496,8 +569,11 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
 def _drive_to_toml(d: Drive) -> str:
     out = [toml_table("", {"name": d.name, "description": d.description})]
     m = d.motor
-    out.append(toml_table("motor", {"p": int(m.p), "R": float(m.R), "L": float(m.L), "V_N": float(m.V_N),
-                                "I_N": float(m.I_N), "Omega_N": m.Omega_N, "T_peak": m.T_peak}))
+    mot: dict[str, object] = {"p": int(m.p), "R": float(m.R), "L": float(m.L), "V_N": float(m.V_N),
+                              "I_N": float(m.I_N), "Omega_N": m.Omega_N, "T_peak": m.T_peak}
+    if m.has_iron_losses or m.speed_fe_ref is not None:  # otherwise (the default) written as before they existed
+        mot.update({k: getattr(m, k) for k in Motor.IRON_LOSS_FIELDS})
+    out.append(toml_table("motor", mot))
     out += emf_tables(m.emf)
     if m.cogging is not None:
         out.append(cogging_table(m.cogging))
