@@ -5,6 +5,7 @@ defaults, field validation and the motor file."""
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 
 import numpy as np
@@ -245,3 +246,17 @@ def test_iron_loss_is_an_efficiency_map_bucket():
         losses = sum(r[b] for b in res.buckets)
         assert abs(r.p_in - r.p_shaft - losses - r.p_stored) <= BALANCE_WARN * abs(r.p_in)
         assert r0.p_fe == 0.0 and r.efficiency < r0.efficiency
+
+
+def test_cli_reports_the_iron_loss(tmp_path, capsys):
+    """``bldclab check`` names the model's iron loss at Omega_0; ``bldclab simulate`` reports p_iron_W, which at
+    speed_fe_ref is the sum of the given parts."""
+    drive = _with_iron(_catalog("htm-48v"), ex=0.0, w_ref_pu=0.5)
+    path = tmp_path / "iron.toml"
+    path.write_text(drive.to_toml())
+    assert main(["check", str(path)]) == 0
+    assert f"{drive.motor.iron_loss(drive.Omega_0):.4g} W" in capsys.readouterr().out
+    assert main(["simulate", str(path), "--control", "sine", "--speed", str(drive.motor.speed_fe_ref), "--torque",
+                 str(0.4 * drive.T_N), "--no-trace", "--format", "json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["p_iron_W"] == pytest.approx(drive.motor.P_fe_eddy + drive.motor.P_fe_hyst, rel=1e-6)
