@@ -101,6 +101,19 @@ class Shape(ABC):
             return float(np.mean(np.abs(self(th)) ** q))
         return _pwl_mean_abs_power(np.asarray(x, dtype=float), np.asarray(y, dtype=float), q)
 
+    def flux_peak(self) -> float:
+        """Return the peak of the shape's zero-mean integral over the angle, ``max |int k dtheta|`` (V s).
+
+        Divided by the pole pairs it is the peak magnet flux linkage of the phase (Wb): ``e = d psi/dt =
+        omega_m k`` and ``d theta_e = p omega_m dt``. Half the peak-to-peak of the integral (the trapezoidal rule on
+        2^16 points of the period and the shape's corners; relative error below 1e-8).
+        """
+        th = np.unique(np.concatenate([np.linspace(0.0, TWO_PI, 1 << 16, endpoint=False), self.breakpoints(),
+                                       [TWO_PI]]))
+        k = self(th)
+        integral = np.concatenate([[0.0], np.cumsum(0.5 * (k[1:] + k[:-1]) * np.diff(th))])
+        return float(0.5 * (integral.max() - integral.min()))
+
     @abstractmethod
     def scaled(self, factor: float) -> Shape:
         """Return the same shape with every value times ``factor`` (> 0)."""

@@ -143,6 +143,70 @@ class Motor:
             return 0.0
         return float(self.P_fe_ex / (self.speed_fe_ref**1.5 * self.emf.mean_abs_power(1.5)))
 
+    def with_iron_from_material(self, *, mass: float, B_peak: float, p_hyst: float, p_eddy: float,
+                                p_ex: float = 0.0, alpha: float = 2.0, speed_ref: float | None = None) -> Motor:
+        """Return the motor with ``P_fe_eddy``, ``P_fe_hyst``, ``P_fe_ex`` at ``speed_ref`` from core-material data.
+
+        The material's loss at 50 Hz and 1 T (sinusoidal flux) split by term, ``p_hyst``, ``p_eddy``, ``p_ex``
+        (W/kg), with the Steinmetz exponent ``alpha`` of the hysteresis term, the core mass and its peak flux
+        density. The assumed flux: each third of the core carries a flux density that follows its phase's magnet
+        flux linkage, ``B_x = B_peak psi_x / psi_pk``, so ``dB_x/dt = (B_peak / psi_pk) e_x`` with ``psi_pk`` the
+        peak magnet flux linkage of a phase (:meth:`BackEmf`'s shapes, ``Shape.flux_peak / p``, averaged over the
+        phases). Then, matching each term of the material's sinusoidal loss
+        ``p_hyst (f/50) B^alpha + p_eddy (f/50)^2 B^2 + p_ex (f/50)^1.5 B^1.5`` in the time domain:
+
+        - eddy ``mass p_eddy / (2 pi^2 50^2) mean (dB/dt)^2``: ``k_fe_e = mass p_eddy B_peak^2 / (6 pi^2 50^2
+          psi_pk^2)``;
+        - hysteresis ``mass p_hyst B_peak^alpha / 50`` per electrical cycle: ``k_fe_h = mass p_hyst B_peak^alpha /
+          (100 pi)``;
+        - excess ``mass p_ex / ((2 pi 50)^1.5 m_15) mean |dB/dt|^1.5``, ``m_15 = mean |cos|^1.5``:
+          ``k_fe_x = mass p_ex B_peak^1.5 / (3 (2 pi 50)^1.5 m_15 psi_pk^1.5)``;
+
+        and the returned powers are these coefficients' losses at ``speed_ref``. A sinusoidal back-EMF gets the
+        material's formula at every speed; a trapezoidal one more eddy and excess loss (its harmonics). Limits
+        (docs/motor-files.md, "Iron losses from material data"): one effective peak flux density for teeth and
+        yoke, tooth flux taken as the phase's flux linkage (sharper in reality for a distributed winding), no
+        rotational loss.
+
+        Parameters
+        ----------
+        mass : float
+            Core (stator iron) mass (kg), > 0.
+        B_peak : float
+            Peak flux density in the core at no load (T), > 0.
+        p_hyst, p_eddy, p_ex : float
+            Material loss at 1 T, 50 Hz by term (W/kg), >= 0.
+        alpha : float
+            Steinmetz exponent of the hysteresis term, in [1, 3]; default 2.
+        speed_ref : float, optional
+            Reference speed of the returned powers (rad/s), > 0; default the rated speed ``Omega_nominal``.
+
+        Returns
+        -------
+        Motor
+            The motor with ``P_fe_eddy``, ``P_fe_hyst``, ``P_fe_ex``, ``speed_fe_ref`` set.
+
+        Raises
+        ------
+        BldclabError
+            Naming the material argument that is out of range.
+        """
+        check_number("material.mass", mass, lo=0.0, lo_open=True)
+        check_number("material.B_peak", B_peak, lo=0.0, lo_open=True)
+        for name, v in (("material.p_hyst", p_hyst), ("material.p_eddy", p_eddy), ("material.p_ex", p_ex)):
+            check_number(name, v, lo=0.0)
+        check_number("material.alpha", alpha, lo=1.0, hi=3.0)
+        check_number("material.speed_ref", speed_ref, lo=0.0, lo_open=True, allow_none=True)
+        w = float(speed_ref) if speed_ref is not None else self.Omega_nominal
+        psi = float(np.mean([sh.flux_peak() for sh in self.emf.shapes])) / self.p
+        m15 = math.gamma(1.25) / (math.sqrt(math.pi) * math.gamma(1.75))
+        k_e = mass * p_eddy * B_peak**2 / (6.0 * math.pi**2 * 50.0**2 * psi**2)
+        k_h = mass * p_hyst * B_peak**alpha / (100.0 * math.pi)
+        k_x = mass * p_ex * B_peak**1.5 / (3.0 * (2.0 * math.pi * 50.0) ** 1.5 * m15 * psi**1.5)
+        return dataclasses.replace(self, P_fe_eddy=k_e * w**2 * self.emf.mean_abs_power(2.0),
+                                   P_fe_hyst=k_h * self.p * w, P_fe_ex=k_x * w**1.5 * self.emf.mean_abs_power(1.5),
+                                   speed_fe_ref=w)
+
     def iron_loss(self, omega: float) -> float:
         """Return the mean iron loss (W) the plant books at a constant mechanical speed ``omega`` (rad/s), any load.
 
