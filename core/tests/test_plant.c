@@ -1,6 +1,6 @@
 /* test_plant.c - physics of the plant alone: standstill DC, Hall sequence both ways, open circuit,
  * diode freewheeling to an open phase, energy balance, step-size convergence, the averaged inverter, bad
- * parameters. */
+ * parameters, switching and iron losses. */
 #include <math.h>
 #include <string.h>
 
@@ -352,6 +352,125 @@ static void test_switching_losses(void)
     CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "E_rr without V_test rejected");
 }
 
+/* Iron losses (bc_plant.h). A sinusoidal back-EMF k_1 sin at an imposed constant speed, inverter off (no current):
+ * over whole electrical periods p_fe = 3 k_fe_e E^2 / 2 + k_fe_h omega_e + 3 k_fe_x E^1.5 mean|sin|^1.5 with
+ * E = k_1 omega and mean|sin|^q = Gamma((q + 1)/2) / (sqrt(pi) Gamma(q/2 + 1)). Then a free spin-down with rotor
+ * dynamics: the kinetic energy goes into the iron (balance), hysteresis alone decelerates at the constant
+ * p k_fe_h / J and holds the rotor once it stops. */
+static void test_iron_losses(void)
+{
+    fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    double fx[2] = {0.0, 0.0}, fy[2] = {0.0, 0.3};
+    for (int x = 0; x < 3; ++x) {
+        f.p.emf[x].kind = BC_EMF_FOURIER;
+        f.p.emf[x].n = 2;
+        f.p.emf[x].x = fx;
+        f.p.emf[x].y = fy;
+    }
+    f.p.k_fe_e = 0.02;
+    f.p.k_fe_h = 0.05;
+    f.p.k_fe_x = 0.01;
+    const double om = 40.0, E = 0.3 * om, w_e = 8.0 * om;
+    const double msin15 = tgamma(1.25) / (sqrt(BC_PI) * tgamma(1.75));
+    const double p_eddy = 1.5 * 0.02 * E * E, p_hyst = 0.05 * w_e, p_ex = 3.0 * 0.01 * pow(E, 1.5) * msin15;
+    bc_plant_state s;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, om, I0, 48.0) == BC_OK, "init");
+    bc_leg_cmd c[3];
+    legs(c, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f);
+    double Te = BC_TWO_PI / w_e;
+    for (int j = 0; j < 3; ++j) {
+        bc_plant_set_half(&f.p, &s, c, j % 2 == 0);
+        bc_plant_advance(&f.p, &s, (double)(j + 1) * Te);
+    }
+    double a0 = s.acc[BC_ACC_FE];
+    for (int j = 3; j < 7; ++j) bc_plant_advance(&f.p, &s, (double)(j + 1) * Te);
+    double p_fe = (s.acc[BC_ACC_FE] - a0) / (4.0 * Te), hand = p_eddy + p_hyst + p_ex;
+    CHECK(s.i[0] == 0.0 && s.acc[BC_ACC_CU] == 0.0, "no current");
+    CHECK(fabs(p_fe / hand - 1.0) < 1e-6, "sinusoidal iron loss %.9g W, formula %.9g W", p_fe, hand);
+    bc_plant_out out;
+    bc_plant_output(&f.p, &s, &out);
+    CHECK(out.tau_shaft < -p_hyst / om, "the dynamometer holds the iron drag (%.4g N m)", out.tau_shaft);
+
+    /* spin-down: no current, no friction; eddy + excess + hysteresis */
+    fixture_htm(&f, BC_MECH_DYNAMIC);
+    f.p.k_fe_e = 0.02;
+    f.p.k_fe_h = 0.01;
+    f.p.k_fe_x = 0.005;
+    f.p.J = 0.01;
+    const double om0 = 50.0; /* line back-EMF 32 V < 48 V: the diodes stay off */
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, om0, I0, 48.0) == BC_OK, "init");
+    long k = 0;
+    run_halves(&f.p, &s, c, 4000, &k);
+    double w_kin = 0.5 * f.p.J * (om0 * om0 - s.omega * s.omega);
+    CHECK(s.omega > 0.0 && s.omega < 0.95 * om0, "decelerating (%.4g rad/s)", s.omega);
+    CHECK(fabs(s.acc[BC_ACC_FE] / w_kin - 1.0) < 1e-9, "kinetic energy into the iron: %.9g J vs %.9g J",
+          s.acc[BC_ACC_FE], w_kin);
+    CHECK(s.acc[BC_ACC_FRIC] == 0.0 && s.acc[BC_ACC_CU] == 0.0, "no friction, no current");
+}
+
+/* A rotor coasting down against a constant drag, Coulomb friction tau_c or the iron's hysteresis p k_fe_h:
+ * omega = om0 - tau t / J until t_stop = J om0 / tau, then held at rest; every joule of kinetic energy is booked.
+ * om0 is chosen so that the stop falls inside a step (the RK4 stages past the zero once cancelled the drag and left
+ * the rotor coasting at a small constant speed). */
+static void test_coulomb_stop(void)
+{
+    for (int hyst = 0; hyst < 2; ++hyst) {
+        for (int j = 0; j < 2; ++j) {
+            fixture f;
+            fixture_htm(&f, BC_MECH_DYNAMIC);
+            f.p.J = 0.002;
+            if (hyst) {
+                f.p.k_fe_h = 0.01; /* tau = p k_fe_h = 0.08 N m */
+            } else {
+                f.p.tau_c = 0.08;
+            }
+            const double om0 = j == 0 ? 50.0 : 50.0007, tau = 0.08, t_stop = f.p.J * om0 / tau;
+            bc_plant_state s;
+            CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, om0, I0, 48.0) == BC_OK, "init");
+            bc_leg_cmd c[3];
+            legs(c, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f);
+            long k = 0, half = (long)(0.5 * t_stop / bc_plant_t_half(&f.p));
+            run_halves(&f.p, &s, c, half, &k);
+            CHECK(fabs(s.omega - (om0 - tau * s.t / f.p.J)) < 1e-9 * om0, "%s: constant drag, %.12g rad/s",
+                  hyst ? "hysteresis" : "Coulomb", s.omega);
+            run_halves(&f.p, &s, c, 2 * half, &k);
+            CHECK(s.stuck && s.omega == 0.0, "%s from %.4f rad/s: stopped and held (omega %.3g)",
+                  hyst ? "hysteresis" : "Coulomb", om0, s.omega);
+            double e = s.acc[hyst ? BC_ACC_FE : BC_ACC_FRIC], w0 = 0.5 * f.p.J * om0 * om0;
+            CHECK(fabs(e - w0) < 1e-9 * w0, "all kinetic energy booked: %.9g J of %.9g J", e, w0);
+            CHECK(s.acc[hyst ? BC_ACC_FRIC : BC_ACC_FE] == 0.0, "in its own lane");
+            double th = s.theta;
+            run_halves(&f.p, &s, c, 100, &k);
+            CHECK(s.theta == th && s.omega == 0.0, "stays at rest");
+        }
+    }
+}
+
+static void test_iron_bad_params(void)
+{
+    fixture f;
+    bc_plant_state s;
+    bc_leg_cmd c[3];
+    legs(c, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f);
+    long k = 0;
+    /* zero coefficients: the lane stays zero */
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, 40.0, I0, 48.0) == BC_OK, "init");
+    run_halves(&f.p, &s, c, 100, &k);
+    CHECK(s.acc[BC_ACC_FE] == 0.0 && s.acc[BC_ACC_SWLOSS] == 0.0 && s.acc[BC_ACC_RR] == 0.0, "no loss booked");
+    /* bad iron-loss coefficients */
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.k_fe_e = -1e-3;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "k_fe_e < 0 rejected");
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.k_fe_h = NAN;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "k_fe_h = NaN rejected");
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.k_fe_x = INFINITY;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.0, 0.0, I0, 48.0) == BC_ERR_PARAM, "k_fe_x = inf rejected");
+}
+
 static void test_bad_params(void)
 {
     fixture f;
@@ -397,5 +516,8 @@ int main(void)
     test_average_model();
     test_bad_params();
     test_switching_losses();
+    test_iron_losses();
+    test_coulomb_stop();
+    test_iron_bad_params();
     return bc_test_summary("test_plant");
 }

@@ -10,6 +10,11 @@
 #define Y_OM 4
 #define Y_ACC 5
 #define NY (Y_ACC + BC_ACC_N)
+#define NY_BASE (Y_ACC + BC_ACC_OPT) /* without the optional loss lanes (bc_plant.h) */
+
+/* the optional lanes are the last three */
+typedef char bc_acc_opt_last[(BC_ACC_OPT + 3 == BC_ACC_N && BC_ACC_RR == BC_ACC_OPT + 1 &&
+                              BC_ACC_FE == BC_ACC_OPT + 2) ? 1 : -1];
 
 /* Local angle offset of phase x: theta_x = theta_e - PHI[x]. */
 static const double PHI[3] = {0.0, BC_TWO_PI / 3.0, 2.0 * BC_TWO_PI / 3.0};
@@ -22,7 +27,7 @@ static const double SIN_PHI[3] = {0.0, 0.86602540378443864676, -0.86602540378443
 /* Instantaneous circuit quantities computed with the derivative. */
 typedef struct aux_s {
     double k[3], e[3], v[3];
-    double vn, vbus, idc, tau, tau_cog, tau_net;
+    double vn, vbus, idc, tau, tau_cog, tau_net, tau_fe;
     int n_conn;
 } aux_t;
 
@@ -140,14 +145,26 @@ static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restric
     const double tau_cog = p->n_cog > 0 ? cogging_at(p, s, th) : 0.0;
     const double tau = k[0] * i0 + k[1] * i1 + k[2] * i2 + tau_cog;
     const double tau_net = tau - s->tau_load;
-    double t_fric = 0.0;
-    if (!s->stuck && (p->B > 0.0 || p->tau_c > 0.0)) {
-        double sgn = sign_of(om);
+    double t_fric = 0.0, t_fe = 0.0;
+    if (s->drag_on && !s->stuck) {
+        /* the Coulomb-like terms take the sign of the motion at the step start (work.wdir, valid inside a step):
+         * the speed keeps it up to the W_OMEGA event, and RK4 stages evaluated past the zero must not flip it
+         * (their flipped drags cancel in the RK4 sum and the rotor would coast at a small constant speed) */
+        double sgn = (s->work.valid && s->work.wdir != 0) ? (double)s->work.wdir : sign_of(om);
         if (sgn == 0.0) sgn = sign_of(tau_net);
         t_fric = p->B * om + p->tau_c * sgn;
+        /* iron-loss drag (bc_plant.h): eddy k_fe_e omega sum k^2, hysteresis p k_fe_h sign(omega), excess
+         * k_fe_x sign(omega) |omega|^0.5 sum |k|^1.5 */
+        if (s->fe_on) {
+            t_fe = p->k_fe_e * om * (k[0] * k[0] + k[1] * k[1] + k[2] * k[2]) + s->fe_tc * sgn;
+            if (p->k_fe_x > 0.0) {
+                const double ak0 = fabs(k[0]), ak1 = fabs(k[1]), ak2 = fabs(k[2]);
+                t_fe += p->k_fe_x * sgn * sqrt(fabs(om)) * (ak0 * sqrt(ak0) + ak1 * sqrt(ak1) + ak2 * sqrt(ak2));
+            }
+        }
     }
     dy[Y_TH] = (double)p->p * om;
-    dy[Y_OM] = (p->mech == BC_MECH_DYNAMIC && !s->stuck) ? (tau_net - t_fric) / p->J : 0.0;
+    dy[Y_OM] = (p->mech == BC_MECH_DYNAMIC && !s->stuck) ? (tau_net - t_fric - t_fe) / p->J : 0.0;
     /* the open terminals float at e + v_n */
     const double t0 = c0 != 0.0 ? v0 : e0 + vn, t1 = c1 != 0.0 ? v1 : e1 + vn, t2 = c2 != 0.0 ? v2 : e2 + vn;
 
@@ -157,8 +174,6 @@ static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restric
     d[BC_ACC_CU] = R * (sq0 + sq1 + sq2);
     d[BC_ACC_SW] = p_sw;
     d[BC_ACC_DIODE] = p_d;
-    d[BC_ACC_SWLOSS] = vbus * (s->tc_swk[0] * a0 + s->tc_swk[1] * a1 + s->tc_swk[2] * a2);
-    d[BC_ACC_RR] = vbus * (s->tc_rrk[0] * a0 + s->tc_rrk[1] * a1 + s->tc_rrk[2] * a2);
     d[BC_ACC_EMF] = e0 * i0 + e1 * i1 + e2 * i2;
     d[BC_ACC_COG] = tau_cog * om;
     d[BC_ACC_FRIC] = t_fric * om;
@@ -173,6 +188,12 @@ static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restric
     d[BC_ACC_VC] = t2;
     d[BC_ACC_VN] = vn;
     d[BC_ACC_IDC] = idc;
+    if (s->ny == NY) { /* the optional loss lanes; otherwise their rates are zero, RK4 skips them and they are not
+                          * written (nothing reads them) */
+        d[BC_ACC_SWLOSS] = vbus * (s->tc_swk[0] * a0 + s->tc_swk[1] * a1 + s->tc_swk[2] * a2);
+        d[BC_ACC_RR] = vbus * (s->tc_rrk[0] * a0 + s->tc_rrk[1] * a1 + s->tc_rrk[2] * a2);
+        d[BC_ACC_FE] = t_fe * om;
+    }
 
     if (a) {
         a->k[0] = k[0];
@@ -190,6 +211,7 @@ static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restric
         a->tau = tau;
         a->tau_cog = tau_cog;
         a->tau_net = tau_net;
+        a->tau_fe = t_fe;
         a->n_conn = s->tc_n;
     }
 }
@@ -290,6 +312,7 @@ static void aux_to_out(const bc_plant_params *p, const bc_plant_state *s, const 
     out->tau_cog = a->tau_cog;
     double om = y[Y_OM];
     out->tau_shaft = a->tau - p->B * om - p->tau_c * sign_of(om);
+    if (s->fe_on && om != 0.0) out->tau_shaft -= a->tau_fe; /* at rest, as tau_c: none */
     out->w_l = 0.5 * p->L * (y[Y_I] * y[Y_I] + y[Y_I + 1] * y[Y_I + 1] + y[Y_I + 2] * y[Y_I + 2]);
     (void)s;
 }
@@ -327,7 +350,12 @@ static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double 
     rhs(p, s, yt, k3, a);
     for (int j = 0; j < Y_ACC; ++j) yt[j] = y0[j] + h * k3[j];
     rhs(p, s, yt, k4, a);
-    for (int j = 0; j < NY; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
+    for (int j = 0; j < NY_BASE; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
+    if (s->ny == NY) {
+        for (int j = NY_BASE; j < NY; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
+    } else { /* the optional lanes have zero rates (bc_plant.h) */
+        for (int j = NY_BASE; j < NY; ++j) y1[j] = y0[j];
+    }
     if (p->mech == BC_MECH_IMPOSED) {
         y1[Y_OM] = y0[Y_OM]; /* exactly constant */
     }
@@ -831,7 +859,7 @@ static void watch_eval(const bc_plant_params *p, const bc_plant_state *s, const 
     }
     if (p->mech == BC_MECH_DYNAMIC) {
         if (s->stuck) {
-            g[W_STICK] = p->tau_c - fabs(a->tau_net);
+            g[W_STICK] = p->tau_c + s->fe_tc - fabs(a->tau_net);
         } else if (dir_om != 0) {
             g[W_OMEGA] = y[Y_OM] * (double)dir_om;
         }
@@ -852,7 +880,7 @@ static double watch_tol(const bc_plant_params *p, const bc_plant_state *s, int w
     if (w >= W_TRIP) {
         return 1e-9 * (1.0 + p->i_trip);
     }
-    return 1e-10 * (1.0 + p->tau_c);
+    return 1e-10 * (1.0 + p->tau_c + s->fe_tc);
 }
 
 /* Zero in (0, h) of the cubic Hermite interpolant through (0, g0, d0) and (h, g1, d1) (d: dg/dt), by Newton
@@ -993,7 +1021,7 @@ static void apply_event(const bc_plant_params *p, bc_plant_state *s, int w, cons
         }
     } else if (w == W_OMEGA) {
         s->omega = 0.0;
-        if (fabs(a->tau_net) <= p->tau_c) {
+        if (fabs(a->tau_net) <= p->tau_c + s->fe_tc) {
             s->stuck = 1;
         } else {
             int nd = a->tau_net > 0.0 ? 1 : -1;
@@ -1056,6 +1084,7 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
         return BC_ERR_PARAM;
     if (p->inverter != BC_INV_SWITCHING && p->inverter != BC_INV_AVERAGE) return BC_ERR_PARAM;
     if (!finite_nonneg(p->E_on) || !finite_nonneg(p->E_off) || !finite_nonneg(p->E_rr)) return BC_ERR_PARAM;
+    if (!finite_nonneg(p->k_fe_e) || !finite_nonneg(p->k_fe_h) || !finite_nonneg(p->k_fe_x)) return BC_ERR_PARAM;
     int sw_on = p->E_on > 0.0 || p->E_off > 0.0 || p->E_rr > 0.0;
     if (sw_on && !(isfinite(p->V_test) && p->V_test > 0.0 && isfinite(p->I_test) && p->I_test > 0.0))
         return BC_ERR_PARAM;
@@ -1078,6 +1107,12 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     s->t = t0;
     s->sw_on = sw_on;
     s->sw_inv_vi = sw_on ? 1.0 / (p->V_test * p->I_test) : 0.0;
+    s->fe_on = p->k_fe_e > 0.0 || p->k_fe_h > 0.0 || p->k_fe_x > 0.0;
+    s->fe_tc = (double)p->p * p->k_fe_h;
+    s->drag_on = p->B > 0.0 || p->tau_c > 0.0 || s->fe_on;
+    /* the optional lanes integrate when a rate can be nonzero: iron loss, or switching losses on averaged legs
+     * (the switching inverter books them at its gate edges) */
+    s->ny = (s->fe_on || (sw_on && p->inverter == BC_INV_AVERAGE)) ? NY : NY_BASE;
     double mean = (i0[0] + i0[1] + i0[2]) / 3.0;
     for (int x = 0; x < 3; ++x) {
         s->i[x] = i0[x] - mean;

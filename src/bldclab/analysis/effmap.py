@@ -14,7 +14,7 @@ such points are kept in the table with ``feasible = False`` and left out of the 
 The loss buckets are the mean powers of :class:`~bldclab.sim.results.Metrics` named in :data:`LOSS_BUCKETS`
 (:mod:`bldclab.analysis.losses`, the one place to add a new one; re-exported here); the accounting of each point
 is ``p_src_total = p_shaft + sum(buckets) + p_stored + residue`` (``p_src_total``: the DC source's power with the
-switching and recovery energies it supplies) with ``p_shaft = p_emf + p_cog - p_fric``, ``p_stored`` the change
+switching and recovery energies it supplies) with ``p_shaft = p_emf + p_cog - p_fric - p_fe``, ``p_stored`` the change
 of the windings' magnetic energy over the window divided by its length (zero in an exactly periodic steady state)
 and a residue of the order of the integration's energy balance
 (:attr:`~bldclab.sim.results.Metrics.balance_electrical`, 1e-9 to 1e-7).

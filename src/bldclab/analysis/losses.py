@@ -17,12 +17,12 @@ from ..sim.results import Metrics
 __all__ = ["LOSS_BUCKETS", "NOT_LOSSES", "copper_only_efficiency", "efficiency", "loss_buckets", "point_losses"]
 
 #: The loss buckets, by their :class:`~bldclab.sim.results.Metrics` field names (W): source resistance, windings,
-#: switch conduction, diodes, switching, diode recovery, friction. A bucket the plant does not report (yet) is
-#: skipped; add a new one here.
-LOSS_BUCKETS: tuple[str, ...] = ("p_Rsrc", "p_cu", "p_sw", "p_diode", "p_swloss", "p_rr", "p_fric")
+#: switch conduction, diodes, switching, diode recovery, friction, stator iron. A bucket the plant does not report
+#: (yet) is skipped; add a new one here.
+LOSS_BUCKETS: tuple[str, ...] = ("p_Rsrc", "p_cu", "p_sw", "p_diode", "p_swloss", "p_rr", "p_fric", "p_fe")
 #: The ``p_*`` fields of :class:`~bldclab.sim.results.Metrics` that are not losses: the input, the load, and the
-#: two that make up the shaft power with friction. Every other ``p_*`` field must be in :data:`LOSS_BUCKETS`
-#: (a test checks it, so a bucket added to the plant is not silently left out of the maps).
+#: two that make up the shaft power with friction and iron loss. Every other ``p_*`` field must be in
+#: :data:`LOSS_BUCKETS` (a test checks it, so a bucket added to the plant is not silently left out of the maps).
 NOT_LOSSES: tuple[str, ...] = ("p_src", "p_src_total", "p_load", "p_emf", "p_cog")
 
 
@@ -67,13 +67,13 @@ def point_losses(m: Metrics, buckets: tuple[str, ...] | None = None) -> dict[str
     Returns
     -------
     dict of str to float
-        ``p_in`` (``Metrics.p_src_total``, W), ``p_shaft`` (``p_emf + p_cog - p_fric``, W), each bucket (W),
+        ``p_in`` (``Metrics.p_src_total``, W), ``p_shaft`` (``p_emf + p_cog - p_fric - p_fe``, W), each bucket (W),
         ``p_loss`` (their sum, W), ``p_stored`` (change of the windings' magnetic energy over the window per second,
         W), ``residue`` (``p_in - p_shaft - p_loss - p_stored``, W) and ``efficiency``
         (:func:`efficiency` of ``p_in - p_stored`` and ``p_shaft``: every loss counted).
     """
     names = loss_buckets() if buckets is None else buckets
-    shaft = m.p_emf + m.p_cog - m.p_fric
+    shaft = m.p_emf + m.p_cog - m.p_fric - m.p_fe
     losses = {b: float(getattr(m, b)) for b in names}
     p_loss = sum(losses.values())
     p_stored = m.dW_L / (m.t1 - m.t0)  # zero in an exactly periodic steady state

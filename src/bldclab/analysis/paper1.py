@@ -68,7 +68,8 @@ def friction_test(drive: Drive, speeds: Sequence[float]) -> pd.DataFrame:
         sc = Scenario(duration=2 * Te, speed=om, window=(0.0, 2 * Te), trace=False)
         m = simulate(drive, OpenLoop(np.zeros((n, 3), int), np.zeros((n, 3))), sc).metrics
         assert m is not None
-        rows.append({"Omega": om, "T_friction": m.p_fric / om})
+        # the unexcited rotor spun by the load machine: friction and the magnets' iron-loss drag, as measured
+        rows.append({"Omega": om, "T_friction": (m.p_fric + m.p_fe) / om})
     return pd.DataFrame(rows)
 
 
@@ -97,7 +98,7 @@ def dynamometer_test(drive: Drive, control: Control, ref: float, speeds: Sequenc
     for om in speeds:
         point, _ = steady_state(drive, control, om, ref)
         m = point.metrics
-        t_dyno = m.tau_mean - m.p_fric / om  # mean shaft torque the load machine balances
+        t_dyno = m.tau_mean - (m.p_fric + m.p_fe) / om  # mean shaft torque the load machine balances
         t_fric = float(np.interp(om, fr["Omega"], fr["T_friction"]))
         rows.append({"Omega": om, "Omega_pu": om / drive.Omega_0, "T_dyno": t_dyno, "T_friction": t_fric,
                      "T_motor": t_dyno + t_fric, "T_e": m.tau_mean})

@@ -55,6 +55,9 @@ def derived(drive: Drive) -> list[tuple[str, str, str]]:
     ]
     if not math.isinf(tau):
         rows.append(("PWM per L/R", f"{inv.f_pwm * tau:.4g}", "PWM periods in the electrical time constant"))
+    if m.has_iron_losses:
+        rows.append(("iron loss at Omega_0", f"{m.iron_loss(drive.Omega_0):.4g} W",
+                     "stator iron loss the model books at Omega_0 (any load; docs/plant.md, \"Iron losses\")"))
     return rows
 
 

@@ -30,6 +30,10 @@ FIELDS: dict[tuple[str, str], str] = {
     ("motor", "I_N"): "A: nominal current, the square-wave current amplitude of the rating",
     ("motor", "Omega_N"): "rad/s: rated speed (optional; default (V_N - 2 R I_N) / (2 k_phi))",
     ("motor", "T_peak"): "N m: peak torque (optional, informative)",
+    ("motor", "P_fe_eddy"): "W: stator iron loss, eddy-current part, at speed_fe_ref (default 0: no iron loss)",
+    ("motor", "P_fe_hyst"): "W: stator iron loss, hysteresis part, at speed_fe_ref",
+    ("motor", "P_fe_ex"): "W: stator iron loss, excess part, at speed_fe_ref",
+    ("motor", "speed_fe_ref"): "rad/s: speed of the iron-loss data (required with any P_fe_*)",
     ("motor.emf", "kind"): "back-EMF shape: trapezoid (k_phi, flat_top), sinusoid (k_1), fourier (a, b), table "
                            "(theta, k or k_a/k_b/k_c)",
     ("motor.emf", "k_phi"): "V s/rad: flat-top back-EMF per mechanical rad/s",
@@ -78,7 +82,11 @@ FIELDS: dict[tuple[str, str], str] = {
 
 #: Optional fields and tables shown commented out when the drive does not use them.
 _OPTIONAL: dict[str, list[str]] = {
-    "motor": ["# Omega_N = 67.0  # rad/s (optional)", "# T_peak = 100.0  # N m (optional)"],
+    "motor": ["# Omega_N = 67.0  # rad/s (optional)", "# T_peak = 100.0  # N m (optional)",
+              "# P_fe_eddy = 0.0  # W: iron loss (optional, default none), eddy-current part at speed_fe_ref",
+              "# P_fe_hyst = 0.0  # W: iron loss, hysteresis part at speed_fe_ref",
+              "# P_fe_ex = 0.0  # W: iron loss, excess part at speed_fe_ref",
+              '# speed_fe_ref = "3000 rpm"  # rad/s: speed of the iron-loss data'],
     "motor.emf": ["", "# [motor.cogging]  # optional: cogging torque sum_j A_j sin(n_j theta_m + phi_j), theta_m the "
                   "mechanical angle",
                   "# orders = [48]      # n_j: harmonic orders in the mechanical angle (integers >= 1)",

@@ -80,6 +80,40 @@ class Shape(ABC):
     def to_toml_dict(self) -> dict[str, Any]:
         """Return the TOML table describing this shape (SI numbers)."""
 
+    def mean_abs_power(self, q: float) -> float:
+        """Return the mean over one period of ``|k(theta)|^q`` ((V s/rad)^q).
+
+        Exact for piecewise-linear shapes (segment by segment, split at zero crossings) and, for ``q = 2``, for
+        Fourier shapes (Parseval: ``a_0^2 + sum (a_n^2 + b_n^2) / 2``); other Fourier cases by the trapezoidal
+        rule on 2^15 points of the period (relative error below 1e-9 for ``q >= 1.5``).
+
+        Parameters
+        ----------
+        q : float
+            Exponent, >= 1.
+        """
+        kind, x, y = self.c_form()
+        if kind == 1:
+            a, b = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+            if q == 2.0:
+                return float(a[0] ** 2 + 0.5 * np.sum(a[1:] ** 2 + b[1:] ** 2))
+            th = np.linspace(0.0, TWO_PI, 1 << 15, endpoint=False)
+            return float(np.mean(np.abs(self(th)) ** q))
+        return _pwl_mean_abs_power(np.asarray(x, dtype=float), np.asarray(y, dtype=float), q)
+
+    def flux_peak(self) -> float:
+        """Return the peak of the shape's zero-mean integral over the angle, ``max |int k dtheta|`` (V s).
+
+        Divided by the pole pairs it is the peak magnet flux linkage of the phase (Wb): ``e = d psi/dt =
+        omega_m k`` and ``d theta_e = p omega_m dt``. Half the peak-to-peak of the integral (the trapezoidal rule on
+        2^16 points of the period and the shape's corners; relative error below 1e-8).
+        """
+        th = np.unique(np.concatenate([np.linspace(0.0, TWO_PI, 1 << 16, endpoint=False), self.breakpoints(),
+                                       [TWO_PI]]))
+        k = self(th)
+        integral = np.concatenate([[0.0], np.cumsum(0.5 * (k[1:] + k[:-1]) * np.diff(th))])
+        return float(0.5 * (integral.max() - integral.min()))
+
     @abstractmethod
     def scaled(self, factor: float) -> Shape:
         """Return the same shape with every value times ``factor`` (> 0)."""
@@ -105,6 +139,24 @@ def _pwl_fourier(x: NDArray[np.float64], y: NDArray[np.float64], n_max: int
         a[n] = np.sum(ic) / math.pi
         b[n] = np.sum(is_) / math.pi
     return a, b
+
+
+def _pwl_mean_abs_power(x: NDArray[np.float64], y: NDArray[np.float64], q: float) -> float:
+    """Exact period mean of ``|f|^q`` for the periodic piecewise-linear ``f`` through (x, y) on [0, 2 pi)."""
+    xs = np.append(x, x[0] + TWO_PI)
+    ys = np.append(y, y[0])
+    total = 0.0
+    for x0, x1, y0, y1 in zip(xs[:-1], xs[1:], ys[:-1], ys[1:], strict=True):
+        pieces = [(x1 - x0, abs(y0), abs(y1))]
+        if y0 * y1 < 0.0:  # split at the zero: |f| is linear on each side
+            xz = (x1 - x0) * y0 / (y0 - y1)
+            pieces = [(xz, abs(y0), 0.0), (x1 - x0 - xz, 0.0, abs(y1))]
+        for dx, u, v in pieces:
+            if abs(v - u) <= 1e-6 * max(u, v):  # nearly flat: the cancellation-free midpoint form, error O((v-u)^2)
+                total += dx * 0.5 * (u**q + v**q)
+            else:  # integral of a linear |f| from u to v: (v^(q+1) - u^(q+1)) / ((q + 1) (v - u)) per unit length
+                total += dx * (v ** (q + 1) - u ** (q + 1)) / ((q + 1) * (v - u))
+    return total / TWO_PI
 
 
 @dataclass(frozen=True)
@@ -330,6 +382,14 @@ class BackEmf:
     def scaled(self, factor: float) -> BackEmf:
         """Return the back-EMF with every phase's shape times ``factor`` (> 0)."""
         return BackEmf(tuple(sh.scaled(factor) for sh in self.shapes))  # type: ignore[arg-type]  # three shapes in, three out
+
+    def mean_abs_power(self, q: float) -> float:
+        """Return ``sum_x mean_theta |k_x(theta)|^q`` over the three phases ((V s/rad)^q).
+
+        See :meth:`Shape.mean_abs_power`. With ``q = 2``, times ``omega_m^2``: the mean of ``sum_x e_x^2`` at a
+        constant speed ``omega_m``, the quantity the iron loss's eddy term scales with.
+        """
+        return float(sum(sh.mean_abs_power(q) for sh in self.shapes))
 
     @property
     def is_symmetric(self) -> bool:

@@ -58,6 +58,17 @@ class Motor:
         Peak torque (N m), informative.
     cogging : Cogging, optional
         Cogging torque.
+    P_fe_eddy, P_fe_hyst, P_fe_ex : float
+        Stator iron loss caused by the magnets (W), >= 0, default 0 (none): its eddy-current, hysteresis and
+        excess parts at the speed ``speed_fe_ref`` (a measured no-load loss split by its speed dependence, or a
+        core-loss calculation). The plant evaluates them in the time domain from the back-EMF,
+        ``p_fe = k_fe_e sum e_x^2 + k_fe_h |omega_e| + k_fe_x sum |e_x|^1.5``, with the coefficients
+        (:attr:`k_fe_eddy`, :attr:`k_fe_hyst`, :attr:`k_fe_ex`) that reproduce these powers at ``speed_fe_ref``
+        with this motor's back-EMF shape; the loss acts as a drag torque on the rotor (docs/plant.md, "Iron
+        losses").
+    speed_fe_ref : float, optional
+        Mechanical speed (rad/s) at which ``P_fe_eddy``, ``P_fe_hyst``, ``P_fe_ex`` hold; > 0, required when any
+        of them is > 0.
 
     """
 
@@ -70,6 +81,13 @@ class Motor:
     Omega_N: float | None = None
     T_peak: float | None = None
     cogging: Cogging | None = None
+    P_fe_eddy: float = 0.0
+    P_fe_hyst: float = 0.0
+    P_fe_ex: float = 0.0
+    speed_fe_ref: float | None = None
+
+    #: The iron-loss fields, all 0 / None by default (a file without them has no iron loss).
+    IRON_LOSS_FIELDS: ClassVar[tuple[str, ...]] = ("P_fe_eddy", "P_fe_hyst", "P_fe_ex", "speed_fe_ref")
 
     def __post_init__(self) -> None:
         if isinstance(self.p, bool) or not isinstance(self.p, int | np.integer) or self.p < 1:
@@ -84,6 +102,122 @@ class Motor:
             raise BldclabError("emf", "must be a BackEmf")
         if self.Omega_N is None and self.V_N - 2.0 * self.R * self.I_N <= 0.0:
             raise BldclabError("R", "2 R I_N exceeds V_N: no positive nominal speed")
+        for name in ("P_fe_eddy", "P_fe_hyst", "P_fe_ex"):
+            check_number(name, getattr(self, name), lo=0.0)
+        check_number("speed_fe_ref", self.speed_fe_ref, lo=0.0, lo_open=True, allow_none=True)
+        if self.has_iron_losses and self.speed_fe_ref is None:
+            raise BldclabError("speed_fe_ref", "is missing: P_fe_eddy, P_fe_hyst and P_fe_ex are losses at a "
+                               "reference speed, give it (e.g. speed_fe_ref = \"3000 rpm\")")
+
+    @property
+    def has_iron_losses(self) -> bool:
+        """True if any of ``P_fe_eddy``, ``P_fe_hyst``, ``P_fe_ex`` is positive."""
+        return self.P_fe_eddy > 0.0 or self.P_fe_hyst > 0.0 or self.P_fe_ex > 0.0
+
+    @property
+    def k_fe_eddy(self) -> float:
+        """Eddy coefficient ``k_fe_e = P_fe_eddy / (speed_fe_ref^2 sum_x mean k_x^2)`` (W/V^2), 0 without it.
+
+        The plant's eddy loss ``k_fe_e sum_x e_x^2`` then equals ``P_fe_eddy`` at ``speed_fe_ref``.
+        """
+        if self.P_fe_eddy == 0.0 or self.speed_fe_ref is None:
+            return 0.0
+        return float(self.P_fe_eddy / (self.speed_fe_ref**2 * self.emf.mean_abs_power(2.0)))
+
+    @property
+    def k_fe_hyst(self) -> float:
+        """Hysteresis coefficient ``k_fe_h = P_fe_hyst / (p speed_fe_ref)`` (J/rad), 0 without it.
+
+        Per electrical radian: the plant's hysteresis loss is ``k_fe_h |omega_e|``.
+        """
+        if self.P_fe_hyst == 0.0 or self.speed_fe_ref is None:
+            return 0.0
+        return float(self.P_fe_hyst / (self.p * self.speed_fe_ref))
+
+    @property
+    def k_fe_ex(self) -> float:
+        """Excess coefficient ``k_fe_x = P_fe_ex / (speed_fe_ref^1.5 sum_x mean |k_x|^1.5)`` (W/V^1.5), 0 without it.
+
+        The plant's excess loss is ``k_fe_x sum_x |e_x|^1.5``.
+        """
+        if self.P_fe_ex == 0.0 or self.speed_fe_ref is None:
+            return 0.0
+        return float(self.P_fe_ex / (self.speed_fe_ref**1.5 * self.emf.mean_abs_power(1.5)))
+
+    def with_iron_from_material(self, *, mass: float, B_peak: float, p_hyst: float, p_eddy: float,
+                                p_ex: float = 0.0, alpha: float = 2.0, speed_ref: float | None = None) -> Motor:
+        """Return the motor with ``P_fe_eddy``, ``P_fe_hyst``, ``P_fe_ex`` at ``speed_ref`` from core-material data.
+
+        The material's loss at 50 Hz and 1 T (sinusoidal flux) split by term, ``p_hyst``, ``p_eddy``, ``p_ex``
+        (W/kg), with the Steinmetz exponent ``alpha`` of the hysteresis term, the core mass and its peak flux
+        density. The assumed flux: each third of the core carries a flux density that follows its phase's magnet
+        flux linkage, ``B_x = B_peak psi_x / psi_pk``, so ``dB_x/dt = (B_peak / psi_pk) e_x`` with ``psi_pk`` the
+        peak magnet flux linkage of a phase (:meth:`BackEmf`'s shapes, ``Shape.flux_peak / p``, averaged over the
+        phases). Then, matching each term of the material's sinusoidal loss
+        ``p_hyst (f/50) B^alpha + p_eddy (f/50)^2 B^2 + p_ex (f/50)^1.5 B^1.5`` in the time domain:
+
+        - eddy ``mass p_eddy / (2 pi^2 50^2) mean (dB/dt)^2``: ``k_fe_e = mass p_eddy B_peak^2 / (6 pi^2 50^2
+          psi_pk^2)``;
+        - hysteresis ``mass p_hyst B_peak^alpha / 50`` per electrical cycle: ``k_fe_h = mass p_hyst B_peak^alpha /
+          (100 pi)``;
+        - excess ``mass p_ex / ((2 pi 50)^1.5 m_15) mean |dB/dt|^1.5``, ``m_15 = mean |cos|^1.5``:
+          ``k_fe_x = mass p_ex B_peak^1.5 / (3 (2 pi 50)^1.5 m_15 psi_pk^1.5)``;
+
+        and the returned powers are these coefficients' losses at ``speed_ref``. A sinusoidal back-EMF gets the
+        material's formula at every speed; a trapezoidal one more eddy and excess loss (its harmonics). Limits
+        (docs/motor-files.md, "Iron losses from material data"): one effective peak flux density for teeth and
+        yoke, tooth flux taken as the phase's flux linkage (sharper in reality for a distributed winding), no
+        rotational loss.
+
+        Parameters
+        ----------
+        mass : float
+            Core (stator iron) mass (kg), > 0.
+        B_peak : float
+            Peak flux density in the core at no load (T), > 0.
+        p_hyst, p_eddy, p_ex : float
+            Material loss at 1 T, 50 Hz by term (W/kg), >= 0.
+        alpha : float
+            Steinmetz exponent of the hysteresis term, in [1, 3]; default 2.
+        speed_ref : float, optional
+            Reference speed of the returned powers (rad/s), > 0; default the rated speed ``Omega_nominal``.
+
+        Returns
+        -------
+        Motor
+            The motor with ``P_fe_eddy``, ``P_fe_hyst``, ``P_fe_ex``, ``speed_fe_ref`` set.
+
+        Raises
+        ------
+        BldclabError
+            Naming the material argument that is out of range.
+        """
+        check_number("material.mass", mass, lo=0.0, lo_open=True)
+        check_number("material.B_peak", B_peak, lo=0.0, lo_open=True)
+        for name, v in (("material.p_hyst", p_hyst), ("material.p_eddy", p_eddy), ("material.p_ex", p_ex)):
+            check_number(name, v, lo=0.0)
+        check_number("material.alpha", alpha, lo=1.0, hi=3.0)
+        check_number("material.speed_ref", speed_ref, lo=0.0, lo_open=True, allow_none=True)
+        w = float(speed_ref) if speed_ref is not None else self.Omega_nominal
+        psi = float(np.mean([sh.flux_peak() for sh in self.emf.shapes])) / self.p
+        m15 = math.gamma(1.25) / (math.sqrt(math.pi) * math.gamma(1.75))
+        k_e = mass * p_eddy * B_peak**2 / (6.0 * math.pi**2 * 50.0**2 * psi**2)
+        k_h = mass * p_hyst * B_peak**alpha / (100.0 * math.pi)
+        k_x = mass * p_ex * B_peak**1.5 / (3.0 * (2.0 * math.pi * 50.0) ** 1.5 * m15 * psi**1.5)
+        return dataclasses.replace(self, P_fe_eddy=k_e * w**2 * self.emf.mean_abs_power(2.0),
+                                   P_fe_hyst=k_h * self.p * w, P_fe_ex=k_x * w**1.5 * self.emf.mean_abs_power(1.5),
+                                   speed_fe_ref=w)
+
+    def iron_loss(self, omega: float) -> float:
+        """Return the mean iron loss (W) the plant books at a constant mechanical speed ``omega`` (rad/s), any load.
+
+        ``P_fe_eddy (w/w_ref)^2 + P_fe_hyst |w/w_ref| + P_fe_ex |w/w_ref|^1.5`` with ``w_ref = speed_fe_ref``: the
+        model's loss depends on the magnets' flux only, not on the current (docs/plant.md, "Iron losses").
+        """
+        if not self.has_iron_losses or self.speed_fe_ref is None:
+            return 0.0
+        r = abs(float(omega)) / self.speed_fe_ref
+        return self.P_fe_eddy * r**2 + self.P_fe_hyst * r + self.P_fe_ex * r**1.5
 
     @property
     def k_phi(self) -> float:
@@ -523,7 +657,10 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
     motor = wrap("motor", Motor, p=ms.integer("p"), R=ms.quantity("R", "resistance"),
                   L=ms.quantity("L", "inductance"), emf=emf, V_N=ms.quantity("V_N", "voltage"),
                   I_N=ms.quantity("I_N", "current"), Omega_N=ms.quantity("Omega_N", "speed", None),
-                  T_peak=ms.quantity("T_peak", "torque", None), cogging=cog)
+                  T_peak=ms.quantity("T_peak", "torque", None), cogging=cog,
+                  P_fe_eddy=ms.quantity("P_fe_eddy", "power", 0.0), P_fe_hyst=ms.quantity("P_fe_hyst", "power", 0.0),
+                  P_fe_ex=ms.quantity("P_fe_ex", "power", 0.0),
+                  speed_fe_ref=ms.quantity("speed_fe_ref", "speed", None))
     ms.finish()
 
     inv_s = top.sub("inverter")
@@ -612,8 +749,11 @@ def _inverter_energies(inv_s: Section, motor: Motor) -> dict[str, float]:
 def _drive_to_toml(d: Drive) -> str:
     out = [toml_table("", {"name": d.name, "description": d.description})]
     m = d.motor
-    out.append(toml_table("motor", {"p": int(m.p), "R": float(m.R), "L": float(m.L), "V_N": float(m.V_N),
-                                "I_N": float(m.I_N), "Omega_N": m.Omega_N, "T_peak": m.T_peak}))
+    mot: dict[str, object] = {"p": int(m.p), "R": float(m.R), "L": float(m.L), "V_N": float(m.V_N),
+                              "I_N": float(m.I_N), "Omega_N": m.Omega_N, "T_peak": m.T_peak}
+    if m.has_iron_losses or m.speed_fe_ref is not None:  # otherwise (the default) written as before they existed
+        mot.update({k: getattr(m, k) for k in Motor.IRON_LOSS_FIELDS})
+    out.append(toml_table("motor", mot))
     out += emf_tables(m.emf)
     if m.cogging is not None:
         out.append(cogging_table(m.cogging))

@@ -21,7 +21,8 @@ __all__ = ["plot_difference", "plot_efficiency_maps", "plot_losses"]
 
 _NAMES = {"square": "square-wave supply", "sine": "sinusoidal supply"}
 _BUCKET_NAMES = {"p_Rsrc": "source resistance", "p_cu": "copper (windings)", "p_sw": "switch conduction",
-                 "p_diode": "diodes", "p_fric": "friction", "p_swloss": "switching", "p_rr": "reverse recovery"}
+                 "p_diode": "diodes", "p_fric": "friction", "p_swloss": "switching", "p_rr": "reverse recovery",
+                 "p_fe": "iron (stator core)"}
 
 
 def _figure(rows: int, cols: int) -> Figure:

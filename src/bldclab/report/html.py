@@ -101,6 +101,10 @@ PARAMETERS: dict[str, tuple[tuple[str, str, str], ...]] = {
         ("T_peak", "peak torque", "N m"),
         ("emf", "back-EMF shapes k_a, k_b, k_c", "V s/rad"),
         ("cogging", "cogging torque", "N m"),
+        ("P_fe_eddy", "iron loss, eddy-current part at speed_fe_ref (0: no iron loss)", "W"),
+        ("P_fe_hyst", "iron loss, hysteresis part at speed_fe_ref", "W"),
+        ("P_fe_ex", "iron loss, excess part at speed_fe_ref", "W"),
+        ("speed_fe_ref", "speed of the iron-loss data", "rad/s"),
     ),
     "inverter": (
         ("V_dc", "DC bus voltage", "V"),

@@ -416,6 +416,9 @@ def _plant_params(drive: Drive, imposed: bool, h_max: float, keep: list[object])
         keep += arrs
         rec["n_cog"] = arrs[0].size
         rec["cog_order"], rec["cog_amp"], rec["cog_phase"] = (a.ctypes.data for a in arrs)
+    rec["k_fe_e"] = m.k_fe_eddy  # iron loss: the coefficients reproducing P_fe_* at speed_fe_ref
+    rec["k_fe_h"] = m.k_fe_hyst
+    rec["k_fe_x"] = m.k_fe_ex
     rec["f_pwm"] = inv.f_pwm
     rec["t_dead"] = inv.t_dead
     rec["R_on"] = inv.R_on

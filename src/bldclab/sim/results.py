@@ -82,6 +82,10 @@ class Metrics:
         (``E_rr`` at hard turn-ons), W (0 with the default inverter, which has no switching-loss data). The plant
         switches ideally: these are an accounting on top of the circuit, drawn from the DC source in addition to
         ``p_src`` (docs/plant.md, "Switching losses").
+    p_fe : float
+        Mean stator iron loss (W): eddy, hysteresis and excess terms evaluated from the back-EMF
+        (``Motor.P_fe_eddy`` ...; 0 by default). It acts as a drag torque on the rotor, so it is taken from the
+        shaft (the dynamometer at an imposed speed) like friction (docs/plant.md, "Iron losses").
     p_src_total : float
         Total power from the DC source, ``p_src + p_swloss + p_rr`` (W): the input of :attr:`efficiency`.
     dW_L, dW_kin : float
@@ -92,11 +96,12 @@ class Metrics:
         (dimensionless). The booked switching energies enter both sides, so the residue measures the circuit's
         integration; the booking itself is checked against hand calculations (tests/test_losses.py).
     balance_mechanical : float
-        ``(E_emf + E_cog - E_fric - E_load - dW_kin) / max(|E_emf|, ...)`` (dynamic mechanics; 0 otherwise).
+        ``(E_emf + E_cog - E_fric - E_fe - E_load - dW_kin) / max(|E_emf|, ...)`` (dynamic mechanics; 0
+        otherwise).
     i_rms, i_peak : tuple of float
         Per-phase rms and peak current (A).
     efficiency : float
-        Shaft power ``p_emf + p_cog - p_fric`` over ``p_src_total`` (motoring; nan if ``p_src_total <= 0``).
+        Shaft power ``p_emf + p_cog - p_fric - p_fe`` over ``p_src_total`` (motoring; nan if ``p_src_total <= 0``).
     """
 
     t0: float
@@ -128,6 +133,7 @@ class Metrics:
     p_emf: float
     p_cog: float
     p_fric: float
+    p_fe: float
     p_load: float
     dW_L: float
     dW_kin: float
@@ -152,8 +158,8 @@ class Metrics:
         if imposed:
             bal_m = 0.0
         else:
-            scale_m = max(abs(E["emf"]), abs(E["fric"]), abs(E["load"]), abs(dW_kin), 1e-300)
-            bal_m = (E["emf"] + E["cog"] - E["fric"] - E["load"] - dW_kin) / scale_m
+            scale_m = max(abs(E["emf"]), abs(E["fric"]), abs(E["fe"]), abs(E["load"]), abs(dW_kin), 1e-300)
+            bal_m = (E["emf"] + E["cog"] - E["fric"] - E["fe"] - E["load"] - dW_kin) / scale_m
         tau_mean = E["tau"] / dt
         ma_min, ma_max = float(m["tau_ma_min"]), float(m["tau_ma_max"])
         if int(m["n_ma"]) == 0:
@@ -161,7 +167,7 @@ class Metrics:
         mg_min, mg_max = float(m["tau_ma_grid_min"]), float(m["tau_ma_grid_max"])
         if int(m["n_ma_grid"]) == 0:
             mg_min = mg_max = math.nan
-        shaft = p["emf"] + p["cog"] - p["fric"]
+        shaft = p["emf"] + p["cog"] - p["fric"] - p["fe"]
         p_src_total = E_src_total / dt
         return cls(
             t0=float(m["t0"]), t1=float(m["t1"]), tau_mean=tau_mean, tau_min=float(m["tau_min"]),
@@ -172,7 +178,7 @@ class Metrics:
             tau_std=math.sqrt(max(E["tau2"] / dt - tau_mean**2, 0.0)), omega_mean=omega_integral / dt,
             p_src=p["src"], p_src_total=p_src_total, p_Rsrc=p["Rsrc"], p_cu=p["cu"], p_sw=p["sw"],
             p_diode=p["diode"], p_swloss=p["swloss"], p_rr=p["rr"], p_emf=p["emf"],
-            p_cog=p["cog"], p_fric=p["fric"], p_load=p["load"], dW_L=dW_L, dW_kin=dW_kin,
+            p_cog=p["cog"], p_fric=p["fric"], p_fe=p["fe"], p_load=p["load"], dW_L=dW_L, dW_kin=dW_kin,
             balance_electrical=bal_e, balance_mechanical=bal_m,
             i_rms=(math.sqrt(E["i2a"] / dt), math.sqrt(E["i2b"] / dt), math.sqrt(E["i2c"] / dt)),
             i_peak=(float(m["i_peak"][0]), float(m["i_peak"][1]), float(m["i_peak"][2])),
@@ -423,6 +429,7 @@ class SimResult:
             kw.setdefault("p_swloss", 0.0)
             kw.setdefault("p_rr", 0.0)
             kw.setdefault("p_src_total", kw.get("p_src"))
+            kw.setdefault("p_fe", 0.0)  # ... and before the iron loss
             for f in fields(Metrics):
                 if f.name in ("i_rms", "i_peak"):
                     kw[f.name] = tuple(kw[f.name])

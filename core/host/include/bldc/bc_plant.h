@@ -5,7 +5,8 @@
  *
  *     v_x - v_n = R i_x + L di_x/dt + e_x,    e_x = omega_m k_x(theta_e - x 2pi/3),    i_a + i_b + i_c = 0
  *     tau_e = sum_x k_x i_x + tau_cog(theta_m),                 theta_e = p theta_m
- *     J domega_m/dt = tau_e - tau_L - B omega_m - tau_c sign(omega_m)      (or omega_m imposed)
+ *     J domega_m/dt = tau_e - tau_L - B omega_m - tau_c sign(omega_m) - tau_fe   (or omega_m imposed; tau_fe: the
+ *                                                                              iron-loss drag, "Iron losses" below)
  *
  * Inverter: each leg's gate state (upper on, lower on, both off) comes from the half-period command
  * (bc_plant_set_half), centre-aligned PWM and dead time. A connected phase has v_x = U_x - r_x i_x:
@@ -78,8 +79,36 @@
  * An isolated edge is thus seen d_x + tau_x ln 2 late; a pulse on the line shorter than tau_x ln 2 is never seen.
  * All switching angles are located exactly (integration events) and every time is exact.
  *
+ * Iron losses (stator core loss caused by the magnets' flux; an accounting with its drag torque, the circuit is
+ * unchanged). The flux linked by phase x's teeth and yoke follows psi_PM,x, so the back-EMF e_x = dpsi_PM,x/dt
+ * (any shape) is the flux rate the core sees. In the time domain:
+ *
+ *     p_eddy = k_fe_e sum_x e_x^2                 classical eddy-current loss, k_fe_e in W/V^2;
+ *     p_hyst = k_fe_h |omega_e|,  omega_e = p omega_m   hysteresis: an energy 2 pi k_fe_h per electrical cycle, fixed
+ *                                                  by the peak flux density, which the magnets fix; J/rad;
+ *     p_ex = k_fe_x sum_x |e_x|^1.5               excess (Bertotti) loss, |dB/dt|^1.5 in the time domain; W/V^1.5;
+ *     p_fe = p_eddy + p_hyst + p_ex,
+ *     tau_fe = p_fe / omega_m = k_fe_e omega_m sum_x k_x^2 + p k_fe_h sign(omega_m)
+ *              + k_fe_x sign(omega_m) |omega_m|^0.5 sum_x |k_x|^1.5.
+ *
+ * For a non-sinusoidal back-EMF the mean of e_x^2 is the sum of its harmonics' mean squares (Parseval), so the eddy
+ * term counts every harmonic of the trapezoid with the f^2 weight of the classical eddy loss; a sinusoidal e_x of
+ * peak E gives 3 k_fe_e E^2 / 2. tau_fe is a drag on the rotor: it enters the rotor equation next to friction,
+ *
+ *     J domega_m/dt = tau_e - tau_L - B omega_m - tau_c sign(omega_m) - tau_fe,
+ *
+ * the eddy part as a viscous drag, the excess part vanishing at rest like |omega_m|^0.5, the hysteresis part as
+ * Coulomb friction (a rotor at rest stays stuck while |tau_e - tau_L| <= tau_c + p k_fe_h);
+ * with an imposed speed the dynamometer supplies it. The loss is booked in acc FE (tau_fe omega_m = p_fe), so the
+ * shaft balance reads E_emf + E_cog = E_fric + E_fe + E_load + dW_kin. Not modelled: the flux of the stator currents
+ * (armature reaction L i, and the PWM ripple flux): their core loss would need a magnetising branch in the circuit;
+ * minor hysteresis loops (dc-biased or reversing flux in a period); eddy currents' own field (valid while the
+ * lamination is thin against the skin depth at the harmonics that carry the loss); rotational loss in the yoke
+ * beyond what k_fe_e, k_fe_h calibrate. Full description: docs/plant.md, "Iron losses".
+ *
  * Integration: RK4 between events; lands exactly on gate edges, back-EMF corners and Hall edges (predicted),
- * and on diode current zeros, re-conduction and speed zero crossings (root finding). Powers are integrated
+ * and on diode current zeros, re-conduction and speed zero crossings (root finding); within a step the Coulomb-like
+ * drags (tau_c, p k_fe_h) keep the sign of the motion at its start. Powers are integrated
  * as extra states (acc[]) so the energy balance closes to the integration accuracy. Full description:
  * docs/plant.md.
  */
@@ -110,15 +139,16 @@
 #define BC_COND_D_U 3
 #define BC_COND_D_L 4
 
-/* Integrated quantities acc[], listed once: X(NAME, name, unit, description). */
+/* Integrated quantities acc[], listed once: X(NAME, name, unit, description). The loss lanes SWLOSS, RR and FE stay
+ * last (BC_ACC_OPT is the first of them): a plant whose switching-loss energies and iron-loss coefficients are all
+ * zero, or whose switching losses are only booked at gate edges (switching inverter, no iron loss), has zero rates
+ * there and its integrator skips them, so lossless runs cost what they cost before the lanes existed. */
 #define BC_ACC_FIELDS(X)                                                                      \
     X(SRC, src, "J", "V_src i_dc: energy delivered by the DC source")                         \
     X(RSRC, Rsrc, "J", "R_src i_dc^2: loss in the source resistance")                        \
     X(CU, cu, "J", "R sum i^2: copper loss")                                                  \
     X(SW, sw, "J", "R_on i^2 in conducting switches")                                         \
     X(DIODE, diode, "J", "(V_f + r_d |i|) |i| in conducting diodes")                          \
-    X(SWLOSS, swloss, "J", "E_on + E_off booked at hard gate edges (switching loss, from the source)") \
-    X(RR, rr, "J", "E_rr booked at hard turn-ons: the opposite diode's reverse recovery")     \
     X(EMF, emf, "J", "sum e_x i_x = tau_em omega_m: electrical to mechanical")               \
     X(COG, cog, "J", "tau_cog omega_m")                                                       \
     X(FRIC, fric, "J", "(B omega + tau_c sign omega) omega: friction loss")                   \
@@ -132,7 +162,10 @@
     X(VB, vb, "V s", "integral of v_b")                                                       \
     X(VC, vc, "V s", "integral of v_c")                                                       \
     X(VN, vn, "V s", "integral of the star-point voltage")                                    \
-    X(IDC, idc, "A s", "integral of the DC current")
+    X(IDC, idc, "A s", "integral of the DC current")                                          \
+    X(SWLOSS, swloss, "J", "E_on + E_off booked at hard gate edges (switching loss, from the source)") \
+    X(RR, rr, "J", "E_rr booked at hard turn-ons: the opposite diode's reverse recovery")     \
+    X(FE, fe, "J", "tau_fe omega: stator iron loss (eddy k_fe_e sum e^2 + hysteresis k_fe_h |omega_e|)")
 
 enum {
 #define BC_ACC_ENUM(NAME, name, unit, doc) BC_ACC_##NAME,
@@ -140,6 +173,7 @@ enum {
 #undef BC_ACC_ENUM
     BC_ACC_N
 };
+#define BC_ACC_OPT BC_ACC_SWLOSS /* first optional lane: SWLOSS, RR, FE are the last three */
 
 #define BC_HALL_QUEUE 8
 #define BC_PLANT_NW 15 /* functions watched for sign changes inside a step (diodes, open phases, speed, trip) */
@@ -177,6 +211,9 @@ typedef struct {
     const double *cog_order;  /* harmonic orders in theta_m */
     const double *cog_amp;    /* amplitudes, N m */
     const double *cog_phase;  /* phases, rad: tau_cog = sum amp sin(order theta_m + phase) */
+    double k_fe_e;          /* iron loss, eddy term: p_eddy = k_fe_e sum_x e_x^2, W/V^2 (0: none) */
+    double k_fe_h;          /* iron loss, hysteresis term: p_hyst = k_fe_h |omega_e|, J/rad (0: none) */
+    double k_fe_x;          /* iron loss, excess term: p_ex = k_fe_x sum_x |e_x|^1.5, W/V^1.5 (0: none) */
     /* inverter */
     double f_pwm;           /* carrier frequency, Hz (half period T/2 = 1/(2 f_pwm)) */
     double t_dead;          /* dead time, s */
@@ -220,7 +257,7 @@ typedef struct {
     double i_dc;      /* DC current, A */
     double tau_e;     /* electromagnetic torque incl. cogging, N m */
     double tau_cog;   /* cogging torque, N m */
-    double tau_shaft; /* tau_e - B omega - tau_c sign(omega): what a dynamometer holds, N m */
+    double tau_shaft; /* tau_e - B omega - tau_c sign(omega) - tau_fe: what a dynamometer holds, N m */
     double w_l;       /* magnetic energy (L/2) sum i^2, J */
 } bc_plant_out;
 
@@ -273,6 +310,11 @@ typedef struct {
     int32_t hold_open;      /* bit x: phase x stays open until time advances (a spurious diode turn-on) */
     int32_t sw_on;          /* 1 if any of E_on, E_off, E_rr is positive (set at init) */
     double sw_inv_vi;       /* 1 / (V_test I_test), 1/(V A) (0 without switching losses) */
+    int32_t fe_on;          /* 1 if k_fe_e, k_fe_h or k_fe_x is positive (set at init) */
+    double fe_tc;           /* Coulomb-like hysteresis drag p k_fe_h, N m */
+    int32_t drag_on;        /* 1 if B, tau_c or an iron-loss coefficient is positive (set at init) */
+    int32_t ny;             /* entries of the integrated vector the RK4 step advances: all, or without the optional
+                               loss lanes (BC_ACC_OPT ...) when their rates are zero (set at init) */
     /* circuit coefficients of the present conduction states, set whenever they change (internal) */
     double tc_up[3];        /* 1 if tied to the + rail */
     double tc_u0[3];        /* constant part of the terminal source U_x, V */

@@ -41,7 +41,7 @@
     X(e_b, "V", "back-EMF b")                                                                       \
     X(e_c, "V", "back-EMF c")                                                                       \
     X(tau_e, "N m", "electromagnetic torque (with cogging)")                                        \
-    X(tau_shaft, "N m", "torque minus friction: what a dynamometer holds")                          \
+    X(tau_shaft, "N m", "torque minus friction and iron drag: what a dynamometer holds")              \
     X(v_bus, "V", "DC bus at the inverter")                                                         \
     X(hall, "-", "Hall code seen by the controller")                                                \
     X(tau_mean, "N m", "mean torque over the window")                                               \
