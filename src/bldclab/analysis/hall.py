@@ -19,6 +19,7 @@ results: docs/hall.md.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -33,10 +34,11 @@ from ..control import Control, Lu, Sine, SixStep
 from ..errors import BldclabError, PlausibilityError
 from ..model.motor import Drive
 from ..sim import plausibility as _plaus
+from ..sim.hallcal import calibrate
 from .experiments import map_points, steady_state
 
-__all__ = ["CASES", "DEFAULT_ERRORS_DEG", "VARIANTS", "Factory", "HallStudyResult", "Variant", "error_pattern",
-           "hall_study"]
+__all__ = ["CASES", "DEFAULT_ERRORS_DEG", "VARIANTS", "CalibrationError", "Factory", "HallStudyResult", "Variant",
+           "calibrated_table", "error_pattern", "hall_study"]
 
 #: Makes a variant's controller for the drive (its Hall errors set) and the speed (rad/s).
 Factory = Callable[[Drive, float], Control]
@@ -62,17 +64,73 @@ def sine_46(drive: Drive, speed: float) -> Control:
     return Sine(handoff_speed=0.25 * abs(speed))
 
 
+def sine_pll(drive: Drive, speed: float) -> Control:
+    """Sinusoidal supply with the tracking angle estimator on the Hall edges (``Sine(angle="pll")``)."""
+    del drive
+    return Sine(angle="pll", handoff_speed=0.25 * abs(speed))
+
+
 def lu(drive: Drive, speed: float) -> Control:
     """Paper 2's torque controller (Lu, Zhang, Qu)."""
     del drive, speed
     return Lu()
 
 
-#: The controllers of the study, in table order.
+class CalibrationError(Exception):
+    """The open-loop Hall calibration of a drive did not give a table (its reasons in the message)."""
+
+
+@functools.lru_cache(maxsize=64)
+def calibrated_table(drive: Drive) -> tuple[float, ...]:
+    """Return the Hall edge table the C routine learns on this drive (open loop, as firmware does at start-up).
+
+    The routine runs on the drive's own sensors (placement errors, hysteresis, delays, filters): what a controller
+    would carry into its run. Cached per drive and process.
+
+    Raises
+    ------
+    CalibrationError
+        If the routine flags its result (no table).
+    """
+    cal = calibrate(drive, "open-loop")
+    if not cal.ok:
+        raise CalibrationError(f"calibration failed: {'|'.join(cal.reasons)}")
+    return cal.table
+
+
+def square_wave_cal(drive: Drive, speed: float) -> Control:
+    """Square-wave supply with the calibrated edge table (commutation at the nominal angles)."""
+    del speed
+    return SixStep(reference="torque", hall_table=calibrated_table(drive))
+
+
+def sine_46_cal(drive: Drive, speed: float) -> Control:
+    """Sinusoidal supply, (46) on the calibrated edge table."""
+    return Sine(handoff_speed=0.25 * abs(speed), hall_table=calibrated_table(drive))
+
+
+def sine_pll_cal(drive: Drive, speed: float) -> Control:
+    """Sinusoidal supply, tracking estimator on the calibrated edge table."""
+    return Sine(angle="pll", handoff_speed=0.25 * abs(speed), hall_table=calibrated_table(drive))
+
+
+def lu_cal(drive: Drive, speed: float) -> Control:
+    """Paper 2's torque controller on the calibrated edge table."""
+    del speed
+    return Lu(hall_table=calibrated_table(drive))
+
+
+#: The controllers of the study, in table order: each supply as is, then after the open-loop calibration
+#: (:func:`calibrated_table`).
 VARIANTS: tuple[Variant, ...] = (
     ("square-wave", square_wave),
     ("sine (46)", sine_46),
+    ("sine (pll)", sine_pll),
     ("lu", lu),
+    ("square-wave, cal.", square_wave_cal),
+    ("sine (46), cal.", sine_46_cal),
+    ("sine (pll), cal.", sine_pll_cal),
+    ("lu, cal.", lu_cal),
 )
 
 
@@ -111,6 +169,8 @@ def _run(job: tuple[Drive, str, Factory, float, float, Mapping[str, Any]]) -> di
             point, _ = steady_state(drive, factory(drive, speed), speed, torque, **opts)
     except PlausibilityError as exc:  # refused by the guards: no measurement
         return {**_NAN_ROW, "note": f"refused: {exc}", "_warnings": []}
+    except CalibrationError as exc:  # no table to run with
+        return {**_NAN_ROW, "note": str(exc), "_warnings": []}
     return {"tau_mean": point.tau_mean, "tau_mean_pu": point.tau_mean_pu, "ripple_sampled": point.ripple_sampled,
             "ripple_sampled_pu": point.ripple_sampled_pu, "ripple_ma_pu": point.ripple_ma_pu,
             "efficiency": point.efficiency, "note": "",
