@@ -57,6 +57,22 @@ def test_open_loop_finds_the_absolute_edges(name, err):
     assert np.max(np.abs(d)) < 1.5, d
 
 
+
+@pytest.mark.parametrize("name", DRIVES)
+def test_open_loop_cancels_hysteresis_and_delay(name):
+    """Sensors with 4 deg of hysteresis and 20 us of delay each switch h/2 (plus the delay's angle) late in the
+    direction of travel; the forward and backward sweeps see opposite shifts and their average is the placement
+    error alone: the table moves by < 0.1 deg against the same sensors without them, and stays within 1.5 deg of
+    the true edges (measured: 0.55 deg worst, lu-4kw)."""
+    e = (math.radians(5.0), math.radians(-3.0), math.radians(2.0))
+    base = bl.load(name).replace(sensors__hall_error=e)
+    h = math.radians(4.0)
+    lagged = base.replace(sensors__hall_hysteresis=(h, h, h), sensors__hall_delay=(20e-6, 20e-6, 20e-6))
+    a, b = bl.calibrate_hall(base, "open-loop"), bl.calibrate_hall(lagged, "open-loop")
+    assert a.ok and b.ok, (a.reasons, b.reasons)
+    assert np.max(np.abs(wrap_deg(np.array(b.table) - np.array(a.table)))) < 0.1
+    assert np.max(np.abs(wrap_deg(np.array(b.table) - true_edges(e)))) < 1.5
+
 def _run(drive, routine, scenario):
     res = bl.simulate(drive, routine, scenario, check="off")
     return read_calibration(res, routine.method)
