@@ -205,10 +205,10 @@ def test_screenshot_is_not_blank(built: tuple[str, Path, Path]) -> None:
 
     exe, work, page = built
     shot = work / "report.png"
-    proc = _chromium(exe, page, work, "shot", "--window-size=1280,5200", f"--screenshot={shot}")
+    proc = _chromium(exe, page, work, "shot", "--window-size=1280,9000", f"--screenshot={shot}")
     assert proc.returncode == 0 and shot.is_file(), proc.stderr[-2000:]
     img = image.imread(shot)[..., :3]
-    assert img.shape[:2] == (5200, 1280)
+    assert img.shape[:2] == (9000, 1280)
     assert float(img.std()) > 0.08
     ink = np.any(img < 0.9, axis=2)
     assert 0.03 < float(ink.mean()) < 0.8  # text, tables and plots on a white page
