@@ -505,12 +505,13 @@ typedef struct {
     uint32_t n_edges;
     double t_edge;
     int last_sector;
+    double shift; /* rad: every sensor misplaced by shift (the edges at pi/6 + n pi/3 + shift) */
 } hall_sim;
 
-/* Hall inputs for time t on the trajectory theta0 + omega_e t (edges at pi/6 + n pi/3). */
+/* Hall inputs for time t on the trajectory theta0 + omega_e t (edges at pi/6 + n pi/3 + shift). */
 static void hall_at(hall_sim *hs, double t, bc_ctrl_in *in)
 {
-    double th = fmod(hs->theta0 + hs->omega_e * t, 2.0 * BC_PI);
+    double th = fmod(hs->theta0 + hs->omega_e * t - hs->shift, 2.0 * BC_PI);
     if (th < 0.0) th += 2.0 * BC_PI;
     int sector = (int)floor(fmod(th - BC_PI / 6.0 + 2.0 * BC_PI, 2.0 * BC_PI) / (BC_PI / 3.0));
     if (sector > 5) sector = 5;
@@ -558,7 +559,7 @@ static void test_switching_logic(void)
         static bc_lu_state s;
         CHECK(bc_lu_init(&p, &s) == BC_OK, "init");
         /* 3000 rpm: omega_e = 2 * 314.16 rad/s; start in sector 0 (a+ b-) */
-        hall_sim hs = {2.0 * 100.0 * BC_PI, BC_PI / 6.0 + 0.01, 20e6, 0u, 0.0, -1};
+        hall_sim hs = {2.0 * 100.0 * BC_PI, BC_PI / 6.0 + 0.01, 20e6, 0u, 0.0, -1, 0.0};
         double t = 0.0;
         bc_ctrl_out out;
         /* through three sectors so that the Hall speed is known, then to the middle of sector 2 (b+ c-) */
@@ -611,7 +612,7 @@ static void test_switching_logic(void)
     make_params(&p, BC_LU_TORQUE, 0);
     static bc_lu_state s;
     CHECK(bc_lu_init(&p, &s) == BC_OK, "init");
-    hall_sim hs = {2.0 * 30.0 * BC_PI, BC_PI / 6.0 + 0.01, 20e6, 0u, 0.0, -1}; /* 900 rpm */
+    hall_sim hs = {2.0 * 30.0 * BC_PI, BC_PI / 6.0 + 0.01, 20e6, 0u, 0.0, -1, 0.0}; /* 900 rpm */
     double t_sector = (BC_PI / 3.0) / hs.omega_e, t = 0.0;
     bc_ctrl_out out;
     float i_bc[3] = {0.0f, 16.0f, -16.0f};
@@ -825,7 +826,7 @@ static void test_reversal(void)
         make_params(&p, m, 1);
         static bc_lu_state s;
         CHECK(bc_lu_init(&p, &s) == BC_OK, "init");
-        hall_sim hs = {-2.0 * 50.0 * BC_PI, 3.0, 20e6, 0u, 0.0, -1};
+        hall_sim hs = {-2.0 * 50.0 * BC_PI, 3.0, 20e6, 0u, 0.0, -1, 0.0};
         double t = 0.0;
         bc_ctrl_out out;
         float i0[3] = {5.0f, 0.0f, -5.0f};
@@ -960,6 +961,91 @@ static void test_closed_loop(void)
           "moving-average ripple lu %.3f < lu-no-do %.3f < rect %.3f N m", ripple[0], ripple[1], ripple[2]);
 }
 
+/* A calibrated table moves the pair to the nominal sector boundaries: sensors misplaced by +-10 degrees (late and
+ * early edges), the true edges as table. The commanded sector (diag 7) changes when the middle of the interval the
+ * output applies to crosses a nominal boundary (within one sample), never steps back, and the pair and its
+ * outgoing phase F follow it: a late edge commutates before the code moves, an early edge holds the previous pair
+ * (F open, normal conduction) until the nominal boundary. The nominal table commutates on the code. */
+static void test_table_commutation(void)
+{
+    make_table();
+    const double deg = BC_PI / 180.0;
+    for (int delay = 0; delay < 2; ++delay) {
+        for (int sign = -1; sign <= 1; sign += 2) {
+            double shift = sign * 10.0 * deg, w = 2.0 * 100.0 * BC_PI;
+            bc_lu_params p, p0;
+            make_params(&p, BC_LU_TORQUE, delay);
+            make_params(&p0, BC_LU_TORQUE, delay);
+            p.hall_table.set = 1;
+            for (int j = 0; j < 6; ++j) p.hall_table.fwd[j] = p.hall_table.bwd[j] = (float)(BC_PI / 6.0 + j * BC_PI / 3.0 + shift);
+            static bc_lu_state s, s0;
+            CHECK(bc_lu_init(&p, &s) == BC_OK && bc_lu_init(&p0, &s0) == BC_OK, "init");
+            hall_sim hs = {w, BC_PI / 6.0 + shift + 0.01, 20e6, 0u, 0.0, -1, shift};
+            hall_sim hs0 = hs;
+            double lead = (delay + 0.5) * (double)p.ts, step = w * (double)p.ts;
+            float i_bc[3] = {0.0f, 16.0f, -16.0f}; /* sector 2's pair b+ c- conducting, a at zero */
+            int last = -1, back = 0, comm = 0, late = 0;
+            double worst = 0.0;
+            bc_ctrl_out out, out0;
+            for (double t = 0.0; t < 3.0 * (2.0 * BC_PI) / w; t += (double)p.ts) {
+                bc_ctrl_in in, in0;
+                memset(&in, 0, sizeof in);
+                memset(&in0, 0, sizeof in0);
+                hall_at(&hs, t, &in);
+                hall_at(&hs0, t, &in0);
+                in.i_abc[0] = in0.i_abc[0] = i_bc[0];
+                in.i_abc[2] = in0.i_abc[2] = i_bc[2];
+                in.i_mask = in0.i_mask = 5u;
+                in.v_dc = in0.v_dc = 300.0f;
+                in.ref = in0.ref = 12.0f;
+                bc_lu_step(&p, &s, &in, &out);
+                bc_lu_step(&p0, &s0, &in0, &out0);
+                int c = (int)out.diag[7];
+                double mid = hs.theta0 + w * (t + lead); /* rotor angle at the middle of the output's interval */
+                double into = fmod(mid - BC_PI / 6.0 + 8.0 * BC_PI, BC_PI / 3.0); /* past the last nominal boundary */
+                int nominal = (int)floor(fmod(mid - BC_PI / 6.0 + 8.0 * BC_PI, 2.0 * BC_PI) / (BC_PI / 3.0));
+                if (t > 3.0 * (BC_PI / 3.0) / w && last >= 0 && c != last) { /* speed known since an edge */
+                    comm += 1;
+                    if (c != (last + 1) % 6) back += 1;
+                    CHECK(c == nominal % 6, "delay %d shift %+g: commanded %d, nominal sector %d", delay,
+                          shift / deg, c, nominal);
+                    if (into > worst) worst = into;
+                    if (into > step + 1e-3) late += 1;
+                }
+                last = c;
+                /* 5 degrees either side of the nominal boundary into sector 3 (7 pi/6) */
+                double rot = fmod(hs.theta0 + w * t, 2.0 * BC_PI);
+                if (t > 2.0 * (BC_PI / 3.0) / w && fabs(rot - (7.0 * BC_PI / 6.0 - 5.0 * deg)) < 0.5 * step) {
+                    CHECK(c == 2 && out.leg[0].mode == BC_LEG_OFF && out.leg[1].mode == BC_LEG_HIGH &&
+                              out.leg[2].mode == BC_LEG_LOW && out.diag[0] == 0.0f,
+                          "delay %d shift %+g: before the boundary b+ c- with a (F) open, normal: sector %g mode %g",
+                          delay, shift / deg, (double)out.diag[7], (double)out.diag[0]);
+                    if (sign < 0) { /* early edge: the nominal table already commutates, c outgoing */
+                        CHECK(out0.diag[7] == 3.0f && (delay || out0.diag[0] != 0.0f),
+                              "delay %d, nominal table: sector %g mode %g", delay, (double)out0.diag[7],
+                              (double)out0.diag[0]);
+                    }
+                }
+                if (t > 2.0 * (BC_PI / 3.0) / w && fabs(rot - (7.0 * BC_PI / 6.0 + 5.0 * deg)) < 0.5 * step) {
+                    CHECK(c == 3 && out.leg[1].mode == BC_LEG_HIGH && out.leg[0].mode == BC_LEG_LOW &&
+                              (delay || out.diag[0] != 0.0f),
+                          "delay %d shift %+g: past the boundary b+ a-, c (F) outgoing: sector %g mode %g", delay,
+                          shift / deg, (double)out.diag[7], (double)out.diag[0]);
+                    if (sign > 0) { /* late edge: the nominal table still drives b+ c- */
+                        CHECK(out0.diag[7] == 2.0f && out0.diag[0] == 0.0f,
+                              "delay %d, nominal table: sector %g mode %g", delay, (double)out0.diag[7],
+                              (double)out0.diag[0]);
+                    }
+                }
+            }
+            CHECK(comm >= 14 && back == 0, "delay %d shift %+g: %d back-steps in %d commutations", delay,
+                  shift / deg, back, comm);
+            CHECK(late == 0, "delay %d shift %+g: %d commutations more than a sample past the nominal boundary "
+                  "(worst %.2f deg)", delay, shift / deg, late, worst / deg);
+        }
+    }
+}
+
 int main(void)
 {
     test_shape();
@@ -971,6 +1057,7 @@ int main(void)
     test_switching_logic();
     test_safety();
     test_reversal();
+    test_table_commutation();
     test_closed_loop();
     return bc_test_summary("test_lu");
 }

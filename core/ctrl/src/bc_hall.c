@@ -209,3 +209,47 @@ void bc_hall_step(const bc_hall_params *p, bc_hall_state *s, const bc_ctrl_in *i
     out->omega_e = dir * omega;
     out->theta = wrap_2pi(edge_angle + dir * travel + p->theta_offset);
 }
+
+int bc_hall_commutate(const bc_hall_params *p, const bc_hall_out *h, const bc_ctrl_in *in, float lead, int advance,
+                      int prev, int32_t *seen, float *travel_out)
+{
+    /* the sector seen, or the next one when its Hall edge is due by the middle of the interval the output applies
+     * to (advance). A sector once commanded ahead of the sector seen is held until the Hall code moves: only a Hall
+     * edge ends it (forward: the sector seen catches up; backward: the rotor reversed). */
+    float w_abs = fabsf(h->omega_e);
+    float travel = -1.0f; /* angle travelled since the edge at the middle of that interval; < 0 unknown */
+    int sector = h->sector;
+    int held = !h->edge && h->sector == *seen && prev >= 0 && prev != h->sector;
+    if (h->speed_valid) {
+        float since = (float)(uint32_t)(in->tick_now - in->tick_edge) / p->f_tick;
+        travel = w_abs * (since + lead);
+    }
+    /* calibrated edges: o = how far the edge just crossed lies beyond the nominal one (bc_hall_entry_lead); the
+     * nominal boundary ahead is pi/3 - o away, and with o < 0 (an early edge) the first -o still belong to the
+     * previous nominal sector. Nominal table: o = 0, d_next = pi/3. */
+    float o = bc_hall_entry_lead(p, h->sector, h->dir);
+    float d_next = PI3_F - o;
+    int behind = p->table.set && h->dir != 0 && prev == (h->sector - h->dir + 6) % 6;
+    if (held && behind && advance) {
+        /* holding the previous sector after an early edge: move on at the nominal boundary (or without a speed) */
+        if (!h->speed_valid || travel >= -o) {
+            sector = h->sector;
+            travel = travel >= 0.0f ? travel + o : -1.0f;
+        } else {
+            sector = prev;
+            travel += PI3_F + o;
+        }
+    } else if (held) {
+        sector = prev;
+        travel = travel >= d_next ? travel - d_next : -1.0f;
+    } else if (advance && h->edge && behind && o < 0.0f && h->speed_valid && travel >= 0.0f && travel < -o) {
+        sector = prev; /* early edge: the commutation waits for the nominal boundary */
+        travel += PI3_F + o;
+    } else if (advance && h->speed_valid && h->dir != 0 && travel >= d_next) {
+        sector = (sector + (h->dir > 0 ? 1 : 5)) % 6;
+        travel -= d_next;
+    }
+    *seen = h->sector;
+    *travel_out = travel;
+    return sector;
+}

@@ -458,6 +458,8 @@ int bc_lu_init(const bc_lu_params *p, bc_lu_state *s)
     s->pred_plan = s->applied;
     s->pred_rising = 0;
     s->pred_speed = 0;
+    s->sector = -1;
+    s->seen = -1;
     return BC_OK;
 }
 
@@ -471,6 +473,8 @@ static void go_safe(bc_lu_state *s, bc_ctrl_out *out, uint32_t why)
     s->applied.kind = BC_LU_SAFE;
     s->applied.duty = 0.0f;
     s->pred_plan.kind = BC_LU_SAFE;
+    s->sector = -1;
+    s->seen = -1;
     bc_pi_reset(&s->pi_p, &s->pi, 0.0f);
 }
 
@@ -579,9 +583,21 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
         for (int k = 0; k < 3; ++k) i_pred[k] = x1.i[k];
     }
 
-    /* the pair: sector's pos/neg, swapped for a negative torque; F the third phase */
+    /* the sector commanded: the Hall sector seen (nominal table), or with a calibrated table the one whose nominal
+     * span holds the middle of the interval the new output applies to (bc_hall_commutate: at the nominal boundary,
+     * never back while the rotor turns one way) */
+    int sector = h.sector;
+    if (p->hall_table.set) {
+        float travel;
+        sector = bc_hall_commutate(&s->hall_p, &h, in, ((float)p->delay + 0.5f) * p->ts, 1, s->sector, &s->seen,
+                                   &travel);
+    }
+    s->sector = sector;
+    s->seen = h.sector;
+
+    /* the pair: the commanded sector's pos/neg, swapped for a negative torque; F the third phase */
     int pos = 0, neg = 1;
-    (void)bc_sector_phases(h.sector, &pos, &neg);
+    (void)bc_sector_phases(sector, &pos, &neg);
     if (t_ref < 0.0f) {
         int t = pos;
         pos = neg;
@@ -699,5 +715,5 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
     out->diag[1] = plan.duty;
     out->diag[3] = bc_lu_torque(&xp);
     out->diag[6] = x1.i[off];
-    out->diag[7] = (float)h.sector;
+    out->diag[7] = (float)sector;
 }

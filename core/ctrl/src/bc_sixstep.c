@@ -281,44 +281,11 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
     }
 
     /* commutation: the sector seen, or the next one when its Hall edge is due by the middle of the interval this
-     * output applies to (advance). A sector once commanded ahead of the sector seen is held until the Hall code
-     * moves: only a Hall edge ends it (forward: the sector seen catches up; backward: the rotor reversed). */
+     * output applies to (advance; at the nominal boundary with a calibrated table): bc_hall_commutate */
     float ts = p->ts;
     float lead = ((float)p->delay + 0.5f) * ts;
-    float w_abs = fabsf(h.omega_e);
-    float travel = -1.0f; /* angle travelled since the edge at the middle of that interval; < 0 unknown */
-    int sector = h.sector;
-    int held = !h.edge && h.sector == s->seen && s->sector >= 0 && s->sector != h.sector;
-    if (h.speed_valid) {
-        float since = (float)(uint32_t)(in->tick_now - in->tick_edge) / p->f_tick;
-        travel = w_abs * (since + lead);
-    }
-    /* calibrated edges: o = how far the edge just crossed lies beyond the nominal one (bc_hall_entry_lead); the
-     * nominal boundary ahead is pi/3 - o away, and with o < 0 (an early edge) the first -o still belong to the
-     * previous nominal sector. Nominal table: o = 0, d_next = pi/3. */
-    float o = bc_hall_entry_lead(&s->hall_p, h.sector, h.dir);
-    float d_next = PI3_F - o;
-    int behind = s->hall_p.table.set && h.dir != 0 && s->sector == (h.sector - h.dir + 6) % 6;
-    if (held && behind && p->advance) {
-        /* holding the previous sector after an early edge: move on at the nominal boundary (or without a speed) */
-        if (!h.speed_valid || travel >= -o) {
-            sector = h.sector;
-            travel = travel >= 0.0f ? travel + o : -1.0f;
-        } else {
-            sector = s->sector;
-            travel += PI3_F + o;
-        }
-    } else if (held) {
-        sector = s->sector;
-        travel = travel >= d_next ? travel - d_next : -1.0f;
-    } else if (p->advance && h.edge && behind && o < 0.0f && h.speed_valid && travel >= 0.0f && travel < -o) {
-        sector = s->sector; /* early edge: the commutation waits for the nominal boundary */
-        travel += PI3_F + o;
-    } else if (p->advance && h.speed_valid && h.dir != 0 && travel >= d_next) {
-        sector = (sector + (h.dir > 0 ? 1 : 5)) % 6;
-        travel -= d_next;
-    }
-    s->seen = h.sector;
+    float travel;
+    int sector = bc_hall_commutate(&s->hall_p, &h, in, lead, p->advance, s->sector, &s->seen, &travel);
     if (sector != s->sector) {
         int inc = -1;
         if (s->sector >= 0) {

@@ -115,7 +115,7 @@ def sine_pll_cal(drive: Drive, speed: float) -> Control:
 
 
 def lu_cal(drive: Drive, speed: float) -> Control:
-    """Paper 2's torque controller on the calibrated edge table."""
+    """Paper 2's torque controller on the calibrated edge table (commutation at the nominal angles)."""
     del speed
     return Lu(hall_table=calibrated_table(drive))
 

@@ -103,8 +103,9 @@ class Lu(Control):
         Time constant of the tracking loop in Hall edges (1 .. 1000).
     hall_table : sequence of float, optional
         Calibrated Hall edge angles (rad, electrical): 6 (both directions) or 12 (forward, then backward), e.g.
-        from :func:`bldclab.sim.hallcal.calibrate`; used for the angle, the speed and (six-step with ``advance``)
-        the commutation instant. ``None``: the nominal edges ``pi/6 + j pi/3``.
+        from :func:`bldclab.sim.hallcal.calibrate`; used for the angle, the speed and the commutation instant (the
+        pair changes at the nominal sector boundaries, as six-step's with ``advance``; ``sector`` is the sector
+        commanded). ``None``: the nominal edges ``pi/6 + j pi/3``, the pair changes with the Hall code.
     """
 
     method: Literal["lu", "lu-no-do", "rect"] = "lu"

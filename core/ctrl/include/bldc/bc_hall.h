@@ -119,8 +119,24 @@ void bc_hall_table_nominal(bc_hall_table *t);
 int bc_hall_table_check(const bc_hall_table *t);
 /* Angle (rad, within (-pi/6, pi/6)) by which the edge through which the rotor entered `sector` turning `dir`
  * (+1, -1) lies beyond the nominal edge in the direction of motion: dir (theta_edge - nominal); 0 for a nominal
- * table or an invalid sector/direction. Used by bc_sixstep to commutate at the nominal angle. */
+ * table or an invalid sector/direction. Used by bc_hall_commutate to commutate at the nominal angle. */
 float bc_hall_entry_lead(const bc_hall_params *p, int sector, int dir);
+/* The sector to command (bc_sixstep with advance, bc_lu with a table), from the decoder's output h of this sample,
+ * the sector commanded at the last call (prev, -1 none) and the sector seen then (*seen, set to h->sector here).
+ * lead (s): from this sample to the middle of the interval the output applies to ((delay + 1/2) T_s). With
+ * travel = |Omega_e| (t_k - t_edge + lead) (the angle since the edge by then, from the capture time of the last
+ * edge and in->tick_now) and o = bc_hall_entry_lead of the edge just crossed (0 for a nominal table):
+ *   - the next sector h.sector + dir is commanded once travel >= pi/3 - o (the nominal boundary ahead is due);
+ *   - after an early edge (o < 0, table set) the sector commanded before it is held while travel < -o (the rotor
+ *     is still in the previous nominal sector), then the sector seen follows;
+ *   - a sector commanded ahead of the sector seen is held until the Hall code moves (only an edge ends it: the
+ *     sector seen catches up, or the rotor reversed).
+ * So a commanded sector is only ever replaced by the next one in the direction of motion or by a Hall edge, never
+ * stepped back while the rotor turns one way. advance = 0: the sector seen (the table is ignored). *travel: the
+ * angle (rad) the rotor will have travelled into the returned sector's nominal span by the middle of that interval,
+ * < 0 if unknown (no speed estimate). */
+int bc_hall_commutate(const bc_hall_params *p, const bc_hall_out *h, const bc_ctrl_in *in, float lead, int advance,
+                      int prev, int32_t *seen, float *travel);
 void bc_hall_step(const bc_hall_params *p, bc_hall_state *s, const bc_ctrl_in *in, bc_hall_out *out);
 
 #endif /* BC_HALL_H */

@@ -3,8 +3,16 @@
  * methods it is compared with: torque control neglecting the finite DC bus (no D_o) and conventional rectangular
  * current control (float). Derivations and conventions: docs/theory-paper2.md.
  *
- * Notation. The Hall sector seen gives the phase driven positive and the one driven negative (bc_commutation.h;
- * no advance: the pair changes only with the Hall code, so it never steps back unless the rotor does). With
+ * Notation. The sector commanded gives the phase driven positive and the one driven negative (bc_commutation.h).
+ * With the nominal table (hall_table.set = 0) it is the Hall sector seen: no advance, the pair changes only with the
+ * Hall code, so it never steps back unless the rotor does. With a calibrated table (set = 1) the pair changes at the
+ * nominal sector boundary instead of the misplaced edge (bc_hall_commutate, the rule of bc_sixstep.h, "Calibrated
+ * edges", with advance): the next sector is commanded once the angle travelled since the Hall edge, at the middle
+ * of the interval the output applies to ((delay + 1/2) T_s after the sample), reaches the nominal boundary (a late
+ * edge: before the code moves); after an early edge the previous sector is held until the nominal boundary. A
+ * commanded sector is replaced only by the next one in the direction of motion or by a Hall edge, never stepped
+ * back. Everything below that uses the pair (P, N, the outgoing phase F, the commutation and D_o modes, RECT)
+ * follows the commanded sector. With
  * T* = in.ref (N m) >= 0 the pair is P = pos, N = neg; with T* < 0 the roles swap (reverse torque). F is the third
  * phase, whose leg is off (in a commutation: the outgoing phase). V = measured v_dc; Omega_e from bc_hall,
  * w = Omega_e / p (mechanical); theta from bc_hall (angle interpolated between Hall edges, paper 2 Figs 8-9).
@@ -126,7 +134,7 @@
  * the model's torque at the next sample (N m: under the new output with delay 0, under the output in force with
  * delay 1), [4] theta (rad),
  * [5] Omega_e (electrical rad/s), [6] i_F of the new output's off phase at the start of its interval (A),
- * [7] sector (-1 safe).
+ * [7] sector commanded (-1 safe).
  */
 #ifndef BC_LU_H
 #define BC_LU_H
@@ -205,6 +213,8 @@ typedef struct {
     bc_lu_plan pred_plan;  /* adaptation: the output the prediction assumed (SAFE: no prediction to check) */
     int32_t pred_rising;   /* adaptation: that interval was a rising half period (off part first) */
     int32_t pred_speed;    /* adaptation: the speed estimate was valid (the model's back-EMF is not 0) */
+    int32_t sector;        /* sector commanded by the last output (its pair), -1 none */
+    int32_t seen;          /* Hall sector seen at the last sample, -1 none */
 } bc_lu_state;
 
 /* An operating point at the start of a step: what the models and laws need. */

@@ -32,7 +32,8 @@
  * sector commanded before it is held while the travel since the edge is below -o (the rotor is still in the
  * previous nominal sector), then the sector seen follows. Both are monotone: a commanded sector is only ever
  * replaced by the next one in the direction of motion or by a Hall edge, never stepped back. With the nominal
- * table o = 0 and this is the rule above. advance = 0 ignores the table for the commutation.
+ * table o = 0 and this is the rule above. advance = 0 ignores the table for the commutation. The rule is
+ * bc_hall_commutate (bc_hall.h), shared with bc_lu, which applies it whenever it has a table.
  *
  * Regulated current. The phase x that entered the pair at the most recent commutation (the incoming phase: the
  * phase of the new pair that was not in the old one; the positive phase before the first commutation) is
