@@ -166,7 +166,7 @@ void bc_hall_step(const bc_hall_params *p, bc_hall_state *s, const bc_ctrl_in *i
     float dir = (float)s->dir;
     float edge_angle;
     if (tb->set) edge_angle = fwd ? tb->fwd[sector] : tb->bwd[(sector + 1) % 6];
-    else edge_angle = fwd ? bc_sector_angle(sector) : bc_sector_angle(sector) + BC_PI_F / 3.0f;
+    else edge_angle = bc_sector_angle(fwd ? sector : (sector + 1) % 6); /* backward: entered at its upper bound */
     out->speed_valid = 1;
     if (p->mode == BC_HALL_PLL) {
         if (!s->pll_on) { /* start: (46) at this edge */
@@ -203,11 +203,18 @@ void bc_hall_step(const bc_hall_params *p, bc_hall_state *s, const bc_ctrl_in *i
         out->theta = wrap_2pi(edge_angle + dir * rel + p->theta_offset);
         return;
     }
-    /* never beyond the next edge; once the edge is overdue exactly at it (omega since would round either side) */
+    /* never beyond the next edge; once the edge is overdue exactly at it (omega since would round either side).
+     * "At it" is the next sector's own entry angle, computed by the same expression as its edge_angle above (not
+     * edge_angle + w_cur, which can round one ulp past it): the angle then never steps back, not even by rounding,
+     * when the edge moves it into the next sector. */
+    float next;
+    if (fwd) next = tb->set ? tb->fwd[(sector + 1) % 6] : bc_sector_angle((sector + 1) % 6);
+    else next = tb->set ? tb->bwd[sector] : bc_sector_angle(sector);
     float travel = overdue ? w_cur : omega * since;
-    if (travel > w_cur) travel = w_cur;
+    float theta = edge_angle + dir * travel;
+    if (travel >= w_cur || dir * wrap_pm(next - theta) < 0.0f) theta = next;
     out->omega_e = dir * omega;
-    out->theta = wrap_2pi(edge_angle + dir * travel + p->theta_offset);
+    out->theta = wrap_2pi(theta + p->theta_offset);
 }
 
 int bc_hall_commutate(const bc_hall_params *p, const bc_hall_out *h, const bc_ctrl_in *in, float lead, int advance,
