@@ -420,8 +420,8 @@ int bc_lu_init(const bc_lu_params *p, bc_lu_state *s)
         if (!isfinite(v[j])) return BC_ERR_PARAM;
     }
     if (!(p->L > 0.0f) || p->R < 0.0f || !(p->ts > 0.0f) || !(p->i_max > 0.0f) || p->i_zero < 0.0f ||
-        !(p->i_zero < p->i_max) || !(p->v_max > 0.0f) || !(p->k_phi > 0.0f) || p->kp < 0.0f || p->ki < 0.0f || p->l_adapt < 0.0f ||
-        p->l_adapt > 1.0f)
+        !(p->i_zero < p->i_max) || !(p->v_max > 0.0f) || !(p->k_phi > 0.0f) || p->kp < 0.0f || p->ki < 0.0f ||
+        p->l_adapt < 0.0f || p->l_adapt > 1.0f)
         return BC_ERR_PARAM;
     float f_max = 0.0f;
     for (int x = 0; x < 3; ++x) {
@@ -479,7 +479,7 @@ static void go_safe(bc_lu_state *s, bc_ctrl_out *out, uint32_t why)
 }
 
 /* Inductance adaptation (see the header): compare the last step's predicted rise of the pair current with the
- * measured one, where the interval started with the pair at zero current and F open. */
+ * measured one, over a rising half period in normal conduction (F open at both ends) with a valid speed. */
 static void adapt_l(const bc_lu_params *p, bc_lu_state *s, const float i_now[3])
 {
     const bc_lu_plan *q = &s->pred_plan;
