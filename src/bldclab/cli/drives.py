@@ -15,6 +15,7 @@ RPM_PER_RAD_S = 30.0 / math.pi
 #: Where each built-in drive's numbers come from (its motor file's description says it in full).
 SOURCES: dict[str, str] = {
     "htm-48v": "paper 1 (Bertoluzzo et al. 2015) Table II",
+    "htm-48v-losses": "htm-48v + onsemi NTB5860NL, M270-35A losses",
     "lu-4kw": "paper 2 (Lu et al. 2008) appendix; synthetic back-EMF",
     "outrunner-24v": "Mini Cheetah firmware (B. Katz)",
     "servo-2k2": "motulator examples (Aalto Univ.)",

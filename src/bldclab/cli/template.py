@@ -57,6 +57,11 @@ FIELDS: dict[tuple[str, str], str] = {
     ("inverter", "R_src"): "Ohm: DC source internal resistance",
     ("inverter", "i_trip"): "A: hardware over-current trip, latched (0: none)",
     ("inverter", "model"): "switching (every gate edge) or average (half-period averages, no PWM ripple)",
+    ("inverter", "E_on"): "J: switch turn-on energy at V_test, I_test (datasheet; or give t_rise instead)",
+    ("inverter", "E_off"): "J: switch turn-off energy at V_test, I_test (or t_fall)",
+    ("inverter", "E_rr"): "J: diode reverse-recovery energy at V_test, I_test (or Q_rr)",
+    ("inverter", "V_test"): "V: test voltage of the switching energies",
+    ("inverter", "I_test"): "A: test current of the switching energies",
     ("motor.cogging", "orders"): "harmonic orders n_j in the mechanical angle (integers >= 1)",
     ("motor.cogging", "amplitudes"): "N m: amplitudes A_j of sum_j A_j sin(n_j theta_m + phi_j)",
     ("motor.cogging", "phases"): "rad: phases phi_j",
@@ -93,7 +98,13 @@ _OPTIONAL: dict[str, list[str]] = {
                   "# amplitudes = [0.3] # A_j: N m",
                   "# phases = [0.0]     # phi_j: rad"],
     "inverter": ["# model: switching (every gate edge) or average (half-period averages, no PWM ripple)",
-                 '# model = "switching"'],
+                 '# model = "switching"',
+                 "# switching losses (optional, default none): datasheet energies at a test point, or times instead",
+                 '# E_on = "40 uJ"  # J: turn-on energy at V_test, I_test (or t_rise = "58 ns")',
+                 '# E_off = "60 uJ"  # J: turn-off energy (or t_fall = "144 ns")',
+                 '# E_rr = "3 uJ"  # J: diode reverse-recovery energy (or Q_rr = "71 nC")',
+                 '# V_test = "48 V"  # V: test voltage of the energies',
+                 '# I_test = "100 A"  # A: test current of the energies'],
 }
 
 _KEY = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)\s*=")
@@ -129,6 +140,8 @@ def template(source: str) -> str:
             line.startswith((f"# {k} =", f"# {k}:")) for k in present)]
         if tbl == "motor.emf" and drive.motor.cogging is not None:
             extra = []
+        if tbl == "inverter" and "E_on" in present:
+            extra = [line for line in extra if not line.startswith("# switching losses")]
         if extra:
             out.extend(extra)
 

@@ -21,6 +21,7 @@ from .._files import read_toml
 from ..errors import BldclabError
 from ._checks import check_number
 from .emf import PHASES, BackEmf, Cogging
+from .iron import SteelGrade
 from .motorfile import Section, cogging_table, emf_tables, read_cogging, read_emf, toml_table, wrap
 from .units import to_si
 
@@ -207,6 +208,31 @@ class Motor:
         return dataclasses.replace(self, P_fe_eddy=k_e * w**2 * self.emf.mean_abs_power(2.0),
                                    P_fe_hyst=k_h * self.p * w, P_fe_ex=k_x * w**1.5 * self.emf.mean_abs_power(1.5),
                                    speed_fe_ref=w)
+
+    def with_iron_from_grade(self, grade: SteelGrade, *, mass: float, B_peak: float,
+                             speed_ref: float | None = None) -> Motor:
+        """Return the motor with its iron-loss fields from a standard steel grade (:class:`~.iron.SteelGrade`).
+
+        :meth:`with_iron_from_material` with the grade's separated terms (:meth:`SteelGrade.terms`: classical eddy
+        from the sheet's thickness, resistivity and density; hysteresis, with the excess folded in, fitted to the
+        grade's 1.0 T and 1.5 T losses at 50 Hz).
+
+        Parameters
+        ----------
+        grade : SteelGrade
+            The core's steel, e.g. ``bldclab.model.iron.M270_35A``.
+        mass : float
+            Core (stator iron) mass (kg), > 0.
+        B_peak : float
+            Peak flux density in the core at no load (T), > 0.
+        speed_ref : float, optional
+            Reference speed of the returned powers (rad/s), > 0; default the rated speed ``Omega_nominal``.
+
+        Returns
+        -------
+        Motor
+        """
+        return self.with_iron_from_material(mass=mass, B_peak=B_peak, speed_ref=speed_ref, **grade.terms())
 
     def iron_loss(self, omega: float) -> float:
         """Return the mean iron loss (W) the plant books at a constant mechanical speed ``omega`` (rad/s), any load.

@@ -1,10 +1,11 @@
 """Built-in drives: motor files shipped with bldclab.
 
-``htm-48v``: paper 1 Table II. ``lu-4kw``: paper 2 appendix with a synthetic non-ideal back-EMF (see
-:mod:`bldclab.model.catalog.synthetic` for how it is made). ``outrunner-24v``: a 24 V, 21-pole-pair outrunner with a
-sinusoidal back-EMF, from the motor parameters of Ben Katz's open-source Mini Cheetah motor-controller firmware.
-``servo-2k2``: a 540 V, 2.2 kW PMSM with a sinusoidal back-EMF and 51 mH, from the motulator examples. Each file
-cites the source of every number and says which are assumed (``docs/motor-files.md``).
+``htm-48v``: paper 1 Table II. ``htm-48v-losses``: the same drive with the losses of a real inverter (onsemi NTB5860NL
+MOSFETs, datasheet values) and core (EN 10106 grade M270-35A). ``lu-4kw``: paper 2 appendix with a synthetic non-ideal
+back-EMF (see :mod:`bldclab.model.catalog.synthetic` for how it is made). ``outrunner-24v``: a 24 V, 21-pole-pair
+outrunner with a sinusoidal back-EMF, from the motor parameters of Ben Katz's open-source Mini Cheetah
+motor-controller firmware. ``servo-2k2``: a 540 V, 2.2 kW PMSM with a sinusoidal back-EMF and 51 mH, from the
+motulator examples. Each file cites the source of every number and says which are assumed (``docs/motor-files.md``).
 """
 
 from __future__ import annotations
