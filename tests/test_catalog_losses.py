@@ -10,10 +10,12 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
+from pathlib import Path
 
 import pytest
 
 import bldclab as bl
+from bldclab import cli
 from bldclab.analysis.experiments import steady_state
 from bldclab.analysis.losses import point_losses
 from bldclab.errors import BldclabError, PlausibilityWarning
@@ -52,7 +54,8 @@ def test_every_number_follows_its_source() -> None:
     want = base.motor.with_iron_from_grade(M270_35A, mass=CORE_MASS, B_peak=B_PEAK)
     assert d.motor.speed_fe_ref == pytest.approx(base.motor.Omega_nominal, rel=1e-12)
     for f in ("P_fe_eddy", "P_fe_hyst", "P_fe_ex"):
-        assert getattr(d.motor, f) == pytest.approx(getattr(want, f), rel=1e-6, abs=1e-12), f
+        assert getattr(d.motor, f) == pytest.approx(getattr(want, f), rel=1e-12, abs=1e-15), f
+    assert d.motor.P_fe_hyst > 0.0 and d.motor.P_fe_eddy > 0.0
     # the ideal drive stays paper 1's idealisation
     assert (base.inverter.R_on, base.inverter.E_on, base.motor.P_fe_hyst) == (0.0, 0.0, 0.0)
 
@@ -148,3 +151,63 @@ def test_synchronous_chopping_removes_the_square_waves_diode_loss() -> None:
     assert b["p_diode"] < 0.1 * a["p_diode"]
     assert b["efficiency"] > a["efficiency"] + 0.01
     assert pt_s.tau_mean_pu == pytest.approx(pt.tau_mean_pu, abs=0.01)
+
+
+IRON_FILE = """\
+[motor]
+p = 8
+R = "45.2 mOhm"
+L = "75 uH"
+V_N = "48 V"
+I_N = "50 A"
+Omega_N = "640 rpm"
+{extra_motor}
+[motor.emf]
+kind = "trapezoid"
+k_phi = "0.32 V s/rad"
+
+[motor.iron]
+{iron}
+
+[inverter]
+V_dc = "48 V"
+f_pwm = "14 kHz"
+"""
+DATA = ('P10 = "1.10 W/kg"\nP15 = "2.70 W/kg"\nthickness = "0.35 mm"\ndensity = "7.65 kg/dm^3"\n'
+        'resistivity = "0.52 uOhm m"\nmass = "2 kg"\nB_peak = "1.4 T"')
+
+
+def _iron_file(tmp_path: Path, iron: str, extra_motor: str = "") -> Path:
+    f = tmp_path / "iron.toml"
+    f.write_text(IRON_FILE.format(iron=iron, extra_motor=extra_motor))
+    return f
+
+
+def test_motor_iron_table_by_name_and_by_data(tmp_path: Path) -> None:
+    """``[motor.iron]`` with the built-in grade's name and with the same grade's data give the same drive; it is
+    written back as the P_fe_* powers, which load to the same drive."""
+    by_name = bl.load(_iron_file(tmp_path, 'grade = "M270-35A"\nmass = "2 kg"\nB_peak = "1.4 T"'))
+    by_data = bl.load(_iron_file(tmp_path, DATA))
+    assert by_name.motor.P_fe_hyst > 0.0 and by_name == by_data
+    back = tmp_path / "back.toml"
+    back.write_text(by_name.to_toml())
+    assert "[motor.iron]" not in back.read_text() and bl.load(back) == by_name
+
+
+@pytest.mark.parametrize(("iron", "extra", "field"), [
+    (DATA.replace('"2.70 W/kg"', '"1.2 W/kg"'), "", "motor.iron.P15"),
+    (DATA.replace('"0.52 uOhm m"', '"0.02 uOhm m"'), "", "motor.iron.resistivity"),
+    (DATA.replace('"2 kg"', '"-2 kg"'), "", "motor.iron.mass"),
+    (DATA.replace('"1.4 T"', '"1.4 V"'), "", "motor.iron.B_peak"),
+    (DATA.replace('thickness = "0.35 mm"\n', ""), "", "motor.iron.thickness"),
+    ('grade = "M270-35A"\n' + DATA, "", "motor.iron.P10"),
+    ('grade = "M999-35A"\nmass = "2 kg"\nB_peak = "1.4 T"', "", "motor.iron.grade"),
+    ('grade = "M270-35A"\nmass = "2 kg"\nB_peak = "1.4 T"\nB_pk = "1 T"', "", "motor.iron.B_pk"),
+    ('grade = "M270-35A"\nmass = "2 kg"\nB_peak = "1.4 T"', "P_fe_hyst = 1.0", "motor.P_fe_hyst"),
+])
+def test_bad_motor_iron_table_exits_2_naming_the_field(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                        iron: str, extra: str, field: str) -> None:
+    f = _iron_file(tmp_path, iron, extra)
+    assert cli.main(["check", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert f"{field}:" in err and err.count("\n") == 1, err

@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 from bldclab.errors import BldclabError
 from bldclab.model import catalog
 from bldclab.model.emf import TWO_PI, BackEmf, Cogging, Fourier, Sinusoid, Table, Trapezoid
+from bldclab.model.iron import M270_35A
 from bldclab.model.motor import Drive, Inverter, Mechanics, Motor, Sensors
 from bldclab.model.units import ALIASES, DIMENSIONS, to_si
 
@@ -772,7 +773,7 @@ def test_to_si_rejects(value: object, words: str) -> None:
 def test_aliases_only_map_to_known_spellings() -> None:
     known = {u for us in DIMENSIONS.values() for u in us}
     assert any("Ohm" in u for u in known) and any(u.startswith("u") for u in known)
-    assert set(ALIASES.values()) <= {"u", "Ohm", " ", "^2"}
+    assert set(ALIASES.values()) <= {"u", "Ohm", " ", "^2", "^3"}
 
 
 def test_htm48v_file_units() -> None:
@@ -983,8 +984,15 @@ def test_doc_examples_load(tmp_path: Path) -> None:
     assert trapezoid.sensors.hall_error[1] == pytest.approx(1.5 * math.pi / 180)
     assert all(isinstance(s, Table) and len(s.theta) == 24 for s in table.motor.emf.shapes)
     assert not table.motor.emf.is_symmetric
-    snippets = [b for b in blocks if "[motor]" not in b and "[inverter]" not in b]
+    snippets = [b for b in blocks if "[motor]" not in b and "[inverter]" not in b and "[motor.iron]" not in b]
     assert len(snippets) == 1
+    # the [motor.iron] example: a built-in grade, core mass and flux density give with_iron_from_grade's powers
+    irons = [b for b in blocks if "[motor.iron]" in b]
+    assert len(irons) == 1
+    iron = Drive.from_toml(write(tmp_path, BASE + "\n" + irons[0] + "\n", "iron.toml")).motor
+    plain = Drive.from_toml(write(tmp_path, BASE, "plain.toml")).motor
+    want = plain.with_iron_from_grade(M270_35A, mass=2.0, B_peak=1.4)
+    assert (iron.P_fe_eddy, iron.P_fe_hyst, iron.speed_fe_ref) == (want.P_fe_eddy, want.P_fe_hyst, want.speed_fe_ref)
     # the [inverter] example with rise and fall times: 48 V 50 A 20 ns / 2 = 24 uJ at the defaults V_dc, I_N
     inverters = [b for b in blocks if "[inverter]" in b and "[motor]" not in b]
     assert len(inverters) == 1

@@ -91,7 +91,9 @@ _OPTIONAL: dict[str, list[str]] = {
               "# P_fe_eddy = 0.0  # W: iron loss (optional, default none), eddy-current part at speed_fe_ref",
               "# P_fe_hyst = 0.0  # W: iron loss, hysteresis part at speed_fe_ref",
               "# P_fe_ex = 0.0  # W: iron loss, excess part at speed_fe_ref",
-              '# speed_fe_ref = "3000 rpm"  # rad/s: speed of the iron-loss data'],
+              '# speed_fe_ref = "3000 rpm"  # rad/s: speed of the iron-loss data',
+              "# (or, instead of P_fe_*: a [motor.iron] table, a steel grade with core mass and flux density: "
+              "docs/motor-files.md)"],
     "motor.emf": ["", "# [motor.cogging]  # optional: cogging torque sum_j A_j sin(n_j theta_m + phi_j), theta_m the "
                   "mechanical angle",
                   "# orders = [48]      # n_j: harmonic orders in the mechanical angle (integers >= 1)",

@@ -21,7 +21,7 @@ from .._files import read_toml
 from ..errors import BldclabError
 from ._checks import check_number
 from .emf import PHASES, BackEmf, Cogging
-from .iron import SteelGrade
+from .iron import GRADES, SteelGrade
 from .motorfile import Section, cogging_table, emf_tables, read_cogging, read_emf, toml_table, wrap
 from .units import to_si
 
@@ -680,6 +680,12 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
     cs = ms.sub("cogging")
     if cs is not None:
         cog = read_cogging(cs)
+    iron_s = ms.sub("iron")
+    given_p = [k for k in Motor.IRON_LOSS_FIELDS if ms.has(k)]
+    if iron_s is not None and given_p:
+        raise BldclabError(ms.name(given_p[0]), f"cannot be given with {iron_s.prefix}: give the iron losses as "
+                           "powers (P_fe_eddy, P_fe_hyst, P_fe_ex at speed_fe_ref) or as a steel grade, core mass "
+                           "and flux density ([motor.iron]), not both")
     motor = wrap("motor", Motor, p=ms.integer("p"), R=ms.quantity("R", "resistance"),
                   L=ms.quantity("L", "inductance"), emf=emf, V_N=ms.quantity("V_N", "voltage"),
                   I_N=ms.quantity("I_N", "current"), Omega_N=ms.quantity("Omega_N", "speed", None),
@@ -687,6 +693,8 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
                   P_fe_eddy=ms.quantity("P_fe_eddy", "power", 0.0), P_fe_hyst=ms.quantity("P_fe_hyst", "power", 0.0),
                   P_fe_ex=ms.quantity("P_fe_ex", "power", 0.0),
                   speed_fe_ref=ms.quantity("speed_fe_ref", "speed", None))
+    if iron_s is not None:
+        motor = _iron_from_table(iron_s, motor)
     ms.finish()
 
     inv_s = top.sub("inverter")
@@ -741,6 +749,45 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
     top.finish()
     return Drive(motor=motor, inverter=inverter, mechanics=mech, sensors=sensors, name=name,
                  description=description)
+
+
+#: ``[motor.iron]`` keys of a steel grade given by its data instead of a built-in name (:class:`.iron.SteelGrade`).
+GRADE_FIELDS: dict[str, str] = {"P10": "specific_power", "P15": "specific_power", "thickness": "length",
+                                "density": "density", "resistivity": "resistivity"}
+
+
+def _iron_from_table(sec: Section, motor: Motor) -> Motor:
+    """Return ``motor`` with its iron-loss fields from a ``[motor.iron]`` table: a steel grade, core mass, flux.
+
+    The grade is a built-in name (``grade = "M270-35A"``, :data:`.iron.GRADES`) or its five data
+    (:data:`GRADE_FIELDS`); the result is :meth:`Motor.with_iron_from_grade`, and the file is written back with
+    the ``P_fe_*`` fields it gives (as rise and fall times are written back as energies).
+    """
+    given_data = [k for k in GRADE_FIELDS if sec.has(k)]
+    if sec.has("grade") and given_data:
+        raise BldclabError(sec.name(given_data[0]), f"cannot be given with {sec.name('grade')}: name a built-in "
+                           f"grade ({', '.join(GRADES)}) or give its data ({', '.join(GRADE_FIELDS)}), not both")
+    if sec.has("grade"):
+        key = sec.string("grade")
+        if key not in GRADES:
+            raise BldclabError(sec.name("grade"), f"unknown grade {key!r}: built in are {', '.join(GRADES)}; "
+                               f"another grade is given by its data ({', '.join(GRADE_FIELDS)})")
+        grade = GRADES[key]
+    else:
+        data = {k: sec.quantity(k, dim) for k, dim in GRADE_FIELDS.items()}
+    mass = sec.quantity("mass", "mass")
+    B_peak = sec.quantity("B_peak", "flux_density")
+    speed_ref = sec.quantity("speed_ref", "speed", None)
+    sec.finish()
+    try:
+        if not sec.has("grade"):
+            grade = SteelGrade(name="user grade", source="motor file", **data)
+        return motor.with_iron_from_grade(grade, mass=mass, B_peak=B_peak, speed_ref=speed_ref)
+    except BldclabError as exc:
+        field, problem = exc.field.split(".", 1)[-1], exc.problem
+        if field == "alpha":  # the fitted hysteresis exponent: the two losses do not fit a silicon steel
+            field, problem = "P15", f"with P10 gives a hysteresis exponent that {problem}"
+        raise BldclabError(sec.name(field), problem) from None
 
 
 def _inverter_energies(inv_s: Section, motor: Motor) -> dict[str, float]:

@@ -32,12 +32,18 @@ DIMENSIONS: dict[str, dict[str, float]] = {
     "power": {"W": 1.0, "kW": 1e3},
     "energy": {"J": 1.0, "mJ": 1e-3, "uJ": 1e-6, "nJ": 1e-9},
     "charge": {"C": 1.0, "mC": 1e-3, "uC": 1e-6, "nC": 1e-9},
+    "mass": {"kg": 1.0, "g": 1e-3},
+    "length": {"m": 1.0, "mm": 1e-3, "um": 1e-6},
+    "flux_density": {"T": 1.0, "mT": 1e-3},
+    "density": {"kg/m^3": 1.0, "kg/dm^3": 1e3, "g/cm^3": 1e3},
+    "resistivity": {"Ohm m": 1.0, "uOhm m": 1e-6, "uOhm cm": 1e-8, "Ohm mm^2/m": 1e-6},
+    "specific_power": {"W/kg": 1.0},
     "dimensionless": {"": 1.0},
 }
 
 #: Spellings accepted inside a unit and what they stand for ("75 µH", "50 mΩ", "0.32 V·s/rad", "kg·m²").
 ALIASES: dict[str, str] = {"\u00b5": "u", "\u03bc": "u", "\u2126": "Ohm", "\u03a9": "Ohm", "\u00b7": " ",
-                           "\u22c5": " ", "\u00b2": "^2"}
+                           "\u22c5": " ", "\u00b2": "^2", "\u00b3": "^3"}
 
 _NUM = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
 
