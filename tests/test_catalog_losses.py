@@ -13,6 +13,8 @@ import warnings
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import bldclab as bl
 from bldclab import cli
@@ -211,3 +213,23 @@ def test_bad_motor_iron_table_exits_2_naming_the_field(tmp_path: Path, capsys: p
     assert cli.main(["check", str(f)]) == 2
     err = capsys.readouterr().err
     assert f"{field}:" in err and err.count("\n") == 1, err
+
+
+@given(P10=st.floats(0.3, 10.0), ratio=st.floats(1.0, 4.0), d_mm=st.floats(0.05, 1.0),
+       density=st.floats(6500.0, 8200.0), rho_uohm=st.floats(0.1, 1.0))
+@settings(max_examples=300, deadline=None)
+def test_any_grade_either_reproduces_its_losses_or_names_the_field(P10: float, ratio: float, d_mm: float,
+                                                                     density: float, rho_uohm: float) -> None:
+    """Grades drawn at random: the separation reproduces both specified losses with finite, non-negative terms,
+    or it is one error naming the grade field at fault; never a NaN."""
+    g = SteelGrade("random", P10=P10, P15=P10 * ratio, thickness=d_mm * 1e-3, density=density,
+                   resistivity=rho_uohm * 1e-6)
+    try:
+        t = g.terms()
+    except BldclabError as exc:
+        assert exc.field in ("grade.resistivity", "grade.alpha")
+        return
+    assert all(math.isfinite(v) and v >= 0.0 for v in t.values())
+    assert 1.0 <= t["alpha"] <= 3.0
+    assert t["p_hyst"] + t["p_eddy"] == pytest.approx(P10, rel=1e-9)
+    assert t["p_hyst"] * 1.5 ** t["alpha"] + 2.25 * t["p_eddy"] == pytest.approx(P10 * ratio, rel=1e-9)
