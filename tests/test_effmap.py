@@ -229,3 +229,24 @@ def test_cli_second_run_uses_its_store(tmp_path, capsys, monkeypatch):
         main([*argv, "--no-store"])
     assert main([*argv, "--store", str(tmp_path / "none" / "s.sqlite")]) == 2
     assert "--store" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_cli_chopping_changes_only_the_square_wave_and_its_stored_points(tmp_path, capsys):
+    """``--chopping sync`` maps the square wave with a complementary positive leg: on the drive with real diodes its
+    diode loss falls (no freewheeling through a diode in the off-time), the sinusoidal points are the same bytes and
+    come from the store; the square-wave points are new ones (the chopping is part of the stored point's key)."""
+    out = tmp_path / "map"
+    argv = ["effmap", "htm-48v-losses", "--torques", "2", "--speeds", "2", "--workers", "1", "--out", str(out),
+            "--min-speed", "0.2", "--max-speed", "0.5"]
+    assert main(argv) == 0
+    default = pd.read_csv(out / "effmap.csv")
+    capsys.readouterr()
+    assert main([*argv, "--chopping", "sync"]) == 0
+    text = capsys.readouterr().out
+    assert "4 of 8 points found there, 4 simulated" in text and "sync chopping" in text
+    sync = pd.read_csv(out / "effmap.csv")
+    sq0, sq1 = default[default.supply == "square"], sync[sync.supply == "square"]
+    assert sq1.p_diode.sum() < 0.2 * sq0.p_diode.sum()
+    assert (sq1.efficiency.to_numpy() > sq0.efficiency.to_numpy()).all()
+    pd.testing.assert_frame_equal(default[default.supply == "sine"], sync[sync.supply == "sine"])

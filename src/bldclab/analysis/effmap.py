@@ -73,7 +73,7 @@ SUPPLIES = ("square", "sine")
 _RPM = 30.0 / math.pi
 
 
-def map_controls(drive: Drive, lowest_speed: float) -> dict[str, Control]:
+def map_controls(drive: Drive, lowest_speed: float, chopping: str = "pwm-on-pwm") -> dict[str, Control]:
     """Return the controllers of the map, both taking a torque reference (N m).
 
     Parameters
@@ -82,14 +82,17 @@ def map_controls(drive: Drive, lowest_speed: float) -> dict[str, Control]:
     lowest_speed : float
         Lowest speed of the map (rad/s): the sinusoidal controller hands off from its square-wave start at half of
         it, so every point measures the sinusoidal supply (as :func:`bldclab.analysis.compare.default_controls`).
+    chopping : str
+        The square wave's chopping pattern (:data:`bldclab.control.sixstep.CHOPPINGS`).
 
     Returns
     -------
     dict
-        ``{"square": SixStep(reference="torque"), "sine": Sine(handoff_speed=...)}``.
+        ``{"square": SixStep(reference="torque", chopping=...), "sine": Sine(handoff_speed=...)}``.
     """
     del drive  # the controllers configure themselves from the drive when they run
-    return {"square": SixStep(reference="torque"), "sine": Sine(handoff_speed=0.5 * abs(lowest_speed))}
+    return {"square": SixStep(reference="torque", chopping=chopping),  # type: ignore[arg-type]  # checked by SixStep
+            "sine": Sine(handoff_speed=0.5 * abs(lowest_speed))}
 
 
 #: One operating point of a map: drive, supply, controller, torque reference (N m), speed (rad/s), loss buckets.

@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from .._files import write_files
-from ..analysis.effmap import FEASIBLE_TOL_PU, efficiency_map
+from ..analysis.effmap import FEASIBLE_TOL_PU, efficiency_map, map_controls
+from ..control.sixstep import CHOPPINGS
 from ..errors import BldclabError
 from ..report.effmap_plots import plot_difference, plot_efficiency_maps, plot_losses
 from ..report.plots import figure_bytes
@@ -40,6 +41,9 @@ def configure_command(p: argparse.ArgumentParser) -> None:
                        help="results store (a sweep store: SQLite file, or a directory to hold effmap.sqlite; "
                             "default: effmap.sqlite in --out): points in it are not simulated again")
     store.add_argument("--no-store", action="store_true", help="keep no store: simulate every point")
+    p.add_argument("--chopping", choices=CHOPPINGS, default="pwm-on-pwm",
+                   help="square-wave supply's chopping pattern (default pwm-on-pwm; sync: the positive leg "
+                        "complementary, no freewheeling through a diode in the off-time)")
     add_inverter_option(p)
 
 
@@ -69,17 +73,20 @@ def run_command(args: argparse.Namespace) -> int:
     sign = -1.0 if args.generating else 1.0
     torques = sign * np.linspace(args.min_torque, args.max_torque, args.torques) * drive.T_N
     speeds = np.linspace(args.min_speed, args.max_speed, args.speeds) * drive.Omega_0
+    controls = map_controls(drive, float(np.min(speeds)), args.chopping)
     if args.no_store:
-        res = efficiency_map(drive, torques, speeds, workers=args.workers)
+        res = efficiency_map(drive, torques, speeds, workers=args.workers, controls=controls)
     else:
         path = _store_path(out, args.store)
         path.parent.mkdir(parents=True, exist_ok=True)
         with Store(path) as st:
-            res = efficiency_map(drive, torques, speeds, workers=args.workers, cache=EffMapStore(st))
+            res = efficiency_map(drive, torques, speeds, workers=args.workers, controls=controls,
+                                 cache=EffMapStore(st))
         print(f"store {path}: {res.cached} of {len(res.points)} points found there, "
               f"{len(res.points) - res.cached} simulated")
     mode = "generating (braking)" if args.generating else "motoring"
-    print(f"{drive.name}: efficiency map, {mode}, {args.torques} torques x {args.speeds} speeds x 2 supplies in "
+    print(f"{drive.name}: efficiency map, {mode}, {args.torques} torques x {args.speeds} speeds x 2 supplies "
+          f"(square wave: {args.chopping} chopping) in "
           f"{res.seconds:.1f} s (T_N = {drive.T_N:.4g} N m, Omega_0 = {drive.Omega_0 * RPM_PER_RAD_S:.4g} rpm; a "
           f"point is feasible when its mean torque is within {FEASIBLE_TOL_PU:g} T_N of the reference)")
     for line in res.summary():

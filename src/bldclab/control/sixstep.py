@@ -22,13 +22,16 @@ from ..model.motor import Drive
 from .base import Control, check_number
 from .hall import check_hall_options, hall_record, normalize_table
 
-__all__ = ["SixStep"]
+__all__ = ["CHOPPINGS", "SixStep"]
 
 # the settings' C constants (values read from the library: bldclab._core)
 _REG = {"pi": "BC_SIXSTEP_PI", "hysteresis": "BC_SIXSTEP_HYST", "predictive": "BC_SIXSTEP_PRED"}
 _CHOP = {"bipolar": "BC_SIXSTEP_BIPOLAR", "high": "BC_SIXSTEP_HIGH", "pwm-on-pwm": "BC_SIXSTEP_PWMPWM",
          "sync": "BC_SIXSTEP_SYNC"}
 _REF = {"current": 0, "torque": 1}  # ref_torque, a 0/1 switch
+
+#: The chopping patterns of :class:`SixStep` (its ``chopping`` field).
+CHOPPINGS: tuple[str, ...] = tuple(_CHOP)
 
 
 @dataclass(frozen=True)
