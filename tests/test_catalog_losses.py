@@ -8,10 +8,13 @@ checked against the lamination's own physics and, through the plant, against the
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import warnings
 from pathlib import Path
+from typing import Any
 
+import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -233,3 +236,27 @@ def test_any_grade_either_reproduces_its_losses_or_names_the_field(P10: float, r
     assert 1.0 <= t["alpha"] <= 3.0
     assert t["p_hyst"] + t["p_eddy"] == pytest.approx(P10, rel=1e-9)
     assert t["p_hyst"] * 1.5 ** t["alpha"] + 2.25 * t["p_eddy"] == pytest.approx(P10 * ratio, rel=1e-9)
+
+
+@pytest.mark.slow
+def test_compare_chopping_runs_the_square_wave_so_and_says_so(tmp_path: Path,
+                                                              capsys: pytest.CaptureFixture[str]) -> None:
+    """``compare --chopping sync``: the square wave's diode loss falls, the sinusoidal rows are unchanged, and the
+    manifest (its controllers and the command that reproduces the run) says which chopping ran."""
+    def run(*extra: str) -> tuple[pd.DataFrame, dict[str, Any]]:
+        out = tmp_path / ("sync" if extra else "default")
+        argv = ["compare", "htm-48v-losses", "--speeds", "2", "--min-speed", "0.2", "--max-speed", "0.5",
+                "--workers", "1", "--no-report", "--out", str(out), *extra]
+        assert cli.main(argv) == 0
+        capsys.readouterr()
+        return pd.read_csv(out / "efficiency.csv"), json.loads((out / "manifest.json").read_text())
+
+    e0, m0 = run()
+    e1, m1 = run("--chopping", "sync", "--pwm-phases", "2", "--inverter", "switching")
+    sq0, sq1 = e0[e0.supply == "square"], e1[e1.supply == "square"]
+    assert sq1.p_diode.sum() < 0.2 * sq0.p_diode.sum()
+    assert (sq1.eta_sim_full.to_numpy() > sq0.eta_sim_full.to_numpy()).all()
+    assert m0["supplies"]["square"]["settings"]["chopping"] == "pwm-on-pwm"
+    assert m1["supplies"]["square"]["settings"]["chopping"] == "sync"
+    assert "--chopping" not in str(m0["command"])
+    assert str(m1["command"]).endswith("--pwm-phases 2 --chopping sync --inverter switching")

@@ -39,21 +39,31 @@ __all__ = ["EFFICIENCY_COUNTS", "VERDICT_TOLERANCE", "CompareResult", "base_spee
 SUPPLIES = ("square", "sine")
 
 
-def default_controls(drive: Drive, lowest_speed_pu: float = 0.05) -> dict[str, tuple[Control, float]]:
+def default_controls(drive: Drive, lowest_speed_pu: float = 0.05,
+                     chopping: str = "pwm-on-pwm") -> dict[str, tuple[Control, float]]:
     """Return the two supplies as paper 1 compares them: controller and its reference.
 
     The sinusoidal controller's hand-off from its square-wave start is set below the lowest speed compared (paper 1
     hands off at 0.1 Omega_N because its Hall-based angle needs speed; at an imposed constant speed the angle is
     accurate lower too), so every point measures the sinusoidal supply.
 
+    Parameters
+    ----------
+    drive : Drive
+    lowest_speed_pu : float
+        Lowest speed compared (p.u. of ``Omega_0``).
+    chopping : str
+        The square wave's chopping pattern (:data:`bldclab.control.sixstep.CHOPPINGS`; default PWM-on-PWM).
+
     Returns
     -------
     dict
-        ``{"square": (SixStep(...), I_N [A]), "sine": (Sine(...), T_sN [N m])}``.
+        ``{"square": (SixStep(chopping=...), I_N [A]), "sine": (Sine(...), T_sN [N m])}``.
     """
     T_sN = analytic.t_sN(drive)
     handoff = 0.5 * lowest_speed_pu * drive.Omega_0
-    return {"square": (SixStep(), drive.motor.I_N), "sine": (Sine(handoff_speed=handoff), T_sN)}
+    square = SixStep(chopping=chopping)  # type: ignore[arg-type]  # a str checked by SixStep against CHOPPINGS
+    return {"square": (square, drive.motor.I_N), "sine": (Sine(handoff_speed=handoff), T_sN)}
 
 
 def speed_grid(n: int, lo: float = 0.05, hi: float = 0.98) -> list[float]:
@@ -175,6 +185,9 @@ class CompareResult:
         :func:`efficiency_table`: per supply and speed the efficiency by each loss count of
         :data:`EFFICIENCY_COUNTS` (paper 1's copper-only closed forms with 3 P_R and with the consistent 2 R I_N^2,
         the simulated copper-only and the simulated full-loss efficiency) and the loss buckets (W).
+    controls : dict
+        The controllers and references compared, ``{"square": (control, ref), "sine": (control, ref)}``: the
+        waveforms and the manifest of the results (:func:`bldclab.report.bundle.compare_outputs`) use the same.
     """
 
     drive: Drive
@@ -188,6 +201,7 @@ class CompareResult:
     warnings: list[str] = field(default_factory=list)
     not_applicable: list[str] = field(default_factory=list)
     efficiency: pd.DataFrame | None = None
+    controls: dict[str, tuple[Control, float]] = field(default_factory=dict)
 
 
 #: The efficiency columns of :attr:`CompareResult.efficiency`, each with the loss count it uses.
@@ -306,7 +320,7 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
     t1 = analytic.table1(drive)
     bst = base_speed_table(drive, dict(zip(SUPPLIES, bs, strict=True)), t1) if base_speeds else None
     res = CompareResult(drive=drive, simulated=sim, analytic=an, table1=t1, base_speeds=bst,
-                        pwm_phases=pwm_phases, seconds=seconds, efficiency=eff)
+                        pwm_phases=pwm_phases, seconds=seconds, efficiency=eff, controls=dict(controls))
     res.verdict = (_verdict(sim) + _efficiency_verdict(eff) + _sampling_notes(sim)
                    + (_base_speed_verdict(bst) if bst is not None else []))
     res.warnings = caught

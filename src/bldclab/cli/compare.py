@@ -8,7 +8,8 @@ import sys
 from pathlib import Path
 
 from .._files import write_files
-from ..analysis.compare import compare, speed_grid
+from ..analysis.compare import compare, default_controls, speed_grid
+from ..control.sixstep import CHOPPINGS
 from ..errors import BldclabError
 from ..model import analytic
 from ..report.bundle import compare_command, compare_files, compare_outputs
@@ -32,6 +33,9 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     p.add_argument("--pwm-phases", type=int, default=1,
                    help="PWM-grid phases per point: offsets of the rotor's initial angle within one PWM period; "
                         "points report their mean and range (default 1)")
+    p.add_argument("--chopping", choices=CHOPPINGS, default="pwm-on-pwm",
+                   help="square-wave supply's chopping pattern (default pwm-on-pwm; sync: the positive leg "
+                        "complementary, no freewheeling through a diode in the off-time)")
     add_inverter_option(p)
 
 
@@ -47,10 +51,11 @@ def run_command(args: argparse.Namespace) -> int:
     out = args.out if args.out is not None else Path("out") / drive.name
     check_out_dir(out)  # before the simulations: a bad --out fails in a second, not after the whole run
     res = compare(drive, w, workers=args.workers, progress=not args.no_progress and sys.stderr.isatty(),
-                  pwm_phases=args.pwm_phases)
+                  pwm_phases=args.pwm_phases, controls=default_controls(drive, min(w), args.chopping))
     t1 = res.table1
     sim = res.simulated
-    print(f"{drive.name}: square-wave (SixStep, I_N = {drive.motor.I_N:g} A) vs sinusoidal (Sine, "
+    chop = "" if args.chopping == "pwm-on-pwm" else f", {args.chopping} chopping"
+    print(f"{drive.name}: square-wave (SixStep{chop}, I_N = {drive.motor.I_N:g} A) vs sinusoidal (Sine, "
           f"T_sN = {analytic.t_sN(drive):.4g} N m), {args.speeds} speeds x 2 supplies in {res.seconds:.1f} s; "
           f"Omega_0 = {drive.Omega_0:.4g} rad/s = {drive.Omega_0 * RPM_PER_RAD_S:.4g} rpm")
     bs = {} if res.base_speeds is None else res.base_speeds.set_index("supply").simulated_pu.to_dict()

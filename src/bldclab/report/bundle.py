@@ -226,9 +226,19 @@ def make_manifest(res: CompareResult, controls: Mapping[str, tuple[Control, floa
 
 
 def compare_command(args: argparse.Namespace, out: Path) -> str:
-    """Return the ``bldclab compare`` command line that reproduces a run (process count aside: results are equal)."""
-    return shlex.join(["bldclab", "compare", str(args.motor), "--out", str(out), "--speeds", str(args.speeds),
-                       "--min-speed", f"{args.min_speed:g}", "--max-speed", f"{args.max_speed:g}"])
+    """Return the ``bldclab compare`` command line that reproduces a run (process count aside: results are equal).
+
+    Options left at their defaults are not written; ``--pwm-phases``, ``--chopping`` and ``--inverter`` are when set.
+    """
+    argv = ["bldclab", "compare", str(args.motor), "--out", str(out), "--speeds", str(args.speeds),
+            "--min-speed", f"{args.min_speed:g}", "--max-speed", f"{args.max_speed:g}"]
+    if getattr(args, "pwm_phases", 1) != 1:
+        argv += ["--pwm-phases", str(args.pwm_phases)]
+    if getattr(args, "chopping", "pwm-on-pwm") != "pwm-on-pwm":
+        argv += ["--chopping", str(args.chopping)]
+    if getattr(args, "inverter", None) is not None:
+        argv += ["--inverter", str(args.inverter)]
+    return shlex.join(argv)
 
 
 def compare_files(res: CompareResult, *, figures: bool = True) -> dict[str, bytes]:
@@ -285,7 +295,7 @@ def compare_outputs(res: CompareResult, files: Mapping[str, bytes], *, command: 
     Parameters
     ----------
     res : CompareResult
-        The comparison (:func:`bldclab.analysis.compare.compare` with its default controllers).
+        The comparison (:func:`bldclab.analysis.compare.compare`); the waveforms run its controllers.
     files : mapping of str to bytes
         The other files of the results directory (``simulated.csv``, ``table1.json``, ...).
     command : str
@@ -305,7 +315,7 @@ def compare_outputs(res: CompareResult, files: Mapping[str, bytes], *, command: 
         ``waveforms.csv``, ``manifest.json`` and, with ``report``, ``report.html``.
     """
     drive = res.drive
-    controls = default_controls(drive, float(np.min(res.analytic["Omega_pu"])))
+    controls = res.controls or default_controls(drive, float(np.min(res.analytic["Omega_pu"])))
     wf, points = waveforms(drive, waveform_speeds, controls=controls)
     new: dict[str, bytes] = {"waveforms.csv": wf.to_csv(index=False, float_format="%.6g").encode()}
     names = [*files, "waveforms.csv", MANIFEST, *([REPORT] if report else [])]
