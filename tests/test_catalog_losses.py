@@ -260,3 +260,23 @@ def test_compare_chopping_runs_the_square_wave_so_and_says_so(tmp_path: Path,
     assert m1["supplies"]["square"]["settings"]["chopping"] == "sync"
     assert "--chopping" not in str(m0["command"])
     assert str(m1["command"]).endswith("--pwm-phases 2 --chopping sync --inverter switching")
+
+
+@pytest.mark.slow
+def test_inverter_losses_of_the_real_drive_by_hand() -> None:
+    """Six-step at I_N and 0.5 Omega_0 on the datasheet inverter, by hand: the pair needs ``2 R I + 2 k_phi w``;
+    on-time two switches (``V_dc - 2 R_on I``), off-time one switch and the freewheeling body diode
+    (``-V_f - R_on I``), so ``d`` from the average; conduction ``R_on I^2 (1 + d)``, diode ``V_f I (1 - d)``,
+    switching ``(E_on + E_off) (I / I_test) f_pwm`` for the one chopping switch. Within 3 % (commutations and
+    the PWM ripple are left out of the hand count)."""
+    dr = bl.load("htm-48v-losses")
+    inv, i_n = dr.inverter, dr.motor.I_N
+    w = 0.5 * dr.Omega_0
+    need = 2 * dr.motor.R * i_n + 2 * dr.motor.k_phi * w
+    on, off = inv.V_dc - 2 * inv.R_on * i_n, -inv.V_f - inv.R_on * i_n
+    d = (need - off) / (on - off)
+    m = steady_state(dr, bl.SixStep(), w, i_n)[1].metrics
+    assert m is not None
+    assert m.p_sw == pytest.approx(inv.R_on * i_n**2 * (1 + d), rel=0.03)
+    assert m.p_diode == pytest.approx(inv.V_f * i_n * (1 - d), rel=0.03)
+    assert m.p_swloss == pytest.approx((inv.E_on + inv.E_off) * i_n / inv.I_test * inv.f_pwm, rel=0.03)
