@@ -101,8 +101,8 @@ _OPTIONAL: dict[str, list[str]] = {
                   "# phases = [0.0]     # phi_j: rad"],
     "inverter": ["# model: switching (every gate edge) or average (half-period averages, no PWM ripple)",
                  '# model = "switching"',
-                 "# switching losses (optional, default none): datasheet energies at a test point, or times instead",
-                 '# E_on = "40 uJ"  # J: turn-on energy at V_test, I_test (or t_rise = "58 ns")',
+                 '# E_on = "40 uJ"  # J: switching losses (optional, default none): turn-on energy at V_test, I_test '
+                 '(or t_rise = "58 ns")',
                  '# E_off = "60 uJ"  # J: turn-off energy (or t_fall = "144 ns")',
                  '# E_rr = "3 uJ"  # J: diode reverse-recovery energy (or Q_rr = "71 nC")',
                  '# V_test = "48 V"  # V: test voltage of the energies',
@@ -142,8 +142,6 @@ def template(source: str) -> str:
             line.startswith((f"# {k} =", f"# {k}:")) for k in present)]
         if tbl == "motor.emf" and drive.motor.cogging is not None:
             extra = []
-        if tbl == "inverter" and "E_on" in present:
-            extra = [line for line in extra if not line.startswith("# switching losses")]
         if extra:
             out.extend(extra)
 

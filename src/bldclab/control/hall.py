@@ -57,8 +57,10 @@ def normalize_table(table: object, field: str = "control.hall_table") -> tuple[f
     return tuple(out)
 
 
-def check_hall_options(pll_edges: object) -> None:
-    """Check the tracking loop's time constant ``pll_edges`` (edges, 1 .. 1000)."""
+def check_hall_options(pll_edges: object, hall_angle: object = "interp") -> None:
+    """Check the Hall angle estimator ``hall_angle`` (interp or pll) and the loop's ``pll_edges`` (edges, 1 .. 1000)."""
+    if hall_angle not in ("interp", "pll"):
+        raise BldclabError("control.hall_angle", f"must be interp or pll, got {hall_angle!r}")
     if isinstance(pll_edges, bool) or not isinstance(pll_edges, int | float) or not 1 <= pll_edges <= 1000:
         raise BldclabError("control.pll_edges", f"must be a number of edges in [1, 1000], got {pll_edges!r}")
 

@@ -150,9 +150,7 @@ class Lu(Control):
         a = self.adapt_L
         if isinstance(a, bool) or not isinstance(a, int | float) or not 0.0 <= a <= 1.0:
             raise BldclabError("control.adapt_L", f"must be a number in [0, 1], got {a!r}")
-        if self.hall_angle not in ("interp", "pll"):
-            raise BldclabError("control.hall_angle", f"must be interp or pll, got {self.hall_angle!r}")
-        check_hall_options(self.pll_edges)
+        check_hall_options(self.pll_edges, self.hall_angle)
         object.__setattr__(self, "hall_table", normalize_table(self.hall_table))
 
     def gains(self, drive: Drive) -> tuple[float, float]:

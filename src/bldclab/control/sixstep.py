@@ -132,9 +132,7 @@ class SixStep(Control):
         if isinstance(self.theta_offset, bool) or not isinstance(self.theta_offset, int | float) or not math.isfinite(
                 self.theta_offset):
             raise BldclabError("control.theta_offset", f"must be a finite number, got {self.theta_offset!r}")
-        if self.hall_angle not in ("interp", "pll"):
-            raise BldclabError("control.hall_angle", f"must be interp or pll, got {self.hall_angle!r}")
-        check_hall_options(self.pll_edges)
+        check_hall_options(self.pll_edges, self.hall_angle)
         object.__setattr__(self, "hall_table", normalize_table(self.hall_table))
 
     def gains(self, drive: Drive) -> tuple[float, float]:

@@ -767,21 +767,17 @@ def _iron_from_table(sec: Section, motor: Motor) -> Motor:
     if sec.has("grade") and given_data:
         raise BldclabError(sec.name(given_data[0]), f"cannot be given with {sec.name('grade')}: name a built-in "
                            f"grade ({', '.join(GRADES)}) or give its data ({', '.join(GRADE_FIELDS)}), not both")
-    if sec.has("grade"):
-        key = sec.string("grade")
-        if key not in GRADES:
-            raise BldclabError(sec.name("grade"), f"unknown grade {key!r}: built in are {', '.join(GRADES)}; "
-                               f"another grade is given by its data ({', '.join(GRADE_FIELDS)})")
-        grade = GRADES[key]
-    else:
-        data = {k: sec.quantity(k, dim) for k, dim in GRADE_FIELDS.items()}
+    key = sec.string("grade", None)
+    if key is not None and key not in GRADES:
+        raise BldclabError(sec.name("grade"), f"unknown grade {key!r}: built in are {', '.join(GRADES)}; "
+                           f"another grade is given by its data ({', '.join(GRADE_FIELDS)})")
+    data = {} if key is not None else {k: sec.quantity(k, dim) for k, dim in GRADE_FIELDS.items()}
     mass = sec.quantity("mass", "mass")
     B_peak = sec.quantity("B_peak", "flux_density")
     speed_ref = sec.quantity("speed_ref", "speed", None)
     sec.finish()
     try:
-        if not sec.has("grade"):
-            grade = SteelGrade(name="user grade", source="motor file", **data)
+        grade = GRADES[key] if key is not None else SteelGrade(name="user grade", source="motor file", **data)
         return motor.with_iron_from_grade(grade, mass=mass, B_peak=B_peak, speed_ref=speed_ref)
     except BldclabError as exc:
         field, problem = exc.field.split(".", 1)[-1], exc.problem

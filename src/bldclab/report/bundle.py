@@ -232,11 +232,11 @@ def compare_command(args: argparse.Namespace, out: Path) -> str:
     """
     argv = ["bldclab", "compare", str(args.motor), "--out", str(out), "--speeds", str(args.speeds),
             "--min-speed", f"{args.min_speed:g}", "--max-speed", f"{args.max_speed:g}"]
-    if getattr(args, "pwm_phases", 1) != 1:
+    if args.pwm_phases != 1:
         argv += ["--pwm-phases", str(args.pwm_phases)]
-    if getattr(args, "chopping", "pwm-on-pwm") != "pwm-on-pwm":
+    if args.chopping != "pwm-on-pwm":
         argv += ["--chopping", str(args.chopping)]
-    if getattr(args, "inverter", None) is not None:
+    if args.inverter is not None:
         argv += ["--inverter", str(args.inverter)]
     return shlex.join(argv)
 
