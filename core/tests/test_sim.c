@@ -114,6 +114,8 @@ static void test_acceleration_to_no_load(void)
     r.cfg.ctrl.step = sixv_slot;
     r.cfg.ctrl.params = &r.cp;
     r.cfg.ctrl.state = &r.cs;
+    r.cfg.metric_t0 = 0.0; /* acc[] is integrated where something reads it: this window, the whole run */
+    r.cfg.metric_t1 = 1.0;
     CHECK(bc_sim_init(&r.cfg, &s, 0.3, 0.0, I0, 48.0) == BC_OK, "init");
     int64_t nw;
     CHECK(bc_sim_run(&r.cfg, &s, &r.in, 28000, 0, 0, &nw) == BC_OK, "1 s");
