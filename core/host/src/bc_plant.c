@@ -22,15 +22,7 @@ static const double SIN_PHI[3] = {0.0, 0.86602540378443864676, -0.86602540378443
 #define MAX_ZERO_LENGTH_EVENTS 64
 #define ROOT_MAX_ITER 80
 
-/* Instantaneous circuit quantities computed with the derivative. */
-typedef struct aux_s {
-    double k[3], dk[3], e[3], v[3]; /* dk: dk/dtheta, only with WANT_DK; v only where read */
-    double cs[3];                   /* {theta, cos, sin} for Fourier shapes (theta = HUGE_VAL: none) */
-    double w[3];                    /* averaged legs with R_src: sum_y M_xy i_y (tc_msrc) */
-    double vn, vbus, idc, tau, tau_cog, tau_net, tau_fe, t_fric, p_rsrc;
-    double sgn;                     /* sign of the motion the Coulomb-like drags used (0: no drag) */
-    int n_conn;
-} aux_t;
+typedef bc_plant_aux aux_t; /* the circuit quantities computed with a derivative (bc_plant.h) */
 
 static int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
                       int dir_om, double *g);
@@ -80,6 +72,39 @@ static inline void shapes_at(const bc_plant_params *restrict p, const bc_plant_s
             const bc_emf_piece *pc = &s->piece[x];
             k[x] = pc->k0 + pc->slope * (th - pc->lo);
             if (dk) dk[x] = pc->slope;
+        }
+        return;
+    }
+    if (s->fz_n > 0) { /* three Fourier series in the global angle: one recurrence cos(m th), sin(m th) for all */
+        double c, sn;
+        cos_sin(th, ref, &c, &sn);
+        if (cs) {
+            cs[0] = th;
+            cs[1] = c;
+            cs[2] = sn;
+        }
+        double k0 = 0.0, k1 = 0.0, k2 = 0.0, d0 = 0.0, d1 = 0.0, d2 = 0.0, cm = 1.0, sm = 0.0;
+        for (int32_t m = 0; m < s->fz_n; ++m) {
+            k0 += s->fz_a[0][m] * cm + s->fz_b[0][m] * sm;
+            k1 += s->fz_a[1][m] * cm + s->fz_b[1][m] * sm;
+            k2 += s->fz_a[2][m] * cm + s->fz_b[2][m] * sm;
+            if (dk) { /* dk/dth = sum_m m (b_m cos - a_m sin) */
+                const double fm = (double)m;
+                d0 += fm * (s->fz_b[0][m] * cm - s->fz_a[0][m] * sm);
+                d1 += fm * (s->fz_b[1][m] * cm - s->fz_a[1][m] * sm);
+                d2 += fm * (s->fz_b[2][m] * cm - s->fz_a[2][m] * sm);
+            }
+            const double cn = cm * c - sm * sn;
+            sm = sm * c + cm * sn;
+            cm = cn;
+        }
+        k[0] = k0;
+        k[1] = k1;
+        k[2] = k2;
+        if (dk) {
+            dk[0] = d0;
+            dk[1] = d1;
+            dk[2] = d2;
         }
         return;
     }
@@ -141,6 +166,9 @@ static double sign_of(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0);
  * phases, L di_x/dt = c_x (u_x - v_n), i.e. di/dt = P u with P = g (C - c c^T / n), g = 1/L (0 with fewer than
  * two connected phases). topology_set precomputes P (M + R I), P up and P U0, so that a derivative costs a 3 x 3
  * product: di/dt = v_src P up + P U0 - P (M + R I) i - g c_x (e_x - c.e / n). */
+static void aux_terminals(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+                          aux_t *restrict a);
+
 #define WANT_DK 1 /* core(): dk/dtheta in the aux (the power flows need it) */
 #define WANT_V 2  /* core(): the terminal voltages and the star point in the aux even if no phase is open */
 
@@ -227,7 +255,17 @@ static void core(const bc_plant_params *restrict p, const bc_plant_state *restri
     a->w[0] = w0;
     a->w[1] = w1;
     a->w[2] = w2;
-    if (!((want & WANT_V) || s->tc_n < 3 || (s->acc_mask & (1u << BC_ACC_VA)))) return;
+    if ((want & WANT_V) || s->tc_n < 3 || (s->acc_mask & (1u << BC_ACC_VA))) aux_terminals(p, s, y, a);
+}
+
+/* The terminals v_x = up v_bus + U0 - r i (averaged legs with R_src: up v_src - R_src w_x + U0 - r i), the open
+ * terminals floating at e + v_n, and v_n, into a (whose e, w, vbus are set). */
+static void aux_terminals(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+                          aux_t *restrict a)
+{
+    const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
+    const double e0 = a->e[0], e1 = a->e[1], e2 = a->e[2], w0 = a->w[0], w1 = a->w[1], w2 = a->w[2];
+    const double vbus = a->vbus;
     const double R = p->R;
     const double r0 = s->tc_r[0], r1 = s->tc_r[1], r2 = s->tc_r[2];
     double v0, v1, v2;
@@ -464,6 +502,11 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
     key[9] = (double)s->tc_msrc;
     int n = 0;
     for (int x = 0; x < 3; ++x) {
+        if (!s->avg[x] && s->tc_cond[x] == s->cond[x]) { /* a switching leg in the same state: unchanged */
+            n += s->tc_conn[x] != 0.0;
+            continue;
+        }
+        s->tc_cond[x] = s->avg[x] ? -1 : s->cond[x];
         double up = 0.0, u0 = 0.0, r = 0.0, conn = 1.0, rsw = 0.0, dio = 0.0, swk = 0.0, rrk = 0.0;
         if (s->avg[x]) {
             /* averaged leg (bc_plant.h): the weighted mean of its gate states */
@@ -1071,9 +1114,11 @@ static void work_fill(const bc_plant_params *p, bc_plant_state *s, const double 
 {
     memcpy(s->work.k1, dy, sizeof s->work.k1);
     memcpy(s->work.cs, a->cs, sizeof s->work.cs);
+    if (a != &s->work.a[s->work.cur]) s->work.a[s->work.cur] = *a;
+    s->work.a_ok = 1;
     s->work.tau = a->tau;
     s->work.wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
-    (void)watch_eval(p, s, y, a, s->work.wdir, s->work.w);
+    (void)watch_eval(p, s, y, a, s->work.wdir, s->work.w[s->work.cur]);
     if (s->acc_on) lanes(p, s, y, dy, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
     s->work.valid = 1;
 }
@@ -1130,9 +1175,59 @@ static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
     s->work.valid = 0;
 }
 
+/* A gate edge at a state whose circuit quantities are cached (work.a): when every phase that conducted still conducts
+ * and every open phase stays open (a leg moving between its switch and the opposite diode, or between its two
+ * switches), the shapes, back-EMFs, torque and drags are those of the same state, so the derivative follows from the
+ * new conduction coefficients and the cached back-EMFs without evaluating the shapes again; the open phases' windows
+ * are checked as resolve_open does (a terminal leaving its window takes the full path), then the watches and power
+ * flows are recomputed. Returns 0 where it does not apply (averaged legs, a phase opening or closing). */
+static int switch_update(const bc_plant_params *p, bc_plant_state *s, const int32_t old[3])
+{
+    if (!(s->work.valid && s->work.a_ok) || s->tc_msrc) return 0;
+    for (int x = 0; x < 3; ++x) {
+        if (s->avg[x] || (old[x] == BC_COND_OPEN) != (s->cond[x] == BC_COND_OPEN)) return 0;
+    }
+    aux_t *a = &s->work.a[s->work.cur];
+    double y[NY];
+    pack(s, y);
+    const double *B = s->tc_b, *e = a->e;
+    const double eb = s->tc_cn[0] * e[0] + s->tc_cn[1] * e[1] + s->tc_cn[2] * e[2];
+    for (int x = 0; x < 3; ++x) { /* as core(): di/dt = v_src P up + P U0 - B i - g c_x (e_x - c.e / n) */
+        s->work.k1[Y_I + x] = s->tc_gain != 0.0 ? s->v_src * s->tc_pup[x] + s->tc_pu0[x] -
+                                                      (B[3 * x] * y[Y_I] + B[3 * x + 1] * y[Y_I + 1] +
+                                                       B[3 * x + 2] * y[Y_I + 2]) -
+                                                      s->tc_pc[x] * (e[x] - eb)
+                                                : 0.0;
+    }
+    const double idc = s->tc_up[0] * y[Y_I] + s->tc_up[1] * y[Y_I + 1] + s->tc_up[2] * y[Y_I + 2];
+    a->idc = idc;
+    a->vbus = s->v_src - p->R_src * idc;
+    a->p_rsrc = p->R_src * idc * idc;
+    if (s->tc_n < 3 || (s->acc_mask & (1u << BC_ACC_VA))) aux_terminals(p, s, y, a);
+    double tol = 1e-9 * (1.0 + fabs(s->v_src)); /* resolve_open's test of the open terminals */
+    for (int x = 0; x < 3; ++x) {
+        if (s->cond[x] != BC_COND_OPEN || ((s->hold_open | s->open_fault) & (1 << x))) continue;
+        if (a->n_conn == 0 || a->v[x] < s->tc_lo_a[x] * a->vbus + s->tc_lo_b[x] - tol ||
+            a->v[x] > s->tc_hi_a[x] * a->vbus + s->tc_hi_b[x] + tol)
+            return 0;
+    }
+    /* the watches: those of diodes and open phases change with the conduction states; with every phase on a switch
+     * before and after, only the trip, speed and sticking ones are left, functions of the unchanged state */
+    int sw = 1;
+    for (int x = 0; x < 3; ++x) {
+        sw &= (old[x] == BC_COND_SW_U || old[x] == BC_COND_SW_L) &&
+              (s->cond[x] == BC_COND_SW_U || s->cond[x] == BC_COND_SW_L);
+    }
+    if (!sw) (void)watch_eval(p, s, y, a, s->work.wdir, s->work.w[s->work.cur]);
+    if (s->acc_on) lanes(p, s, y, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
+    return 1;
+}
+
 static void resolve(const bc_plant_params *p, bc_plant_state *s)
 {
+    int32_t old[3] = {s->cond[0], s->cond[1], s->cond[2]};
     conduction_from_gates(p, s);
+    if (switch_update(p, s, old)) return;
     s->work.valid = 0;
     resolve_open(p, s);
 }
@@ -1434,6 +1529,7 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     }
 
     memset(s, 0, sizeof *s);
+    s->tc_cond[0] = s->tc_cond[1] = s->tc_cond[2] = -1; /* no conduction coefficients computed yet */
     s->t = t0;
     s->sw_on = sw_on;
     s->sw_inv_vi = sw_on ? 1.0 / (p->V_test * p->I_test) : 0.0;
@@ -1444,6 +1540,22 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
      * (the switching inverter books them at its gate edges) */
     lanes_select(p, s, BC_ACC_ALL);
     s->emf_tables = p->emf[0].kind == BC_EMF_TABLE && p->emf[1].kind == BC_EMF_TABLE && p->emf[2].kind == BC_EMF_TABLE;
+    s->fz_n = 0;
+    for (int x = 0; x < 3; ++x) {
+        int32_t n = p->emf[x].kind == BC_EMF_FOURIER ? p->emf[x].n : BC_PLANT_FZ_N + 1;
+        if (n > s->fz_n) s->fz_n = n;
+    }
+    if (s->fz_n > BC_PLANT_FZ_N) s->fz_n = 0;
+    for (int x = 0; x < 3 && s->fz_n > 0; ++x) {
+        /* x_m cos(m (th - phi)) + y_m sin(m (th - phi)) = a_m cos(m th) + b_m sin(m th), a_m = x_m cos(m phi) -
+         * y_m sin(m phi), b_m = x_m sin(m phi) + y_m cos(m phi); the phase offset phi = 2 pi x/3 */
+        for (int32_t m = 0; m < s->fz_n; ++m) {
+            double xm = m < p->emf[x].n ? p->emf[x].x[m] : 0.0, ym = m < p->emf[x].n ? p->emf[x].y[m] : 0.0;
+            double cp = cos((double)m * PHI[x]), sp = sin((double)m * PHI[x]);
+            s->fz_a[x][m] = xm * cp - ym * sp;
+            s->fz_b[x][m] = xm * sp + ym * cp;
+        }
+    }
     double mean = (i0[0] + i0[1] + i0[2]) / 3.0;
     for (int x = 0; x < 3; ++x) {
         s->i[x] = i0[x] - mean;
@@ -1737,8 +1849,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
 {
     double hmax = h_max_of(p);
     int zero_len = 0;
-    double y0[NY], y1[NY], k1n[NY], g0[NW], g1[NW];
-    aux_t a1;
+    double y0[NY], y1[NY], k1n[NY];
     root_pt rtry, rbest;
     for (;;) {
         process_due(p, s);
@@ -1758,7 +1869,10 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             }
         }
         pack(s, y0);
-        double *f1 = s->work.f[s->work.cur ^ 1], *fd1 = s->work.fd[s->work.cur ^ 1];
+        /* the step's end goes into the other buffers, current once the step is accepted */
+        const int nx = s->work.cur ^ 1;
+        double *f1 = s->work.f[nx], *fd1 = s->work.fd[nx], *g1 = s->work.w[nx];
+        aux_t *a1 = &s->work.a[nx];
         /* the step: to the target, a gate edge, a delayed Hall edge, h_max, or an angle bound */
         double t_stop = t_end;
         double tg = next_gate_time(p, s);
@@ -1791,14 +1905,14 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             }
         }
         state_step(p, s, y0, s->work.k1, h, y1);
-        core(p, s, y1, k1n, &a1, s->acc_on ? WANT_DK : 0, 0);
+        core(p, s, y1, k1n, a1, s->acc_on ? WANT_DK : 0, 0);
         /* watched functions: the first that goes negative inside the step is an event */
         int dir_om = s->work.wdir;
-        int any_neg = watch_eval(p, s, y1, &a1, dir_om, g1);
+        int any_neg = watch_eval(p, s, y1, a1, dir_om, g1);
         int w_hit = -1;
         double h_hit = h;
         if (any_neg && zero_len <= MAX_ZERO_LENGTH_EVENTS) {
-            memcpy(g0, s->work.w, sizeof g0); /* the watches at the step start */
+            const double *g0 = s->work.w[s->work.cur]; /* the watches at the step start */
             for (int w = 0; w < NW; ++w) {
                 if (g1[w] < 0.0) {
                     double guess = -1.0;
@@ -1824,17 +1938,18 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             if (h_hit < h && rbest.h == h_hit) {
                 memcpy(y1, rbest.y, sizeof y1);
                 memcpy(k1n, rbest.dy, sizeof k1n);
-                a1 = rbest.a;
+                *a1 = rbest.a;
             } else if (h_hit < h) {
                 state_step(p, s, y0, s->work.k1, h_hit, y1);
-                core(p, s, y1, k1n, &a1, s->acc_on ? WANT_DK : 0, 0);
+                core(p, s, y1, k1n, a1, s->acc_on ? WANT_DK : 0, 0);
             }
             unpack(s, y1);
+            s->work.a_ok = 0; /* the cache holds the step's start */
             s->t = (h_hit < h) ? s->t + h_hit : t_stop;
             if (p->mech == BC_MECH_IMPOSED) s->omega = y0[Y_OM];
-            step_done(p, s, h_hit < h ? h_hit : h, y1, k1n, &a1, f1, fd1);
-            s->work.tau = a1.tau;
-            apply_event(p, s, w_hit, &a1);
+            step_done(p, s, h_hit < h ? h_hit : h, y1, k1n, a1, f1, fd1);
+            s->work.tau = a1->tau;
+            apply_event(p, s, w_hit, a1);
             s->n_events += 1;
             s->n_steps += 1;
             if (h_hit <= 0.0) {
@@ -1856,12 +1971,12 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
         }
         unpack(s, y1);
         s->t = t_stop;
-        step_done(p, s, h, y1, k1n, &a1, f1, fd1);
-        s->work.tau = a1.tau;
+        step_done(p, s, h, y1, k1n, a1, f1, fd1);
+        s->work.tau = a1->tau;
         memcpy(s->work.k1, k1n, sizeof k1n);
-        memcpy(s->work.cs, a1.cs, sizeof a1.cs);
-        memcpy(s->work.w, g1, sizeof g1);
-        s->work.cur ^= 1; /* the end's power flows (f1, fd1 point into the other buffers) start the next step */
+        memcpy(s->work.cs, a1->cs, sizeof a1->cs);
+        s->work.a_ok = 1;
+        s->work.cur = nx; /* the step's end (f1, fd1, g1, a1) starts the next step */
         s->work.valid = 1;
         s->n_steps += 1;
         zero_len = 0;
@@ -1869,9 +1984,9 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
         if (angle_step && angles_cross(p, s, th_ev) && s->acc_on) {
             /* the shapes are continuous, so the cached derivative stays valid; their slopes are not: the power
              * flows' rates start the next step on the new pieces */
-            aux_t a;
-            core(p, s, y1, k1n, &a, WANT_DK, 0);
-            lanes(p, s, y1, s->work.k1, &a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
+            aux_t *a = &s->work.a[s->work.cur];
+            core(p, s, y1, k1n, a, WANT_DK, 0);
+            lanes(p, s, y1, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
         }
         wrap_angle(p, s);
     }
@@ -1918,10 +2033,11 @@ void bc_plant_set_accumulate(const bc_plant_params *p, bc_plant_state *s, int le
         /* the power flows at the start of the next step; the cached derivative stays (the state's path is the
          * same whatever is integrated) */
         double y[NY], dy[NY];
-        aux_t a;
+        aux_t *a = &s->work.a[s->work.cur]; /* with dk now: the power flows need it */
         pack(s, y);
-        core(p, s, y, dy, &a, WANT_DK, 0);
-        lanes(p, s, y, s->work.k1, &a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
+        core(p, s, y, dy, a, WANT_DK, 0);
+        s->work.a_ok = 1;
+        lanes(p, s, y, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
     }
 }
 

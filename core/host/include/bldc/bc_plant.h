@@ -183,6 +183,7 @@ enum {
 #define BC_ACC_OPT BC_ACC_SWLOSS /* first optional lane: SWLOSS, RR, FE are the last three */
 
 #define BC_HALL_QUEUE 8
+#define BC_PLANT_FZ_N 16 /* Fourier shapes up to this many orders share one cos/sin recurrence for the three phases */
 #define BC_PLANT_NW 15 /* functions watched for sign changes inside a step (diodes, open phases, speed, trip) */
 
 /* Faults the plant injects (bc_plant_params.fault): each active on [t_on, t_off). */
@@ -276,6 +277,16 @@ typedef struct {
  * The runner (bc_sim) uses it for the continuous PWM-period moving average of the torque. */
 typedef void (*bc_plant_step_fn)(void *ctx, double t, const double *acc, double tau);
 
+/* Circuit quantities computed with a derivative (private to bc_plant.c, like bc_plant_work). */
+typedef struct {
+    double k[3], dk[3], e[3], v[3]; /* shapes, dk/dtheta (when asked for), back-EMFs, terminals (where read) */
+    double cs[3];                   /* {theta, cos, sin} for Fourier shapes (theta = HUGE_VAL: none) */
+    double w[3];                    /* averaged legs with R_src: sum_y M_xy i_y */
+    double vn, vbus, idc, tau, tau_cog, tau_net, tau_fe, t_fric, p_rsrc;
+    double sgn;                     /* sign of the motion the Coulomb-like drags used (0: no drag) */
+    int32_t n_conn;
+} bc_plant_aux;
+
 /* The integrator's work memory: the derivative, the electrical torque, the watched functions and (while acc[] is
  * integrated) the rates of acc[] and their time derivatives at the current state, reused as the start of the next
  * step. Private to bc_plant.c: it lives inside bc_plant_state only so that the state stays one caller-owned block
@@ -286,12 +297,15 @@ typedef struct {
     int32_t wdir;               /* speed sign the watches were evaluated with */
     double k1[5];               /* derivative of (i_a, i_b, i_c, theta, omega) at the current state */
     double tau;                 /* tau_e at the current state, N m */
-    double w[BC_PLANT_NW];      /* watched functions at the current state */
+    double w[2][BC_PLANT_NW];   /* watched functions at the current state: w[cur] */
     double cs[3];               /* {theta, cos theta, sin theta} at the current state for Fourier shapes (theta =
                                    HUGE_VAL: none), the reference the RK4 stages rotate from */
     double f[2][BC_ACC_N];      /* rates of acc[] at the current state (valid while acc_on): f[cur] */
-    double fd[2][BC_ACC_N];     /* their time derivatives: fd[cur]; the other buffers take a step's end */
-    int32_t cur;
+    double fd[2][BC_ACC_N];     /* their time derivatives: fd[cur] */
+    int32_t a_ok;               /* 1: a[cur] holds the circuit quantities at the current state (a gate edge then
+                                   updates the derivative and the power flows from them) */
+    bc_plant_aux a[2];
+    int32_t cur;                /* which of the double buffers w, f, fd, a is current; the other takes a step's end */
 } bc_plant_work;
 
 typedef struct {
@@ -325,6 +339,10 @@ typedef struct {
     double sw_inv_vi;       /* 1 / (V_test I_test), 1/(V A) (0 without switching losses) */
     int32_t fe_on;          /* 1 if k_fe_e, k_fe_h or k_fe_x is positive (set at init) */
     int32_t emf_tables;     /* 1 if the three shapes are tables (set at init) */
+    int32_t fz_n;           /* > 0: the three shapes are Fourier series of at most BC_PLANT_FZ_N orders, evaluated from
+                               fz_a, fz_b (set at init); 0: from the shapes themselves */
+    double fz_a[3][BC_PLANT_FZ_N]; /* k_x(theta) = sum_m fz_a[x][m] cos(m theta) + fz_b[x][m] sin(m theta): the */
+    double fz_b[3][BC_PLANT_FZ_N]; /* series of phase x in the global angle (its offset 2 pi x/3 folded in), V s/rad */
     double fe_tc;           /* Coulomb-like hysteresis drag p k_fe_h, N m */
     int32_t drag_on;        /* 1 if B, tau_c or an iron-loss coefficient is positive (set at init) */
     int32_t acc_on;         /* BC_ACC_OFF, _METRICS or _ALL: what is integrated (bc_plant_set_accumulate; _ALL
@@ -332,6 +350,8 @@ typedef struct {
     uint32_t acc_mask;      /* bit j: lane j of acc[] is integrated (its rate can be nonzero at this level) */
     int32_t acc_hi;         /* lanes 0 .. acc_hi - 1 are added up each step (1 + the last integrated one) */
     /* circuit coefficients of the present conduction states, set whenever they change (internal) */
+    int32_t tc_cond[3];     /* conduction state the coefficients of a switching leg were set for (-1: averaged or
+                               none yet) */
     double tc_up[3];        /* 1 if tied to the + rail */
     double tc_u0[3];        /* constant part of the terminal source U_x, V */
     double tc_r[3];         /* device resistance in series, Ohm */
