@@ -915,7 +915,11 @@ static void wrap_angle(const bc_plant_params *p, bc_plant_state *s)
         return;
     }
     s->theta += shift;
-    if (s->theta >= BC_TWO_PI || s->theta < 0.0) { /* rounding at the bound */
+    if (s->theta >= BC_TWO_PI) {
+        /* a negative angle within rounding of 0 rounds up to 2 pi: the rotor has moved back past 0, so it is just
+         * below 2 pi (at 0 it would be back where it started, and a short backward step would repeat forever) */
+        s->theta = nextafter(BC_TWO_PI, 0.0);
+    } else if (s->theta < 0.0) {
         s->theta = 0.0;
     }
     for (int x = 0; x < 3; ++x) {
