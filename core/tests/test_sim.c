@@ -114,6 +114,8 @@ static void test_acceleration_to_no_load(void)
     r.cfg.ctrl.step = sixv_slot;
     r.cfg.ctrl.params = &r.cp;
     r.cfg.ctrl.state = &r.cs;
+    r.cfg.metric_t0 = 0.0; /* acc[] is integrated where something reads it: this window, the whole run */
+    r.cfg.metric_t1 = 1.0;
     CHECK(bc_sim_init(&r.cfg, &s, 0.3, 0.0, I0, 48.0) == BC_OK, "init");
     int64_t nw;
     CHECK(bc_sim_run(&r.cfg, &s, &r.in, 28000, 0, 0, &nw) == BC_OK, "1 s");
@@ -153,11 +155,55 @@ static void test_coulomb_stiction(void)
     CHECK(s.plant.omega == 0.0 && s.plant.stuck == 1, "held by friction: omega %.3g", s.plant.omega);
 }
 
+/* What the plant integrates besides the state follows what is read (bc_plant_set_accumulate): a run with no trace
+ * integrates the power flows only inside its metric window, one with a trace everywhere. The path of the state is the
+ * same bit for bit, and the window's integrals agree to rounding (they start from different absolute values). */
+static void test_accumulate_where_read(void)
+{
+    static rig r1, r2;
+    static bc_sim_state s1, s2;
+    static bc_trace_row rows[3000];
+    for (int k = 0; k < 2; ++k) {
+        rig *r = k ? &r2 : &r1;
+        rig_make(r, BC_MECH_DYNAMIC, 0.6f);
+        r->f.p.V_f = 0.7; /* a diode lane too */
+        r->f.p.R_on = 0.004;
+        r->cfg.ctrl.step = sixv_slot;
+        r->cfg.ctrl.params = &r->cp;
+        r->cfg.ctrl.state = &r->cs;
+        r->cfg.metric_t0 = 0.04;
+        r->cfg.metric_t1 = 0.07;
+        r->in.tau_load_c = 1.0;
+        CHECK(bc_sim_init(&r->cfg, k ? &s2 : &s1, 0.3, 0.0, I0, 48.0) == BC_OK, "init");
+    }
+    int64_t nw;
+    CHECK(bc_sim_run(&r1.cfg, &s1, &r1.in, 2800, 0, 0, &nw) == BC_OK, "no trace");
+    CHECK(bc_sim_run(&r2.cfg, &s2, &r2.in, 2800, rows, 3000, &nw) == BC_OK && nw == 2800, "trace");
+    CHECK(s1.plant.t == s2.plant.t && s1.plant.omega == s2.plant.omega && s1.plant.theta == s2.plant.theta &&
+              s1.plant.i[0] == s2.plant.i[0] && s1.plant.i[1] == s2.plant.i[1] && s1.plant.n_steps == s2.plant.n_steps,
+          "the same path: omega %.17g vs %.17g, %lld vs %lld steps", s1.plant.omega, s2.plant.omega,
+          (long long)s1.plant.n_steps, (long long)s2.plant.n_steps);
+    CHECK(s1.m.state == 2 && s2.m.state == 2, "windows closed");
+    for (int j = 0; j < BC_ACC_N; ++j) { /* the metrics' lanes (the trace's: terminal voltages, star point, DC current
+                                          * are integrated with a trace only) */
+        if (j >= BC_ACC_VA && j <= BC_ACC_IDC) continue;
+        double a = s1.m.E[j], b = s2.m.E[j];
+        CHECK(fabs(a - b) <= 1e-12 * (1.0 + fabs(b)), "window integral %d: %.17g vs %.17g", j, a, b);
+    }
+    CHECK(s1.m.tau_min == s2.m.tau_min && s1.m.tau_max == s2.m.tau_max, "the same torque extremes");
+    CHECK(fabs(s1.m.tau_ma_max - s2.m.tau_ma_max) < 1e-12 * fabs(s2.m.tau_ma_max), "the same moving average");
+    /* without a trace, nothing before the window was integrated; after it nothing either */
+    CHECK(s1.plant.acc_on == BC_ACC_OFF && s2.plant.acc_on == BC_ACC_ALL, "levels after the window: %d, %d",
+          s1.plant.acc_on, s2.plant.acc_on);
+    CHECK(s1.plant.acc[BC_ACC_VA] == 0.0 && s2.plant.acc[BC_ACC_VA] != 0.0, "the trace's lanes only with a trace");
+}
+
 int main(void)
 {
     test_imposed_speed_metrics();
     test_chunked_equals_whole();
     test_acceleration_to_no_load();
+    test_accumulate_where_read();
     test_coulomb_stiction();
     return bc_test_summary("test_sim");
 }

@@ -4,13 +4,11 @@
 #include <math.h>
 #include <string.h>
 
-/* Layout of the integrated vector y. */
+/* Layout of the integrated state y; the accumulators acc[] are integrated apart (acc_step). */
 #define Y_I 0 /* three currents */
 #define Y_TH 3
 #define Y_OM 4
-#define Y_ACC 5
-#define NY (Y_ACC + BC_ACC_N)
-#define NY_BASE (Y_ACC + BC_ACC_OPT) /* without the optional loss lanes (bc_plant.h) */
+#define NY 5
 
 /* the optional lanes are the last three */
 typedef char bc_acc_opt_last[(BC_ACC_OPT + 3 == BC_ACC_N && BC_ACC_RR == BC_ACC_OPT + 1 &&
@@ -24,15 +22,10 @@ static const double SIN_PHI[3] = {0.0, 0.86602540378443864676, -0.86602540378443
 #define MAX_ZERO_LENGTH_EVENTS 64
 #define ROOT_MAX_ITER 80
 
-/* Instantaneous circuit quantities computed with the derivative. */
-typedef struct aux_s {
-    double k[3], e[3], v[3];
-    double vn, vbus, idc, tau, tau_cog, tau_net, tau_fe;
-    int n_conn;
-} aux_t;
+typedef bc_plant_aux aux_t; /* the circuit quantities computed with a derivative (bc_plant.h) */
 
-static void watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
-                       int dir_om, double *g);
+static int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
+                      int dir_om, double *g);
 static int faults_apply(const bc_plant_params *p, bc_plant_state *s);
 
 double bc_plant_t_half(const bc_plant_params *p) { return 0.5 / p->f_pwm; }
@@ -49,11 +42,72 @@ static double h_max_of(const bc_plant_params *p)
 /* ---------------------------------------------------------------------------------------------------------- */
 /* back-EMF shapes and cogging at an angle inside the current pieces                                          */
 
-/* k_x(th) of the three phases and, if dk is non-null, dk_x/dth (tables: the piece's slope; Fourier: the series
- * differentiated term by term, sum_m m (y_m cos - x_m sin)). */
-static void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s, double th,
-                      double *restrict k, double *restrict dk)
+/* cos and sin of th: rotated from a reference angle ref = {th_r, cos th_r, sin th_r} (the step's start) when th is
+ * within 0.03 rad of it, by the Taylor series of cos and sin of the difference (truncation below 2e-17), else from
+ * libm. The RK4 stages of a step lie within p omega h of its start, so a step costs one libm cos/sin instead of four. */
+static void cos_sin(double th, const double *ref, double *c, double *sn)
 {
+    double d = ref ? th - ref[0] : 1.0;
+    if (fabs(d) < 0.03) {
+        double d2 = d * d;
+        double cd = 1.0 - 0.5 * d2 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0));
+        double sd = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0)));
+        *c = ref[1] * cd - ref[2] * sd;
+        *sn = ref[2] * cd + ref[1] * sd;
+        return;
+    }
+    *c = cos(th);
+    *sn = sin(th);
+}
+
+/* k_x(th) of the three phases and, if dk is non-null, dk_x/dth (tables: the piece's slope; Fourier: the series
+ * differentiated term by term, sum_m m (y_m cos - x_m sin)). A Fourier shape needs cos and sin of th: from ref
+ * (cos_sin) and, if cs is non-null, returned there as {th, cos th, sin th} (cs[0] = HUGE_VAL if none was needed). */
+static inline void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s, double th,
+                             double *restrict k, double *restrict dk, const double *ref, double *cs)
+{
+    if (cs) cs[0] = HUGE_VAL;
+    if (s->emf_tables) { /* the usual case (tables and trapezoids): one multiply-add per phase */
+        for (int x = 0; x < 3; ++x) {
+            const bc_emf_piece *pc = &s->piece[x];
+            k[x] = pc->k0 + pc->slope * (th - pc->lo);
+            if (dk) dk[x] = pc->slope;
+        }
+        return;
+    }
+    if (s->fz_n > 0) { /* three Fourier series in the global angle: one recurrence cos(m th), sin(m th) for all */
+        double c, sn;
+        cos_sin(th, ref, &c, &sn);
+        if (cs) {
+            cs[0] = th;
+            cs[1] = c;
+            cs[2] = sn;
+        }
+        double k0 = 0.0, k1 = 0.0, k2 = 0.0, d0 = 0.0, d1 = 0.0, d2 = 0.0, cm = 1.0, sm = 0.0;
+        for (int32_t m = 0; m < s->fz_n; ++m) {
+            k0 += s->fz_a[0][m] * cm + s->fz_b[0][m] * sm;
+            k1 += s->fz_a[1][m] * cm + s->fz_b[1][m] * sm;
+            k2 += s->fz_a[2][m] * cm + s->fz_b[2][m] * sm;
+            if (dk) { /* dk/dth = sum_m m (b_m cos - a_m sin) */
+                const double fm = (double)m;
+                d0 += fm * (s->fz_b[0][m] * cm - s->fz_a[0][m] * sm);
+                d1 += fm * (s->fz_b[1][m] * cm - s->fz_a[1][m] * sm);
+                d2 += fm * (s->fz_b[2][m] * cm - s->fz_a[2][m] * sm);
+            }
+            const double cn = cm * c - sm * sn;
+            sm = sm * c + cm * sn;
+            cm = cn;
+        }
+        k[0] = k0;
+        k[1] = k1;
+        k[2] = k2;
+        if (dk) {
+            dk[0] = d0;
+            dk[1] = d1;
+            dk[2] = d2;
+        }
+        return;
+    }
     int trig = 0;
     double c = 0.0, sn = 0.0;
     for (int x = 0; x < 3; ++x) {
@@ -64,9 +118,13 @@ static void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *r
             continue;
         }
         if (!trig) {
-            c = cos(th);
-            sn = sin(th);
+            cos_sin(th, ref, &c, &sn);
             trig = 1;
+            if (cs) {
+                cs[0] = th;
+                cs[1] = c;
+                cs[2] = sn;
+            }
         }
         /* cos and sin of the local angle th - PHI[x] by rotation, then harmonics by recurrence */
         double c1 = c * COS_PHI[x] + sn * SIN_PHI[x];
@@ -97,60 +155,50 @@ static double cogging_at(const bc_plant_params *p, const bc_plant_state *s, doub
 static double sign_of(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0); }
 
 /* ---------------------------------------------------------------------------------------------------------- */
-/* the derivative                                                                                             */
+/* the derivative and the power flows                                                                         */
 
-static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
-                double *restrict dy, aux_t *restrict a)
+/* dy = f(y) for the five states (i_a, i_b, i_c, theta, omega) under the present conduction states, and (a != 0) the
+ * circuit quantities at y (with dk/dtheta if WANT_DK) for the watches, the outputs and the power flows. ref: cos and
+ * sin at a nearby angle for Fourier shapes (cos_sin), or 0.
+ *
+ * The currents: with U_x = up_x v_src + U0_x the terminal sources, M = R_src W + diag(r) their resistance matrix
+ * (W = up up^T, or the averaged legs' M_xy), u = U - (M + R I) i - e and v_n = c.u / n over the n connected
+ * phases, L di_x/dt = c_x (u_x - v_n), i.e. di/dt = P u with P = g (C - c c^T / n), g = 1/L (0 with fewer than
+ * two connected phases). topology_set precomputes P (M + R I), P up and P U0, so that a derivative costs a 3 x 3
+ * product: di/dt = v_src P up + P U0 - P (M + R I) i - g c_x (e_x - c.e / n). */
+static void aux_terminals(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+                          aux_t *restrict a);
+
+#define WANT_DK 1 /* core(): dk/dtheta in the aux (the power flows need it) */
+#define WANT_V 2  /* core(): the terminal voltages and the star point in the aux even if no phase is open */
+
+static void core(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+                 double *restrict dy, aux_t *restrict a, int want, const double *ref)
 {
     const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
     const double th = y[Y_TH], om = y[Y_OM];
-    double k[3];
-    shapes_at(p, s, th, k, 0);
+    double k[3], dk[3], cs[3];
+    shapes_at(p, s, th, k, (want & WANT_DK) ? dk : 0, ref, a ? cs : 0);
     const double e0 = om * k[0], e1 = om * k[1], e2 = om * k[2];
-    const double R = p->R, V_f = p->V_f;
-    /* terminals from the precomputed conduction coefficients: v_x = up v_bus + U0 - r i (no branches) */
-    const double idc = s->tc_up[0] * i0 + s->tc_up[1] * i1 + s->tc_up[2] * i2;
-    const double vbus = s->v_src - p->R_src * idc;
-    const double r0 = s->tc_r[0], r1 = s->tc_r[1], r2 = s->tc_r[2];
-    double v0, v1, v2, p_rsrc;
-    if (s->tc_msrc) {
-        /* averaged legs: leg x sees R_src times the mean over the half period of up_x(t) i_dc(t) */
-        const double *m = s->tc_msrc_m;
-        const double w0 = m[0] * i0 + m[1] * i1 + m[2] * i2;
-        const double w1 = m[3] * i0 + m[4] * i1 + m[5] * i2;
-        const double w2 = m[6] * i0 + m[7] * i1 + m[8] * i2;
-        v0 = s->tc_up[0] * s->v_src - p->R_src * w0 + s->tc_u0[0] - r0 * i0;
-        v1 = s->tc_up[1] * s->v_src - p->R_src * w1 + s->tc_u0[1] - r1 * i1;
-        v2 = s->tc_up[2] * s->v_src - p->R_src * w2 + s->tc_u0[2] - r2 * i2;
-        p_rsrc = p->R_src * (i0 * w0 + i1 * w1 + i2 * w2);
+    if (s->tc_gain != 0.0) {
+        const double *B = s->tc_b;
+        const double eb = s->tc_cn[0] * e0 + s->tc_cn[1] * e1 + s->tc_cn[2] * e2;
+        const double vs = s->v_src;
+        dy[Y_I] = vs * s->tc_pup[0] + s->tc_pu0[0] - (B[0] * i0 + B[1] * i1 + B[2] * i2) - s->tc_pc[0] * (e0 - eb);
+        dy[Y_I + 1] = vs * s->tc_pup[1] + s->tc_pu0[1] - (B[3] * i0 + B[4] * i1 + B[5] * i2) - s->tc_pc[1] * (e1 - eb);
+        dy[Y_I + 2] = vs * s->tc_pup[2] + s->tc_pu0[2] - (B[6] * i0 + B[7] * i1 + B[8] * i2) - s->tc_pc[2] * (e2 - eb);
     } else {
-        v0 = s->tc_up[0] * vbus + s->tc_u0[0] - r0 * i0;
-        v1 = s->tc_up[1] * vbus + s->tc_u0[1] - r1 * i1;
-        v2 = s->tc_up[2] * vbus + s->tc_u0[2] - r2 * i2;
-        p_rsrc = p->R_src * idc * idc;
+        dy[Y_I] = dy[Y_I + 1] = dy[Y_I + 2] = 0.0;
     }
-    const double u0 = v0 - R * i0 - e0, u1 = v1 - R * i1 - e1, u2 = v2 - R * i2 - e2;
-    const double c0 = s->tc_conn[0], c1 = s->tc_conn[1], c2 = s->tc_conn[2];
-    const double vn = s->tc_n > 0 ? (c0 * u0 + c1 * u1 + c2 * u2) * s->tc_inv_n : 0.5 * vbus - (e0 + e1 + e2) / 3.0;
-    const double g = s->tc_gain;
-    dy[Y_I] = c0 * (u0 - vn) * g;
-    dy[Y_I + 1] = c1 * (u1 - vn) * g;
-    dy[Y_I + 2] = c2 * (u2 - vn) * g;
-    const double sq0 = i0 * i0, sq1 = i1 * i1, sq2 = i2 * i2;
-    const double a0 = fabs(i0), a1 = fabs(i1), a2 = fabs(i2);
-    const double r_d = p->r_d;
-    const double p_sw = s->tc_rsw[0] * sq0 + s->tc_rsw[1] * sq1 + s->tc_rsw[2] * sq2;
-    const double p_d = s->tc_dio[0] * (V_f + r_d * a0) * a0 + s->tc_dio[1] * (V_f + r_d * a1) * a1 +
-                       s->tc_dio[2] * (V_f + r_d * a2) * a2;
     const double tau_cog = p->n_cog > 0 ? cogging_at(p, s, th) : 0.0;
     const double tau = k[0] * i0 + k[1] * i1 + k[2] * i2 + tau_cog;
     const double tau_net = tau - s->tau_load;
-    double t_fric = 0.0, t_fe = 0.0;
+    double t_fric = 0.0, t_fe = 0.0, sgn = 0.0;
     if (s->drag_on && !s->stuck) {
         /* the Coulomb-like terms take the sign of the motion at the step start (work.wdir, valid inside a step):
          * the speed keeps it up to the W_OMEGA event, and RK4 stages evaluated past the zero must not flip it
          * (their flipped drags cancel in the RK4 sum and the rotor would coast at a small constant speed) */
-        double sgn = (s->work.valid && s->work.wdir != 0) ? (double)s->work.wdir : sign_of(om);
+        sgn = (s->work.valid && s->work.wdir != 0) ? (double)s->work.wdir : sign_of(om);
         if (sgn == 0.0) sgn = sign_of(tau_net);
         t_fric = p->B * om + p->tau_c * sgn;
         /* iron-loss drag (bc_plant.h): eddy k_fe_e omega sum k^2, hysteresis p k_fe_h sign(omega), excess
@@ -165,62 +213,300 @@ static void rhs(const bc_plant_params *restrict p, const bc_plant_state *restric
     }
     dy[Y_TH] = (double)p->p * om;
     dy[Y_OM] = (p->mech == BC_MECH_DYNAMIC && !s->stuck) ? (tau_net - t_fric - t_fe) / p->J : 0.0;
-    /* the open terminals float at e + v_n */
-    const double t0 = c0 != 0.0 ? v0 : e0 + vn, t1 = c1 != 0.0 ? v1 : e1 + vn, t2 = c2 != 0.0 ? v2 : e2 + vn;
-
-    double *restrict d = &dy[Y_ACC];
-    d[BC_ACC_SRC] = s->v_src * idc;
-    d[BC_ACC_RSRC] = p_rsrc;
-    d[BC_ACC_CU] = R * (sq0 + sq1 + sq2);
-    d[BC_ACC_SW] = p_sw;
-    d[BC_ACC_DIODE] = p_d;
-    d[BC_ACC_EMF] = e0 * i0 + e1 * i1 + e2 * i2;
-    d[BC_ACC_COG] = tau_cog * om;
-    d[BC_ACC_FRIC] = t_fric * om;
-    d[BC_ACC_LOAD] = s->tau_load * om;
-    d[BC_ACC_TAU] = tau;
-    d[BC_ACC_TAU2] = tau * tau;
-    d[BC_ACC_I2A] = sq0;
-    d[BC_ACC_I2B] = sq1;
-    d[BC_ACC_I2C] = sq2;
-    d[BC_ACC_VA] = t0;
-    d[BC_ACC_VB] = t1;
-    d[BC_ACC_VC] = t2;
-    d[BC_ACC_VN] = vn;
-    d[BC_ACC_IDC] = idc;
-    if (s->ny == NY) { /* the optional loss lanes; otherwise their rates are zero, RK4 skips them and they are not
-                          * written (nothing reads them) */
-        d[BC_ACC_SWLOSS] = vbus * (s->tc_swk[0] * a0 + s->tc_swk[1] * a1 + s->tc_swk[2] * a2);
-        d[BC_ACC_RR] = vbus * (s->tc_rrk[0] * a0 + s->tc_rrk[1] * a1 + s->tc_rrk[2] * a2);
-        d[BC_ACC_FE] = t_fe * om;
+    if (!a) return;
+    a->k[0] = k[0];
+    a->k[1] = k[1];
+    a->k[2] = k[2];
+    if (want & WANT_DK) {
+        a->dk[0] = dk[0];
+        a->dk[1] = dk[1];
+        a->dk[2] = dk[2];
     }
-
-    if (a) {
-        a->k[0] = k[0];
-        a->k[1] = k[1];
-        a->k[2] = k[2];
-        a->e[0] = e0;
-        a->e[1] = e1;
-        a->e[2] = e2;
-        a->v[0] = t0;
-        a->v[1] = t1;
-        a->v[2] = t2;
-        a->vn = vn;
-        a->vbus = vbus;
-        a->idc = idc;
-        a->tau = tau;
-        a->tau_cog = tau_cog;
-        a->tau_net = tau_net;
-        a->tau_fe = t_fe;
-        a->n_conn = s->tc_n;
+    a->cs[0] = cs[0];
+    a->cs[1] = cs[1];
+    a->cs[2] = cs[2];
+    a->e[0] = e0;
+    a->e[1] = e1;
+    a->e[2] = e2;
+    a->tau = tau;
+    a->tau_cog = tau_cog;
+    a->tau_net = tau_net;
+    a->tau_fe = t_fe;
+    a->t_fric = t_fric;
+    a->sgn = sgn;
+    a->n_conn = s->tc_n;
+    /* the circuit quantities: DC current and bus, and the terminals v_x = up v_bus + U0 - r i (averaged legs with
+     * R_src: up v_src - R_src w_x + U0 - r i), the open terminals floating at e + v_n; the terminals only where
+     * something reads them (an open phase's watches, the trace's lanes, the outputs) */
+    const double idc = s->tc_up[0] * i0 + s->tc_up[1] * i1 + s->tc_up[2] * i2;
+    const double vbus = s->v_src - p->R_src * idc;
+    a->idc = idc;
+    a->vbus = vbus;
+    double w0 = 0.0, w1 = 0.0, w2 = 0.0;
+    if (s->tc_msrc) {
+        const double *m = s->tc_msrc_m;
+        w0 = m[0] * i0 + m[1] * i1 + m[2] * i2;
+        w1 = m[3] * i0 + m[4] * i1 + m[5] * i2;
+        w2 = m[6] * i0 + m[7] * i1 + m[8] * i2;
+        a->p_rsrc = p->R_src * (i0 * w0 + i1 * w1 + i2 * w2);
+    } else {
+        a->p_rsrc = p->R_src * idc * idc;
     }
+    a->w[0] = w0;
+    a->w[1] = w1;
+    a->w[2] = w2;
+    if ((want & WANT_V) || s->tc_n < 3 || (s->acc_mask & (1u << BC_ACC_VA))) aux_terminals(p, s, y, a);
+}
+
+/* The terminals v_x = up v_bus + U0 - r i (averaged legs with R_src: up v_src - R_src w_x + U0 - r i), the open
+ * terminals floating at e + v_n, and v_n, into a (whose e, w, vbus are set). */
+static void aux_terminals(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+                          aux_t *restrict a)
+{
+    const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
+    const double e0 = a->e[0], e1 = a->e[1], e2 = a->e[2], w0 = a->w[0], w1 = a->w[1], w2 = a->w[2];
+    const double vbus = a->vbus;
+    const double R = p->R;
+    const double r0 = s->tc_r[0], r1 = s->tc_r[1], r2 = s->tc_r[2];
+    double v0, v1, v2;
+    if (s->tc_msrc) {
+        v0 = s->tc_up[0] * s->v_src - p->R_src * w0 + s->tc_u0[0] - r0 * i0;
+        v1 = s->tc_up[1] * s->v_src - p->R_src * w1 + s->tc_u0[1] - r1 * i1;
+        v2 = s->tc_up[2] * s->v_src - p->R_src * w2 + s->tc_u0[2] - r2 * i2;
+    } else {
+        v0 = s->tc_up[0] * vbus + s->tc_u0[0] - r0 * i0;
+        v1 = s->tc_up[1] * vbus + s->tc_u0[1] - r1 * i1;
+        v2 = s->tc_up[2] * vbus + s->tc_u0[2] - r2 * i2;
+    }
+    const double u0 = v0 - R * i0 - e0, u1 = v1 - R * i1 - e1, u2 = v2 - R * i2 - e2;
+    const double c0 = s->tc_conn[0], c1 = s->tc_conn[1], c2 = s->tc_conn[2];
+    const double vn = s->tc_n > 0 ? (c0 * u0 + c1 * u1 + c2 * u2) * s->tc_inv_n : 0.5 * vbus - (e0 + e1 + e2) / 3.0;
+    a->v[0] = c0 != 0.0 ? v0 : e0 + vn;
+    a->v[1] = c1 != 0.0 ? v1 : e1 + vn;
+    a->v[2] = c2 != 0.0 ? v2 : e2 + vn;
+    a->vn = vn;
+}
+
+/* d tau_cog/dt = omega_m sum_j amp_j order_j cos(order_j theta_m + phase_j). */
+static double cogging_rate(const bc_plant_params *p, const bc_plant_state *s, double th, double om)
+{
+    double th_m = (th + BC_TWO_PI * (double)s->turns) / (double)p->p;
+    double d = 0.0;
+    for (int32_t j = 0; j < p->n_cog; ++j) {
+        d += p->cog_amp[j] * p->cog_order[j] * cos(p->cog_order[j] * th_m + p->cog_phase[j]);
+    }
+    return om * d;
+}
+
+/* The power flows integrated in acc[] (bc_plant.h's BC_ACC_FIELDS) at state y, f, and their time derivatives along
+ * the circuit equations, fd = df/dt (chain rule with dy = f(y), the aux a of core(..., WANT_DK) at y). Every
+ * rate is a smooth function of the state inside a step (the conduction states, the drags' sign and the shapes'
+ * pieces are fixed there), so the corrected trapezoid rule (acc_step) integrates it to O(h^5); and because the
+ * rates of the energy balance add up to dW_L/dt identically, so do their derivatives to d^2W_L/dt^2. Only the lanes
+ * of s->acc_lane[] are computed: those the parameters can make nonzero, and the trace's (terminal voltages, star
+ * point, DC current) only when acc_on asks for them. */
+static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+                  const double *restrict dy, const aux_t *restrict a, double *restrict f, double *restrict fd)
+{
+    const double i[3] = {y[Y_I], y[Y_I + 1], y[Y_I + 2]};
+    const double di[3] = {dy[Y_I], dy[Y_I + 1], dy[Y_I + 2]};
+    const double om = y[Y_OM], dom = dy[Y_OM], dth = dy[Y_TH];
+    const double R = p->R, R_src = p->R_src;
+    const uint32_t on = s->acc_mask;
+    double dkt[3], de[3], sq[3];
+    for (int x = 0; x < 3; ++x) {
+        dkt[x] = a->dk[x] * dth;             /* dk/dt */
+        de[x] = dom * a->k[x] + om * dkt[x]; /* de/dt = domega/dt k + omega dk/dt */
+        sq[x] = i[x] * i[x];
+    }
+    const double didc = s->tc_up[0] * di[0] + s->tc_up[1] * di[1] + s->tc_up[2] * di[2];
+    const double dvbus = -R_src * didc;
+
+    f[BC_ACC_SRC] = s->v_src * a->idc;
+    fd[BC_ACC_SRC] = s->v_src * didc;
+    f[BC_ACC_CU] = R * (sq[0] + sq[1] + sq[2]);
+    fd[BC_ACC_CU] = 2.0 * R * (i[0] * di[0] + i[1] * di[1] + i[2] * di[2]);
+    f[BC_ACC_EMF] = a->e[0] * i[0] + a->e[1] * i[1] + a->e[2] * i[2];
+    fd[BC_ACC_EMF] = de[0] * i[0] + de[1] * i[1] + de[2] * i[2] + a->e[0] * di[0] + a->e[1] * di[1] + a->e[2] * di[2];
+    f[BC_ACC_LOAD] = s->tau_load * om;
+    fd[BC_ACC_LOAD] = s->tau_load * dom;
+    /* dtau/dt = sum_x (k_x di_x/dt + p omega dk_x/dtheta i_x) + dtau_cog/dt */
+    double dtau = 0.0;
+    for (int x = 0; x < 3; ++x) dtau += a->k[x] * di[x] + (double)p->p * om * a->dk[x] * i[x];
+    if (on & (1u << BC_ACC_COG)) {
+        double dcog = cogging_rate(p, s, y[Y_TH], om);
+        dtau += dcog;
+        f[BC_ACC_COG] = a->tau_cog * om;
+        fd[BC_ACC_COG] = dcog * om + a->tau_cog * dom;
+    }
+    f[BC_ACC_TAU] = a->tau;
+    fd[BC_ACC_TAU] = dtau;
+    f[BC_ACC_TAU2] = a->tau * a->tau;
+    fd[BC_ACC_TAU2] = 2.0 * a->tau * dtau;
+    for (int x = 0; x < 3; ++x) {
+        f[BC_ACC_I2A + x] = sq[x];
+        fd[BC_ACC_I2A + x] = 2.0 * i[x] * di[x];
+    }
+    if (on & (1u << BC_ACC_RSRC)) {
+        double dw = 0.0;
+        if (s->tc_msrc) {
+            const double *m = s->tc_msrc_m;
+            for (int x = 0; x < 3; ++x) {
+                double dwx = m[3 * x] * di[0] + m[3 * x + 1] * di[1] + m[3 * x + 2] * di[2];
+                dw += di[x] * a->w[x] + i[x] * dwx;
+            }
+        } else {
+            dw = 2.0 * a->idc * didc;
+        }
+        f[BC_ACC_RSRC] = a->p_rsrc;
+        fd[BC_ACC_RSRC] = R_src * dw;
+    }
+    if (on & (1u << BC_ACC_SW)) {
+        f[BC_ACC_SW] = s->tc_rsw[0] * sq[0] + s->tc_rsw[1] * sq[1] + s->tc_rsw[2] * sq[2];
+        fd[BC_ACC_SW] = 2.0 * (s->tc_rsw[0] * i[0] * di[0] + s->tc_rsw[1] * i[1] * di[1] + s->tc_rsw[2] * i[2] * di[2]);
+    }
+    /* |i| and its rate: a diode carries its current one way (D_L: i >= 0, D_U: i <= 0), also at the instant it starts
+     * to conduct from i = 0, where sign(i) would be 0 but d|i|/dt = |di/dt| */
+    double ab[3], sg[3];
+    if (on & ((1u << BC_ACC_DIODE) | (1u << BC_ACC_OPT))) {
+        for (int x = 0; x < 3; ++x) {
+            ab[x] = fabs(i[x]);
+            sg[x] = s->cond[x] == BC_COND_D_L ? 1.0 : (s->cond[x] == BC_COND_D_U ? -1.0 : sign_of(i[x]));
+        }
+    }
+    if (on & (1u << BC_ACC_DIODE)) {
+        double fdi = 0.0, fdd = 0.0;
+        for (int x = 0; x < 3; ++x) {
+            if (s->tc_dio[x] == 0.0) continue;
+            fdi += s->tc_dio[x] * (p->V_f + p->r_d * ab[x]) * ab[x];
+            fdd += s->tc_dio[x] * (p->V_f + 2.0 * p->r_d * ab[x]) * sg[x] * di[x];
+        }
+        f[BC_ACC_DIODE] = fdi;
+        fd[BC_ACC_DIODE] = fdd;
+    }
+    if (on & (1u << BC_ACC_FRIC)) {
+        f[BC_ACC_FRIC] = a->t_fric * om;
+        fd[BC_ACC_FRIC] = a->sgn != 0.0 ? (2.0 * p->B * om + p->tau_c * a->sgn) * dom : 0.0;
+    }
+    if (on & (1u << BC_ACC_VA)) { /* the trace's lanes: terminal voltages, star point, DC current */
+        double dv[3], du[3];
+        if (s->tc_msrc) {
+            const double *m = s->tc_msrc_m;
+            for (int x = 0; x < 3; ++x) {
+                double dwx = m[3 * x] * di[0] + m[3 * x + 1] * di[1] + m[3 * x + 2] * di[2];
+                dv[x] = -R_src * dwx - s->tc_r[x] * di[x];
+            }
+        } else {
+            for (int x = 0; x < 3; ++x) dv[x] = s->tc_up[x] * dvbus - s->tc_r[x] * di[x];
+        }
+        for (int x = 0; x < 3; ++x) du[x] = dv[x] - R * di[x] - de[x];
+        const double dvn = s->tc_n > 0 ? (s->tc_conn[0] * du[0] + s->tc_conn[1] * du[1] + s->tc_conn[2] * du[2]) *
+                                             s->tc_inv_n
+                                       : 0.5 * dvbus - (de[0] + de[1] + de[2]) / 3.0;
+        for (int x = 0; x < 3; ++x) {
+            f[BC_ACC_VA + x] = a->v[x];
+            fd[BC_ACC_VA + x] = s->tc_conn[x] != 0.0 ? dv[x] : de[x] + dvn;
+        }
+        f[BC_ACC_VN] = a->vn;
+        fd[BC_ACC_VN] = dvn;
+        f[BC_ACC_IDC] = a->idc;
+        fd[BC_ACC_IDC] = didc;
+    }
+    if (!(on & (1u << BC_ACC_OPT))) return; /* the optional loss lanes have zero rates (bc_plant.h) */
+    double swa = 0.0, swd = 0.0, rra = 0.0, rrd = 0.0;
+    for (int x = 0; x < 3; ++x) {
+        swa += s->tc_swk[x] * ab[x];
+        swd += s->tc_swk[x] * sg[x] * di[x];
+        rra += s->tc_rrk[x] * ab[x];
+        rrd += s->tc_rrk[x] * sg[x] * di[x];
+    }
+    f[BC_ACC_SWLOSS] = a->vbus * swa;
+    fd[BC_ACC_SWLOSS] = dvbus * swa + a->vbus * swd;
+    f[BC_ACC_RR] = a->vbus * rra;
+    fd[BC_ACC_RR] = dvbus * rra + a->vbus * rrd;
+    f[BC_ACC_FE] = a->tau_fe * om;
+    fd[BC_ACC_FE] = 0.0;
+    if (s->fe_on && a->sgn != 0.0) {
+        /* p_fe = k_fe_e omega^2 sum k^2 + p k_fe_h sgn omega + k_fe_x sgn omega |omega|^0.5 sum |k|^1.5 */
+        const double *k = a->k;
+        double k2 = k[0] * k[0] + k[1] * k[1] + k[2] * k[2];
+        double dk2 = 2.0 * (k[0] * dkt[0] + k[1] * dkt[1] + k[2] * dkt[2]);
+        double d = p->k_fe_e * (2.0 * om * dom * k2 + om * om * dk2) + s->fe_tc * a->sgn * dom;
+        if (p->k_fe_x > 0.0) {
+            double k15 = 0.0, dk15 = 0.0;
+            for (int x = 0; x < 3; ++x) {
+                double sk = sqrt(fabs(k[x]));
+                k15 += fabs(k[x]) * sk;
+                dk15 += 1.5 * sk * sign_of(k[x]) * dkt[x];
+            }
+            double so = sqrt(fabs(om));
+            d += p->k_fe_x * a->sgn * (1.5 * so * dom * k15 + om * so * dk15);
+        }
+        fd[BC_ACC_FE] = d;
+    }
+}
+
+/* acc[] over a step of length h from (f0, fd0) to (f1, fd1): the corrected trapezoid rule (bc_plant.h). Every lane in
+ * one loop over lanes 0 .. n - 1: the rates of the lanes not integrated are held at zero (lanes_select). */
+static void acc_step(double *restrict acc, int n, double h, const double *restrict f0, const double *restrict fd0,
+                     const double *restrict f1, const double *restrict fd1)
+{
+    const double a = 0.5 * h, b = h * h / 12.0;
+    for (int j = 0; j < n; ++j) acc[j] += a * (f0[j] + f1[j]) + b * (fd0[j] - fd1[j]);
+}
+
+/* The lanes integrated at accumulation level `level` (bc_plant_set_accumulate): acc_mask, and
+ * the zeroed rates of the others. A lane whose rate the parameters keep at zero is left out (its acc[] stays). */
+static void lanes_select(const bc_plant_params *p, bc_plant_state *s, int level)
+{
+    uint32_t m = 0u;
+    if (level >= BC_ACC_METRICS) {
+        m = (1u << BC_ACC_SRC) | (1u << BC_ACC_CU) | (1u << BC_ACC_EMF) | (1u << BC_ACC_LOAD) | (1u << BC_ACC_TAU) |
+            (1u << BC_ACC_TAU2) | (1u << BC_ACC_I2A) | (1u << BC_ACC_I2B) | (1u << BC_ACC_I2C);
+        if (p->R_src > 0.0) m |= 1u << BC_ACC_RSRC;
+        if (p->R_on > 0.0) m |= 1u << BC_ACC_SW;
+        if (p->V_f > 0.0 || p->r_d > 0.0) m |= 1u << BC_ACC_DIODE;
+        if (p->n_cog > 0) m |= 1u << BC_ACC_COG;
+        if (p->B > 0.0 || p->tau_c > 0.0) m |= 1u << BC_ACC_FRIC;
+        /* the optional lanes integrate when a rate can be nonzero: iron loss, or switching losses on averaged legs
+         * (the switching inverter books them at its gate edges) */
+        if (s->fe_on || (s->sw_on && p->inverter == BC_INV_AVERAGE)) {
+            m |= (1u << BC_ACC_SWLOSS) | (1u << BC_ACC_RR) | (1u << BC_ACC_FE);
+        }
+    }
+    if (level >= BC_ACC_ALL) {
+        m |= (1u << BC_ACC_VA) | (1u << BC_ACC_VB) | (1u << BC_ACC_VC) | (1u << BC_ACC_VN) | (1u << BC_ACC_IDC);
+    }
+    s->acc_mask = m;
+    s->acc_hi = 0;
+    for (int j = 0; j < BC_ACC_N; ++j) { /* acc_step adds zero on the lanes not integrated */
+        if (m & (1u << j)) s->acc_hi = j + 1;
+        if (m & (1u << j)) continue;
+        s->work.f[0][j] = s->work.f[1][j] = 0.0;
+        s->work.fd[0][j] = s->work.fd[1][j] = 0.0;
+    }
+    s->acc_on = level;
 }
 
 /* Circuit coefficients of the present conduction states (bc_plant.h, tc_*). Call after any change of cond[]. */
 static void topology_set(const bc_plant_params *p, bc_plant_state *s)
 {
+    /* B depends on the connected phases, the device resistances and, with R_src, on the + rail ties: a PWM leg
+     * moving between its switches changes none of these (R_src = 0), so B is kept */
+    double key[10];
+    for (int x = 0; x < 3; ++x) {
+        key[x] = s->tc_conn[x];
+        key[3 + x] = s->tc_r[x];
+        key[6 + x] = s->tc_up[x];
+    }
+    key[9] = (double)s->tc_msrc;
     int n = 0;
     for (int x = 0; x < 3; ++x) {
+        if (!s->avg[x] && s->tc_cond[x] == s->cond[x]) { /* a switching leg in the same state: unchanged */
+            n += s->tc_conn[x] != 0.0;
+            continue;
+        }
+        s->tc_cond[x] = s->avg[x] ? -1 : s->cond[x];
         double up = 0.0, u0 = 0.0, r = 0.0, conn = 1.0, rsw = 0.0, dio = 0.0, swk = 0.0, rrk = 0.0;
         if (s->avg[x]) {
             /* averaged leg (bc_plant.h): the weighted mean of its gate states */
@@ -269,6 +555,7 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
     s->tc_n = n;
     s->tc_inv_n = n > 0 ? 1.0 / (double)n : 0.0;
     s->tc_gain = n >= 2 ? 1.0 / p->L : 0.0;
+    /* the affine map of core(): P = g (C - c c^T / n), M = R_src W + diag(r) */
     /* averaged legs with a source resistance: the half-period mean of up_x(t) up_y(t) (bc_plant.h) */
     s->tc_msrc = (s->avg[0] | s->avg[1] | s->avg[2]) && p->R_src > 0.0;
     if (s->tc_msrc) {
@@ -293,6 +580,37 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
                                           ui[x] * ui[y] * fmin(1.0 - d[x], 1.0 - d[y]);
             }
         }
+    }
+    /* (P v)_x = g c_x (v_x - c.v / n); B = P (M + R I) with M = R_src W + diag(r): column y of B is P applied to
+     * column y of M + R I, which is (r_y + R) at row y plus R_src times W's column (W = up up^T: R_src up_y P up) */
+    for (int x = 0; x < 3; ++x) {
+        s->tc_cn[x] = s->tc_conn[x] * s->tc_inv_n;
+        s->tc_pc[x] = s->tc_gain * s->tc_conn[x];
+    }
+    const double *cn = s->tc_cn, *pc = s->tc_pc;
+    const double ub = cn[0] * s->tc_up[0] + cn[1] * s->tc_up[1] + cn[2] * s->tc_up[2];
+    const double u0b = cn[0] * s->tc_u0[0] + cn[1] * s->tc_u0[1] + cn[2] * s->tc_u0[2];
+    for (int x = 0; x < 3; ++x) {
+        s->tc_pup[x] = pc[x] * (s->tc_up[x] - ub);
+        s->tc_pu0[x] = pc[x] * (s->tc_u0[x] - u0b);
+    }
+    int same = s->tc_b_ok && key[9] == (double)s->tc_msrc && !s->tc_msrc;
+    for (int x = 0; x < 3 && same; ++x) {
+        same = key[x] == s->tc_conn[x] && key[3 + x] == s->tc_r[x] && (p->R_src == 0.0 || key[6 + x] == s->tc_up[x]);
+    }
+    if (same) return;
+    s->tc_b_ok = 1;
+    for (int y = 0; y < 3; ++y) {
+        const double d = s->tc_r[y] + p->R; /* diagonal of M + R I */
+        double col[3] = {0.0, 0.0, 0.0};    /* R_src W's column y */
+        if (p->R_src > 0.0) {
+            for (int x = 0; x < 3; ++x) {
+                col[x] = p->R_src * (s->tc_msrc ? s->tc_msrc_m[3 * x + y] : s->tc_up[x] * s->tc_up[y]);
+            }
+        }
+        col[y] += d;
+        const double mb = cn[0] * col[0] + cn[1] * col[1] + cn[2] * col[2];
+        for (int x = 0; x < 3; ++x) s->tc_b[3 * x + y] = pc[x] * (col[x] - mb);
     }
 }
 
@@ -324,7 +642,6 @@ static void pack(const bc_plant_state *s, double *y)
     y[Y_I + 2] = s->i[2];
     y[Y_TH] = s->theta;
     y[Y_OM] = s->omega;
-    memcpy(&y[Y_ACC], s->acc, sizeof s->acc);
 }
 
 static void unpack(bc_plant_state *s, const double *y)
@@ -334,30 +651,67 @@ static void unpack(bc_plant_state *s, const double *y)
     s->i[2] = y[Y_I + 2];
     s->theta = y[Y_TH];
     s->omega = y[Y_OM];
-    memcpy(s->acc, &y[Y_ACC], sizeof s->acc);
 }
 
-/* One classical Runge-Kutta step of length h from y0 with derivative k1 = f(y0). */
+/* One classical Runge-Kutta step of length h from y0 with derivative k1 = f(y0) (the five states only; the power
+ * flows follow by acc_step from the step's ends). */
 static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
                 double *y1)
 {
     double k2[NY], k3[NY], k4[NY], yt[NY];
-    aux_t *a = 0;
-    /* the integrals (Y_ACC ...) never feed back: intermediate stages need only currents, angle, speed */
-    for (int j = 0; j < Y_ACC; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
-    rhs(p, s, yt, k2, a);
-    for (int j = 0; j < Y_ACC; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
-    rhs(p, s, yt, k3, a);
-    for (int j = 0; j < Y_ACC; ++j) yt[j] = y0[j] + h * k3[j];
-    rhs(p, s, yt, k4, a);
-    for (int j = 0; j < NY_BASE; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
-    if (s->ny == NY) {
-        for (int j = NY_BASE; j < NY; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
-    } else { /* the optional lanes have zero rates (bc_plant.h) */
-        for (int j = NY_BASE; j < NY; ++j) y1[j] = y0[j];
-    }
+    for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
+    core(p, s, yt, k2, 0, 0, s->work.cs);
+    for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
+    core(p, s, yt, k3, 0, 0, s->work.cs);
+    for (int j = 0; j < NY; ++j) yt[j] = y0[j] + h * k3[j];
+    core(p, s, yt, k4, 0, 0, s->work.cs);
+    for (int j = 0; j < NY; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
     if (p->mech == BC_MECH_IMPOSED) {
         y1[Y_OM] = y0[Y_OM]; /* exactly constant */
+    }
+}
+
+/* The same step where the circuit is linear with a forcing affine in time: at constant speed (imposed, or a rotor
+ * held by friction) on table shapes, the angle moves as theta0 + p omega t inside one piece, so e(t) = e0 + e1 t and
+ * (core()) di/dt = -B i + g0 + g1 t with g1 = -P e1. For such a system the RK4 step is exactly the Taylor polynomial
+ * of degree four, i(h) = i + h D1 + h^2/2 D2 + h^3/6 D3 + h^4/24 D4 with the derivatives of the linear ODE
+ * D1 = di/dt, D2 = -B D1 + g1, D3 = -B D2, D4 = -B D3: the same step to rounding, for three 3 x 3 products instead
+ * of three derivative evaluations. */
+static int linear_step_ok(const bc_plant_params *p, const bc_plant_state *s)
+{
+    return s->emf_tables && (p->mech == BC_MECH_IMPOSED || s->stuck);
+}
+
+static void taylor4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
+                    double *y1)
+{
+    const double *B = s->tc_b;
+    const double om = y0[Y_OM], wth = (double)p->p * om; /* d theta/dt */
+    double de[3]; /* de_x/dt = omega slope_x p omega */
+    for (int x = 0; x < 3; ++x) de[x] = om * s->piece[x].slope * wth;
+    const double eb = s->tc_cn[0] * de[0] + s->tc_cn[1] * de[1] + s->tc_cn[2] * de[2];
+    double d1[3], d2[3], d3[3], d4[3];
+    for (int x = 0; x < 3; ++x) d1[x] = k1[Y_I + x];
+    for (int x = 0; x < 3; ++x) {
+        d2[x] = -(B[3 * x] * d1[0] + B[3 * x + 1] * d1[1] + B[3 * x + 2] * d1[2]) - s->tc_pc[x] * (de[x] - eb);
+    }
+    for (int x = 0; x < 3; ++x) d3[x] = -(B[3 * x] * d2[0] + B[3 * x + 1] * d2[1] + B[3 * x + 2] * d2[2]);
+    for (int x = 0; x < 3; ++x) d4[x] = -(B[3 * x] * d3[0] + B[3 * x + 1] * d3[1] + B[3 * x + 2] * d3[2]);
+    for (int x = 0; x < 3; ++x) {
+        y1[Y_I + x] = y0[Y_I + x] + h * (d1[x] + 0.5 * h * (d2[x] + h / 3.0 * (d3[x] + 0.25 * h * d4[x])));
+    }
+    y1[Y_TH] = y0[Y_TH] + h * wth;
+    y1[Y_OM] = om;
+}
+
+/* One step of the five states: taylor4 where the circuit is linear (identical to RK4 there), else rk4. */
+static void state_step(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
+                       double *y1)
+{
+    if (linear_step_ok(p, s)) {
+        taylor4(p, s, y0, k1, h, y1);
+    } else {
+        rk4(p, s, y0, k1, h, y1);
     }
 }
 
@@ -561,7 +915,11 @@ static void wrap_angle(const bc_plant_params *p, bc_plant_state *s)
         return;
     }
     s->theta += shift;
-    if (s->theta >= BC_TWO_PI || s->theta < 0.0) { /* rounding at the bound */
+    if (s->theta >= BC_TWO_PI) {
+        /* a negative angle within rounding of 0 rounds up to 2 pi: the rotor has moved back past 0, so it is just
+         * below 2 pi (at 0 it would be back where it started, and a short backward step would repeat forever) */
+        s->theta = nextafter(BC_TWO_PI, 0.0);
+    } else if (s->theta < 0.0) {
         s->theta = 0.0;
     }
     for (int x = 0; x < 3; ++x) {
@@ -754,6 +1112,21 @@ static double pair_margin(const bc_plant_params *p, const bc_plant_state *s, con
     return best;
 }
 
+/* Cache the derivative, torque, watches and (while acc[] is integrated) the power flows at the current state y,
+ * whose core() gave dy and a (with dk if acc_on): the start of the next step. */
+static void work_fill(const bc_plant_params *p, bc_plant_state *s, const double *y, const double *dy, const aux_t *a)
+{
+    memcpy(s->work.k1, dy, sizeof s->work.k1);
+    memcpy(s->work.cs, a->cs, sizeof s->work.cs);
+    if (a != &s->work.a[s->work.cur]) s->work.a[s->work.cur] = *a;
+    s->work.a_ok = 1;
+    s->work.tau = a->tau;
+    s->work.wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
+    (void)watch_eval(p, s, y, a, s->work.wdir, s->work.w[s->work.cur]);
+    if (s->acc_on) lanes(p, s, y, dy, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
+    s->work.valid = 1;
+}
+
 /* Open phases whose floating terminal leaves their window ([-V_f, v_bus + V_f] for a both-off leg) conduct
  * (fixed point, docs/plant.md). */
 static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
@@ -768,7 +1141,7 @@ static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
     double tol = 1e-9 * (1.0 + fabs(s->v_src));
     for (int iter = 0; iter < 4; ++iter) {
         pack(s, y);
-        rhs(p, s, y, dy, &a);
+        core(p, s, y, dy, &a, s->acc_on ? WANT_DK : 0, 0);
         int changed = 0;
         if (a.n_conn == 0) {
             int hi = -1, lo = -1;
@@ -799,21 +1172,66 @@ static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
         if (changed) {
             topology_set(p, s);
         } else {
-            /* the derivative at this state and topology is the next step's k1 */
-            memcpy(s->work.k1, dy, sizeof dy);
-            s->work.tau = a.tau;
-            s->work.wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
-            watch_eval(p, s, y, &a, s->work.wdir, s->work.w);
-            s->work.valid = 1;
+            work_fill(p, s, y, dy, &a); /* the derivative at this state and topology starts the next step */
             return;
         }
     }
     s->work.valid = 0;
 }
 
+/* A gate edge at a state whose circuit quantities are cached (work.a): when every phase that conducted still conducts
+ * and every open phase stays open (a leg moving between its switch and the opposite diode, or between its two
+ * switches), the shapes, back-EMFs, torque and drags are those of the same state, so the derivative follows from the
+ * new conduction coefficients and the cached back-EMFs without evaluating the shapes again; the open phases' windows
+ * are checked as resolve_open does (a terminal leaving its window takes the full path), then the watches and power
+ * flows are recomputed. Returns 0 where it does not apply (averaged legs, a phase opening or closing). */
+static int switch_update(const bc_plant_params *p, bc_plant_state *s, const int32_t old[3])
+{
+    if (!(s->work.valid && s->work.a_ok) || s->tc_msrc) return 0;
+    for (int x = 0; x < 3; ++x) {
+        if (s->avg[x] || (old[x] == BC_COND_OPEN) != (s->cond[x] == BC_COND_OPEN)) return 0;
+    }
+    aux_t *a = &s->work.a[s->work.cur];
+    double y[NY];
+    pack(s, y);
+    const double *B = s->tc_b, *e = a->e;
+    const double eb = s->tc_cn[0] * e[0] + s->tc_cn[1] * e[1] + s->tc_cn[2] * e[2];
+    for (int x = 0; x < 3; ++x) { /* as core(): di/dt = v_src P up + P U0 - B i - g c_x (e_x - c.e / n) */
+        s->work.k1[Y_I + x] = s->tc_gain != 0.0 ? s->v_src * s->tc_pup[x] + s->tc_pu0[x] -
+                                                      (B[3 * x] * y[Y_I] + B[3 * x + 1] * y[Y_I + 1] +
+                                                       B[3 * x + 2] * y[Y_I + 2]) -
+                                                      s->tc_pc[x] * (e[x] - eb)
+                                                : 0.0;
+    }
+    const double idc = s->tc_up[0] * y[Y_I] + s->tc_up[1] * y[Y_I + 1] + s->tc_up[2] * y[Y_I + 2];
+    a->idc = idc;
+    a->vbus = s->v_src - p->R_src * idc;
+    a->p_rsrc = p->R_src * idc * idc;
+    if (s->tc_n < 3 || (s->acc_mask & (1u << BC_ACC_VA))) aux_terminals(p, s, y, a);
+    double tol = 1e-9 * (1.0 + fabs(s->v_src)); /* resolve_open's test of the open terminals */
+    for (int x = 0; x < 3; ++x) {
+        if (s->cond[x] != BC_COND_OPEN || ((s->hold_open | s->open_fault) & (1 << x))) continue;
+        if (a->n_conn == 0 || a->v[x] < s->tc_lo_a[x] * a->vbus + s->tc_lo_b[x] - tol ||
+            a->v[x] > s->tc_hi_a[x] * a->vbus + s->tc_hi_b[x] + tol)
+            return 0;
+    }
+    /* the watches: those of diodes and open phases change with the conduction states; with every phase on a switch
+     * before and after, only the trip, speed and sticking ones are left, functions of the unchanged state */
+    int sw = 1;
+    for (int x = 0; x < 3; ++x) {
+        sw &= (old[x] == BC_COND_SW_U || old[x] == BC_COND_SW_L) &&
+              (s->cond[x] == BC_COND_SW_U || s->cond[x] == BC_COND_SW_L);
+    }
+    if (!sw) (void)watch_eval(p, s, y, a, s->work.wdir, s->work.w[s->work.cur]);
+    if (s->acc_on) lanes(p, s, y, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
+    return 1;
+}
+
 static void resolve(const bc_plant_params *p, bc_plant_state *s)
 {
+    int32_t old[3] = {s->cond[0], s->cond[1], s->cond[2]};
     conduction_from_gates(p, s);
+    if (switch_update(p, s, old)) return;
     s->work.valid = 0;
     resolve_open(p, s);
 }
@@ -830,18 +1248,22 @@ static void resolve(const bc_plant_params *p, bc_plant_state *s)
 #define W_TRIP 12  /* + phase: |i_x| below the hardware trip level */
 #define NW BC_PLANT_NW
 
-static void watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
-                       int dir_om, double *g)
+static int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
+                      int dir_om, double *g)
 {
     for (int j = 0; j < NW; ++j) g[j] = HUGE_VAL;
+    int neg = 0; /* any watch negative */
     for (int x = 0; x < 3; ++x) {
         switch (s->cond[x]) {
-        case BC_COND_D_L: g[W_DIODE + x] = y[Y_I + x]; break;
-        case BC_COND_D_U: g[W_DIODE + x] = -y[Y_I + x]; break;
+        case BC_COND_D_L: g[W_DIODE + x] = y[Y_I + x]; neg |= y[Y_I + x] < 0.0; break;
+        case BC_COND_D_U: g[W_DIODE + x] = -y[Y_I + x]; neg |= y[Y_I + x] > 0.0; break;
         case BC_COND_OPEN:
             if (a->n_conn > 0 && !(s->open_fault & (1 << x))) {
-                g[W_OPEN_LO + x] = a->v[x] - (s->tc_lo_a[x] * a->vbus + s->tc_lo_b[x]);
-                g[W_OPEN_HI + x] = (s->tc_hi_a[x] * a->vbus + s->tc_hi_b[x]) - a->v[x];
+                double lo = a->v[x] - (s->tc_lo_a[x] * a->vbus + s->tc_lo_b[x]);
+                double hi = (s->tc_hi_a[x] * a->vbus + s->tc_hi_b[x]) - a->v[x];
+                g[W_OPEN_LO + x] = lo;
+                g[W_OPEN_HI + x] = hi;
+                neg |= (lo < 0.0) | (hi < 0.0);
             }
             break;
         default: break;
@@ -852,18 +1274,25 @@ static void watch_eval(const bc_plant_params *p, const bc_plant_state *s, const 
         double m = pair_margin(p, s, a, &hi, &lo);
         if (hi >= 0 && lo >= 0 && hi != lo && (s->avg[0] | s->avg[1] | s->avg[2] || a->e[hi] > a->e[lo])) {
             g[W_PAIR] = m;
+            neg |= m < 0.0;
         }
     }
     if (p->i_trip > 0.0 && !s->tripped) {
-        for (int x = 0; x < 3; ++x) g[W_TRIP + x] = p->i_trip - fabs(y[Y_I + x]);
+        for (int x = 0; x < 3; ++x) {
+            g[W_TRIP + x] = p->i_trip - fabs(y[Y_I + x]);
+            neg |= g[W_TRIP + x] < 0.0;
+        }
     }
     if (p->mech == BC_MECH_DYNAMIC) {
         if (s->stuck) {
             g[W_STICK] = p->tau_c + s->fe_tc - fabs(a->tau_net);
+            neg |= g[W_STICK] < 0.0;
         } else if (dir_om != 0) {
             g[W_OMEGA] = y[Y_OM] * (double)dir_om;
+            neg |= g[W_OMEGA] < 0.0;
         }
     }
+    return neg;
 }
 
 static double watch_tol(const bc_plant_params *p, const bc_plant_state *s, int w)
@@ -914,10 +1343,10 @@ static double watch_at(const bc_plant_params *p, const bc_plant_state *s, const 
                        double c, int w, int dir_om, root_pt *rp)
 {
     double g[NW];
-    rk4(p, s, y0, k1, c, rp->y);
-    rhs(p, s, rp->y, rp->dy, &rp->a);
+    state_step(p, s, y0, k1, c, rp->y);
+    core(p, s, rp->y, rp->dy, &rp->a, s->acc_on ? WANT_DK : 0, s->work.cs);
     rp->h = c;
-    watch_eval(p, s, rp->y, &rp->a, dir_om, g);
+    (void)watch_eval(p, s, rp->y, &rp->a, dir_om, g);
     return g[w];
 }
 
@@ -1104,6 +1533,7 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     }
 
     memset(s, 0, sizeof *s);
+    s->tc_cond[0] = s->tc_cond[1] = s->tc_cond[2] = -1; /* no conduction coefficients computed yet */
     s->t = t0;
     s->sw_on = sw_on;
     s->sw_inv_vi = sw_on ? 1.0 / (p->V_test * p->I_test) : 0.0;
@@ -1112,7 +1542,24 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     s->drag_on = p->B > 0.0 || p->tau_c > 0.0 || s->fe_on;
     /* the optional lanes integrate when a rate can be nonzero: iron loss, or switching losses on averaged legs
      * (the switching inverter books them at its gate edges) */
-    s->ny = (s->fe_on || (sw_on && p->inverter == BC_INV_AVERAGE)) ? NY : NY_BASE;
+    lanes_select(p, s, BC_ACC_ALL);
+    s->emf_tables = p->emf[0].kind == BC_EMF_TABLE && p->emf[1].kind == BC_EMF_TABLE && p->emf[2].kind == BC_EMF_TABLE;
+    s->fz_n = 0;
+    for (int x = 0; x < 3; ++x) {
+        int32_t n = p->emf[x].kind == BC_EMF_FOURIER ? p->emf[x].n : BC_PLANT_FZ_N + 1;
+        if (n > s->fz_n) s->fz_n = n;
+    }
+    if (s->fz_n > BC_PLANT_FZ_N) s->fz_n = 0;
+    for (int x = 0; x < 3 && s->fz_n > 0; ++x) {
+        /* x_m cos(m (th - phi)) + y_m sin(m (th - phi)) = a_m cos(m th) + b_m sin(m th), a_m = x_m cos(m phi) -
+         * y_m sin(m phi), b_m = x_m sin(m phi) + y_m cos(m phi); the phase offset phi = 2 pi x/3 */
+        for (int32_t m = 0; m < s->fz_n; ++m) {
+            double xm = m < p->emf[x].n ? p->emf[x].x[m] : 0.0, ym = m < p->emf[x].n ? p->emf[x].y[m] : 0.0;
+            double cp = cos((double)m * PHI[x]), sp = sin((double)m * PHI[x]);
+            s->fz_a[x][m] = xm * cp - ym * sp;
+            s->fz_b[x][m] = xm * sp + ym * cp;
+        }
+    }
     double mean = (i0[0] + i0[1] + i0[2]) / 3.0;
     for (int x = 0; x < 3; ++x) {
         s->i[x] = i0[x] - mean;
@@ -1333,39 +1780,15 @@ static void ensure_k1(const bc_plant_params *p, bc_plant_state *s)
     if (s->work.valid) {
         return;
     }
-    double y[NY];
+    double y[NY], dy[NY];
     aux_t a;
     pack(s, y);
-    rhs(p, s, y, s->work.k1, &a);
-    s->work.tau = a.tau;
-    s->work.wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
-    watch_eval(p, s, y, &a, s->work.wdir, s->work.w);
-    s->work.valid = 1;
+    core(p, s, y, dy, &a, s->acc_on ? WANT_DK : 0, 0);
+    work_fill(p, s, y, dy, &a);
 }
 
 /* ---------------------------------------------------------------------------------------------------------- */
 /* torque extremes inside a step                                                                              */
-
-/* d tau_e/dt at state y with derivative dy, inside the current angle pieces:
- *     sum_x k_x di_x/dt + p omega sum_x i_x dk_x/dtheta + omega sum_j amp_j order_j cos(order_j theta_m + phase_j)
- * (tables: the piece's slope; Fourier: the series differentiated term by term). */
-static double tau_rate(const bc_plant_params *p, const bc_plant_state *s, const double *y, const double *dy)
-{
-    const double th = y[Y_TH], om = y[Y_OM];
-    double k[3], dk[3];
-    shapes_at(p, s, th, k, dk);
-    double r = 0.0;
-    for (int x = 0; x < 3; ++x) r += k[x] * dy[Y_I + x] + (double)p->p * om * dk[x] * y[Y_I + x];
-    if (p->n_cog > 0) {
-        double th_m = (th + BC_TWO_PI * (double)s->turns) / (double)p->p;
-        double d = 0.0;
-        for (int32_t j = 0; j < p->n_cog; ++j) {
-            d += p->cog_amp[j] * p->cog_order[j] * cos(p->cog_order[j] * th_m + p->cog_phase[j]);
-        }
-        r += om * d;
-    }
-    return r;
-}
 
 /* Fold the turning points of the cubic Hermite interpolant through (0, f0, d0) and (h, f1, d1) into [*lo, *hi]:
  *     q(u) = f0 + m0 u + (3 D - 2 m0 - m1) u^2 + (m0 + m1 - 2 D) u^3,  u in (0, 1),  m = h d,  D = f1 - f0. */
@@ -1402,30 +1825,35 @@ static void hermite_extremes(double h, double f0, double f1, double d0, double d
     }
 }
 
-/* After a step of length h from (y0, k0 = f(y0), tau0) to the current state (y1, k1 = f(y1), tau_e in work.tau):
- * update the extremes, including the torque's turning points inside the step, and tell the observer. */
-static void track_extremes(const bc_plant_params *p, bc_plant_state *s, double h, const double *y0,
-                           const double *k0, double tau0, const double *y1, const double *k1)
+/* A step of length h has ended at the current state (y1, dy1 = f(y1), aux a1; the work cache still holds its start):
+ * integrate acc[] over it and update the extremes, including the torque's turning points inside the step (from the
+ * torque and its rate at both ends), while acc_on; then tell the observer. */
+static void step_done(const bc_plant_params *p, bc_plant_state *s, double h, const double *y1, const double *dy1,
+                      const aux_t *a1, double *f1, double *fd1)
 {
-    double tau1 = s->work.tau;
-    if (tau1 < s->tau_min) s->tau_min = tau1;
-    if (tau1 > s->tau_max) s->tau_max = tau1;
-    if (h > 0.0) {
-        hermite_extremes(h, tau0, tau1, tau_rate(p, s, y0, k0), tau_rate(p, s, y1, k1), &s->tau_min, &s->tau_max);
+    if (s->acc_on) {
+        lanes(p, s, y1, dy1, a1, f1, fd1);
+        if (h > 0.0) acc_step(s->acc, s->acc_hi, h, s->work.f[s->work.cur], s->work.fd[s->work.cur], f1, fd1);
+        double tau0 = s->work.tau, tau1 = a1->tau;
+        if (tau1 < s->tau_min) s->tau_min = tau1;
+        if (tau1 > s->tau_max) s->tau_max = tau1;
+        if (h > 0.0) {
+            hermite_extremes(h, tau0, tau1, s->work.fd[s->work.cur][BC_ACC_TAU], fd1[BC_ACC_TAU], &s->tau_min,
+                             &s->tau_max);
+        }
+        for (int x = 0; x < 3; ++x) {
+            double v = fabs(s->i[x]);
+            if (v > s->i_peak[x]) s->i_peak[x] = v;
+        }
     }
-    for (int x = 0; x < 3; ++x) {
-        double v = fabs(s->i[x]);
-        if (v > s->i_peak[x]) s->i_peak[x] = v;
-    }
-    if (s->on_step) s->on_step(s->on_step_ctx, s->t, s->acc, tau1);
+    if (s->on_step) s->on_step(s->on_step_ctx, s->t, s->acc, a1->tau);
 }
 
 void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
 {
     double hmax = h_max_of(p);
     int zero_len = 0;
-    double y0[NY], y1[NY], k1n[NY], g0[NW], g1[NW];
-    aux_t a1;
+    double y0[NY], y1[NY], k1n[NY];
     root_pt rtry, rbest;
     for (;;) {
         process_due(p, s);
@@ -1445,6 +1873,10 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             }
         }
         pack(s, y0);
+        /* the step's end goes into the other buffers, current once the step is accepted */
+        const int nx = s->work.cur ^ 1;
+        double *f1 = s->work.f[nx], *fd1 = s->work.fd[nx], *g1 = s->work.w[nx];
+        aux_t *a1 = &s->work.a[nx];
         /* the step: to the target, a gate edge, a delayed Hall edge, h_max, or an angle bound */
         double t_stop = t_end;
         double tg = next_gate_time(p, s);
@@ -1476,17 +1908,15 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                 continue;
             }
         }
-        rk4(p, s, y0, s->work.k1, h, y1);
-        rhs(p, s, y1, k1n, &a1);
+        state_step(p, s, y0, s->work.k1, h, y1);
+        core(p, s, y1, k1n, a1, s->acc_on ? WANT_DK : 0, 0);
         /* watched functions: the first that goes negative inside the step is an event */
         int dir_om = s->work.wdir;
-        watch_eval(p, s, y1, &a1, dir_om, g1);
+        int any_neg = watch_eval(p, s, y1, a1, dir_om, g1);
         int w_hit = -1;
         double h_hit = h;
-        int any_neg = 0;
-        for (int w = 0; w < NW; ++w) any_neg |= g1[w] < 0.0;
         if (any_neg && zero_len <= MAX_ZERO_LENGTH_EVENTS) {
-            memcpy(g0, s->work.w, sizeof g0); /* the watches at the step start */
+            const double *g0 = s->work.w[s->work.cur]; /* the watches at the step start */
             for (int w = 0; w < NW; ++w) {
                 if (g1[w] < 0.0) {
                     double guess = -1.0;
@@ -1512,18 +1942,18 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             if (h_hit < h && rbest.h == h_hit) {
                 memcpy(y1, rbest.y, sizeof y1);
                 memcpy(k1n, rbest.dy, sizeof k1n);
-                a1 = rbest.a;
+                *a1 = rbest.a;
             } else if (h_hit < h) {
-                rk4(p, s, y0, s->work.k1, h_hit, y1);
-                rhs(p, s, y1, k1n, &a1);
+                state_step(p, s, y0, s->work.k1, h_hit, y1);
+                core(p, s, y1, k1n, a1, s->acc_on ? WANT_DK : 0, 0);
             }
-            double tau0 = s->work.tau;
             unpack(s, y1);
+            s->work.a_ok = 0; /* the cache holds the step's start */
             s->t = (h_hit < h) ? s->t + h_hit : t_stop;
             if (p->mech == BC_MECH_IMPOSED) s->omega = y0[Y_OM];
-            s->work.tau = a1.tau;
-            track_extremes(p, s, h_hit < h ? h_hit : h, y0, s->work.k1, tau0, y1, k1n);
-            apply_event(p, s, w_hit, &a1);
+            step_done(p, s, h_hit < h ? h_hit : h, y1, k1n, a1, f1, fd1);
+            s->work.tau = a1->tau;
+            apply_event(p, s, w_hit, a1);
             s->n_events += 1;
             s->n_steps += 1;
             if (h_hit <= 0.0) {
@@ -1543,19 +1973,24 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             wrap_angle(p, s);
             continue;
         }
-        double tau0 = s->work.tau;
         unpack(s, y1);
         s->t = t_stop;
-        s->work.tau = a1.tau;
-        track_extremes(p, s, h, y0, s->work.k1, tau0, y1, k1n);
+        step_done(p, s, h, y1, k1n, a1, f1, fd1);
+        s->work.tau = a1->tau;
         memcpy(s->work.k1, k1n, sizeof k1n);
-        memcpy(s->work.w, g1, sizeof g1);
+        memcpy(s->work.cs, a1->cs, sizeof a1->cs);
+        s->work.a_ok = 1;
+        s->work.cur = nx; /* the step's end (f1, fd1, g1, a1) starts the next step */
         s->work.valid = 1;
         s->n_steps += 1;
         zero_len = 0;
         s->hold_open = 0;
-        if (angle_step) {
-            angles_cross(p, s, th_ev); /* the shapes are continuous: the cached derivative stays valid */
+        if (angle_step && angles_cross(p, s, th_ev) && s->acc_on) {
+            /* the shapes are continuous, so the cached derivative stays valid; their slopes are not: the power
+             * flows' rates start the next step on the new pieces */
+            aux_t *a = &s->work.a[s->work.cur];
+            core(p, s, y1, k1n, a, WANT_DK, 0);
+            lanes(p, s, y1, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
         }
         wrap_angle(p, s);
     }
@@ -1582,8 +2017,32 @@ void bc_plant_output(const bc_plant_params *p, const bc_plant_state *s, bc_plant
     double y[NY], dy[NY];
     aux_t a;
     pack(s, y);
-    rhs(p, s, y, dy, &a);
+    core(p, s, y, dy, &a, WANT_V, 0);
     aux_to_out(p, s, y, &a, out);
+}
+
+double bc_plant_tau(const bc_plant_params *p, bc_plant_state *s)
+{
+    ensure_k1(p, s);
+    return s->work.tau;
+}
+
+void bc_plant_set_accumulate(const bc_plant_params *p, bc_plant_state *s, int level)
+{
+    int v = level <= BC_ACC_OFF ? BC_ACC_OFF : (level >= BC_ACC_ALL ? BC_ACC_ALL : BC_ACC_METRICS);
+    if (v == s->acc_on) return;
+    int had = s->acc_on;
+    lanes_select(p, s, v);
+    if (v > had && s->work.valid) {
+        /* the power flows at the start of the next step; the cached derivative stays (the state's path is the
+         * same whatever is integrated) */
+        double y[NY], dy[NY];
+        aux_t *a = &s->work.a[s->work.cur]; /* with dk now: the power flows need it */
+        pack(s, y);
+        core(p, s, y, dy, a, WANT_DK, 0);
+        s->work.a_ok = 1;
+        lanes(p, s, y, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
+    }
 }
 
 void bc_plant_reset_extremes(const bc_plant_params *p, bc_plant_state *s)

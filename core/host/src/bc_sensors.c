@@ -60,7 +60,8 @@ uint32_t bc_sensor_tick(const bc_sensor_params *p, double t)
 {
     if (!(t >= 0.0) || !isfinite(t)) return 0u;
     double ticks = floor(t * p->f_tick);
-    return (uint32_t)(uint64_t)fmod(ticks, 4294967296.0);
+    /* mod 2^32: the conversion of an integer below 2^64 to uint64_t, then to uint32_t, takes it exactly */
+    return ticks < 18446744073709551616.0 ? (uint32_t)(uint64_t)ticks : (uint32_t)(uint64_t)fmod(ticks, 4294967296.0);
 }
 
 void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_plant_state *ps, double v_bus,
@@ -72,7 +73,7 @@ void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_p
             if (p->i_noise > 0.0) v += p->i_noise * normal(s);
             for (int j = 0; j < BC_FAULT_MAX; ++j) {
                 const bc_fault *f = &p->fault[j];
-                if (f->phase != x || !(ps->t >= f->t_on && ps->t < f->t_off)) continue;
+                if (f->kind == BC_FAULT_NONE || f->phase != x || !(ps->t >= f->t_on && ps->t < f->t_off)) continue;
                 if (f->kind == BC_FAULT_CURRENT_OFFSET) v += f->value;
                 if (f->kind == BC_FAULT_CURRENT_LOSS) v = 0.0;
             }

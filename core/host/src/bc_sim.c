@@ -6,6 +6,9 @@
 
 static void sim_on_step(void *ctx, double t, const double *acc, double tau);
 
+/* the history ring is indexed with a mask: its length is a power of two */
+typedef char bc_sim_hist_pow2[(BC_SIM_HIST & (BC_SIM_HIST - 1)) == 0 ? 1 : -1];
+
 static int config_ok(const bc_sim_config *c)
 {
     if (c == 0 || c->plant == 0 || c->sensors == 0 || c->ctrl.step == 0) return 0;
@@ -118,15 +121,15 @@ static void row_close(bc_sim_state *s, bc_trace_row *rows, int64_t cap, int64_t 
  * derivatives tau_e. */
 static double hist_interp(const bc_sim_state *s, int64_t a, double tq)
 {
-    int ja = (int)(a % BC_SIM_HIST), jb = (int)((a + 1) % BC_SIM_HIST);
+    int ja = (int)(a & (BC_SIM_HIST - 1)), jb = (int)((a + 1) & (BC_SIM_HIST - 1));
     double h = s->h_t[jb] - s->h_t[ja];
     if (!(h > 0.0)) return s->h_a[jb];
     double u = (tq - s->h_t[ja]) / h;
     if (u < 0.0) u = 0.0;
     if (u > 1.0) u = 1.0;
-    double u2 = u * u, u3 = u2 * u;
-    return (2.0 * u3 - 3.0 * u2 + 1.0) * s->h_a[ja] + (u3 - 2.0 * u2 + u) * h * s->h_tau[ja] +
-           (3.0 * u2 - 2.0 * u3) * s->h_a[jb] + (u3 - u2) * h * s->h_tau[jb];
+    /* A(u) = A_a + u (h tau_a + u (3 D - 2 h tau_a - h tau_b + u (h tau_a + h tau_b - 2 D))), D = A_b - A_a */
+    double D = s->h_a[jb] - s->h_a[ja], m0 = h * s->h_tau[ja], m1 = h * s->h_tau[jb];
+    return s->h_a[ja] + u * (m0 + u * (3.0 * D - 2.0 * m0 - m1 + u * (m0 + m1 - 2.0 * D)));
 }
 
 static void ma_fold(bc_sim_state *s, double ma)
@@ -154,16 +157,17 @@ static void sim_on_step(void *ctx, double t, const double *acc, double tau)
 {
     bc_sim_state *s = (bc_sim_state *)ctx;
     angle_track(s);
+    if (!s->plant.acc_on) return; /* outside the metric window, no trace: nothing reads the history */
     double A = acc[BC_ACC_TAU];
     if (s->h_n > 0) {
-        int jl = (int)((s->h_n - 1) % BC_SIM_HIST);
+        int jl = (int)((s->h_n - 1) & (BC_SIM_HIST - 1));
         if (!(t > s->h_t[jl])) { /* a zero-length step (an event at this instant): same node */
             s->h_a[jl] = A;
             s->h_tau[jl] = tau;
             return;
         }
     }
-    int jn = (int)(s->h_n % BC_SIM_HIST);
+    int jn = (int)(s->h_n & (BC_SIM_HIST - 1));
     s->h_t[jn] = t;
     s->h_a[jn] = A;
     s->h_tau[jn] = tau;
@@ -173,15 +177,15 @@ static void sim_on_step(void *ctx, double t, const double *acc, double tau)
     double T = s->t_pwm;
     double eps = 1e-9 * T;
     if (s->h_lag < oldest) {
-        if (in && s->h_t[(int)(oldest % BC_SIM_HIST)] - T > s->m.t0 - eps) s->m.ma_lost += 1;
+        if (in && s->h_t[(int)(oldest & (BC_SIM_HIST - 1))] - T > s->m.t0 - eps) s->m.ma_lost += 1;
         s->h_lag = oldest;
     }
     if (s->h_n < 2) return;
     int64_t prev = s->h_n - 2;
-    double t_prev = s->h_t[(int)(prev % BC_SIM_HIST)];
+    double t_prev = s->h_t[(int)(prev & (BC_SIM_HIST - 1))];
     /* older nodes j whose t_j + T lies in (t_prev, t]: A(t_j + T) from the step just ended, A(t_j) exact */
     while (s->h_lag + 1 < s->h_n - 1) {
-        int j = (int)((s->h_lag + 1) % BC_SIM_HIST);
+        int j = (int)((s->h_lag + 1) & (BC_SIM_HIST - 1));
         double ts = s->h_t[j] + T;
         if (ts > t) break;
         if (in && ts > t_prev && s->h_t[j] >= s->m.t0 - eps) {
@@ -191,7 +195,7 @@ static void sim_on_step(void *ctx, double t, const double *acc, double tau)
     }
     /* the new node: A(t - T) from the history segment holding t - T */
     double tq = t - T;
-    if (in && tq >= s->m.t0 - eps && s->h_t[(int)(s->h_lag % BC_SIM_HIST)] <= tq + eps) {
+    if (in && tq >= s->m.t0 - eps && s->h_t[(int)(s->h_lag & (BC_SIM_HIST - 1))] <= tq + eps) {
         ma_fold(s, (A - hist_interp(s, s->h_lag, tq)) / T);
     }
 }
@@ -208,19 +212,19 @@ static double w_mag(const bc_plant_params *p, const bc_plant_state *ps)
     return 0.5 * p->L * (ps->i[0] * ps->i[0] + ps->i[1] * ps->i[1] + ps->i[2] * ps->i[2]);
 }
 
-static void metric_start(const bc_sim_config *cfg, bc_sim_state *s)
+static void metric_start(const bc_sim_config *cfg, bc_sim_state *s, int trace)
 {
-    const bc_plant_state *ps = &s->plant;
-    bc_plant_out po;
-    bc_plant_output(cfg->plant, ps, &po);
+    bc_plant_state *ps = &s->plant;
+    bc_plant_set_accumulate(cfg->plant, ps, trace ? BC_ACC_ALL : BC_ACC_METRICS);
+    double tau = bc_plant_tau(cfg->plant, ps);
     s->m.t0 = ps->t;
     memcpy(s->m_acc0, ps->acc, sizeof s->m_acc0);
     s->m.w_l0 = w_mag(cfg->plant, ps);
     s->m.w_kin0 = w_kin(cfg->plant, ps);
     angle_track(s);
     s->m.th0 = s->th_run;
-    s->m.tau_min = po.tau_e;
-    s->m.tau_max = po.tau_e;
+    s->m.tau_min = tau;
+    s->m.tau_max = tau;
     s->m.tau_ma_min = HUGE_VAL;
     s->m.tau_ma_max = -HUGE_VAL;
     s->m.tau_ma_grid_min = HUGE_VAL;
@@ -233,9 +237,13 @@ static void metric_start(const bc_sim_config *cfg, bc_sim_state *s)
     s->m.ma_lost = 0;
     s->ma_have = 0;
     s->m.state = 1;
+    /* the moving average's history starts at t0 (before it acc[] may not have been integrated) */
+    s->h_n = 0;
+    s->h_lag = 0;
+    sim_on_step(s, ps->t, ps->acc, tau);
 }
 
-static void metric_stop(const bc_sim_config *cfg, bc_sim_state *s)
+static void metric_stop(const bc_sim_config *cfg, bc_sim_state *s, int trace)
 {
     const bc_plant_state *ps = &s->plant;
     s->m.t1 = ps->t;
@@ -245,6 +253,7 @@ static void metric_stop(const bc_sim_config *cfg, bc_sim_state *s)
     angle_track(s);
     s->m.th1 = s->th_run;
     s->m.state = 2;
+    if (!trace) bc_plant_set_accumulate(cfg->plant, &s->plant, BC_ACC_OFF); /* nothing reads acc[] any more */
 }
 
 /* Integrate to t, then merge the chunk's extremes into the open row and the running metrics. */
@@ -279,6 +288,8 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
     *rows_written = 0;
     s->plant.on_step = sim_on_step; /* set on every call: the state may have been copied */
     s->plant.on_step_ctx = s;
+    /* the power flows and extremes are integrated where something reads them: a trace, the metric window */
+    bc_plant_set_accumulate(pp, &s->plant, rows != 0 ? BC_ACC_ALL : (s->m.state == 1 ? BC_ACC_METRICS : BC_ACC_OFF));
 
     for (int64_t j = 0; j < n; ++j) {
         int64_t k = s->k;
@@ -316,10 +327,9 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
 
         /* torque at the sample instant, inside the metric window */
         if (s->m.state == 1) {
-            bc_plant_out po;
-            bc_plant_output(pp, ps, &po);
-            if (po.tau_e < s->m.tau_s_min) s->m.tau_s_min = po.tau_e;
-            if (po.tau_e > s->m.tau_s_max) s->m.tau_s_max = po.tau_e;
+            double tau = bc_plant_tau(pp, ps);
+            if (tau < s->m.tau_s_min) s->m.tau_s_min = tau;
+            if (tau > s->m.tau_s_max) s->m.tau_s_max = tau;
         }
 
         /* half-period torque mean for the moving average */
@@ -347,7 +357,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
             /* metric bounds inside this segment */
             if (has_window && s->m.state == 0 && cfg->metric_t0 >= ps->t && cfg->metric_t0 < t_seg) {
                 if (cfg->metric_t0 > ps->t) advance_chunk(cfg, s, cfg->metric_t0);
-                metric_start(cfg, s);
+                metric_start(cfg, s, rows != 0);
                 if (ps->t == t_k) {
                     s->m_acc0[BC_ACC_SWLOSS] = pre_swloss;
                     s->m_acc0[BC_ACC_RR] = pre_rr;
@@ -355,7 +365,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
             }
             if (has_window && s->m.state == 1 && cfg->metric_t1 > ps->t && cfg->metric_t1 <= t_seg) {
                 advance_chunk(cfg, s, cfg->metric_t1);
-                metric_stop(cfg, s);
+                metric_stop(cfg, s, rows != 0);
             }
             advance_chunk(cfg, s, t_seg);
             if (sub > 1 && rows != 0 && s->row_open) {

@@ -108,9 +108,14 @@
  *
  * Integration: RK4 between events; lands exactly on gate edges, back-EMF corners and Hall edges (predicted),
  * and on diode current zeros, re-conduction and speed zero crossings (root finding); within a step the Coulomb-like
- * drags (tau_c, p k_fe_h) keep the sign of the motion at its start. Powers are integrated
- * as extra states (acc[]) so the energy balance closes to the integration accuracy. Full description:
- * docs/plant.md.
+ * drags (tau_c, p k_fe_h) keep the sign of the motion at its start. The power flows acc[] are integrated over each
+ * step by the corrected trapezoid rule from their rates f and the rates' exact time derivatives f' (chain rule along
+ * the circuit equations) at the step's two ends,
+ *
+ *     acc(t + h) = acc(t) + h (f(t) + f(t + h)) / 2 + h^2 (f'(t) - f'(t + h)) / 12      (exact for cubics, O(h^5)),
+ *
+ * so the RK4 stages evaluate only the five states (i_a, i_b, i_c, theta, omega) and the energy balance, an
+ * identity of the rates, closes to the integration accuracy. Full description: docs/plant.md.
  */
 #ifndef BC_PLANT_H
 #define BC_PLANT_H
@@ -139,25 +144,27 @@
 #define BC_COND_D_U 3
 #define BC_COND_D_L 4
 
-/* Integrated quantities acc[], listed once: X(NAME, name, unit, description). The loss lanes SWLOSS, RR and FE stay
- * last (BC_ACC_OPT is the first of them): a plant whose switching-loss energies and iron-loss coefficients are all
- * zero, or whose switching losses are only booked at gate edges (switching inverter, no iron loss), has zero rates
- * there and its integrator skips them, so lossless runs cost what they cost before the lanes existed. */
+/* Integrated quantities acc[], listed once: X(NAME, name, unit, description). The order serves the integrator, which
+ * adds up the lanes 0 .. acc_hi - 1 (the rates of the lanes not integrated are held at zero): first the lanes every
+ * metric window reads, then those the parameters may keep at zero (friction, cogging, switch, diode and source
+ * resistance losses), then the trace's (terminal voltages, star point, DC current), last the optional loss lanes
+ * SWLOSS, RR, FE (BC_ACC_OPT is the first of them: a plant whose switching-loss energies and iron-loss coefficients
+ * are all zero, or whose switching losses are only booked at gate edges, never integrates them). */
 #define BC_ACC_FIELDS(X)                                                                      \
-    X(SRC, src, "J", "V_src i_dc: energy delivered by the DC source")                         \
-    X(RSRC, Rsrc, "J", "R_src i_dc^2: loss in the source resistance")                        \
-    X(CU, cu, "J", "R sum i^2: copper loss")                                                  \
-    X(SW, sw, "J", "R_on i^2 in conducting switches")                                         \
-    X(DIODE, diode, "J", "(V_f + r_d |i|) |i| in conducting diodes")                          \
-    X(EMF, emf, "J", "sum e_x i_x = tau_em omega_m: electrical to mechanical")               \
-    X(COG, cog, "J", "tau_cog omega_m")                                                       \
-    X(FRIC, fric, "J", "(B omega + tau_c sign omega) omega: friction loss")                   \
-    X(LOAD, load, "J", "tau_L omega: energy to the load")                                     \
     X(TAU, tau, "N m s", "integral of tau_e")                                                 \
     X(TAU2, tau2, "N^2 m^2 s", "integral of tau_e^2")                                         \
     X(I2A, i2a, "A^2 s", "integral of i_a^2")                                                 \
     X(I2B, i2b, "A^2 s", "integral of i_b^2")                                                 \
     X(I2C, i2c, "A^2 s", "integral of i_c^2")                                                 \
+    X(CU, cu, "J", "R sum i^2: copper loss")                                                  \
+    X(EMF, emf, "J", "sum e_x i_x = tau_em omega_m: electrical to mechanical")               \
+    X(SRC, src, "J", "V_src i_dc: energy delivered by the DC source")                         \
+    X(LOAD, load, "J", "tau_L omega: energy to the load")                                     \
+    X(FRIC, fric, "J", "(B omega + tau_c sign omega) omega: friction loss")                   \
+    X(COG, cog, "J", "tau_cog omega_m")                                                       \
+    X(SW, sw, "J", "R_on i^2 in conducting switches")                                         \
+    X(DIODE, diode, "J", "(V_f + r_d |i|) |i| in conducting diodes")                          \
+    X(RSRC, Rsrc, "J", "R_src i_dc^2: loss in the source resistance")                        \
     X(VA, va, "V s", "integral of the terminal voltage v_a")                                  \
     X(VB, vb, "V s", "integral of v_b")                                                       \
     X(VC, vc, "V s", "integral of v_c")                                                       \
@@ -176,6 +183,7 @@ enum {
 #define BC_ACC_OPT BC_ACC_SWLOSS /* first optional lane: SWLOSS, RR, FE are the last three */
 
 #define BC_HALL_QUEUE 8
+#define BC_PLANT_FZ_N 16 /* Fourier shapes up to this many orders share one cos/sin recurrence for the three phases */
 #define BC_PLANT_NW 15 /* functions watched for sign changes inside a step (diodes, open phases, speed, trip) */
 
 /* Faults the plant injects (bc_plant_params.fault): each active on [t_on, t_off). */
@@ -269,16 +277,35 @@ typedef struct {
  * The runner (bc_sim) uses it for the continuous PWM-period moving average of the torque. */
 typedef void (*bc_plant_step_fn)(void *ctx, double t, const double *acc, double tau);
 
-/* The integrator's work memory: the derivative, the electrical torque and the watched functions at the current
- * state, reused as the first stage of the next RK4 step. Private to bc_plant.c: it lives inside bc_plant_state only
- * so that the state stays one caller-owned block (no malloc); the binding does not describe it, and the plant
- * invalidates it (valid = 0) whenever it changes the state itself (init, inputs, half-period start, events). */
+/* Circuit quantities computed with a derivative (private to bc_plant.c, like bc_plant_work). */
+typedef struct {
+    double k[3], dk[3], e[3], v[3]; /* shapes, dk/dtheta (when asked for), back-EMFs, terminals (where read) */
+    double cs[3];                   /* {theta, cos, sin} for Fourier shapes (theta = HUGE_VAL: none) */
+    double w[3];                    /* averaged legs with R_src: sum_y M_xy i_y */
+    double vn, vbus, idc, tau, tau_cog, tau_net, tau_fe, t_fric, p_rsrc;
+    double sgn;                     /* sign of the motion the Coulomb-like drags used (0: no drag) */
+    int32_t n_conn;
+} bc_plant_aux;
+
+/* The integrator's work memory: the derivative, the electrical torque, the watched functions and (while acc[] is
+ * integrated) the rates of acc[] and their time derivatives at the current state, reused as the start of the next
+ * step. Private to bc_plant.c: it lives inside bc_plant_state only so that the state stays one caller-owned block
+ * (no malloc); the binding does not describe it, and the plant invalidates it (valid = 0) whenever it changes the
+ * state itself (init, inputs, half-period start, events). */
 typedef struct {
     int32_t valid;              /* 1: the members below hold the current state's values */
     int32_t wdir;               /* speed sign the watches were evaluated with */
-    double k1[5 + BC_ACC_N];    /* derivative at the current state */
+    double k1[5];               /* derivative of (i_a, i_b, i_c, theta, omega) at the current state */
     double tau;                 /* tau_e at the current state, N m */
-    double w[BC_PLANT_NW];      /* watched functions at the current state */
+    double w[2][BC_PLANT_NW];   /* watched functions at the current state: w[cur] */
+    double cs[3];               /* {theta, cos theta, sin theta} at the current state for Fourier shapes (theta =
+                                   HUGE_VAL: none), the reference the RK4 stages rotate from */
+    double f[2][BC_ACC_N];      /* rates of acc[] at the current state (valid while acc_on): f[cur] */
+    double fd[2][BC_ACC_N];     /* their time derivatives: fd[cur] */
+    int32_t a_ok;               /* 1: a[cur] holds the circuit quantities at the current state (a gate edge then
+                                   updates the derivative and the power flows from them) */
+    bc_plant_aux a[2];
+    int32_t cur;                /* which of the double buffers w, f, fd, a is current; the other takes a step's end */
 } bc_plant_work;
 
 typedef struct {
@@ -311,11 +338,20 @@ typedef struct {
     int32_t sw_on;          /* 1 if any of E_on, E_off, E_rr is positive (set at init) */
     double sw_inv_vi;       /* 1 / (V_test I_test), 1/(V A) (0 without switching losses) */
     int32_t fe_on;          /* 1 if k_fe_e, k_fe_h or k_fe_x is positive (set at init) */
+    int32_t emf_tables;     /* 1 if the three shapes are tables (set at init) */
+    int32_t fz_n;           /* > 0: the three shapes are Fourier series of at most BC_PLANT_FZ_N orders, evaluated from
+                               fz_a, fz_b (set at init); 0: from the shapes themselves */
+    double fz_a[3][BC_PLANT_FZ_N]; /* k_x(theta) = sum_m fz_a[x][m] cos(m theta) + fz_b[x][m] sin(m theta): the */
+    double fz_b[3][BC_PLANT_FZ_N]; /* series of phase x in the global angle (its offset 2 pi x/3 folded in), V s/rad */
     double fe_tc;           /* Coulomb-like hysteresis drag p k_fe_h, N m */
     int32_t drag_on;        /* 1 if B, tau_c or an iron-loss coefficient is positive (set at init) */
-    int32_t ny;             /* entries of the integrated vector the RK4 step advances: all, or without the optional
-                               loss lanes (BC_ACC_OPT ...) when their rates are zero (set at init) */
+    int32_t acc_on;         /* BC_ACC_OFF, _METRICS or _ALL: what is integrated (bc_plant_set_accumulate; _ALL
+                               after init) */
+    uint32_t acc_mask;      /* bit j: lane j of acc[] is integrated (its rate can be nonzero at this level) */
+    int32_t acc_hi;         /* lanes 0 .. acc_hi - 1 are added up each step (1 + the last integrated one) */
     /* circuit coefficients of the present conduction states, set whenever they change (internal) */
+    int32_t tc_cond[3];     /* conduction state the coefficients of a switching leg were set for (-1: averaged or
+                               none yet) */
     double tc_up[3];        /* 1 if tied to the + rail */
     double tc_u0[3];        /* constant part of the terminal source U_x, V */
     double tc_r[3];         /* device resistance in series, Ohm */
@@ -331,6 +367,14 @@ typedef struct {
     double tc_msrc_m[9];    /* M_xy = half-period mean of up_x(t) up_y(t), row-major */
     double tc_inv_n;        /* 1 / connected phases (0 if none) */
     double tc_gain;         /* 1/L if at least two phases conduct, else 0 */
+    /* the current derivative as an affine map of the currents and back-EMFs (docs/plant.md, "Integration"):
+       di/dt = v_src tc_pup + tc_pu0 - tc_b i - tc_pc (e - sum_y tc_cn_y e_y) */
+    double tc_b[9];         /* P (M + R I), row-major, 1/s */
+    int32_t tc_b_ok;        /* tc_b has been computed (set by the first topology_set) */
+    double tc_pup[3];       /* P up, 1/H */
+    double tc_pu0[3];       /* P U0, A/s */
+    double tc_pc[3];        /* g c_x (P's diagonal part), 1/H */
+    double tc_cn[3];        /* c_x / n */
     int32_t tc_n;           /* connected phases */
     /* angle-dependent pieces */
     bc_emf_piece piece[3];  /* current back-EMF piece per phase (bounds in the global angle frame) */
@@ -390,6 +434,20 @@ void bc_plant_output(const bc_plant_params *p, const bc_plant_state *s, bc_plant
  * would have at this instant, the carrier peak or valley that ends the half period (active / idle), so the sensors
  * read what they read on the switching plant. */
 double bc_plant_vbus(const bc_plant_params *p, const bc_plant_state *s);
+
+/* What the plant integrates besides the state (bc_plant_set_accumulate). */
+#define BC_ACC_OFF 0     /* nothing: acc[] and the tau_min/tau_max/i_peak trackers hold their values */
+#define BC_ACC_METRICS 1 /* the lanes a metric window reads (all but VA, VB, VC, VN, IDC) and the trackers */
+#define BC_ACC_ALL 2     /* every lane (the trace's means of the terminal voltages, star point and DC current too);
+                            the level after init */
+
+/* Set what is integrated (BC_ACC_*). The state evolves bit for bit the same at every level; a lane whose rate the
+ * parameters keep at zero (no R_src, R_on, diode drop, cogging, friction, iron or averaged switching loss) is never
+ * integrated. A runner lowers the level where nothing reads the lanes (outside a metric window, no trace). */
+void bc_plant_set_accumulate(const bc_plant_params *p, bc_plant_state *s, int level);
+
+/* Electromagnetic torque tau_e at the current state, N m (cheaper than bc_plant_output: cached). */
+double bc_plant_tau(const bc_plant_params *p, bc_plant_state *s);
 
 /* Restart the tau_min/tau_max/i_peak trackers from the current state. */
 void bc_plant_reset_extremes(const bc_plant_params *p, bc_plant_state *s);
