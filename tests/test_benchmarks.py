@@ -134,14 +134,37 @@ def test_agreement_flags_a_settled_speed_offset(case, run):
     assert bad == [f"max |dw|, t >= {mc.SETTLED:g} s"]
 
 
+def test_run_all_exit_code_is_1_when_a_row_misses_its_target(capsys):
+    ra = _load("run_all")
+    ok, miss = ra.Row("a", "1", target="<= 2", ok="yes"), ra.Row("b", "3", "x", "<= 2", "NO")
+    assert ra.exit_code([ok, ra.Row("c", "skipped")], failed=False, allow_miss=False) == 0
+    assert ra.exit_code([ok, miss], failed=False, allow_miss=False) == 1
+    assert "1 row(s) missed their target" in capsys.readouterr().err
+    assert ra.exit_code([ok, miss], failed=False, allow_miss=True) == 0
+    assert "b: 3 x, target <= 2" in capsys.readouterr().err  # still listed
+    assert ra.exit_code([ok], failed=True, allow_miss=True) == 1  # a failed measurement is never allowed
+
+
+def _load(name):
+    spec = importlib.util.spec_from_file_location(f"{name}_bench", ROOT / "benchmarks" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
 @pytest.mark.slow
 def test_run_all_prints_one_table_and_survives_a_missing_motulator(tmp_path):
     cmd = [sys.executable, str(ROOT / "benchmarks" / "run_all.py"),
-           "--skip", "sine,sweep,memory,compare,effmap,firmware",
+           "--skip", "sine,sweep,memory,compare,effmap,firmware,cost",
            "--seconds", "0.05", "--repeats", "1", "--python", str(tmp_path / "no-python"), "--motulator-venv",
            str(tmp_path / "venv"), "--out", str(tmp_path / "out")]
     proc = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=300)
-    assert proc.returncode == 0, proc.stderr
+    missed = [line for line in proc.stdout.splitlines() if "  NO  " in line]
+    # a row that misses its target is an error (exit 1), named on stderr; a missing motulator is not
+    assert proc.returncode == (1 if missed else 0), proc.stderr
+    for line in missed:
+        assert line.split("  ")[0].strip() in proc.stderr
     lines = proc.stdout.splitlines()
     head = [j for j, line in enumerate(lines) if line.startswith("benchmark ")]
     assert len(head) == 1  # one table
