@@ -347,6 +347,49 @@ class Profile:
                             sum(external(k, frozenset()) for k in targets))
 
 
+def calls_per_part(path: Path | str, function: str) -> list[tuple[str, int, int]]:
+    """(trigger, calls, inclusive instructions) of the calls to ``function`` in each part of a callgrind file.
+
+    A fast scan for files with many dumps (one per controller step): only call arcs are read, by callee name.
+    """
+    fn_names: dict[str, str] = {}
+    out: list[tuple[str, int, int]] = []
+    trigger, calls, incl = "", 0, 0
+    started = False
+    cfn = ""
+    pending = False
+    with Path(path).open() as fh:
+        for line in fh:
+            if pending:
+                if line[0].isdigit() or line[0] in "+-*":
+                    if fn_names.get(cfn) == function:
+                        incl += int(line.split()[1])  # positions: line (one column), then Ir
+                    pending = False
+                continue
+            if line.startswith(("fn=", "cfn=")):
+                m = _NAME.match(line.split("=", 1)[1].rstrip("\n"))
+                key = m.group(1) if m else line.split("=", 1)[1].rstrip("\n")
+                if m and m.group(2) is not None:
+                    fn_names[key] = m.group(2)
+                elif not m:
+                    fn_names[key] = key
+                if line[0] == "c":
+                    cfn = key
+            elif line.startswith("calls="):
+                if fn_names.get(cfn) == function:
+                    calls += int(line[6:].split()[0])
+                pending = True
+            elif line.startswith("part:"):
+                if started:
+                    out.append((trigger, calls, incl))
+                started, trigger, calls, incl = True, "", 0, 0
+            elif line.startswith("desc: Trigger:"):
+                trigger = line.split(":", 2)[2].strip()
+    if started:
+        out.append((trigger, calls, incl))
+    return out
+
+
 def _base(path: str) -> str:
     return path.rsplit("/", 1)[-1]
 

@@ -187,28 +187,30 @@ def effmap_rows(n: int, workers: int) -> list[Row]:
                 verdict(par <= em.TARGET), note)]
 
 
-def firmware_rows(steps: int) -> list[Row]:
-    """Summary of ``firmware.py``: the sine controller and the costliest controller."""
+def firmware_rows() -> list[Row]:
+    """Summary of ``firmware.py``: the sine controller and the costliest controller, in closed loop."""
     fw = load("firmware")
-    missing = [t for t in ("arm-none-eabi-gcc", "arm-none-eabi-size", "valgrind", "callgrind_annotate", "cc")
-               if shutil.which(t) is None]
+    missing = [t for t in ("arm-none-eabi-gcc", "arm-none-eabi-size", "valgrind", "cc") if shutil.which(t) is None]
     if missing:
         return [Row("firmware (Cortex-M4F)", "skipped", "", "", "", f"missing: {', '.join(missing)}")]
+    closed = fw.closed_loop_counts(list(fw.CLOSED_LOOP))
     with tempfile.TemporaryDirectory() as d:
         sizes = fw.arm_sizes(Path(d))
-        counts = fw.instruction_counts(Path(d), steps)
     base_flash, base_ram = sizes.pop("none")
-    worst = {name: max(c.values()) for name, c in counts.items() if c}
+    share = fw.M4F_CYCLES_PER_SAMPLE
     rows = []
-    if "sine" in worst and "sine" in sizes:
+    if "sine" in closed and "sine" in sizes:
         flash, ram = sizes["sine"]
-        rows.append(Row("firmware: sine controller", f"{worst['sine']:.0f}", "instr/step", "", "",
-                        f"{flash - base_flash} B flash, {ram - base_ram} B RAM on Cortex-M4F; host -O2, worst "
-                        "input scenario"))
-    name = max(worst, key=lambda k: worst[k])
+        s = closed["sine"]
+        rows.append(Row("firmware: sine controller, worst step", f"{s.worst:.0f}", "instr/step", "", "",
+                        f"mean {s.mean:.0f}; {s.worst / share:.0%} of {share:,.0f} M4F cycles (host -O2 as proxy); "
+                        f"{flash - base_flash} B flash, {ram - base_ram} B RAM on Cortex-M4F; closed loop"))
+    name = max(closed, key=lambda k: closed[k].worst)
     big = max(sizes, key=lambda k: sizes[k][0])
-    rows.append(Row("firmware: costliest controller", f"{worst[name]:.0f}", "instr/step", "", "",
-                    f"{name}; largest flash: {big} {sizes[big][0] - base_flash} B ({len(worst)} controllers)"))
+    c = closed[name]
+    rows.append(Row("firmware: costliest controller, worst step", f"{c.worst:.0f}", "instr/step", "", "",
+                    f"{name} ({c.worst_run.label}), mean {c.mean:.0f}; largest flash: {big} "
+                    f"{sizes[big][0] - base_flash} B ({len(closed)} controllers in closed loop)"))
     return rows
 
 
@@ -299,7 +301,6 @@ def main() -> int:
     ap.add_argument("--periods", type=int, default=30, help="measured electrical periods per sweep case")
     ap.add_argument("--sweep-repeats", type=int, default=2, help="timed sweep runs of each kind (the best counts)")
     ap.add_argument("--compare-repeats", type=int, default=1, help="runs of bldclab compare (median)")
-    ap.add_argument("--firmware-steps", type=int, default=5000, help="controller steps per callgrind scenario")
     ap.add_argument("--motulator-venv", type=Path, default=None, help="motulator's virtual environment "
                     "(default benchmarks/.venv-motulator)")
     ap.add_argument("--python", help="Python >= 3.12 for motulator's environment (default: found)")
@@ -331,7 +332,7 @@ def main() -> int:
         ("effmap", lambda: effmap_rows(20, args.workers)),
         ("sweep", lambda: sweep_rows(args.points, args.workers, args.periods, args.sweep_repeats,
                                      "memory" not in skip, True)),
-        ("firmware", lambda: firmware_rows(args.firmware_steps)),
+        ("firmware", firmware_rows),
         ("cost", cost_rows),
         ("motulator", lambda: motulator_rows(5, venv, args.python, out)),
     ]
