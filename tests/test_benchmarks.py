@@ -17,6 +17,7 @@ import pytest
 
 import bldclab as bl
 from bldclab.control.sine import fundamental_k1
+from conftest import require_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 _spec = importlib.util.spec_from_file_location("motulator_case_bench", ROOT / "benchmarks" / "motulator_case.py")
@@ -175,3 +176,26 @@ def test_run_all_prints_one_table_and_survives_a_missing_motulator(tmp_path):
     motulator = [line for line in lines if line.startswith("shared case: motulator")]
     assert len(motulator) == 1 and "not available" in motulator[0] and "Python >= 3.12" in motulator[0]
     assert not (tmp_path / "venv").exists()
+
+
+@pytest.mark.slow
+def test_versus_builds_two_revisions_apart_and_counts_the_same_instructions_for_the_same_sources(tmp_path):
+    if subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True).returncode != 0:
+        pytest.skip("not a git checkout")
+    require_tool("valgrind")
+    before = subprocess.run(["git", "status", "--porcelain"], cwd=ROOT, capture_output=True, text=True).stdout
+    cmd = [sys.executable, str(ROOT / "benchmarks" / "versus.py"), "HEAD", "--new", "HEAD", "--repeats", "1",
+           "--short", "0.02", "--long", "0.06", "--instructions", "--count-seconds", "0.01"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    lines = [line for line in proc.stdout.splitlines() if line.startswith(("sixstep ", "sine "))]
+    assert len(lines) == 4, proc.stdout  # the timing table, then the instruction table
+    timed, rows = lines[:2], {line.split()[0]: line.split() for line in lines[2:]}
+    assert len(timed) == 2 and all(float(r.split()[1]) > 0 and float(r.split()[2]) > 0 for r in timed)
+    # the same sources built twice: exactly the same instructions and calls (the last table's rows)
+    for name in ("sixstep", "sine"):
+        _, a, b, ratio, ca, cb = rows[name]
+        assert a == b and ratio == "1.000" and ca == cb, rows[name]
+        assert int(a.replace(",", "")) > 1_000_000
+    assert subprocess.run(["git", "status", "--porcelain"], cwd=ROOT, capture_output=True,
+                          text=True).stdout == before  # nothing written into the working tree
