@@ -118,8 +118,9 @@ def count_child(name: str, duration: float, marks: str) -> dict[str, Any]:
 
 @dataclass
 class Side:
-    """One build: its label and the directory to put on PYTHONPATH."""
+    """One build: its key ("old", "new"), its label for the table, and the directory to put on PYTHONPATH."""
 
+    key: str
     label: str
     what: str
     pythonpath: Path
@@ -156,7 +157,7 @@ def prepare_side(rev: str | None, tmp: Path, name: str) -> Side:
         sha = export(rev, src)
         label, what = rev, f"{sha[:10]} ({git('log', '-1', '--format=%cs %s', sha)[:70]})"
     out.mkdir(parents=True)
-    return Side(label, what, cost.build_tree(src, out))
+    return Side(name, label, what, cost.build_tree(src, out))
 
 
 # ------------------------------------------------------------------------------------------------------------
@@ -178,12 +179,12 @@ def _child(side: Side, args: list[str], valgrind: list[str] | None = None) -> di
 def time_sides(sides: Sequence[Side], names: Sequence[str], repeats: int, short: float,
                long: float) -> dict[str, dict[str, dict[str, float]]]:
     """Best of ``repeats`` fresh processes per side, the sides alternating (ABBA...); side -> name -> wall, cpu."""
-    best: dict[str, dict[str, dict[str, float]]] = {s.label: {} for s in sides}
+    best: dict[str, dict[str, dict[str, float]]] = {s.key: {} for s in sides}
     for r in range(repeats):
         for side in (sides if r % 2 == 0 else list(reversed(sides))):
             info = _child(side, ["--time-child", ",".join(names), "--short", repr(short), "--long", repr(long)])
             for n in names:
-                b = best[side.label].setdefault(n, {"wall": math.inf, "cpu": math.inf})
+                b = best[side.key].setdefault(n, {"wall": math.inf, "cpu": math.inf})
                 b["wall"] = min(b["wall"], info[n]["wall"])
                 b["cpu"] = min(b["cpu"], info[n]["cpu"])
     return best
@@ -196,13 +197,13 @@ def count_sides(sides: Sequence[Side], names: Sequence[str], duration: float,
     marks = cost.build_marks(tmp)
 
     def one(side: Side, name: str) -> Any:
-        cg = tmp / f"callgrind.{side.label}.{name}"
+        cg = tmp / f"callgrind.{side.key}.{name}"
         _child(side, ["--count-child", name, "--duration", repr(duration), "--marks", str(marks)],
                cost.valgrind_cmd(cg))
         return cost.parse(cg).core_cost()
 
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as ex:
-        futures = {(s.label, n): ex.submit(one, s, n) for s in sides for n in names}
+        futures = {(s.key, n): ex.submit(one, s, n) for s in sides for n in names}
         return {k: f.result() for k, f in futures.items()}
 
 
@@ -244,6 +245,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         except (subprocess.CalledProcessError, RuntimeError) as exc:
             print(f"cannot build: {exc}", file=sys.stderr)
             return 2
+        if new.label == old.label:
+            new.label += "'"
         print(f"old: {old.label} = {old.what}")
         print(f"new: {new.label} = {new.what}")
         print(f"htm-48v, 0.5 Omega_0 imposed, I_N (SixStep: torque T_N; Sine: T_s,N), no trace; marginal time per "
@@ -255,11 +258,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{'controller':<10}  {old.label + ' s/s':>{w + 4}}  {new.label + ' s/s':>{w + 4}}  {'ratio':>6}    "
               f"{'CPU ' + old.label:>{w + 4}}  {'CPU ' + new.label:>{w + 4}}  {'ratio':>6}")
         for n in names:
-            a, b = best[old.label][n], best[new.label][n]
+            a, b = best["old"][n], best["new"][n]
             print(f"{n:<10}  {a['wall']:>{w + 4}.4f}  {b['wall']:>{w + 4}.4f}  {b['wall'] / a['wall']:>6.2f}    "
                   f"{a['cpu']:>{w + 4}.4f}  {b['cpu']:>{w + 4}.4f}  {b['cpu'] / a['cpu']:>6.2f}")
         print(f"(ratio = {new.label} / {old.label}: above 1, {new.label} is slower; load average at end "
               + " ".join(f"{v:.2f}" for v in os.getloadavg()) + ")")
+        if any(best[k][n][q] <= 0 for k in best for n in names for q in ("wall", "cpu")):
+            print("a marginal time <= 0: the noise exceeds the difference of the runs; use a longer --long or more "
+                  "--repeats")
         if args.instructions:
             counts = count_sides([old, new], names, args.count_seconds, tmp)
             print(f"\ninstructions in the core under callgrind, one {args.count_seconds:g} s run (calls out: "
@@ -267,7 +273,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"{'controller':<10}  {old.label:>{w + 6}}  {new.label:>{w + 6}}  {'ratio':>6}  "
                   f"{'calls out ' + old.label:>{w + 10}}  {'calls out ' + new.label:>{w + 10}}")
             for n in names:
-                a, b = counts[old.label, n], counts[new.label, n]
+                a, b = counts["old", n], counts["new", n]
                 print(f"{n:<10}  {a.instructions:>{w + 6},}  {b.instructions:>{w + 6},}  "
                       f"{b.instructions / a.instructions:>6.3f}  {a.calls_out_count:>{w + 10},}  "
                       f"{b.calls_out_count:>{w + 10},}")
