@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import require_tool
+from conftest import _missing, require_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 _spec = importlib.util.spec_from_file_location("cost_bench", ROOT / "benchmarks" / "cost.py")
@@ -37,7 +37,12 @@ def cost_runs(tmp_path_factory):
     require_tool("valgrind")
     require_tool("cc")
     out = tmp_path_factory.mktemp("cost")
-    build = cost.prepare(ROOT, out)
+    try:
+        build = cost.prepare(ROOT, out)
+    except RuntimeError as exc:
+        if "callgrind.h" not in str(exc):
+            raise
+        _missing(f"valgrind's callgrind.h is missing (the valgrind package installs it): {exc}")
     runs = [(name, 1.0) for name in cost.SCENARIOS] + [HEAVIER]
     ms = cost.measure(build, runs, tmp=out)
     return {(m.scenario, m.scale): m for m in ms}
