@@ -498,7 +498,7 @@ SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
     Scenario("lu-trace", "the same with a trace", _lu(0.2, True)),
     Scenario("sixv", f"SixStepVoltage high, duty for I_N, {_HTM}, 0.2 s", _sixv(0.2, False), "bc_sixv_step"),
     Scenario("sixv-trace", "the same with a trace", _sixv(0.2, True)),
-    Scenario("losses", f"SixStep, T_N, htm-48v-losses (switching, recovery, iron), {_HTM[8:]}, 0.2 s",
+    Scenario("losses", f"SixStep, T_N, htm-48v-losses (switching, recovery, iron), {_HTM[9:]}, 0.2 s",
              _sixstep(0.2, False, drive="htm-48v-losses")),
     Scenario("speed-loop", "motulator's shared case: sinusoidal EMF, rotor dynamics, Sine speed loop, 0.2 s",
              _speed_loop(0.2), "bc_sine_step"),
