@@ -70,6 +70,7 @@ XDIST_GROUPS = {
     "site": "docs-site",  # test_docs.py: mkdocs build --strict (~25 s)
     "built": "report-browser",  # test_report_browser.py: the report the browser opens
     "slow_reference": "sweep-interrupt",  # test_sweep.py: the 80-case serial reference of the kill/Ctrl-C tests
+    "cost_runs": "cost-gate",  # test_cost_gate.py: every cost scenario under valgrind (~1 min)
 }
 
 

@@ -17,6 +17,7 @@ import pytest
 
 import bldclab as bl
 from bldclab.control.sine import fundamental_k1
+from conftest import require_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 _spec = importlib.util.spec_from_file_location("motulator_case_bench", ROOT / "benchmarks" / "motulator_case.py")
@@ -134,14 +135,37 @@ def test_agreement_flags_a_settled_speed_offset(case, run):
     assert bad == [f"max |dw|, t >= {mc.SETTLED:g} s"]
 
 
+def test_run_all_exit_code_is_1_when_a_row_misses_its_target(capsys):
+    ra = _load("run_all")
+    ok, miss = ra.Row("a", "1", target="<= 2", ok="yes"), ra.Row("b", "3", "x", "<= 2", "NO")
+    assert ra.exit_code([ok, ra.Row("c", "skipped")], failed=False, allow_miss=False) == 0
+    assert ra.exit_code([ok, miss], failed=False, allow_miss=False) == 1
+    assert "1 row(s) missed their target" in capsys.readouterr().err
+    assert ra.exit_code([ok, miss], failed=False, allow_miss=True) == 0
+    assert "b: 3 x, target <= 2" in capsys.readouterr().err  # still listed
+    assert ra.exit_code([ok], failed=True, allow_miss=True) == 1  # a failed measurement is never allowed
+
+
+def _load(name):
+    spec = importlib.util.spec_from_file_location(f"{name}_bench", ROOT / "benchmarks" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
 @pytest.mark.slow
 def test_run_all_prints_one_table_and_survives_a_missing_motulator(tmp_path):
     cmd = [sys.executable, str(ROOT / "benchmarks" / "run_all.py"),
-           "--skip", "sine,sweep,memory,compare,effmap,firmware",
+           "--skip", "sine,sweep,memory,compare,effmap,firmware,cost",
            "--seconds", "0.05", "--repeats", "1", "--python", str(tmp_path / "no-python"), "--motulator-venv",
            str(tmp_path / "venv"), "--out", str(tmp_path / "out")]
     proc = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=300)
-    assert proc.returncode == 0, proc.stderr
+    missed = [line for line in proc.stdout.splitlines() if "  NO  " in line]
+    # a row that misses its target is an error (exit 1), named on stderr; a missing motulator is not
+    assert proc.returncode == (1 if missed else 0), proc.stderr
+    for line in missed:
+        assert line.split("  ")[0].strip() in proc.stderr
     lines = proc.stdout.splitlines()
     head = [j for j, line in enumerate(lines) if line.startswith("benchmark ")]
     assert len(head) == 1  # one table
@@ -152,3 +176,47 @@ def test_run_all_prints_one_table_and_survives_a_missing_motulator(tmp_path):
     motulator = [line for line in lines if line.startswith("shared case: motulator")]
     assert len(motulator) == 1 and "not available" in motulator[0] and "Python >= 3.12" in motulator[0]
     assert not (tmp_path / "venv").exists()
+
+
+@pytest.mark.slow
+def test_versus_builds_two_revisions_apart_and_counts_the_same_instructions_for_the_same_sources(tmp_path):
+    if subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True).returncode != 0:
+        pytest.skip("not a git checkout")
+    require_tool("valgrind")
+    before = subprocess.run(["git", "status", "--porcelain"], cwd=ROOT, capture_output=True, text=True).stdout
+    cmd = [sys.executable, str(ROOT / "benchmarks" / "versus.py"), "HEAD", "--new", "HEAD", "--repeats", "1",
+           "--short", "0.02", "--long", "0.06", "--instructions", "--count-seconds", "0.01"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "old: HEAD = " in proc.stdout and "new: HEAD' = " in proc.stdout  # two builds, told apart
+    lines = [line for line in proc.stdout.splitlines() if line.startswith(("sixstep ", "sine "))]
+    assert len(lines) == 4, proc.stdout  # the timing table, then the instruction table
+    timed, rows = lines[:2], {line.split()[0]: line.split() for line in lines[2:]}
+    for r in timed:  # each build timed in its own processes (wall times too short here to compare)
+        _, wa, wb, ratio, *_ = r.split()
+        assert math.isfinite(float(wa)) and math.isfinite(float(wb)), r
+    # the same sources built twice: exactly the same instructions and calls (the last table's rows)
+    for name in ("sixstep", "sine"):
+        _, a, b, ratio, ca, cb = rows[name]
+        assert a == b and ratio == "1.000" and ca == cb, rows[name]
+        assert int(a.replace(",", "")) > 100_000
+    assert subprocess.run(["git", "status", "--porcelain"], cwd=ROOT, capture_output=True,
+                          text=True).stdout == before  # nothing written into the working tree
+
+
+def test_versus_keeps_the_two_builds_apart_even_with_one_label(monkeypatch, tmp_path):
+    vs = _load("versus")
+    old = vs.Side("old", "HEAD", "a", tmp_path / "a")
+    new = vs.Side("new", "HEAD", "b", tmp_path / "b")
+    calls = []
+
+    def child(side, args, valgrind=None):
+        calls.append(side.key)
+        k = {"old": 1.0, "new": 2.0}[side.key] * (1 + 0.1 * len(calls))  # later processes slower
+        return {"bldclab": "x", "sine": {"wall": 0.01 * k, "cpu": 0.009 * k}}
+
+    monkeypatch.setattr(vs, "_child", child)
+    best = vs.time_sides([old, new], ["sine"], 3, 0.1, 1.1)
+    assert calls == ["old", "new", "new", "old", "old", "new"]  # alternating, A B B A A B
+    assert best["old"]["sine"]["wall"] == pytest.approx(0.011) and best["new"]["sine"]["wall"] == pytest.approx(0.024)
+    assert best["new"]["sine"]["cpu"] == pytest.approx(0.009 * 2 * 1.2)  # the best of its three processes

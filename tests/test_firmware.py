@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import require_tool
+from conftest import _missing, require_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 spec = importlib.util.spec_from_file_location("firmware_bench", ROOT / "benchmarks" / "firmware.py")
@@ -36,6 +36,30 @@ def test_every_registered_controller_is_in_the_firmware_harness():
     registered = set(core.core().controllers) - {"table"}  # table replays host arrays: a simulation driver
     assert registered <= set(fw.harness_names()), registered - set(fw.harness_names())
     assert registered <= set(fw.cost_names()), registered - set(fw.cost_names())
+    # ... and measured in closed loop (core/firmware/replay.c's targets; firmware.py checks they exist)
+    closed = {c.registry for c in fw.CLOSED_LOOP.values()}
+    assert registered <= closed, registered - closed
+    assert all(c.runs for c in fw.CLOSED_LOOP.values())
+
+
+@pytest.mark.slow
+def test_closed_loop_replay_is_the_closed_loop_and_counts_every_step():
+    require_tool("valgrind")
+    require_tool("cc")
+    try:
+        res = fw.closed_loop_counts(["sixstep"], scale=0.1)["sixstep"]  # 15 ms start-up, 5 ms at each speed
+    except RuntimeError as exc:
+        if "callgrind.h" not in str(exc):
+            raise
+        _missing(f"valgrind's callgrind.h is missing (the valgrind package installs it): {exc}")
+    assert [r.label for r in res.runs] == [fw.START, fw.HALF, fw.FULL]
+    assert [len(r.steps) for r in res.runs] == [420, 140, 140]  # one dump with one step call per sample
+    for r in res.runs:
+        assert r.identical, r.info  # the -O2 replay reproduces the closed loop's outputs bit for bit
+        assert r.info["steps"] == len(r.steps)
+        assert 300 < min(r.steps) <= r.mean <= r.worst < 20_000, (r.label, min(r.steps), r.mean, r.worst)
+    assert res.worst == max(max(r.steps) for r in res.runs)
+    assert res.mean == pytest.approx(sum(sum(r.steps) for r in res.runs) / 700)
 
 
 @pytest.mark.slow
