@@ -23,8 +23,11 @@ CONTROLS = {"sixv": bl.SixStepVoltage(), "sixstep": bl.SixStep(), "sine": bl.Sin
             "sine-pll": bl.Sine(angle="pll", pll_edges=1.0, hall_table=TABLE),
             "sixstep-cal": bl.SixStep(hall_angle="pll", hall_table=TABLE + TABLE),
             "lu-pll": bl.Lu(hall_angle="pll", pll_edges=20.0, hall_table=TABLE),
-            "hallcal-ol": bl.HallCal(method="open-loop", align_time=0.0), "hallcal-speed": bl.HallCal()}
-USES_CURRENT = {"sixstep", "sine", "lu", "rect", "sixstep-pi", "sine-pll", "sixstep-cal", "lu-pll", "hallcal-ol"}
+            "hallcal-ol": bl.HallCal(method="open-loop", align_time=0.0), "hallcal-speed": bl.HallCal(),
+            "sixstep-timed": bl.SixStep(timed=True, timing="20 deg", timing_time="30 us"),
+            "sixstep-enc": bl.SixStep(regulation="duty", timed=True, commutation="encoder", timing="10 deg")}
+USES_CURRENT = {"sixstep", "sine", "lu", "rect", "sixstep-pi", "sine-pll", "sixstep-cal", "lu-pll", "hallcal-ol",
+                "sixstep-timed", "sixstep-enc"}
 
 floats = st.one_of(st.floats(allow_nan=True, allow_infinity=True, width=32),
                    st.sampled_from([0.0, -0.0, 1e30, -1e30, 50.0, -50.0, 48.0, 300.0, 1e-30]))
@@ -89,10 +92,18 @@ def check_outputs(name: str, motor: str, steps: list[dict]) -> None:
         assert np.all((modes >= 0) & (modes <= 3)), modes
         assert np.all(np.isfinite(duties)) and np.all((duties >= 0) & (duties <= 1)), duties
         assert np.all(np.isfinite(out["diag"][0]))
+        has_at = int(out["has_at"][0])
+        assert has_at in (0, 1), has_at
+        if has_at:  # a timed change inside the half period: legs as valid, its time inside it
+            modes_at, duties_at = out["leg_at"]["mode"][0], out["leg_at"]["duty"][0]
+            assert np.all((modes_at >= 0) & (modes_at <= 3)), modes_at
+            assert np.all(np.isfinite(duties_at)) and np.all((duties_at >= 0) & (duties_at <= 1)), duties_at
+            t_at = float(out["t_at"][0])
+            assert 0.0 <= t_at < 0.5 / drive.inverter.f_pwm, t_at
         hall_bad = r["hall"] in (0, 7, 8, 9)
         bus_bad = not (math.isfinite(r["v_dc"]) and r["v_dc"] > 0)
         cur_bad = any(not math.isfinite(r["i"][x]) for x in range(3) if r["mask"] & (1 << x))
         must_stop = hall_bad or (name in USES_CURRENT and (bus_bad or cur_bad))
         if must_stop:
             assert int(out["flags"][0]) & FLAG_SAFE, (name, r)
-            assert np.all(modes == 0), (name, r)
+            assert np.all(modes == 0) and has_at == 0, (name, r)

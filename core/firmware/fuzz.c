@@ -2,7 +2,8 @@
  * fuzz.c - libFuzzer target over every controller in targets.c. The input is a controller selector byte followed
  * by a sequence of raw bc_ctrl_in records (any bit pattern: NaN, inf, huge, negative bus, invalid Hall codes, time
  * jumps of the capture counters), fed one per step so that controller state is explored too. After every step:
- *   - every leg mode is one of the four and every duty is finite and in [0, 1];
+ *   - every leg mode is one of the four and every duty is finite and in [0, 1], also of a timed change (has_at),
+ *     whose time is finite and >= 0;
  *   - every diagnostic is finite;
  *   - an invalid Hall code (for controllers that use Hall), a non-finite current (for those that measure
  *     currents), or a non-finite or non-positive DC bus (for those that use it) gives all legs off and BC_FLAG_SAFE.
@@ -23,6 +24,14 @@ static void check(const bc_fw_target *tg, const bc_ctrl_in *in, const bc_ctrl_ou
         if (out->leg[x].mode < BC_LEG_OFF || out->leg[x].mode > BC_LEG_LOW) abort();
         if (!(out->leg[x].duty >= 0.0f && out->leg[x].duty <= 1.0f)) abort();
     }
+    if (out->has_at > 1u) abort();
+    if (out->has_at) { /* a timed change inside the half period: as valid legs, at a finite, non-negative time */
+        for (int x = 0; x < 3; ++x) {
+            if (out->leg_at[x].mode < BC_LEG_OFF || out->leg_at[x].mode > BC_LEG_LOW) abort();
+            if (!(out->leg_at[x].duty >= 0.0f && out->leg_at[x].duty <= 1.0f)) abort();
+        }
+        if (!(out->t_at >= 0.0f) || !isfinite(out->t_at)) abort();
+    }
     for (int j = 0; j < BC_DIAG_N; ++j) {
         if (!isfinite(out->diag[j])) abort();
     }
@@ -36,7 +45,7 @@ static void check(const bc_fw_target *tg, const bc_ctrl_in *in, const bc_ctrl_ou
         }
     }
     if (must_stop) {
-        if (!(out->flags & BC_FLAG_SAFE)) abort();
+        if (!(out->flags & BC_FLAG_SAFE) || out->has_at) abort();
         for (int x = 0; x < 3; ++x) {
             if (out->leg[x].mode != BC_LEG_OFF) abort();
         }

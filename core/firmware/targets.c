@@ -62,6 +62,21 @@ static bc_sixstep_state sixstep_s;
 static int sixstep_init(void) { return bc_sixstep_init(&sixstep_p, &sixstep_s); }
 STEP_FN sixstep_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sixstep_step(&sixstep_p, &sixstep_s, in, out); }
 
+/* six-step with a timing advance (10 deg + 30 us) and the commutation timer (bc_ctrl_out.has_at) */
+static bc_sixstep_params sixstep_timed_p = HTM_SIXSTEP_PARAMS(0);
+static bc_sixstep_state sixstep_timed_s;
+static int sixstep_timed_init(void)
+{
+    sixstep_timed_p.timed = 1;
+    sixstep_timed_p.adv_angle = 0.1745f;
+    sixstep_timed_p.adv_time = 30e-6f;
+    return bc_sixstep_init(&sixstep_timed_p, &sixstep_timed_s);
+}
+STEP_FN sixstep_timed_step(const bc_ctrl_in *in, bc_ctrl_out *out)
+{
+    bc_sixstep_step(&sixstep_timed_p, &sixstep_timed_s, in, out);
+}
+
 static const bc_sine_params sine_p = HTM_SINE_PARAMS;
 static bc_sine_state sine_s;
 static int sine_init(void) { return bc_sine_init(&sine_p, &sine_s); }
@@ -88,6 +103,8 @@ const bc_fw_target bc_fw_targets[] = {
 #endif
     {"sixv", BC_USES_HALL, sixv_init, sixv_step, 48.0f, 50.0f, 0.5f, 357.0f},
     {"sixstep", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sixstep_init, sixstep_step, 48.0f, 50.0f, 50.0f, 357.0f},
+    {"sixstep_timed", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sixstep_timed_init, sixstep_timed_step, 48.0f,
+     50.0f, 50.0f, 357.0f},
     {"sine", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sine_init, sine_step, 48.0f, 57.7f, 33.7f, 357.0f},
     {"lu", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, lu_init, lu_step, 300.0f, 15.9f, 12.7f, 1000.0f},
     {"hall", BC_IS_BLOCK, hall_init, hall_step, 48.0f, 50.0f, 0.0f, 357.0f},

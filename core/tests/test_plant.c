@@ -554,6 +554,47 @@ static void test_backward_from_zero_angle(void)
     CHECK(s.n_steps < 100 && !(s.flags & BC_PLANT_CHATTER), "%lld steps, flags %u", (long long)s.n_steps, s.flags);
 }
 
+/* A leg change scheduled inside a half period (bc_plant_schedule, a commutation timer): from its time the leg follows
+ * the new command on the same carrier. Phase a's terminal is a PWM leg (connected whatever the current), so its mean
+ * over the half period is v_bus times its on-time. */
+static void test_scheduled_change(void)
+{
+    for (int rising = 0; rising < 2; ++rising) {
+        for (int avg = 0; avg < 2; ++avg) {
+            fixture f;
+            fixture_htm(&f, BC_MECH_IMPOSED);
+            if (avg) f.p.inverter = BC_INV_AVERAGE;
+            bc_plant_state s;
+            CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, 10.0, I0, 48.0) == BC_OK, "init");
+            bc_leg_cmd c[3], c2[3];
+            legs(c, BC_LEG_PWM, 0.5f, BC_LEG_PWM, 0.5f, BC_LEG_OFF, 0.0f);
+            double th = bc_plant_t_half(&f.p);
+            long k = 0;
+            run_halves(&f.p, &s, c, 4, &k); /* k = 4: the next half period rises */
+            if (!rising) run_halves(&f.p, &s, c, 1, &k);
+            double va0 = s.acc[BC_ACC_VA];
+            /* rising: on from 0.5 T/2; at 0.2 T/2 the duty becomes 0.9 (on from 0.1 T/2: on at once) -> on 0.8 T/2.
+             * falling: on until 0.5 T/2; at 0.2 T/2 the duty becomes 0.1 (off after 0.1 T/2: off at once) -> 0.2 */
+            legs(c2, BC_LEG_PWM, rising ? 0.9f : 0.1f, BC_LEG_PWM, 0.5f, BC_LEG_OFF, 0.0f);
+            bc_plant_set_half(&f.p, &s, c, rising);
+            bc_plant_schedule(&f.p, &s, c2, 0.2 * th);
+            bc_plant_advance(&f.p, &s, (double)(k + 1) * th);
+            double on = (s.acc[BC_ACC_VA] - va0) / (48.0 * th);
+            /* averaged: 0.5 for 0.2 T/2, then the new duty's mean for 0.8 T/2 */
+            double d2 = (double)c2[0].duty; /* 0.9f or 0.1f as a double */
+            double want = avg ? 0.2 * 0.5 + 0.8 * d2 : (rising ? 0.8 : 0.2);
+            CHECK(fabs(on - want) < 1e-9, "%s%s half: on-time %.12f of T/2, expected %.3f", avg ? "averaged, " : "",
+                  rising ? "rising" : "falling", on, want);
+            CHECK(s.cmd[0].duty == (rising ? 0.9f : 0.1f), "the new command is in force");
+            /* a change at or beyond the half period's end is not in it */
+            ++k;
+            bc_plant_set_half(&f.p, &s, c, (k % 2) == 0);
+            bc_plant_schedule(&f.p, &s, c2, th);
+            CHECK(s.at_on == 0, "beyond the half period: ignored");
+        }
+    }
+}
+
 int main(void)
 {
     test_standstill_dc();
@@ -566,6 +607,7 @@ int main(void)
     test_iron_losses();
     test_coulomb_stop();
     test_backward_from_zero_angle();
+    test_scheduled_change();
     test_iron_bad_params();
     return bc_test_summary("test_plant");
 }

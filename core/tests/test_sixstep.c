@@ -11,6 +11,7 @@
 #include "bldc/bc_sim.h"
 #include "bldc/bc_sixstep.h"
 #include "fixtures.h"
+#include "synth_hall.h"
 
 #define TS (0.5 / 14e3)
 #define F_TICK 10e6
@@ -85,14 +86,20 @@ static void test_init(void)
     struct {
         const char *what;
         bc_sixstep_params q;
-    } bad[21];
+    } bad[27];
     int n = 0;
 #define BAD(field, value)                    \
     bad[n].what = #field " = " #value;       \
     bad[n].q = params(BC_SIXSTEP_PRED, BC_SIXSTEP_PWMPWM); \
     bad[n].q.field = value;                  \
     ++n
-    BAD(reg, 3);
+    BAD(reg, 4);
+    BAD(timed, 2);
+    BAD(comm, 2);
+    BAD(adv_angle, -0.1f);
+    BAD(adv_angle, nan);
+    BAD(adv_time, -1e-6f);
+    BAD(adv_time, inf);
     BAD(chop, -1);
     BAD(delay, 2);
     BAD(advance, 5);
@@ -735,6 +742,64 @@ static void test_start_up(void)
           r.s.plant.omega, expect);
 }
 
+/* Timed commutation (timed = 1) with a timing advance: a rotor at constant speed with nominal Hall edges; whenever the
+ * advanced boundary pi/6 + j pi/3 - adv falls inside the interval an output applies to ([t_k + T_s, t_k + 2 T_s) with
+ * delay 1), the output schedules the next sector's legs at that instant (has_at, t_at), to the capture timer's
+ * resolution; otherwise it schedules nothing. The sector in force follows the advanced boundaries exactly. */
+static void test_timed_commutation(void)
+{
+    const double edges[6] = {BC_PI / 6.0, BC_PI / 2.0, 5.0 * BC_PI / 6.0, 7.0 * BC_PI / 6.0, 3.0 * BC_PI / 2.0,
+                             11.0 * BC_PI / 6.0};
+    for (int ia = 0; ia < 3; ++ia) {
+        const double adv = (double)ia * BC_PI / 18.0; /* 0, 10, 20 degrees */
+        const double w = 2.0 * BC_PI * 600.0;            /* 600 Hz electrical: 7.8 samples per sector at 28 kHz */
+        bc_sixstep_params p = params(BC_SIXSTEP_DUTY, BC_SIXSTEP_HIGH);
+        p.timed = 1;
+        p.adv_angle = (float)adv;
+        bc_sixstep_state s;
+        CHECK(bc_sixstep_init(&p, &s) == BC_OK, "init");
+        synth_hall g;
+        synth_init(&g, edges, w, 0.0, TS, F_TICK);
+        int n_sched = 0, n_due = 0, n_wrong = 0;
+        double worst = 0.0;
+        for (long k = 0; k < 400; ++k) {
+            bc_ctrl_in in;
+            synth_sample(&g, k, &in);
+            in.ref = 0.8f;
+            bc_ctrl_out o;
+            memset(&o, 0, sizeof o);
+            bc_sixstep_step(&p, &s, &in, &o);
+            if (k < 40) continue; /* the speed estimate needs two edges */
+            /* the advanced boundaries inside [t_a, t_a + T_s), t_a = (k + 1) T_s */
+            double t_a = (double)(k + 1) * TS, th_a = synth_theta(&g, t_a), th_b = synth_theta(&g, t_a + TS);
+            double first = HUGE_VAL;
+            for (int j = -1; j < 200; ++j) {
+                double b = BC_PI / 6.0 + (double)j * BC_PI / 3.0 - adv;
+                if (b >= th_a && b < th_b) {
+                    first = (b - th_a) / w;
+                    break;
+                }
+            }
+            int due = first < HUGE_VAL;
+            n_due += due;
+            if (o.has_at) {
+                ++n_sched;
+                double err = fabs((double)o.t_at - first);
+                if (err > worst) worst = err;
+                /* the next sector's legs: its positive phase HIGH, its negative LOW */
+                int pn, nn;
+                (void)bc_sector_phases((int)o.diag[0] == 5 ? 0 : (int)o.diag[0] + 1, &pn, &nn);
+                if (o.leg_at[pn].mode != BC_LEG_HIGH || o.leg_at[nn].mode != BC_LEG_LOW) ++n_wrong;
+            }
+            if (due != (int)o.has_at) ++n_wrong;
+        }
+        CHECK(n_due > 20 && n_sched == n_due && n_wrong == 0, "adv %.0f deg: %d commutations due, %d scheduled, %d "
+              "wrong", adv * 180.0 / BC_PI, n_due, n_sched, n_wrong);
+        CHECK(worst < 2.0 / F_TICK, "adv %.0f deg: scheduled instants within %.3g s (2 capture ticks)",
+              adv * 180.0 / BC_PI, worst);
+    }
+}
+
 int main(void)
 {
     test_init();
@@ -748,5 +813,6 @@ int main(void)
     test_closed_loop_options();
     test_braking();
     test_start_up();
+    test_timed_commutation();
     return bc_test_summary("test_sixstep");
 }

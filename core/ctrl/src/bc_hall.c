@@ -218,7 +218,7 @@ void bc_hall_step(const bc_hall_params *p, bc_hall_state *s, const bc_ctrl_in *i
 }
 
 int bc_hall_commutate(const bc_hall_params *p, const bc_hall_out *h, const bc_ctrl_in *in, float lead, int advance,
-                      int prev, int32_t *seen, float *travel_out)
+                      float adv, int prev, int32_t *seen, float *travel_out)
 {
     /* the sector seen, or the next one when its Hall edge is due by the middle of the interval the output applies
      * to (advance). A sector once commanded ahead of the sector seen is held until the Hall code moves: only a Hall
@@ -235,26 +235,31 @@ int bc_hall_commutate(const bc_hall_params *p, const bc_hall_out *h, const bc_ct
      * nominal boundary ahead is pi/3 - o away, and with o < 0 (an early edge) the first -o still belong to the
      * previous nominal sector. Nominal table: o = 0, d_next = pi/3. */
     float o = bc_hall_entry_lead(p, h->sector, h->dir);
-    float d_next = PI3_F - o;
+    float a = advance ? adv : 0.0f;    /* the timing advance moves every boundary ahead by a */
+    float d_next = PI3_F - o - a;
     int behind = p->table.set && h->dir != 0 && prev == (h->sector - h->dir + 6) % 6;
+    /* travel is returned into the commanded sector's span as advanced by a (its nominal span moved a earlier) */
     if (held && behind && advance) {
         /* holding the previous sector after an early edge: move on at the nominal boundary (or without a speed) */
-        if (!h->speed_valid || travel >= -o) {
+        if (!h->speed_valid || travel >= -o - a) {
             sector = h->sector;
-            travel = travel >= 0.0f ? travel + o : -1.0f;
+            travel = travel >= 0.0f ? travel + o + a : -1.0f;
         } else {
             sector = prev;
-            travel += PI3_F + o;
+            travel += PI3_F + o + a;
         }
     } else if (held) {
         sector = prev;
         travel = travel >= d_next ? travel - d_next : -1.0f;
-    } else if (advance && h->edge && behind && o < 0.0f && h->speed_valid && travel >= 0.0f && travel < -o) {
-        sector = prev; /* early edge: the commutation waits for the nominal boundary */
-        travel += PI3_F + o;
+    } else if (advance && h->edge && behind && o + a < 0.0f && h->speed_valid && travel >= 0.0f &&
+               travel < -o - a) {
+        sector = prev; /* early edge: the commutation waits for the (advanced) nominal boundary */
+        travel += PI3_F + o + a;
     } else if (advance && h->speed_valid && h->dir != 0 && travel >= d_next) {
         sector = (sector + (h->dir > 0 ? 1 : 5)) % 6;
         travel -= d_next;
+    } else if (travel >= 0.0f) {
+        travel += o + a; /* the sector seen: the rotor entered its advanced span o + a before the edge */
     }
     *seen = h->sector;
     *travel_out = travel;

@@ -589,7 +589,7 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
     int sector = h.sector;
     if (p->hall_table.set) {
         float travel;
-        sector = bc_hall_commutate(&s->hall_p, &h, in, ((float)p->delay + 0.5f) * p->ts, 1, s->sector, &s->seen,
+        sector = bc_hall_commutate(&s->hall_p, &h, in, ((float)p->delay + 0.5f) * p->ts, 1, 0.0f, s->sector, &s->seen,
                                    &travel);
     }
     s->sector = sector;

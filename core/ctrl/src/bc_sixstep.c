@@ -6,6 +6,7 @@
 #include "bldc/bc_commutation.h"
 #include "bldc/bc_inverter.h"
 #include "bldc/bc_math.h"
+#include "bldc/bc_transform.h"
 
 #define PI3_F (BC_PI_F / 3.0f)
 #define PI6_F (BC_PI_F / 6.0f)
@@ -15,7 +16,10 @@ static int fin(float v) { return isfinite(v) ? 1 : 0; }
 int bc_sixstep_init(const bc_sixstep_params *p, bc_sixstep_state *s)
 {
     if (p == 0 || s == 0) return BC_ERR_PARAM;
-    if (p->reg < BC_SIXSTEP_PI || p->reg > BC_SIXSTEP_PRED) return BC_ERR_PARAM;
+    if (p->reg < BC_SIXSTEP_PI || p->reg > BC_SIXSTEP_DUTY) return BC_ERR_PARAM;
+    if ((p->timed != 0 && p->timed != 1) || (p->comm != BC_SIXSTEP_COMM_HALL && p->comm != BC_SIXSTEP_COMM_ENCODER) ||
+        !fin(p->adv_angle) || !fin(p->adv_time) || p->adv_angle < 0.0f || p->adv_time < 0.0f)
+        return BC_ERR_PARAM;
     if (p->chop < BC_SIXSTEP_BIPOLAR || p->chop > BC_SIXSTEP_SYNC) return BC_ERR_PARAM;
     if ((p->ref_torque != 0 && p->ref_torque != 1) || (p->delay != 0 && p->delay != 1) ||
         (p->advance != 0 && p->advance != 1) || (p->emf_ff != 0 && p->emf_ff != 1) ||
@@ -36,7 +40,9 @@ int bc_sixstep_init(const bc_sixstep_params *p, bc_sixstep_state *s)
     for (int x = 0; x < 3; ++x) {
         s->applied[x].mode = BC_LEG_OFF;
         s->applied[x].duty = 0.0f;
+        s->applied_at[x] = s->applied[x];
     }
+    s->applied_t = -1.0f;
     s->sector = -1;
     s->seen = -1;
     s->incoming = -1;
@@ -169,6 +175,7 @@ static void safe(bc_sixstep_state *s, bc_ctrl_out *out, uint32_t flags)
 {
     bc_legs_off(out);
     for (int x = 0; x < 3; ++x) s->applied[x] = out->leg[x];
+    s->applied_t = -1.0f;
     out->flags |= flags | BC_FLAG_SAFE;
     out->diag[0] = -1.0f;
     out->diag[5] = -1.0f;
@@ -260,10 +267,56 @@ static float solve_m(const pred_ctx *c, float target, float m_lo, int *sat)
 
 /* ------------------------------------------------------------------------------------------------------------ */
 
+/* The timing advance at electrical speed w (rad/s): adv_angle + w adv_time, at most pi/6. */
+static float timing_advance(const bc_sixstep_params *p, float w)
+{
+    float a = p->adv_angle + w * p->adv_time;
+    return fin(a) ? bc_clampf(a, 0.0f, PI6_F) : 0.0f;
+}
+
+/* Sector (0..5) whose span, advanced by adv in the direction of motion, holds the electrical angle th, and the angle
+ * travelled into it (*travel). Forward, sector s spans [pi/6 + s pi/3, pi/2 + s pi/3) (bc_commutation.h); backward it
+ * is entered at its upper end. */
+static int encoder_sector(float th, int dir, float adv, float *travel)
+{
+    float u = dir >= 0 ? bc_wrap_2pi(th - PI6_F + adv) : bc_wrap_2pi(PI3_F + PI6_F + adv - th);
+    int j = (int)(u / PI3_F);
+    if (j < 0) j = 0;
+    if (j > 5) j = 5;
+    *travel = u - (float)j * PI3_F;
+    return dir >= 0 ? j : (6 - j) % 6;
+}
+
+/* Command a sector: a new one records the phase that entered the pair (the incoming phase). */
+static void set_sector(bc_sixstep_state *s, int sector)
+{
+    if (sector == s->sector) return;
+    int inc = -1;
+    if (s->sector >= 0) {
+        int po, no, pn, nn;
+        (void)bc_sector_phases(s->sector, &po, &no);
+        (void)bc_sector_phases(sector, &pn, &nn);
+        if (pn != po && pn != no) inc = pn;
+        else if (nn != po && nn != no) inc = nn;
+    }
+    s->incoming = inc;
+    s->sector = sector;
+}
+
+/* The chopping leg (3: both): PWM-on-PWM chops the incoming phase x in the first half of the sector (travel < pi/6,
+ * or unknown), the other one in the second. */
+static int chop_leg_of(const bc_sixstep_params *p, int pos, int neg, int x, float travel)
+{
+    if (p->chop == BC_SIXSTEP_PWMPWM) return (travel < 0.0f || travel < PI6_F) ? x : (x == pos ? neg : pos);
+    if (p->chop == BC_SIXSTEP_BIPOLAR) return 3;
+    return pos;
+}
+
 void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_ctrl_in *in, bc_ctrl_out *out)
 {
     for (int j = 0; j < BC_DIAG_N; ++j) out->diag[j] = 0.0f;
     out->flags = 0u;
+    out->has_at = 0u; /* no timed commutation unless one is scheduled below */
 
     bc_hall_out h;
     bc_hall_step(&s->hall_p, &s->hall, in, &h);
@@ -280,23 +333,40 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
         return;
     }
 
-    /* commutation: the sector seen, or the next one when its Hall edge is due by the middle of the interval this
-     * output applies to (advance; at the nominal boundary with a calibrated table): bc_hall_commutate */
+    /* commutation: the sector seen, or the next one when its (advanced) boundary is due by the middle of the
+     * interval this output applies to (advance; at the nominal boundary with a calibrated table):
+     * bc_hall_commutate; with timed, the sector at the interval's start and the next one at its instant */
     float ts = p->ts;
-    float lead = ((float)p->delay + 0.5f) * ts;
+    int timed = p->timed;
+    float lead = ((float)p->delay + (timed ? 0.0f : 0.5f)) * ts;
     float travel;
-    int sector = bc_hall_commutate(&s->hall_p, &h, in, lead, p->advance, s->sector, &s->seen, &travel);
-    if (sector != s->sector) {
-        int inc = -1;
-        if (s->sector >= 0) {
-            int po, no, pn, nn;
-            (void)bc_sector_phases(s->sector, &po, &no);
-            (void)bc_sector_phases(sector, &pn, &nn);
-            if (pn != po && pn != no) inc = pn;
-            else if (nn != po && nn != no) inc = nn;
+    int dir = h.dir;
+    float w_c = fabsf(h.omega_e); /* the speed the commutation instants come from */
+    int sector;
+    if (p->comm == BC_SIXSTEP_COMM_ENCODER) {
+        float we = in->omega_enc * (float)p->p;
+        if (!fin(in->theta_enc) || !fin(we)) {
+            safe(s, out, BC_FLAG_BAD_INPUT);
+            return;
         }
-        s->incoming = inc;
-        s->sector = sector;
+        w_c = fabsf(we);
+        dir = we < 0.0f ? -1 : 1;
+        sector = encoder_sector(in->theta_enc + we * lead, dir, timing_advance(p, w_c), &travel);
+    } else {
+        float adv = h.speed_valid ? timing_advance(p, w_c) : 0.0f;
+        sector = bc_hall_commutate(&s->hall_p, &h, in, lead, p->advance || timed, adv, s->sector, &s->seen, &travel);
+        if (!h.speed_valid) w_c = 0.0f;
+    }
+    set_sector(s, sector);
+    /* the next commutation inside the interval, at its instant (timed) */
+    int next = -1;
+    float t_next = 0.0f;
+    if (timed && travel >= 0.0f && w_c > 0.0f && dir != 0) {
+        float dt = (PI3_F - travel) / w_c;
+        if (fin(dt) && dt < ts) {
+            next = (sector + (dir > 0 ? 1 : 5)) % 6;
+            t_next = bc_clampf(dt, 0.0f, ts);
+        }
     }
     int pos, neg;
     (void)bc_sector_phases(sector, &pos, &neg);
@@ -315,10 +385,7 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
     i_ref = bc_clampf(i_ref, 0.0f, p->i_max);
 
     /* PWM-on-PWM: the incoming phase chops in the first half of the sector, the other one in the second */
-    int chop_leg = -1;
-    if (p->chop == BC_SIXSTEP_PWMPWM) chop_leg = (travel < 0.0f || travel < PI6_F) ? x : (x == pos ? neg : pos);
-    else if (p->chop == BC_SIXSTEP_BIPOLAR) chop_leg = 3;
-    else chop_leg = pos;
+    int chop_leg = chop_leg_of(p, pos, neg, x, travel);
 
     /* back-EMF estimate over the interval the output applies to (mid-interval angle):
      * e_j = (k_e/2) (Omega_e/p) k(theta + Omega_e t - j 2 pi/3) */
@@ -350,10 +417,23 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
             c.e1[j] = e1[j];
             c.i1[j] = i[j];
         }
-        /* i(k+1) = F(i(k), c_applied): the command already in force (delay 1) */
-        if (p->delay) (void)bc_sixstep_predict(s->applied, v, e0, p->R, p->L, ts, c.i1);
+        /* i(k+1) = F(i(k), c_applied): the command already in force (delay 1), in two parts if a timed
+         * commutation falls in it */
+        if (p->delay) {
+            if (s->applied_t >= 0.0f) {
+                (void)bc_sixstep_predict(s->applied, v, e0, p->R, p->L, s->applied_t, c.i1);
+                (void)bc_sixstep_predict(s->applied_at, v, e0, p->R, p->L, ts - s->applied_t, c.i1);
+            } else {
+                (void)bc_sixstep_predict(s->applied, v, e0, p->R, p->L, ts, c.i1);
+            }
+        }
         /* sgn_x i_x(k+1+D) = F(i(k+D), c(m)) = I_ref */
         m = solve_m(&c, i_ref, m_lo, &sat);
+    } else if (p->reg == BC_SIXSTEP_DUTY) {
+        /* no current loop: the duty asked for (an ESC's throttle) */
+        float d = fabsf(ref);
+        m = bc_clampf(d, 0.0f, 1.0f);
+        sat = d > 1.0f;
     } else if (p->reg == BC_SIXSTEP_HYST) {
         /* m = 1 below I_ref - band/2, m = m_lo above I_ref + band/2, else unchanged */
         if (i_reg < i_ref - 0.5f * p->band) s->hyst_on = 1;
@@ -372,10 +452,27 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
     m = fin(m) ? bc_clampf(m, m_lo, 1.0f) : 0.0f;
 
     build((int)p->chop, pos, neg, chop_leg, m, out->leg);
+    if (next >= 0) { /* the timed commutation: the next sector's legs from t_next, the same pair voltage */
+        int pn, nn;
+        (void)bc_sector_phases(next, &pn, &nn);
+        if (ref < 0.0f) {
+            int t = pn;
+            pn = nn;
+            nn = t;
+        }
+        set_sector(s, next); /* the sector in force at the interval's end, and its incoming phase */
+        int xn = (s->incoming == pn || s->incoming == nn) ? s->incoming : pn;
+        build((int)p->chop, pn, nn, chop_leg_of(p, pn, nn, xn, 0.0f), m, out->leg_at);
+        out->has_at = 1u;
+        out->t_at = t_next;
+    }
     for (int j = 0; j < 3; ++j) { /* never pass on a bad duty */
         if (!(out->leg[j].duty >= 0.0f && out->leg[j].duty <= 1.0f)) out->leg[j].duty = 0.0f;
+        if (!(out->leg_at[j].duty >= 0.0f && out->leg_at[j].duty <= 1.0f)) out->leg_at[j].duty = 0.0f;
         s->applied[j] = out->leg[j];
+        s->applied_at[j] = out->leg_at[j];
     }
+    s->applied_t = out->has_at ? out->t_at : -1.0f;
     if (sat) out->flags |= BC_FLAG_SATURATED;
     out->diag[0] = (float)sector;
     out->diag[1] = i_reg;

@@ -158,6 +158,9 @@ static const bc_field_desc FIELDS[] = {
     F(bc_ctrl_out, leg, "bc_leg_cmd"),
     F(bc_ctrl_out, diag, "f4"),
     F(bc_ctrl_out, flags, "u4"),
+    F(bc_ctrl_out, has_at, "u4"),
+    F(bc_ctrl_out, t_at, "f4"),
+    F(bc_ctrl_out, leg_at, "bc_leg_cmd"),
 };
 
 #define S BC_BIND_STRUCT

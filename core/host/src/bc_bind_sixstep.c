@@ -8,7 +8,9 @@
 static const bc_field_desc SIXSTEP_FIELDS[] = {
     F(bc_sixstep_params, reg, "i4"),      F(bc_sixstep_params, chop, "i4"),
     F(bc_sixstep_params, ref_torque, "i4"), F(bc_sixstep_params, delay, "i4"),
-    F(bc_sixstep_params, advance, "i4"),  F(bc_sixstep_params, emf_ff, "i4"),
+    F(bc_sixstep_params, advance, "i4"),  F(bc_sixstep_params, timed, "i4"),
+    F(bc_sixstep_params, adv_angle, "f4"), F(bc_sixstep_params, adv_time, "f4"),
+    F(bc_sixstep_params, comm, "i4"),     F(bc_sixstep_params, emf_ff, "i4"),
     F(bc_sixstep_params, regen, "i4"),
     F(bc_sixstep_params, p, "i4"),        F(bc_sixstep_params, ts, "f4"),
     F(bc_sixstep_params, R, "f4"),        F(bc_sixstep_params, L, "f4"),
@@ -32,7 +34,9 @@ static const bc_ctrl_info SIXSTEP_INFO = {
     {"sector", "i_reg", "i_ref", "duty", "omega_e", "incoming", "chop_leg", "i_out"}};
 static const bc_const_desc SIXSTEP_CONSTS[] = {
     BC_BIND_CONST("sixstep_reg", BC_SIXSTEP_PI),        BC_BIND_CONST("sixstep_reg", BC_SIXSTEP_HYST),
-    BC_BIND_CONST("sixstep_reg", BC_SIXSTEP_PRED),      BC_BIND_CONST("sixstep_chop", BC_SIXSTEP_BIPOLAR),
+    BC_BIND_CONST("sixstep_reg", BC_SIXSTEP_PRED),      BC_BIND_CONST("sixstep_reg", BC_SIXSTEP_DUTY),
+    BC_BIND_CONST("sixstep_comm", BC_SIXSTEP_COMM_HALL), BC_BIND_CONST("sixstep_comm", BC_SIXSTEP_COMM_ENCODER),
+    BC_BIND_CONST("sixstep_chop", BC_SIXSTEP_BIPOLAR),
     BC_BIND_CONST("sixstep_chop", BC_SIXSTEP_HIGH),     BC_BIND_CONST("sixstep_chop", BC_SIXSTEP_PWMPWM),
     BC_BIND_CONST("sixstep_chop", BC_SIXSTEP_SYNC),
 };

@@ -1037,7 +1037,7 @@ static void leg_average_end(bc_plant_state *s, int x, double t)
 
 static double next_gate_time(const bc_plant_params *p, const bc_plant_state *s)
 {
-    double tn = HUGE_VAL;
+    double tn = s->at_on ? s->at_t : HUGE_VAL; /* a scheduled command change (bc_plant_schedule) */
     for (int x = 0; x < 3; ++x) {
         if (s->edge_to[x] >= 0 && s->edge_t[x] < tn) {
             tn = s->edge_t[x];
@@ -1643,13 +1643,14 @@ static int leg_average(const bc_plant_params *p, bc_plant_state *s, int x, int32
     return changed;
 }
 
-void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], int rising)
+/* Apply leg commands from time t inside the current half period (started at t_half, rising or not): each leg's gate
+ * follows the centre-aligned carrier, so at t it is where the command puts it at that instant (bc_plant.h), with its
+ * remaining edge pending. Averaged legs apply the command's half-period average from t. */
+static void legs_apply(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], double t)
 {
     double th = bc_plant_t_half(p);
-    double t0 = s->t;
+    double t0 = s->t_half;
     int changed = 0;
-    s->t_half = t0;
-    s->rising = rising ? 1 : 0;
     for (int x = 0; x < 3; ++x) {
         int32_t mode = cmd[x].mode;
         float d = cmd[x].duty;
@@ -1674,38 +1675,62 @@ void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg
         int32_t act = mode_gate(mode, 1), idle = mode_gate(mode, 0);
         s->edge_to[x] = -1;
         if (p->inverter == BC_INV_AVERAGE && act != idle && dd > 0.0 && dd < 1.0) {
-            changed |= leg_average(p, s, x, mode, dd, t0);
+            changed |= leg_average(p, s, x, mode, dd, t);
             continue;
         }
         if (s->avg[x]) {
-            leg_average_end(s, x, t0);
+            leg_average_end(s, x, t);
             changed = 1;
         }
-        if (rising) { /* idle, then active from t0 + (1 - d) T/2 */
+        if (s->rising) { /* idle, then active from t0 + (1 - d) T/2 */
             if (dd >= 1.0) {
                 s->des[x] = act;
             } else {
-                s->des[x] = idle;
-                if (dd > 0.0 && act != idle) {
+                double te = t0 + (1.0 - dd) * th;
+                s->des[x] = (dd > 0.0 && t >= te) ? act : idle;
+                if (dd > 0.0 && act != idle && t < te) {
                     s->edge_to[x] = act;
-                    s->edge_t[x] = t0 + (1.0 - dd) * th;
+                    s->edge_t[x] = te;
                 }
             }
         } else { /* active until t0 + d T/2, then idle */
             if (dd <= 0.0) {
                 s->des[x] = idle;
             } else {
-                s->des[x] = act;
-                if (dd < 1.0 && act != idle) {
+                double te = t0 + dd * th;
+                s->des[x] = (dd >= 1.0 || t < te) ? act : idle;
+                if (dd < 1.0 && act != idle && t < te) {
                     s->edge_to[x] = idle;
-                    s->edge_t[x] = t0 + dd * th;
+                    s->edge_t[x] = te;
                 }
             }
         }
-        changed |= gate_update(p, s, x, t0);
+        changed |= gate_update(p, s, x, t);
     }
     if (changed) {
         resolve(p, s); /* otherwise the circuit and its cached derivative are unchanged */
+    }
+}
+
+void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], int rising)
+{
+    s->t_half = s->t;
+    s->rising = rising ? 1 : 0;
+    s->at_on = 0;
+    legs_apply(p, s, cmd, s->t);
+}
+
+void bc_plant_schedule(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], double dt)
+{
+    double th = bc_plant_t_half(p);
+    if (!(dt >= 0.0)) dt = 0.0; /* NaN or negative: now */
+    if (dt >= th) return;        /* beyond this half period: not in it */
+    for (int x = 0; x < 3; ++x) s->at_cmd[x] = cmd[x];
+    s->at_t = s->t_half + dt;
+    s->at_on = 1;
+    if (!(s->at_t > s->t)) { /* due now */
+        s->at_on = 0;
+        legs_apply(p, s, s->at_cmd, s->t);
     }
 }
 
@@ -1771,6 +1796,11 @@ static int process_due(const bc_plant_params *p, bc_plant_state *s)
     }
     if (changed) {
         resolve(p, s);
+    }
+    if (s->at_on && s->at_t <= s->t) { /* a scheduled command change (bc_plant_schedule) */
+        s->at_on = 0;
+        legs_apply(p, s, s->at_cmd, s->t);
+        changed = 1;
     }
     return changed;
 }

@@ -30,10 +30,7 @@ int bc_sim_init(const bc_sim_config *cfg, bc_sim_state *s, double theta0, double
     s->k = 0;
     s->th_prev = s->plant.theta;
     s->th_run = 0.0;
-    for (int x = 0; x < 3; ++x) {
-        s->pending[x].mode = BC_LEG_OFF;
-        s->pending[x].duty = 0.0f;
-    }
+    /* s->pending, cleared above: all legs off (BC_LEG_OFF = 0), no timed change */
     s->t_pwm = 2.0 * bc_plant_t_half(cfg->plant);
     sim_on_step(s, s->plant.t, s->plant.acc, s->plant.tau_min); /* the first history node (tau_min: tau_e now) */
     return BC_OK;
@@ -318,12 +315,10 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         /* 3. apply; gate edges at t_k book their energies (E_on, E_off, E_rr) here, and belong to a row or metric
          * window that starts at t_k: [t0, t1) holds the edges at t0, not those at t1 (each edge once per period) */
         double pre_swloss = ps->acc[BC_ACC_SWLOSS], pre_rr = ps->acc[BC_ACC_RR];
-        bc_leg_cmd cmd[3];
-        for (int x = 0; x < 3; ++x) {
-            cmd[x] = cfg->delay ? s->pending[x] : co.leg[x];
-            s->pending[x] = co.leg[x];
-        }
-        bc_plant_set_half(pp, ps, cmd, (k % 2) == 0);
+        const bc_ctrl_out applied = cfg->delay ? s->pending : co;
+        s->pending = co;
+        bc_plant_set_half(pp, ps, applied.leg, (k % 2) == 0);
+        if (applied.has_at) bc_plant_schedule(pp, ps, applied.leg_at, (double)applied.t_at);
 
         /* torque at the sample instant, inside the metric window */
         if (s->m.state == 1) {

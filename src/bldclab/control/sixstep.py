@@ -19,13 +19,16 @@ from ..errors import BldclabError
 from ..model.analytic import r_total
 from ..model.design import pi_gains
 from ..model.motor import Drive
+from ..model.units import to_si
 from .base import Control, check_number
 from .hall import check_hall_options, hall_record, normalize_table
 
 __all__ = ["CHOPPINGS", "SixStep"]
 
 # the settings' C constants (values read from the library: bldclab._core)
-_REG = {"pi": "BC_SIXSTEP_PI", "hysteresis": "BC_SIXSTEP_HYST", "predictive": "BC_SIXSTEP_PRED"}
+_REG = {"pi": "BC_SIXSTEP_PI", "hysteresis": "BC_SIXSTEP_HYST", "predictive": "BC_SIXSTEP_PRED",
+        "duty": "BC_SIXSTEP_DUTY"}
+_COMM = {"hall": "BC_SIXSTEP_COMM_HALL", "encoder": "BC_SIXSTEP_COMM_ENCODER"}
 _CHOP = {"bipolar": "BC_SIXSTEP_BIPOLAR", "high": "BC_SIXSTEP_HIGH", "pwm-on-pwm": "BC_SIXSTEP_PWMPWM",
          "sync": "BC_SIXSTEP_SYNC"}
 _REF = {"current": 0, "torque": 1}  # ref_torque, a 0/1 switch
@@ -39,16 +42,18 @@ class SixStep(Control):
     """Real square-wave current supply: Hall commutation, 120-degree conduction, current regulation.
 
     The reference (``Scenario.ref``) is the current amplitude ``I`` in A (``reference="current"``) or the torque in
-    N m (``reference="torque"``, converted to ``I = tau / (2 k_phi)``, paper 1 (6)). A negative reference reverses
-    the torque (the two conducting phases swap roles).
+    N m (``reference="torque"``, converted to ``I = tau / (2 k_phi)``, paper 1 (6)); with ``regulation="duty"`` it
+    is the duty in [-1, 1] (an ESC's throttle). A negative reference reverses the torque (the two conducting phases
+    swap roles).
 
     Parameters
     ----------
-    regulation : {"predictive", "pi", "hysteresis"}
+    regulation : {"predictive", "pi", "hysteresis", "duty"}
         ``predictive``: the duty that brings the incoming phase's current to the reference at the sample after next,
         from an average model of the inverter and motor (full voltage when it cannot: paper 1's idealisation);
         ``pi``: PI on the line current with back-EMF feed-forward, gains from :func:`bldclab.model.design.pi_gains` for
-        the line ``2 R``, ``2 L``; ``hysteresis``: on below ``I - band/2``, off above ``I + band/2`` at the samples.
+        the line ``2 R``, ``2 L``; ``hysteresis``: on below ``I - band/2``, off above ``I + band/2`` at the samples;
+        ``duty``: no current loop, the reference is the duty (voltage mode, as a hobby ESC's throttle).
     chopping : {"pwm-on-pwm", "bipolar", "high", "sync"}
         ``pwm-on-pwm``: a phase chops in the first and last 30 degrees of its conduction and is fully on in the
         middle 60 (the pattern that realises paper 1's commutation); ``bipolar``: both conducting legs chop;
@@ -62,6 +67,19 @@ class SixStep(Control):
     advance : bool
         Commutate at the sample nearest the Hall edge predicted from the Hall speed, instead of on the edge seen
         (which is on average 1.5 samples late with ``delay = 1``).
+    timed : bool
+        Commutate at the predicted instant itself, inside the PWM period, as an ESC's commutation timer does
+        (``bc_ctrl_out.has_at``), instead of at the sample nearest it. At a few PWM periods per commutation (a drone
+        motor at 30,000 rpm) the sample grid alone commutates up to half a sample late or early.
+    timing : float or str
+        Timing advance at any speed (electrical rad, or a string such as ``"15 deg"``): every commutation this much
+        earlier than the nominal sector boundary.
+    timing_time : float or str
+        Timing advance per speed (s, or ``"20 us"``): the advance angle grows by ``|Omega_e| timing_time``,
+        compensating a fixed delay. The total advance is capped at 30 degrees.
+    commutation : {"hall", "encoder"}
+        Where the commutation instants come from: the Hall sensors, or the encoder's exact angle and speed (the
+        ideal instant, a reference to measure the Hall drive against).
     bandwidth_hz, phase_margin_deg : float
         PI design (paper 1: 1 kHz, 90 deg) for the line R-L ``(2 R, 2 L)``, used when ``kp``/``ki`` are not given.
     kp, ki : float, optional
@@ -98,6 +116,10 @@ class SixStep(Control):
     reference: Literal["current", "torque"] = "current"
     delay: int = 1
     advance: bool = True
+    timed: bool = False
+    timing: float | str = 0.0
+    timing_time: float | str = 0.0
+    commutation: Literal["hall", "encoder"] = "hall"
     bandwidth_hz: float = 1000.0
     phase_margin_deg: float = 90.0
     kp: float | None = None
@@ -115,12 +137,19 @@ class SixStep(Control):
     ref_meaning: ClassVar[str] = "current amplitude, A (or torque, N m)"
 
     def __post_init__(self) -> None:
-        for name, table in (("regulation", _REG), ("chopping", _CHOP), ("reference", _REF)):
+        for name, dim in (("timing", "angle"), ("timing_time", "time")):
+            v = getattr(self, name)
+            if isinstance(v, str):
+                object.__setattr__(self, name, to_si(v, dim, f"control.{name}"))
+            check_number(name, getattr(self, name), allow_zero=True)
+        if self.timing > math.pi / 6:
+            raise BldclabError("control.timing", f"must be at most 30 deg (pi/6 rad), got {self.timing:.4g} rad")
+        for name, table in (("regulation", _REG), ("chopping", _CHOP), ("reference", _REF), ("commutation", _COMM)):
             if getattr(self, name) not in table:
                 raise BldclabError(f"control.{name}", f"must be one of {', '.join(table)}, got {getattr(self, name)!r}")
         if self.delay not in (0, 1) or isinstance(self.delay, bool):
             raise BldclabError("control.delay", f"must be 0 or 1 sample, got {self.delay!r}")
-        for name in ("advance", "emf_feedforward", "regen"):
+        for name in ("advance", "timed", "emf_feedforward", "regen"):
             if not isinstance(getattr(self, name), bool):
                 raise BldclabError(f"control.{name}", f"must be True or False, got {getattr(self, name)!r}")
         check_number("bandwidth_hz", self.bandwidth_hz)
@@ -164,6 +193,10 @@ class SixStep(Control):
             ref_torque=_REF[self.reference],
             delay=self.delay,
             advance=int(self.advance),
+            timed=int(self.timed),
+            adv_angle=self.timing,
+            adv_time=self.timing_time,
+            comm=core.const(_COMM[self.commutation]),
             emf_ff=int(self.emf_feedforward),
             regen=int(self.regen),
             p=m.p,

@@ -126,17 +126,18 @@ float bc_hall_entry_lead(const bc_hall_params *p, int sector, int dir);
  * lead (s): from this sample to the middle of the interval the output applies to ((delay + 1/2) T_s). With
  * travel = |Omega_e| (t_k - t_edge + lead) (the angle since the edge by then, from the capture time of the last
  * edge and in->tick_now) and o = bc_hall_entry_lead of the edge just crossed (0 for a nominal table):
- *   - the next sector h.sector + dir is commanded once travel >= pi/3 - o (the nominal boundary ahead is due);
+ *   - the next sector h.sector + dir is commanded once travel >= pi/3 - o - adv (the nominal boundary ahead, moved
+ *     adv earlier by a timing advance (rad, 0 <= adv < pi/3 - |o|), is due);
  *   - after an early edge (o < 0, table set) the sector commanded before it is held while travel < -o (the rotor
  *     is still in the previous nominal sector), then the sector seen follows;
  *   - a sector commanded ahead of the sector seen is held until the Hall code moves (only an edge ends it: the
  *     sector seen catches up, or the rotor reversed).
  * So a commanded sector is only ever replaced by the next one in the direction of motion or by a Hall edge, never
  * stepped back while the rotor turns one way. advance = 0: the sector seen (the table is ignored). *travel: the
- * angle (rad) the rotor will have travelled into the returned sector's nominal span by the middle of that interval,
- * < 0 if unknown (no speed estimate). */
+ * angle (rad) the rotor will have travelled into the returned sector's span (nominal, moved adv earlier) by the
+ * time lead from now, < 0 if unknown (no speed estimate): the next commutation is due pi/3 - travel later. */
 int bc_hall_commutate(const bc_hall_params *p, const bc_hall_out *h, const bc_ctrl_in *in, float lead, int advance,
-                      int prev, int32_t *seen, float *travel);
+                      float adv, int prev, int32_t *seen, float *travel_out);
 void bc_hall_step(const bc_hall_params *p, bc_hall_state *s, const bc_ctrl_in *in, bc_hall_out *out);
 
 #endif /* BC_HALL_H */

@@ -26,6 +26,20 @@
  * hold also covers the speed estimate timing out (a rotor stopped just before the edge). With advance = 0 the
  * legs follow the Hall sector seen, (D + 1/2) T_s late on average.
  *
+ * Timing advance and timed commutation. adv = min(adv_angle + |Omega_e| adv_time, pi/6) moves every commutation adv
+ * earlier (a constant adv_time compensates a fixed delay, as an ESC's timing advance does). With timed = 1 the
+ * sector is decided for the start of the interval the output applies to, t_a = t_k + D T_s, and the next one is
+ * scheduled at the predicted instant inside it, as a commutation timer does on an MCU:
+ *
+ *     travel = angle into the commanded sector's (advanced) span at t_a;   dt = (pi/3 - travel) / |Omega_e|
+ *     dt < T_s:  legs of this sector from t_a, of the next from t_a + dt (bc_ctrl_out.has_at, t_at = dt)
+ *
+ * both built with the same pair voltage m (the regulation runs again at the next sample); the predictive law then
+ * predicts the sample in force in its two parts. comm = BC_SIXSTEP_COMM_ENCODER takes sector and travel from the
+ * encoder's angle and speed instead of the Hall sensors: the ideal commutation instant, a reference to measure the
+ * Hall drive against (as the encoder angle of bc_sine). reg = BC_SIXSTEP_DUTY has no current loop: m = |ref|, a duty
+ * in [0, 1] (above 1: 1 and BC_FLAG_SATURATED), the throttle of an ESC.
+ *
  * Calibrated edges (hall_table set, bc_hall.h). The commutation is due at the *nominal* sector boundary, not at the
  * misplaced edge: with o = dir (theta_edge - nominal edge) of the edge just crossed (bc_hall_entry_lead), the next
  * sector is commanded when |Omega_e| (t_k - t_edge + (D + 1/2) T_s) >= pi/3 - o; after an early edge (o < 0) the
@@ -122,6 +136,11 @@
 #define BC_SIXSTEP_PI 0
 #define BC_SIXSTEP_HYST 1
 #define BC_SIXSTEP_PRED 2
+#define BC_SIXSTEP_DUTY 3 /* no current loop: m = |ref| (a duty in [0, 1], ref's sign the direction), as an ESC */
+
+/* commutation angle source */
+#define BC_SIXSTEP_COMM_HALL 0    /* the Hall sensors (bc_hall_commutate) */
+#define BC_SIXSTEP_COMM_ENCODER 1 /* the encoder angle and speed: the ideal instant, a reference for comparison */
 
 /* chopping pattern */
 #define BC_SIXSTEP_BIPOLAR 0
@@ -130,11 +149,17 @@
 #define BC_SIXSTEP_SYNC 3
 
 typedef struct {
-    int32_t reg;          /* BC_SIXSTEP_PI, _HYST, _PRED */
+    int32_t reg;          /* BC_SIXSTEP_PI, _HYST, _PRED, _DUTY */
     int32_t chop;         /* BC_SIXSTEP_BIPOLAR, _HIGH, _PWMPWM, _SYNC */
     int32_t ref_torque;   /* 0: ref = current amplitude I (A); 1: ref = torque (N m), I = ref / k_e */
     int32_t delay;        /* samples between computing and applying an output, 0 or 1 (as the runner/DSP) */
     int32_t advance;      /* 1: commutate at the sample nearest the predicted Hall edge; 0: on the edge seen */
+    int32_t timed;        /* 1: commutate at the predicted instant inside the interval (bc_ctrl_out.has_at: a
+                             commutation timer); implies the prediction of advance = 1 */
+    float adv_angle;      /* timing advance at any speed, electrical rad (>= 0) */
+    float adv_time;       /* timing advance per speed, s: the advance angle grows by |Omega_e| adv_time (>= 0);
+                             the total is capped at pi/6 */
+    int32_t comm;         /* BC_SIXSTEP_COMM_HALL or _ENCODER */
     int32_t emf_ff;       /* 1: PI with back-EMF (and 2 R I_ref) feed-forward */
     int32_t regen;        /* 1: unipolar patterns reach m < 0 by chopping both legs */
     int32_t p;            /* pole pairs (>= 1) */
@@ -161,6 +186,8 @@ typedef struct {
     bc_pi_params pi_p;     /* derived in init: the PI on the normalised pair voltage, limits [-1, 1] */
     bc_pi_state pi;
     bc_leg_cmd applied[3]; /* command in force over the current sample (the previous output when delay = 1) */
+    bc_leg_cmd applied_at[3]; /* ... and from applied_t on, if applied_t >= 0 (a timed commutation in it) */
+    float applied_t;       /* s after the start of the sample, -1 none */
     int32_t sector;        /* sector commanded, -1 none */
     int32_t seen;          /* Hall sector seen at the last sample, -1 none */
     int32_t incoming;      /* phase that entered at the last commutation, -1 none */

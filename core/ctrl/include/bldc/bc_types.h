@@ -64,11 +64,17 @@ typedef struct {
     uint32_t fault_pin;  /* 1: the inverter's hardware protection has tripped (its gates are off, latched) */
 } bc_ctrl_in;
 
-/* What a controller returns at one sample. */
+/* What a controller returns at one sample. The legs apply to the next half period (with the runner's one-sample
+ * delay; the current one without). A controller may also change them inside that half period, at t_at seconds after
+ * its start, as an MCU's commutation timer does (the output compare of a timer running beside the PWM): from then
+ * on the legs are leg_at, each on the same carrier. has_at = 0 (what the runner clears the output to): no change. */
 typedef struct {
     bc_leg_cmd leg[3];     /* legs a, b, c for the next half period */
     float diag[BC_DIAG_N]; /* diagnostics for the trace */
     uint32_t flags;        /* BC_FLAG_* */
+    uint32_t has_at;       /* 1: leg_at from t_at on */
+    float t_at;            /* s after the start of the half period, in [0, T/2) (a later time is ignored) */
+    bc_leg_cmd leg_at[3];  /* legs from t_at on */
 } bc_ctrl_out;
 
 /* A controller slot: the runner calls step(params, state, in, out) once per sample. */

@@ -322,7 +322,10 @@ typedef struct {
     /* inverter */
     double t_half;          /* start of the current half period, s */
     int32_t rising;         /* 1 in a rising (valley -> peak) half period */
-    bc_leg_cmd cmd[3];      /* command of the current half period (sanitised) */
+    bc_leg_cmd cmd[3];      /* command in force (sanitised): the half period's, or a scheduled change's from its time */
+    int32_t at_on;          /* 1: at_cmd takes over at at_t (bc_plant_schedule) */
+    double at_t;            /* its time, s (inside the current half period) */
+    bc_leg_cmd at_cmd[3];
     int32_t des[3];         /* desired gate state (from the carrier) */
     int32_t gate[3];        /* actual gate state (after dead time) */
     int32_t edge_to[3];     /* desired state after the pending edge, -1 if none */
@@ -423,6 +426,12 @@ void bc_plant_set_inputs(const bc_plant_params *p, bc_plant_state *s, double ome
 /* Start a half period at the current time with the three leg commands (rising = carrier valley -> peak).
  * NaN duties are treated as 0 and out-of-range duties clamped (BC_PLANT_BAD_DUTY is set). */
 void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], int rising);
+
+/* Change the leg commands dt seconds after the start of the current half period (a commutation timer): from then on
+ * each leg follows cmd on the same carrier, as if it had been commanded for the whole half period (its gate is where
+ * cmd puts it at that instant; an averaged leg applies cmd's average). dt >= T/2: ignored (not in this half period);
+ * dt <= now: at once. Call after bc_plant_set_half; a new half period cancels a change not yet due. */
+void bc_plant_schedule(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], double dt);
 
 /* Integrate to t_end (<= the end of the current half period), landing on every event. */
 void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end);

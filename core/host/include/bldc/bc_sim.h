@@ -6,7 +6,8 @@
  *   1. hold the per-sample inputs (imposed speed, load torque, DC source voltage) over [t_k, t_k+1]
  *   2. measure the plant at t_k (bc_sensor_measure), add the references, call the controller
  *   3. apply a command for [t_k, t_k+1]: the controller's previous output (delay = 1, as on a DSP that loads the
- *      PWM shadow registers at the next carrier extreme) or this one (delay = 0, ideal)
+ *      PWM shadow registers at the next carrier extreme) or this one (delay = 0, ideal), and the leg change it
+ *      schedules inside the half period, if any (bc_ctrl_out.has_at: a commutation timer; bc_plant_schedule)
  *   4. integrate to t_k+1, landing on trace points and metric-window bounds
  *
  * Output: an optional trace (one row per `trace_every` samples, or `trace_sub` rows per sample), each row
@@ -142,7 +143,7 @@ typedef struct {
     bc_plant_state plant;
     bc_sensor_state sensors;
     int64_t k;                 /* next sample index */
-    bc_leg_cmd pending[3];     /* controller output waiting for the next sample (delay 1) */
+    bc_ctrl_out pending;       /* controller output waiting for the next sample (delay 1): legs and a timed change */
     bc_ctrl_out last;          /* last controller output */
     bc_ctrl_in last_in;        /* last measurements */
     uint32_t flags_seen;       /* BC_FLAG_* bits the controller raised at any sample so far (OR) */
