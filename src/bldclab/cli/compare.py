@@ -13,7 +13,8 @@ from ..control.sixstep import CHOPPINGS
 from ..errors import BldclabError
 from ..model import analytic
 from ..report.bundle import compare_command, compare_files, compare_outputs
-from .common import add_inverter_option, check_out_dir, check_speed_range, load_drive, positive_int
+from .common import add_inverter_option, check_speed_range, load_drive, positive_int
+from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
 

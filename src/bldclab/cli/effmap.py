@@ -16,7 +16,8 @@ from ..report.effmap_plots import plot_difference, plot_efficiency_maps, plot_lo
 from ..report.plots import figure_bytes
 from ..sweep.effmap_store import EffMapStore
 from ..sweep.store import Store
-from .common import add_inverter_option, check_out_dir, check_speed_range, load_drive, positive_int
+from .common import add_inverter_option, check_speed_range, load_drive, positive_int
+from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
 

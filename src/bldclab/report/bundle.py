@@ -27,9 +27,9 @@ from .._version import __version__
 from ..analysis import paper1, paper2
 from ..analysis.compare import SUPPLIES, CompareResult, compare, default_controls
 from ..analysis.experiments import electrical_period, steady_state
-from ..analysis.paper1 import table1_text
 from ..control import Control, Lu
 from ..errors import BldclabError
+from ..model.analytic.table import table1_text
 from ..model.motor import Drive
 from ..sim import Scenario
 from . import plots
