@@ -7,8 +7,12 @@ Where a command may write is checked by :mod:`bldclab.cli.paths` (no controllers
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import warnings
+from collections.abc import Iterator
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 
 from ..control import Control, Lu, Sine, SixStep, SixStepVoltage
 from ..errors import BldclabError, PlausibilityWarning
@@ -19,7 +23,7 @@ from ..model.units import to_si
 from ..sim import plausibility as _plaus
 
 __all__ = ["CONTROLS", "add_inverter_option", "check_speed_range", "control_of", "load_drive", "parse_speed",
-           "positive_int", "summarise"]
+           "positive_int", "summarise", "worker_pool", "workers_of"]
 
 
 CONTROLS = ("square", "sine", "sixv", "lu", "lu-no-do", "rect")
@@ -93,3 +97,21 @@ def check_speed_range(lo: float, hi: float) -> None:
     if lo >= hi:
         raise BldclabError("--max-speed", f"must be above --min-speed ({lo:g}), got {hi:g}")
 
+
+def workers_of(workers: int | None) -> int:
+    """Return the processes of ``--workers``: as given, else one per core."""
+    return workers or os.cpu_count() or 1
+
+
+@contextmanager
+def worker_pool(workers: int) -> Iterator[ProcessPoolExecutor | None]:
+    """Open the command's process pool, for its simulations and then its figures (None for one process: run here).
+
+    One pool for the whole command: its workers start once (at the first job) and draw the figures after the
+    simulations, with everything they imported for the simulations still loaded.
+    """
+    if workers <= 1:
+        yield None
+        return
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        yield pool
