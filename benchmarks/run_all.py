@@ -34,7 +34,7 @@ from types import ModuleType
 from typing import Any
 
 HERE = Path(__file__).resolve().parent
-GROUPS = ("plant", "sine", "sweep", "memory", "compare", "effmap", "firmware", "cost", "motulator")
+GROUPS = ("plant", "sine", "sweep", "memory", "compare", "effmap", "cli", "firmware", "cost", "motulator")
 
 
 def load(name: str) -> ModuleType:
@@ -187,6 +187,18 @@ def effmap_rows(n: int, workers: int) -> list[Row]:
                 verdict(par <= em.TARGET), note)]
 
 
+def cli_rows(repeats: int) -> list[Row]:
+    """``cli_startup.py``: the light commands (target 0.3 s each) and the fixed cost of effmap and compare."""
+    cs = load("cli_startup")
+    rows = [Row(f"cli: {cmd}", f"{t:.3f}", "s wall", f"<= {cs.TARGET:g}", verdict(t <= cs.TARGET),
+                f"best of {repeats} fresh processes")
+            for cmd, t in cs.startup(repeats)]
+    for run in cs.fixed(repeats, [1, 2]):
+        phases = ", ".join(f"{name} {t:.2f}" for name, t in run.phases.items() if t >= 0.005)
+        rows.append(Row(f"cli: {run.label}, 8 points", f"{run.wall:.2f}", "s wall", "", "", phases))
+    return rows
+
+
 def firmware_rows() -> list[Row]:
     """Summary of ``firmware.py``: the sine controller and the costliest controller, in closed loop."""
     fw = load("firmware")
@@ -330,6 +342,7 @@ def main() -> int:
         ("sine", lambda: sine_rows(args.seconds, args.repeats)),
         ("compare", lambda: compare_rows(args.compare_repeats)),
         ("effmap", lambda: effmap_rows(20, args.workers)),
+        ("cli", lambda: cli_rows(5)),
         ("sweep", lambda: sweep_rows(args.points, args.workers, args.periods, args.sweep_repeats,
                                      "memory" not in skip, True)),
         ("firmware", firmware_rows),

@@ -157,7 +157,7 @@ def _load(name):
 @pytest.mark.slow
 def test_run_all_prints_one_table_and_survives_a_missing_motulator(tmp_path):
     cmd = [sys.executable, str(ROOT / "benchmarks" / "run_all.py"),
-           "--skip", "sine,sweep,memory,compare,effmap,firmware,cost",
+           "--skip", "sine,sweep,memory,compare,effmap,cli,firmware,cost",
            "--seconds", "0.05", "--repeats", "1", "--python", str(tmp_path / "no-python"), "--motulator-venv",
            str(tmp_path / "venv"), "--out", str(tmp_path / "out")]
     proc = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=300)
@@ -220,3 +220,36 @@ def test_versus_keeps_the_two_builds_apart_even_with_one_label(monkeypatch, tmp_
     assert calls == ["old", "new", "new", "old", "old", "new"]  # alternating, A B B A A B
     assert best["old"]["sine"]["wall"] == pytest.approx(0.011) and best["new"]["sine"]["wall"] == pytest.approx(0.024)
     assert best["new"]["sine"]["cpu"] == pytest.approx(0.009 * 2 * 1.2)  # the best of its three processes
+
+
+def _cli_startup():
+    spec = importlib.util.spec_from_file_location("cli_startup_bench", ROOT / "benchmarks" / "cli_startup.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["cli_startup_bench"] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_cli_startup_cuts_a_run_into_its_phases():
+    cs = _cli_startup()
+    events = {"spawn": 0.0, "start": 0.02, "imports": 0.3, "sims_start": 0.31, "sims_end": 0.5, "outputs_end": 1.5,
+              "files_end": 1.6, "exit": 1.65}
+    phases = cs.phases_of(events)
+    assert list(phases) == [name for name, _, _ in cs.PHASES]
+    assert math.isclose(sum(phases.values()), 1.65)
+    del events["sims_start"]  # a phase whose timestamps are missing is left out
+    assert "set-up" not in cs.phases_of(events) and "simulations" not in cs.phases_of(events)
+
+
+@pytest.mark.slow
+def test_cli_startup_prints_both_tables(tmp_path):
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "cli_startup.py"), "--repeats", "1"],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout
+    for command in ("bldclab --help", "bldclab drives", "bldclab check htm-48v", "bldclab template --out motor.toml",
+                    "bldclab analyze htm-48v"):
+        assert any(line.startswith(command + " ") for line in out.splitlines()), command
+    for phase in ("imports", "simulations", "figures, report", "exit", "wall"):
+        assert any(line.startswith(phase + " ") for line in out.splitlines()), phase
+    assert "effmap --workers 2" in out and "compare --workers 1" in out and "ms forked" in out

@@ -301,3 +301,36 @@ def test_plots_do_not_touch_pyplot() -> None:
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120,
                          check=False)
     assert res.returncode == 0, res.stderr
+
+
+def _fig7_with_data(drive: bldclab.Drive) -> tuple[object, int]:
+    """A figure job's function that also returns data (as paper 1's Fig 12 does)."""
+    from bldclab.report import plots
+
+    fig, _ = plots.plot_torque_speed(an.characteristic(drive, [0.0, 0.5, 1.0]))
+    return fig, 42
+
+
+def test_figures_drawn_on_a_pool_are_those_drawn_here() -> None:
+    from concurrent.futures import ProcessPoolExecutor
+
+    from bldclab.report import plots
+
+    jobs = {"fig7": plots.FigureJob(_fig7_with_data, (bldclab.load("htm-48v"),), dated=False)}
+    here = plots.render_figures(jobs)
+    with ProcessPoolExecutor(max_workers=1) as pool:
+        there = plots.render_figures(jobs, pool)
+    assert here["fig7"][1] == there["fig7"][1] == 42
+    assert here["fig7"][0]["png"] == there["fig7"][0]["png"]  # the SVG's element ids are random
+    assert set(here["fig7"][0]) == {"png", "svg"} and b"<svg" in there["fig7"][0]["svg"][:2000]
+
+
+def test_a_figure_is_laid_out_once_for_all_its_formats() -> None:
+    """render_figure keeps the first format's layout for the next ones: a PNG drawn after the SVG with the kept
+    layout is the PNG drawn with the layout engine."""
+    from bldclab.report import plots
+
+    drive = bldclab.load("htm-48v")
+    files, data = plots.render_figure(plots.FigureJob(_fig7_with_data, (drive,), formats=("png", "svg", "png")))
+    fig, _ = _fig7_with_data(drive)
+    assert data == 42 and files["png"] == plots.figure_bytes(fig, "png")

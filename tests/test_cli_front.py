@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import os
 import shlex
+import subprocess
+import sys
 import tomllib
 from pathlib import Path
 
@@ -16,9 +18,9 @@ from bldclab import cli
 from bldclab.analysis.compare import VERDICT_TOLERANCE, _verdict
 from bldclab.analysis.identify import sample_path
 from bldclab.cli import analyze as cli_analyze
-from bldclab.cli import common
 from bldclab.cli import compare as cli_compare
 from bldclab.cli import faults as cli_faults
+from bldclab.cli import paths
 from bldclab.cli import torque_control as cli_torque
 from bldclab.cli.drives import SOURCES
 from bldclab.model import analytic as an
@@ -49,7 +51,7 @@ def locked_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
             return False
         return real_access(path, mode, *args, **kw)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(common.os, "access", access)
+    monkeypatch.setattr(paths.os, "access", access)
     return d
 
 
@@ -196,6 +198,22 @@ def test_identify_usage_errors(capsys: pytest.CaptureFixture[str], argv: list[st
 
 # ---------------------------------------------------------------------------------------------------------------
 # discoverability: drives, template, check
+
+
+def test_the_light_commands_load_no_heavy_module(tmp_path: Path) -> None:
+    """--help, drives, check, template and analyze (without --out) import neither pandas nor matplotlib nor the C
+    binding (issue 22: each answers in a fraction of a second; the times are in benchmarks/cli_startup.py)."""
+    out = str(tmp_path / "m.toml")
+    code = ("import sys\nfrom bldclab.cli import main\n"
+            f"runs = [['--help'], ['drives'], ['check', 'htm-48v'], ['template', '--out', {out!r}],"
+            " ['analyze', 'htm-48v']]\n"
+            "codes = [main(a) for a in runs]\n"
+            "heavy = [m for m in ('pandas', 'matplotlib', 'scipy', 'bldclab._core', 'bldclab.sim', 'bldclab.control',"
+            " 'bldclab.analysis') if m in sys.modules]\n"
+            "print(codes, heavy, file=sys.stderr)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=False)
+    assert proc.stderr.strip().splitlines()[-1] == "[0, 0, 0, 0, 0] []", proc.stderr
+
 
 
 def test_drives_lists_every_built_in_drive(capsys: pytest.CaptureFixture[str]) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 import pandas as pd
@@ -14,6 +15,7 @@ import bldclab as bl
 from bldclab.analysis.compare import compare
 from bldclab.cli import main
 from bldclab.model import analytic as an
+from bldclab.report.bundle import compare_directory, compare_files, compare_outputs
 
 
 def test_compare_ideal_drive_follows_the_closed_forms():
@@ -37,6 +39,24 @@ def test_compare_ideal_drive_follows_the_closed_forms():
     # the verdict names the speed ranges: sinusoidal torque higher everywhere, ripple higher around half speed
     assert any(v.startswith("mean torque: sinusoidal better for Omega in [0.10, 0.90]") for v in res.verdict)
     assert any(v.startswith("torque ripple (averaged inverter): square-wave better") for v in res.verdict)
+
+
+@pytest.mark.slow
+def test_the_results_directory_made_on_a_pool_is_the_one_made_here():
+    """compare_directory on a pool (figures, waveforms on the workers, report meanwhile) writes the files of
+    compare_files + compare_outputs in this process, in the same order; only dates and SVG ids differ."""
+    res = compare(bl.load("htm-48v"), [0.3, 0.8], workers=1, base_speeds=False)
+    here = compare_files(res)
+    here.update(compare_outputs(res, here, command="bldclab compare htm-48v"))
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        there = compare_directory(res, command="bldclab compare htm-48v", executor=pool)
+    assert list(there) == list(here)
+    for name in here:
+        if name.endswith((".csv", ".txt", ".png")) or name == "table1.json":
+            assert there[name] == here[name], name
+    a, b = (json.loads(files["manifest.json"]) for files in (here, there))
+    assert {k: v for k, v in a.items() if k != "created"} == {k: v for k, v in b.items() if k != "created"}
+    assert "report.html" in there and there["fig12_dynamometer.svg"].startswith(b"<?xml")
 
 
 def test_compare_verdict_states_its_resolution(compare_htm48v):

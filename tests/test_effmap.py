@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +14,7 @@ import pytest
 import bldclab as bl
 from bldclab.analysis import effmap as effmap_module
 from bldclab.analysis.effmap import FEASIBLE_TOL_PU, LOSS_BUCKETS, NOT_LOSSES, efficiency_map, loss_buckets
+from bldclab.analysis.experiments import map_points
 from bldclab.cli import main
 from bldclab.model import analytic
 from bldclab.sim.plausibility import BALANCE_WARN
@@ -90,6 +92,21 @@ def test_results_do_not_depend_on_the_workers(small, drive):
     par = efficiency_map(drive, small.torques, small.speeds, workers=2)
     pd.testing.assert_frame_equal(small.points, par.points)
     pd.testing.assert_frame_equal(small.difference, par.difference)
+
+
+def test_a_pool_the_caller_keeps_gives_the_same_map_and_stores_every_point(small, drive, tmp_path):
+    """The CLI's way: one pool for the points and then the figures; with a store, each point saved as it arrives."""
+    with ProcessPoolExecutor(max_workers=2) as pool, Store(tmp_path / "s.sqlite") as st:
+        cache = EffMapStore(st)
+        res = efficiency_map(drive, small.torques, small.speeds, workers=2, executor=pool, cache=cache)
+        assert cache.saved == len(small.points) == len(st)
+    pd.testing.assert_frame_equal(small.points, res.points)
+
+
+def test_map_points_hands_over_each_result_in_order():
+    seen: list[tuple[int, int]] = []
+    assert map_points(abs, [-3, 1, -2], each=lambda k, r: seen.append((k, r))) == [3, 1, 2]
+    assert seen == [(0, 3), (1, 1), (2, 2)]
 
 
 @pytest.mark.slow
@@ -229,6 +246,19 @@ def test_cli_second_run_uses_its_store(tmp_path, capsys, monkeypatch):
         main([*argv, "--no-store"])
     assert main([*argv, "--store", str(tmp_path / "none" / "s.sqlite")]) == 2
     assert "--store" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_cli_on_two_workers_writes_the_serial_files(tmp_path, capsys):
+    """The points and then the figures on one pool of two workers: the same tables, every figure."""
+    argv = ["effmap", "htm-48v", "--torques", "2", "--speeds", "2", "--no-store"]
+    assert main([*argv, "--workers", "1", "--out", str(tmp_path / "one")]) == 0
+    assert main([*argv, "--workers", "2", "--out", str(tmp_path / "two")]) == 0
+    for name in ("effmap.csv", "effmap_difference.csv"):
+        assert (tmp_path / "one" / name).read_bytes() == (tmp_path / "two" / name).read_bytes()
+    for stem in ("effmap_efficiency", "effmap_difference", "effmap_losses"):
+        assert (tmp_path / "two" / f"{stem}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert b"<svg" in (tmp_path / "two" / f"{stem}.svg").read_bytes()[:2000]
 
 
 @pytest.mark.slow

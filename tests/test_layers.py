@@ -20,11 +20,18 @@ The layers, lowest first (docs/design.md explains them and where new code goes):
 A module may import its own layer or any lower one. Imports under ``if TYPE_CHECKING:`` count too (they name the
 same dependency). Third-party imports may be deferred into a function (matplotlib, pandas, dask: heavy or
 optional), with a comment saying so; this test looks at bldclab imports only.
+
+Imports by name (so that ``import bldclab`` and the command line load a module only when it is used) go through one
+function, :func:`bldclab._lazy.load`, from two kinds of tables only: a package's module-level ``LAZY`` table of names
+imported on first use (``bldclab``, ``bldclab.report``) and the command registry :data:`bldclab.cli.COMMANDS`. They
+count as imports of the module that declares the table, at its top level (the layer rule and the cycle check apply
+to them); ``importlib`` or ``__import__`` anywhere else fails (but in :data:`BY_NAME_ELSEWHERE`, with its reason).
 """
 
 from __future__ import annotations
 
 import ast
+import importlib
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -36,6 +43,7 @@ PACKAGE = "bldclab"
 #: module prefix -> layer number; the longest matching prefix wins, every module must match one
 LAYERS: dict[str, int] = {
     "bldclab._version": 0,
+    "bldclab._lazy": 0,
     "bldclab.errors": 0,
     "bldclab._files": 0,
     "bldclab.svg": 0,
@@ -100,14 +108,58 @@ class _Imports(ast.NodeVisitor):
             self._add(sub if sub in self.known else source, node.lineno)
 
 
+#: The one module that imports bldclab modules by name (importlib), from the tables below.
+BY_NAME = "bldclab._lazy"
+#: Other by-name imports, not of a layer: module -> why.
+BY_NAME_ELSEWHERE = {
+    "bldclab.sweep.executors": "rebuilds a case's controller from its recorded 'module:qualname' (any package's, "
+                               "a user's too), as unpickling does",
+}
+
+
+def _lazy_tables(tree: ast.Module) -> bool:
+    """Whether a module declares a ``LAZY`` table at its top level."""
+    return any(isinstance(node, ast.Assign | ast.AnnAssign)
+               and any(isinstance(t, ast.Name) and t.id == "LAZY"
+                       for t in (node.targets if isinstance(node, ast.Assign) else [node.target]))
+               for node in tree.body)
+
+
+def by_name_edges(module: str) -> list[Edge]:
+    """The imports by name of a module that declares a ``LAZY`` table or is the command registry."""
+    mod = importlib.import_module(module)
+    targets = [target for target, _ in getattr(mod, "LAZY", {}).values()]
+    if module == "bldclab.cli":
+        targets += [f"bldclab.cli.{cmd.module}" for cmd in mod.COMMANDS]
+    return [(module, target, 0, False) for target in targets]
+
+
+def by_name_callers() -> list[str]:
+    """The modules other than :data:`BY_NAME` that call ``importlib`` or ``__import__``."""
+    bad = []
+    for name, (path, _) in _modules().items():
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        for node in ast.walk(tree):
+            uses = ((isinstance(node, ast.Import) and any(a.name.startswith("importlib") for a in node.names))
+                    or (isinstance(node, ast.ImportFrom) and (node.module or "").startswith("importlib")
+                        and any(a.name in ("import_module", "__import__") for a in node.names))
+                    or (isinstance(node, ast.Name) and node.id == "__import__"))
+            if uses and name != BY_NAME and name not in BY_NAME_ELSEWHERE:
+                bad.append(f"{name}:{node.lineno}")
+    return bad
+
+
 def import_edges() -> list[Edge]:
-    """Every bldclab import of every module under src/bldclab."""
+    """Every bldclab import of every module under src/bldclab, imports by name included."""
     known = _modules()
     edges: list[Edge] = []
     for name, (path, is_pkg) in known.items():
         visitor = _Imports(name, is_pkg, known)
-        visitor.visit(ast.parse(path.read_text(encoding="utf-8"), filename=str(path)))
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        visitor.visit(tree)
         edges += visitor.edges
+        if _lazy_tables(tree) or name == "bldclab.cli":
+            edges += by_name_edges(name)
     return edges
 
 
@@ -170,8 +222,29 @@ def test_every_module_has_a_layer() -> None:
 def test_the_graph_is_found(edges: list[Edge]) -> None:
     pairs = {(s, d) for s, d, _, _ in edges}
     assert ("bldclab.sim", "bldclab._core") in pairs
-    assert ("bldclab", "bldclab.sim") in pairs
+    assert ("bldclab", "bldclab.sim") in pairs  # a LAZY name (and a TYPE_CHECKING import)
+    assert ("bldclab.report", "bldclab.report.bundle") in pairs
+    assert ("bldclab.cli", "bldclab.cli.torque_control") in pairs  # a command's module, imported by name
     assert len(_modules()) > 30
+
+
+def test_imports_by_name_go_through_one_function() -> None:
+    bad = by_name_callers()
+    assert not bad, f"importlib outside {BY_NAME} (use a LAZY table or bldclab.cli.COMMANDS):\n" + "\n".join(bad)
+
+
+def test_only_the_tables_import_by_name(edges: list[Edge]) -> None:
+    tables = {name for name, (path, _) in _modules().items()
+              if _lazy_tables(ast.parse(path.read_text(encoding="utf-8")))} | {"bldclab.cli"}
+    users = {s for s, d, _, _ in edges if d == BY_NAME}
+    assert users <= tables, f"{BY_NAME} used without a LAZY table: {sorted(users - tables)}"
+
+
+def test_every_by_name_target_exists() -> None:
+    known = _modules()
+    targets = [d for m in ("bldclab", "bldclab.report", "bldclab.cli") for _, d, _, _ in by_name_edges(m)]
+    missing = [t for t in targets if t not in known]
+    assert targets and not missing, missing
 
 
 def test_no_import_cycle(edges: list[Edge]) -> None:

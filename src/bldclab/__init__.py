@@ -8,18 +8,46 @@ sim, analysis, sweep, report, cli); this module is the top, the only one that im
 
 from __future__ import annotations
 
-from ._core import decode_flags, flag
+from typing import TYPE_CHECKING
+
+from ._lazy import Lazy, attach
 from ._version import __version__
-from .analysis import experiments
-from .control import Control, HallCal, HallCalibration, Lu, OpenLoop, Sine, SixStep, SixStepVoltage
 from .errors import BldclabError
-from .model import catalog
-from .model.catalog import load
-from .model.emf import BackEmf, Cogging, Fourier, Sinusoid, Table, Trapezoid
-from .model.motor import Drive, Inverter, Mechanics, Motor, Sensors
-from .sim import Fault, Scenario, simulate
-from .sim.hallcal import calibrate as calibrate_hall
-from .sim.results import Metrics, SimResult
+
+if TYPE_CHECKING:  # the same names, for type checkers and readers; at run time they are imported on first use
+    from ._core import decode_flags, flag
+    from .analysis import experiments
+    from .control import Control, HallCal, HallCalibration, Lu, OpenLoop, Sine, SixStep, SixStepVoltage
+    from .model import catalog
+    from .model.catalog import load
+    from .model.emf import BackEmf, Cogging, Fourier, Sinusoid, Table, Trapezoid
+    from .model.motor import Drive, Inverter, Mechanics, Motor, Sensors
+    from .sim import Fault, Scenario, simulate
+    from .sim.hallcal import calibrate as calibrate_hall
+    from .sim.results import Metrics, SimResult
+
+#: Public name -> (module that defines it, its name there; None: the module itself), imported on first use
+#: (:mod:`bldclab._lazy`): ``import bldclab``, and the command line that lives in this package, load numpy, the C
+#: library and the controllers only when a name needs them.
+LAZY: Lazy = {
+    "decode_flags": ("bldclab._core", "decode_flags"),
+    "flag": ("bldclab._core", "flag"),
+    "experiments": ("bldclab.analysis.experiments", None),
+    **{name: ("bldclab.control", name) for name in ("Control", "HallCal", "HallCalibration", "Lu", "OpenLoop",
+                                                    "Sine", "SixStep", "SixStepVoltage")},
+    "catalog": ("bldclab.model.catalog", None),
+    "load": ("bldclab.model.catalog", "load"),
+    **{name: ("bldclab.model.emf", name) for name in ("BackEmf", "Cogging", "Fourier", "Sinusoid", "Table",
+                                                      "Trapezoid")},
+    **{name: ("bldclab.model.motor", name) for name in ("Drive", "Inverter", "Mechanics", "Motor", "Sensors")},
+    **{name: ("bldclab.sim", name) for name in ("Fault", "Scenario", "simulate")},
+    "calibrate_hall": ("bldclab.sim.hallcal", "calibrate"),
+    **{name: ("bldclab.sim.results", name) for name in ("Metrics", "SimResult")},
+}
+
+# the modules reachable as attributes after ``import bldclab`` alone (``bl.sim.samples_of``, ``bl._core.core()``),
+# as when this module imported them all at once
+__getattr__, __dir__ = attach(globals(), LAZY, ("_core", "_files", "analysis", "control", "model", "sim", "svg"))
 
 __all__ = [
     "BackEmf",

@@ -18,7 +18,7 @@ import sys
 import time
 import warnings
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -265,7 +265,7 @@ def _progress(total: int, enabled: bool) -> Callable[[int], None]:
 
 def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls: dict[str, tuple[Control, float]]
             | None = None, workers: int | None = None, progress: bool = False, pwm_phases: int = 1,
-            base_speeds: bool = True) -> CompareResult:
+            base_speeds: bool = True, executor: Executor | None = None) -> CompareResult:
     """Compare square-wave and sinusoidal supply of a drive over speed.
 
     Parameters
@@ -276,7 +276,8 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
     controls : dict, optional
         ``{"square": (control, ref), "sine": (control, ref)}``; default :func:`default_controls`.
     workers : int, optional
-        Processes; default all cores (1: in this process).
+        Processes; default all cores (1: in this process). With a :class:`~concurrent.futures.ProcessPoolExecutor`
+        as ``executor``: its number of processes, for which the points are sent in chunks (else one at a time).
     progress : bool
         Show a progress bar on stderr.
     pwm_phases : int
@@ -285,6 +286,9 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
     base_speeds : bool
         Also search the simulated base speed of each supply (:func:`bldclab.analysis.experiments.base_speed`, with the
         default controllers of paper 1's definitions).
+    executor : concurrent.futures.Executor, optional
+        Where the points run instead of a pool of ``workers`` processes: e.g. a pool the caller keeps to draw the
+        figures on it next. Results do not depend on where the points run.
 
     Returns
     -------
@@ -303,14 +307,20 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
     rows: list[dict[str, Any]]
     bs: list[float]
     n_workers = workers or os.cpu_count() or 1
-    if n_workers <= 1:
+
+    def run_on(pool: Executor, n_pool: int) -> tuple[list[dict[str, Any]], list[float]]:
+        bs_futures = [pool.submit(_run_base_speed, job) for job in bs_jobs]  # the longest jobs first
+        chunk = max(1, len(jobs) // (4 * n_pool)) if n_pool > 0 else 1
+        return map_points(_run_point, jobs, pool, chunksize=chunk, progress=show), [f.result() for f in bs_futures]
+
+    if executor is not None:
+        rows, bs = run_on(executor, n_workers if isinstance(executor, ProcessPoolExecutor) and workers else 0)
+    elif n_workers <= 1:
         rows = map_points(_run_point, jobs, progress=show)
         bs = map_points(_run_base_speed, bs_jobs)
     else:
         with ProcessPoolExecutor(max_workers=n_workers) as pool:
-            bs_futures = [pool.submit(_run_base_speed, job) for job in bs_jobs]  # the longest jobs first
-            rows = map_points(_run_point, jobs, pool, chunksize=max(1, len(jobs) // (4 * n_workers)), progress=show)
-            bs = [f.result() for f in bs_futures]
+            rows, bs = run_on(pool, n_workers)
     seconds = time.perf_counter() - t0
     caught = [text for row in rows for text in row.pop("_warnings")]
     eff = efficiency_table(drive, pd.DataFrame([{"supply": row["supply"], "Omega_pu": row["Omega_pu"],

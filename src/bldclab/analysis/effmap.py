@@ -255,7 +255,8 @@ def _axis(name: str, values: Sequence[float] | np.ndarray) -> np.ndarray:
     return a
 
 
-#: Points per process between two saves to a cache: an interrupted map keeps the chunks it finished.
+#: Largest number of points sent to a worker at a time when they go to a cache: an interrupted map keeps every
+#: chunk that finished.
 _SAVE_CHUNK = 32
 
 
@@ -263,19 +264,13 @@ def _compute(jobs: list[EffMapJob], executor: Executor | None, n_pool: int,
              cache: PointCache | None) -> list[dict[str, Any]]:
     """Run the points (``n_pool`` > 0: on a process pool of that many, in chunks).
 
-    With a cache, in steps of :data:`_SAVE_CHUNK` points per process, each saved as it finishes.
+    With a cache, each point is saved as its result arrives, while the workers run the next ones.
     """
-    step = len(jobs) if cache is None else _SAVE_CHUNK * max(1, n_pool)
-    out: list[dict[str, Any]] = []
-    for a in range(0, len(jobs), max(1, step)):
-        part_jobs = jobs[a:a + step]
-        chunksize = max(1, len(part_jobs) // (4 * n_pool)) if n_pool > 0 else 1
-        part = map_points(_run_point, part_jobs, executor, chunksize=chunksize)
-        if cache is not None:
-            for job, row in zip(part_jobs, part, strict=True):
-                cache.save(job, row)
-        out += part
-    return out
+    chunksize = max(1, len(jobs) // (4 * n_pool)) if n_pool > 0 else 1
+    if cache is None:
+        return map_points(_run_point, jobs, executor, chunksize=chunksize)
+    return map_points(_run_point, jobs, executor, chunksize=min(chunksize, _SAVE_CHUNK),
+                      each=lambda k, row: cache.save(jobs[k], row))
 
 
 def efficiency_map(drive: Drive, torques: Sequence[float] | np.ndarray, speeds: Sequence[float] | np.ndarray,
@@ -294,17 +289,19 @@ def efficiency_map(drive: Drive, torques: Sequence[float] | np.ndarray, speeds: 
     supplies : sequence of {"square", "sine"}
         The supplies mapped; the difference map needs both.
     workers : int, optional
-        Local processes (default: all cores; 1: in this process). Ignored with ``executor``.
+        Local processes (default: all cores; 1: in this process). With a
+        :class:`~concurrent.futures.ProcessPoolExecutor` as ``executor``: its number of processes, for which the points
+        are sent in chunks (else one at a time).
     executor : concurrent.futures.Executor, optional
         Where the points run instead: any executor with ``map`` (a Dask cluster's ``Client.get_executor()``, a
-        pool the caller keeps). Results do not depend on where the points run.
+        pool the caller keeps to draw the figures on it next). Results do not depend on where the points run.
     controls : dict, optional
         ``{"square": control, "sine": control}`` taking a torque reference; default :func:`map_controls`.
     resolution : float
         Smallest efficiency difference called a win (default :data:`RESOLUTION`).
     cache : PointCache, optional
-        Points found there are not simulated again; new points are saved to it as each chunk of points finishes
-        (e.g. :class:`bldclab.sweep.effmap_store.EffMapStore`, a sweep store). The result is the same either way.
+        Points found there are not simulated again; new points are saved to it as they arrive, while the next ones
+        run (e.g. :class:`bldclab.sweep.effmap_store.EffMapStore`, a sweep store). The result is the same either way.
 
     Returns
     -------
@@ -326,8 +323,10 @@ def efficiency_map(drive: Drive, torques: Sequence[float] | np.ndarray, speeds: 
     n_workers = workers or os.cpu_count() or 1
     found = cache.lookup(jobs) if cache is not None else [None] * len(jobs)
     todo = [jobs[k] for k, row in enumerate(found) if row is None]
-    if executor is not None or n_workers <= 1 or len(todo) <= 1:
-        new = _compute(todo, executor, 0, cache)
+    if executor is not None:
+        new = _compute(todo, executor, n_workers if isinstance(executor, ProcessPoolExecutor) and workers else 0, cache)
+    elif n_workers <= 1 or len(todo) <= 1:
+        new = _compute(todo, None, 0, cache)
     else:
         with ProcessPoolExecutor(max_workers=n_workers) as pool:
             new = _compute(todo, pool, n_workers, cache)

@@ -93,7 +93,8 @@ class PointResult:
 
 
 def map_points(fn: Callable[[Any], Any], jobs: Sequence[Any], executor: Executor | None = None, *,
-               chunksize: int = 1, progress: Callable[[int], None] | None = None) -> list[Any]:
+               chunksize: int = 1, progress: Callable[[int], None] | None = None,
+               each: Callable[[int, Any], None] | None = None) -> list[Any]:
     """Run ``fn`` over ``jobs`` and return the results in the order of the jobs.
 
     The one way the analyses (``compare``, ``effmap``) run their operating points: serially without an executor,
@@ -111,6 +112,9 @@ def map_points(fn: Callable[[Any], Any], jobs: Sequence[Any], executor: Executor
         Jobs sent to a process-pool worker at a time (> 1 only for a :class:`~concurrent.futures.ProcessPoolExecutor`).
     progress : callable, optional
         Called with the number of results done after each one.
+    each : callable, optional
+        Called with each job's index and result as it arrives, in order (while the executor runs the next ones):
+        e.g. to keep it in a store.
 
     Returns
     -------
@@ -126,6 +130,8 @@ def map_points(fn: Callable[[Any], Any], jobs: Sequence[Any], executor: Executor
     out = []
     for j, r in enumerate(results):
         out.append(r)
+        if each is not None:
+            each(j, r)
         if progress is not None:
             progress(j + 1)
     return out

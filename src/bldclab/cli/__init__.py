@@ -1,8 +1,10 @@
 """Command-line interface: ``bldclab <command> [options]``.
 
-Every subcommand is a :class:`Command`: a name, a one-line help, a function that declares its arguments
-and a function that runs it and returns the exit code. They are registered in :data:`COMMANDS`, the one place
-to add a new one. :func:`main` owns the error handling for all of them: a bad argument or a
+Every subcommand is a :class:`Command`: a name, a one-line help and the module of this package that implements
+it, with a function that declares its arguments (``configure_command``) and a function that runs it and returns
+the exit code (``run_command``). They are registered in :data:`COMMANDS`, the one place to add a new one. A
+command's module is imported only when that command runs (or its help is shown): ``bldclab drives`` does not
+load matplotlib, pandas or the C library. :func:`main` owns the error handling for all of them: a bad argument or a
 :class:`BldclabError` prints one line ``bldclab: error: <message>`` on stderr and exits with status 2, without
 a traceback.
 
@@ -13,32 +15,20 @@ result has been computed, so an error leaves no half-written output.
 from __future__ import annotations
 
 import argparse
+import gc
 import os  # bldclab.cli.os: the tests fail os.replace through it
 import sys
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from types import ModuleType
 from typing import NoReturn
 
 from .._files import write_files
+from .._lazy import load
 from .._version import __version__
-from ..analysis.paper1 import table1_text
 from ..errors import BldclabError, PlausibilityWarning
-from . import (
-    analyze,
-    check,
-    compare,
-    drives,
-    effmap,
-    faults,
-    hall,
-    identify,
-    report,
-    simulate,
-    sweep,
-    template,
-    torque_control,
-)
+from ..model.analytic.table import table1_text
 
 __all__ = ["COMMANDS", "Command", "build_parser", "main", "table1_text", "write_files"]
 
@@ -67,77 +57,102 @@ class Command:
         What the user types after ``bldclab``.
     help : str
         One line for ``bldclab --help``.
-    configure : callable
-        ``configure(parser)`` adds the subcommand's arguments to its parser.
-    run : callable
-        ``run(args) -> int`` does the work and returns the exit status.
+    module : str
+        The module of :mod:`bldclab.cli` that implements it (``"torque_control"``): its ``configure_command(parser)``
+        adds the subcommand's arguments to its parser, its ``run_command(args) -> int`` does the work and returns
+        the exit status. Imported on first use of :attr:`configure` or :attr:`run`.
 
     """
 
     name: str
     help: str
-    configure: Callable[[argparse.ArgumentParser], None]
-    run: Callable[[argparse.Namespace], int]
+    module: str
 
+    def load(self) -> ModuleType:
+        """Import and return the command's module (``bldclab.cli.<module>``)."""
+        return load(f"{__name__}.{self.module}")
 
-# ------------------------------------------------------------------------------------------------------------
-# shared helpers
+    @property
+    def configure(self) -> Callable[[argparse.ArgumentParser], None]:
+        """``configure(parser)``: add the subcommand's arguments to its parser."""
+        fn: Callable[[argparse.ArgumentParser], None] = self.load().configure_command
+        return fn
 
-
-# ------------------------------------------------------------------------------------------------------------
-# analyze
+    @property
+    def run(self) -> Callable[[argparse.Namespace], int]:
+        """``run(args) -> int``: do the work and return the exit status."""
+        fn: Callable[[argparse.Namespace], int] = self.load().run_command
+        return fn
 
 
 # ------------------------------------------------------------------------------------------------------------
 # registry and entry point
 
-#: The subcommands, in the order ``bldclab --help`` lists them. Add new ones here.
+#: The subcommands, in the order ``bldclab --help`` lists them. Add new ones here. Their modules are imported by name
+#: (:func:`bldclab._lazy.load`) when the command runs; ``tests/test_layers.py`` reads them as imports of this module.
 COMMANDS: tuple[Command, ...] = (
     Command("drives", "list the built-in drives: back-EMF, V_dc, I_N, pole pairs, PWM, speeds, source",
-            drives.configure_command, drives.run_command),
+            "drives"),
     Command("template", "write a commented motor file to start from (every field with its unit)",
-            template.configure_command, template.run_command),
+            "template"),
     Command("check", "validate a motor file and print its derived quantities (bases, L/R, PWM per commutation)",
-            check.configure_command, check.run_command),
+            "check"),
     Command("analyze", "paper 1 closed forms for a motor: Table I, characteristics, Figs 7-8",
-            analyze.configure_command, analyze.run_command),
+            "analyze"),
     Command("sweep", "run many simulations (grid or list of cases) on processes or Dask into a resumable store",
-            sweep.configure_command, sweep.run_command),
+            "sweep"),
     Command("identify", "back-EMF tables from a constant-speed waveform (paper 2)",
-            identify.configure_command, identify.run_command),
+            "identify"),
     Command("simulate", "one switching-level simulation: square, sine, sixv, lu, lu-no-do or rect control",
-            simulate.configure_command, simulate.run_command),
+            "simulate"),
     Command("compare", "square-wave vs sinusoidal supply: closed forms and simulation over speed (paper 1)",
-            compare.configure_command, compare.run_command),
+            "compare"),
     Command("effmap", "efficiency and loss maps of both supplies over the torque-speed plane, where each wins",
-            effmap.configure_command, effmap.run_command),
+            "effmap"),
     Command("hall", "mean torque, ripple and efficiency of each supply against the Hall sensors' placement error",
-            hall.configure_command, hall.run_command),
+            "hall"),
     Command("torque-control", "paper 2's torque control vs its baselines over a load x speed grid",
-            torque_control.configure_command, torque_control.run_command),
+            "torque_control"),
     Command("faults", "inject sensor, bus and phase faults: detection, time to safe state, peak current",
-            faults.configure_command, faults.run_command),
+            "faults"),
     Command("report", "one self-contained HTML report of a comparison (a results directory, or a motor to run)",
-            report.configure_command, report.run_command),
+            "report"),
 )
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(commands: Iterable[str] | None = None) -> argparse.ArgumentParser:
     """Build the argument parser with every subcommand of :data:`COMMANDS`.
+
+    Parameters
+    ----------
+    commands : iterable of str, optional
+        The subcommands whose arguments are declared (their modules are imported); default all. The others are
+        listed by ``--help`` all the same, without their arguments.
 
     Returns
     -------
     argparse.ArgumentParser
 
     """
+    chosen = None if commands is None else set(commands)
     parser = _Parser(prog=PROG, description="Simulate, analyse and control PM brushless DC motor drives.")
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for cmd in COMMANDS:
         p = sub.add_parser(cmd.name, help=cmd.help, description=cmd.help)
-        cmd.configure(p)
-        p.set_defaults(run=cmd.run)
+        if chosen is None or cmd.name in chosen:
+            cmd.configure(p)
+            p.set_defaults(run=cmd.run)
     return parser
+
+
+def _command_name(argv: Sequence[str]) -> list[str]:
+    """Return the subcommand named in ``argv`` (as a list of at most one): its first word that is not an option.
+
+    The program's own options (``--help``, ``--version``) take no value, so that word is the one the parser reads
+    as the subcommand; only that command's module is then imported.
+    """
+    return [a for a in argv if not a.startswith("-")][:1]
 
 
 def _one_line(text: str) -> str:
@@ -160,7 +175,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     Parameters
     ----------
     argv : sequence of str, optional
-        Arguments without the program name; default ``sys.argv[1:]``.
+        Arguments without the program name; default ``sys.argv[1:]``, and then (the ``bldclab`` program, about to
+        exit) the garbage collector's objects are frozen before returning (:func:`gc.freeze`): the process's memory
+        goes with it, without a last collection.
 
     Returns
     -------
@@ -170,7 +187,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         interrupted. Plausibility warnings go to stderr, one line each.
 
     """
-    parser = build_parser()
+    program = argv is None  # run as the bldclab program (not called from Python code)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_command_name(argv))
     try:
         args = parser.parse_args(argv)
         with warnings.catch_warnings():
@@ -189,4 +208,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())  # so that the interpreter's final flush does not fail again
         return 141
-
+    finally:
+        if program:  # the process ends next and its memory goes with it: the interpreter's last garbage collection
+            gc.freeze()  # (the cycles of figures and tables, 0.1 s after effmap or compare) would free it for nothing

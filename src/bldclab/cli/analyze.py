@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 
 from .._files import write_files
-from ..analysis.paper1 import table1_text
 from ..model import analytic
+from ..model.analytic.table import table1_text
 from ..model.catalog import load, names
 from ..model.motor import Drive
 from ..report import plots
-from .common import check_out_dir
+from .paths import check_out_dir
 
 __all__ = [
     "configure_command",

@@ -1,6 +1,7 @@
 """Helpers shared by the simulating commands.
 
 The drive from MOTOR and ``--inverter``, controllers by their CLI names, speeds with units, warnings summarised.
+Where a command may write is checked by :mod:`bldclab.cli.paths` (no controllers imported: the light commands use it).
 """
 
 from __future__ import annotations
@@ -9,7 +10,9 @@ import argparse
 import os
 import re
 import warnings
-from pathlib import Path
+from collections.abc import Iterator
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 
 from ..control import Control, Lu, Sine, SixStep, SixStepVoltage
 from ..errors import BldclabError, PlausibilityWarning
@@ -19,8 +22,8 @@ from ..model.motor import Drive, Inverter
 from ..model.units import to_si
 from ..sim import plausibility as _plaus
 
-__all__ = ["CONTROLS", "add_inverter_option", "check_out_dir", "check_out_file", "check_speed_range", "control_of",
-           "load_drive", "parse_speed", "positive_int", "summarise"]
+__all__ = ["CONTROLS", "add_inverter_option", "check_speed_range", "control_of", "load_drive", "parse_speed",
+           "positive_int", "summarise", "worker_pool", "workers_of"]
 
 
 CONTROLS = ("square", "sine", "sixv", "lu", "lu-no-do", "rect")
@@ -74,67 +77,6 @@ def summarise(caught: list[str], runs: int) -> None:
         warnings.warn(line, PlausibilityWarning, stacklevel=2)
 
 
-
-def check_out_dir(path: Path | None, option: str = "--out") -> None:
-    """Check before any work that ``path`` can be used as an output directory.
-
-    The directory need not exist: its nearest existing ancestor must be a writable directory (it is created when
-    the results are written). Nothing is created here, so a rejected option leaves nothing behind.
-
-    Parameters
-    ----------
-    path : Path or None
-        The directory the command will write into; None: nothing to check.
-    option : str
-        The option the user typed, named in the error.
-
-    Raises
-    ------
-    BldclabError
-        ``option``: the path is an existing file, or its existing ancestor is not a writable directory.
-    """
-    if path is None:
-        return
-    if path.exists() and not path.is_dir():
-        raise BldclabError(option, f"{str(path)!r} exists and is not a directory")
-    _check_writable(path, option)
-
-
-def check_out_file(path: Path | None, option: str = "--out") -> None:
-    """Check before any work that the file ``path`` can be written (its directory created if missing).
-
-    Parameters
-    ----------
-    path : Path or None
-        The file the command will write; None: nothing to check.
-    option : str
-        The option the user typed, named in the error.
-
-    Raises
-    ------
-    BldclabError
-        ``option``: the path is a directory, or its directory cannot be created or written.
-    """
-    if path is None:
-        return
-    if path.is_dir():
-        raise BldclabError(option, f"{str(path)!r} is a directory; give a file name")
-    _check_writable(path.parent if str(path.parent) else Path("."), option)
-
-
-def _check_writable(path: Path, option: str) -> None:
-    """Raise unless the nearest existing ancestor of ``path`` (itself included) is a writable directory."""
-    probe = path.absolute()
-    while not probe.exists():
-        if probe.parent == probe:
-            break
-        probe = probe.parent
-    if not probe.is_dir():
-        raise BldclabError(option, f"cannot create {str(path)!r}: {str(probe)!r} is not a directory")
-    if not os.access(probe, os.W_OK | os.X_OK):
-        raise BldclabError(option, f"cannot write {str(path)!r}: directory {str(probe)!r} is not writable")
-
-
 def positive_int(text: str) -> int:
     """Argparse type: an integer >= 1 (``--workers``, ``--speeds`` counts)."""
     try:
@@ -154,3 +96,22 @@ def check_speed_range(lo: float, hi: float) -> None:
         raise BldclabError("--max-speed", f"must be in (0, 1.5) p.u. of Omega_0, got {hi:g}")
     if lo >= hi:
         raise BldclabError("--max-speed", f"must be above --min-speed ({lo:g}), got {hi:g}")
+
+
+def workers_of(workers: int | None) -> int:
+    """Return the processes of ``--workers``: as given, else one per core."""
+    return workers or os.cpu_count() or 1
+
+
+@contextmanager
+def worker_pool(workers: int) -> Iterator[ProcessPoolExecutor | None]:
+    """Open the command's process pool, for its simulations and then its figures (None for one process: run here).
+
+    One pool for the whole command: its workers start once (at the first job) and draw the figures after the
+    simulations, with everything they imported for the simulations still loaded.
+    """
+    if workers <= 1:
+        yield None
+        return
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        yield pool

@@ -8,12 +8,15 @@ import sys
 from pathlib import Path
 
 from .._files import write_files
-from ..analysis.compare import compare, default_controls, speed_grid
+from ..analysis.compare import CompareResult, compare, default_controls, speed_grid
 from ..control.sixstep import CHOPPINGS
 from ..errors import BldclabError
 from ..model import analytic
-from ..report.bundle import compare_command, compare_files, compare_outputs
-from .common import add_inverter_option, check_out_dir, check_speed_range, load_drive, positive_int
+from ..model.motor import Drive
+from ..report.bundle import compare_command, compare_directory
+from ..report.plots import load_matplotlib
+from .common import add_inverter_option, check_speed_range, load_drive, positive_int, worker_pool, workers_of
+from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
 
@@ -50,8 +53,22 @@ def run_command(args: argparse.Namespace) -> int:
     w = speed_grid(args.speeds, args.min_speed, args.max_speed)
     out = args.out if args.out is not None else Path("out") / drive.name
     check_out_dir(out)  # before the simulations: a bad --out fails in a second, not after the whole run
-    res = compare(drive, w, workers=args.workers, progress=not args.no_progress and sys.stderr.isatty(),
-                  pwm_phases=args.pwm_phases, controls=default_controls(drive, min(w), args.chopping))
+    workers = workers_of(args.workers)
+    load_matplotlib()  # before the pool starts: its workers draw the figures with it already loaded
+    with worker_pool(workers) as pool:  # the points, then paper 1's figures and the waveforms, and the drawing
+        res = compare(drive, w, workers=workers, executor=pool,
+                      progress=not args.no_progress and sys.stderr.isatty(), pwm_phases=args.pwm_phases,
+                      controls=default_controls(drive, min(w), args.chopping))
+        _print(args, drive, w, res)
+        files = compare_directory(res, command=compare_command(args, out), motor_source=args.motor,
+                                  report=not args.no_report, executor=pool)
+    for path in write_files(out, files):
+        print(f"wrote {path}")
+    return 0
+
+
+def _print(args: argparse.Namespace, drive: Drive, w: list[float], res: CompareResult) -> None:
+    """Print the comparison: the heading, one line per speed, the notes and the verdict."""
     t1 = res.table1
     sim = res.simulated
     chop = "" if args.chopping == "pwm-on-pwm" else f", {args.chopping} chopping"
@@ -91,9 +108,3 @@ def run_command(args: argparse.Namespace) -> int:
     print("verdict:")
     for line in res.verdict:
         print(f"  - {line}")
-    files = compare_files(res)
-    files.update(compare_outputs(res, files, command=compare_command(args, out), motor_source=args.motor,
-                                 report=not args.no_report))
-    for path in write_files(out, files):
-        print(f"wrote {path}")
-    return 0

@@ -12,11 +12,12 @@ from .._files import write_files
 from ..analysis.effmap import FEASIBLE_TOL_PU, efficiency_map, map_controls
 from ..control.sixstep import CHOPPINGS
 from ..errors import BldclabError
-from ..report.effmap_plots import plot_difference, plot_efficiency_maps, plot_losses
-from ..report.plots import figure_bytes
+from ..report.effmap_plots import effmap_figures
+from ..report.plots import load_matplotlib
 from ..sweep.effmap_store import EffMapStore
 from ..sweep.store import Store
-from .common import add_inverter_option, check_out_dir, check_speed_range, load_drive, positive_int
+from .common import add_inverter_option, check_speed_range, load_drive, positive_int, worker_pool, workers_of
+from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
 
@@ -74,30 +75,30 @@ def run_command(args: argparse.Namespace) -> int:
     torques = sign * np.linspace(args.min_torque, args.max_torque, args.torques) * drive.T_N
     speeds = np.linspace(args.min_speed, args.max_speed, args.speeds) * drive.Omega_0
     controls = map_controls(drive, float(np.min(speeds)), args.chopping)
-    if args.no_store:
-        res = efficiency_map(drive, torques, speeds, workers=args.workers, controls=controls)
-    else:
-        path = _store_path(out, args.store)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with Store(path) as st:
-            res = efficiency_map(drive, torques, speeds, workers=args.workers, controls=controls,
-                                 cache=EffMapStore(st))
-        print(f"store {path}: {res.cached} of {len(res.points)} points found there, "
-              f"{len(res.points) - res.cached} simulated")
-    mode = "generating (braking)" if args.generating else "motoring"
-    print(f"{drive.name}: efficiency map, {mode}, {args.torques} torques x {args.speeds} speeds x 2 supplies "
-          f"(square wave: {args.chopping} chopping) in "
-          f"{res.seconds:.1f} s (T_N = {drive.T_N:.4g} N m, Omega_0 = {drive.Omega_0 * RPM_PER_RAD_S:.4g} rpm; a "
-          f"point is feasible when its mean torque is within {FEASIBLE_TOL_PU:g} T_N of the reference)")
-    for line in res.summary():
-        print(f"  {line}")
-    print(f"  loss buckets: {', '.join(res.buckets)}")
-    files: dict[str, bytes] = {"effmap.csv": res.points.to_csv(index=False).encode(),
-                               "effmap_difference.csv": res.difference.to_csv(index=False).encode()}
-    for stem, fig in (("effmap_efficiency", plot_efficiency_maps(res)), ("effmap_difference", plot_difference(res)),
-                      ("effmap_losses", plot_losses(res))):
-        for fmt in ("png", "svg"):
-            files[f"{stem}.{fmt}"] = figure_bytes(fig, fmt, dated=False)
+    workers = workers_of(args.workers)
+    load_matplotlib()  # before the pool starts: its workers draw the figures with it already loaded
+    with worker_pool(workers) as pool:  # the points, then the figures
+        if args.no_store:
+            res = efficiency_map(drive, torques, speeds, workers=workers, executor=pool, controls=controls)
+        else:
+            path = _store_path(out, args.store)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with Store(path) as st:
+                res = efficiency_map(drive, torques, speeds, workers=workers, executor=pool, controls=controls,
+                                     cache=EffMapStore(st))
+            print(f"store {path}: {res.cached} of {len(res.points)} points found there, "
+                  f"{len(res.points) - res.cached} simulated")
+        mode = "generating (braking)" if args.generating else "motoring"
+        print(f"{drive.name}: efficiency map, {mode}, {args.torques} torques x {args.speeds} speeds x 2 supplies "
+              f"(square wave: {args.chopping} chopping) in "
+              f"{res.seconds:.1f} s (T_N = {drive.T_N:.4g} N m, Omega_0 = {drive.Omega_0 * RPM_PER_RAD_S:.4g} rpm; "
+              f"a point is feasible when its mean torque is within {FEASIBLE_TOL_PU:g} T_N of the reference)")
+        for line in res.summary():
+            print(f"  {line}")
+        print(f"  loss buckets: {', '.join(res.buckets)}")
+        files: dict[str, bytes] = {"effmap.csv": res.points.to_csv(index=False).encode(),
+                                   "effmap_difference.csv": res.difference.to_csv(index=False).encode()}
+        files.update(effmap_figures(res, pool))
     for path in write_files(out, files):
         print(f"wrote {path}")
     return 0

@@ -9,7 +9,8 @@ from .._files import write_files
 from ..analysis.faults import fault_table
 from ..model.catalog import load
 from ..sim import plausibility as _plaus
-from .common import check_out_dir, control_of, parse_speed, summarise
+from .common import control_of, parse_speed, summarise
+from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
 

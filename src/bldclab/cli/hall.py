@@ -14,7 +14,8 @@ from ..model.units import to_si
 from ..report.hall_plots import plot_hall_study
 from ..report.plots import figure_bytes
 from ..sim import plausibility as _plaus
-from .common import add_inverter_option, check_out_dir, load_drive, parse_speed, positive_int
+from .common import add_inverter_option, load_drive, parse_speed, positive_int
+from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
 

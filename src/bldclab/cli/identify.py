@@ -15,7 +15,7 @@ from ..analysis.identify import Identification, identify, sample_path
 from ..errors import BldclabError
 from ..model.catalog import load
 from ..model.motor import Drive
-from .common import check_out_file
+from .paths import check_out_file
 
 __all__ = [
     "configure_command",

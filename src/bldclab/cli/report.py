@@ -14,7 +14,8 @@ from ..errors import BldclabError
 from ..model.catalog import load
 from ..report.bundle import motor_results, read_results
 from ..report.html import REPORT, WAVEFORM_SPEEDS, Results, render
-from .common import check_out_file, check_speed_range, positive_int
+from .common import check_speed_range, positive_int
+from .paths import check_out_file
 
 __all__ = [
     "configure_command",

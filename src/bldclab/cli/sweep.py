@@ -9,7 +9,8 @@ from pathlib import Path
 from .._files import write_atomic
 from ..errors import BldclabError
 from ..sweep import Dask, Executor, Processes, Serial, Sweep, run
-from .common import check_out_file, positive_int
+from .common import positive_int
+from .paths import check_out_file
 
 __all__ = [
     "configure_command",

@@ -14,7 +14,7 @@ from pathlib import Path
 from .._files import write_atomic
 from ..errors import BldclabError
 from ..model.catalog import load
-from .common import check_out_file
+from .paths import check_out_file
 
 __all__ = ["FIELDS", "configure_command", "run_command", "template"]
 

@@ -14,7 +14,8 @@ from ..errors import BldclabError
 from ..model.units import to_si
 from ..report import plots
 from ..sim import plausibility as _plaus
-from .common import add_inverter_option, check_out_dir, load_drive, parse_speed, summarise
+from .common import add_inverter_option, load_drive, parse_speed, summarise
+from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
 

@@ -16,6 +16,7 @@ import math
 import platform
 import shlex
 from collections.abc import Mapping, Sequence
+from concurrent.futures import Executor
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -26,34 +27,58 @@ from .. import _core
 from .._version import __version__
 from ..analysis import paper1, paper2
 from ..analysis.compare import SUPPLIES, CompareResult, compare, default_controls
-from ..analysis.experiments import electrical_period, steady_state
-from ..analysis.paper1 import table1_text
+from ..analysis.experiments import electrical_period, map_points, steady_state
 from ..control import Control, Lu
 from ..errors import BldclabError
+from ..model.analytic.table import table1_text
 from ..model.motor import Drive
 from ..sim import Scenario
 from . import plots
 from .html import _KNOWN, FORMAT, FORMAT_VERSION, MANIFEST, REPORT, WAVEFORM_SPEEDS, WAVEFORM_SUB, Results, _now, render
+from .plots import FigureJob
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = [
     "compare_command",
+    "compare_directory",
     "compare_files",
     "compare_outputs",
     "comparison_figures",
+    "efficiency_figure",
     "make_manifest",
     "methods_traces",
     "motor_results",
     "read_results",
+    "ripple_figure",
+    "torque_figure",
     "waveforms",
 ]
 
 
+def _waveform(job: tuple[Drive, str, Control, float, float, int]) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """One supply at one speed for :func:`waveforms`: the first period of the measuring window, and the point."""
+    drive, supply, ctl, ref, s, trace_sub = job
+    om = s * drive.Omega_0
+    point, res = steady_state(drive, ctl, om, ref, trace=True, trace_sub=trace_sub)
+    m = point.metrics
+    te = electrical_period(drive, om)
+    sel = (res.t >= m.t0) & (res.t < m.t0 + te)
+    th = np.degrees(np.unwrap(res["theta_e"][sel]))
+    th -= 360.0 * math.floor(th[0] / 360.0 + 1e-9) if th.size else 0.0
+    frame = pd.DataFrame({
+        "supply": supply, "speed_pu": s, "theta_e_deg": th, "t_ms": (res.t[sel] - m.t0) * 1e3,
+        "i_a": res["i_a"][sel], "i_b": res["i_b"][sel], "i_c": res["i_c"][sel], "tau_e": res["tau_e"][sel],
+        "tau_e_pu": res["tau_e"][sel] / drive.T_N})
+    return frame, {"supply": supply, "speed_pu": s, "tau_mean_pu": point.tau_mean_pu,
+                   "ripple_pu": point.ripple_sampled_pu, "ripple_inst_pu": point.ripple_pu,
+                   "efficiency": point.efficiency}
+
+
 def waveforms(drive: Drive, speeds_pu: Sequence[float] = WAVEFORM_SPEEDS, *,
-              controls: Mapping[str, tuple[Control, float]] | None = None, trace_sub: int = WAVEFORM_SUB
-              ) -> tuple[pd.DataFrame, list[dict[str, Any]]]:
+              controls: Mapping[str, tuple[Control, float]] | None = None, trace_sub: int = WAVEFORM_SUB,
+              executor: Executor | None = None) -> tuple[pd.DataFrame, list[dict[str, Any]]]:
     """Simulate phase currents and torque over one electrical period at each speed, both supplies, in steady state.
 
     Each point runs as in :func:`bldclab.analysis.compare.compare`
@@ -70,6 +95,8 @@ def waveforms(drive: Drive, speeds_pu: Sequence[float] = WAVEFORM_SPEEDS, *,
         :func:`bldclab.analysis.compare.default_controls` for the lowest speed.
     trace_sub : int
         Trace rows per controller sample.
+    executor : concurrent.futures.Executor, optional
+        Run the points on it (in parallel); in this process if omitted. The result is the same.
 
     Returns
     -------
@@ -80,29 +107,22 @@ def waveforms(drive: Drive, speeds_pu: Sequence[float] = WAVEFORM_SPEEDS, *,
         Per supply and speed: ``supply``, ``speed_pu``, ``tau_mean_pu``, ``ripple_pu`` (without PWM),
         ``ripple_inst_pu`` (instantaneous), ``efficiency`` over the measuring window.
     """
+    return _waveform_table(map_points(_waveform, _waveform_jobs(drive, speeds_pu, controls, trace_sub), executor))
+
+
+def _waveform_jobs(drive: Drive, speeds_pu: Sequence[float], controls: Mapping[str, tuple[Control, float]] | None,
+                   trace_sub: int) -> list[tuple[Drive, str, Control, float, float, int]]:
+    """Return the points of :func:`waveforms`: each supply at each speed."""
     w = [float(s) for s in speeds_pu]
     if not w or any(not math.isfinite(s) or s <= 0 for s in w):
         raise BldclabError("--waveform-speeds", f"must be positive per-unit speeds, got {list(speeds_pu)!r}")
     controls = controls or default_controls(drive, min(w))
-    frames, points = [], []
-    for supply in SUPPLIES:
-        ctl, ref = controls[supply]
-        for s in w:
-            om = s * drive.Omega_0
-            point, res = steady_state(drive, ctl, om, ref, trace=True, trace_sub=trace_sub)
-            m = point.metrics
-            te = electrical_period(drive, om)
-            sel = (res.t >= m.t0) & (res.t < m.t0 + te)
-            th = np.degrees(np.unwrap(res["theta_e"][sel]))
-            th -= 360.0 * math.floor(th[0] / 360.0 + 1e-9) if th.size else 0.0
-            frames.append(pd.DataFrame({
-                "supply": supply, "speed_pu": s, "theta_e_deg": th, "t_ms": (res.t[sel] - m.t0) * 1e3,
-                "i_a": res["i_a"][sel], "i_b": res["i_b"][sel], "i_c": res["i_c"][sel], "tau_e": res["tau_e"][sel],
-                "tau_e_pu": res["tau_e"][sel] / drive.T_N}))
-            points.append({"supply": supply, "speed_pu": s, "tau_mean_pu": point.tau_mean_pu,
-                           "ripple_pu": point.ripple_sampled_pu, "ripple_inst_pu": point.ripple_pu,
-                           "efficiency": point.efficiency})
-    return pd.concat(frames, ignore_index=True), points
+    return [(drive, supply, *controls[supply], s, trace_sub) for supply in SUPPLIES for s in w]
+
+
+def _waveform_table(done: Sequence[tuple[pd.DataFrame, dict[str, Any]]]) -> tuple[pd.DataFrame, list[dict[str, Any]]]:
+    """Return :func:`waveforms`' table and points from the results of its points, in order."""
+    return pd.concat([frame for frame, _ in done], ignore_index=True), [point for _, point in done]
 
 
 def methods_traces(drive: Drive, torque: float | None = None, speed: float | None = None,
@@ -241,7 +261,7 @@ def compare_command(args: argparse.Namespace, out: Path) -> str:
     return shlex.join(argv)
 
 
-def compare_files(res: CompareResult, *, figures: bool = True) -> dict[str, bytes]:
+def compare_files(res: CompareResult, *, figures: bool = True, executor: Executor | None = None) -> dict[str, bytes]:
     """Return the result files of a comparison, in the order ``bldclab compare`` writes them.
 
     The one producer of a results directory's data files: ``simulated.csv``, ``analytic.csv``, ``base_speeds.csv``,
@@ -249,7 +269,8 @@ def compare_files(res: CompareResult, *, figures: bool = True) -> dict[str, byte
     beside the simulated ones, :func:`bldclab.analysis.compare.efficiency_table`), ``dynamometer.csv`` and, with
     ``figures``, the PNG and SVG of the torque, ripple and efficiency characteristics and of paper 1's Figs 9, 11
     and 12.
-    :func:`compare_outputs` adds ``waveforms.csv``, ``manifest.json`` and ``report.html``.
+    :func:`compare_outputs` adds ``waveforms.csv``, ``manifest.json`` and ``report.html``; :func:`compare_directory`
+    makes both.
 
     Parameters
     ----------
@@ -257,13 +278,23 @@ def compare_files(res: CompareResult, *, figures: bool = True) -> dict[str, byte
         The comparison (:func:`bldclab.analysis.compare.compare`).
     figures : bool
         Also draw the figures (matplotlib).
+    executor : concurrent.futures.Executor, optional
+        Run paper 1's Figs 9, 11 and 12 (their simulations) and draw the figures on its workers, in parallel (the
+        pool that ran the comparison); in this process if omitted. The files are the same.
 
     Returns
     -------
     dict of str to bytes
     """
-    drive, t1 = res.drive, res.table1
-    files: dict[str, bytes] = {
+    files = _data_files(res)
+    files.update(_figure_files(plots.render_figures(_figure_jobs(res, figures), executor), figures))
+    return files
+
+
+def _data_files(res: CompareResult) -> dict[str, bytes]:
+    """Return the data files of :func:`compare_files` but ``dynamometer.csv``."""
+    t1 = res.table1
+    return {
         "simulated.csv": res.simulated.to_csv(index=False).encode(),
         "analytic.csv": res.analytic.to_csv(index=False).encode(),
         # compare(..., base_speeds=False) leaves them out
@@ -274,22 +305,41 @@ def compare_files(res: CompareResult, *, figures: bool = True) -> dict[str, byte
         # compare() results made before the efficiency table existed have none
         **({} if res.efficiency is None else {"efficiency.csv": res.efficiency.to_csv(index=False).encode()}),
     }
-    figs = comparison_figures(res) if figures else {}
+
+
+#: paper 1's figure behind ``dynamometer.csv``: drawn, or only run (its measurements), without figures
+_DYNAMOMETER = "fig12_dynamometer"
+
+
+def _figure_jobs(res: CompareResult, figures: bool) -> dict[str, FigureJob]:
+    """Return the figures of :func:`compare_files`, the costliest first (on an executor they start first)."""
+    drive = res.drive
+    jobs = {_DYNAMOMETER: FigureJob(paper1.fig12, (drive,), ("png", "svg") if figures else ())}
     if figures:
-        figs["fig9_torque_0.8pu"] = paper1.fig9(drive)
-        figs["fig11_currents"] = paper1.fig11(drive)
-    figs["fig12_dynamometer"], dyno = paper1.fig12(drive)
-    files["dynamometer.csv"] = dyno.to_csv(index=False).encode()
-    if figures:
-        for name, fig in figs.items():
-            files[f"{name}.png"] = plots.figure_bytes(fig, "png")
-            files[f"{name}.svg"] = plots.figure_bytes(fig, "svg")
+        jobs["fig11_currents"] = FigureJob(paper1.fig11, (drive,))
+        jobs["fig9_torque_0.8pu"] = FigureJob(paper1.fig9, (drive,))
+        jobs.update({name: FigureJob(make, (res,)) for name, make in _COMPARISON_FIGURES.items()})
+    return jobs
+
+
+def _figure_names(figures: bool) -> list[str]:
+    """Return the names of the files :func:`_figure_files` returns, in order."""
+    stems = (*_COMPARISON_FIGURES, "fig9_torque_0.8pu", "fig11_currents", _DYNAMOMETER) if figures else ()
+    return ["dynamometer.csv", *(f"{stem}.{fmt}" for stem in stems for fmt in ("png", "svg"))]
+
+
+def _figure_files(drawn: Mapping[str, tuple[dict[str, bytes], Any]], figures: bool) -> dict[str, bytes]:
+    """Return ``dynamometer.csv`` and the figure files from the drawn :func:`_figure_jobs`."""
+    files = {"dynamometer.csv": drawn[_DYNAMOMETER][1].to_csv(index=False).encode()}
+    for name in _figure_names(figures)[1:]:
+        stem, _, fmt = name.rpartition(".")
+        files[name] = drawn[stem][0][fmt]
     return files
 
 
 def compare_outputs(res: CompareResult, files: Mapping[str, bytes], *, command: str, motor_source: str | None = None,
                     report: bool = True, waveform_speeds: Sequence[float] = WAVEFORM_SPEEDS,
-                    extra: Mapping[str, Any] | None = None) -> dict[str, bytes]:
+                    extra: Mapping[str, Any] | None = None, executor: Executor | None = None) -> dict[str, bytes]:
     """Return the files ``bldclab compare`` adds to its results: waveforms, manifest and (by default) the report.
 
     Parameters
@@ -308,25 +358,87 @@ def compare_outputs(res: CompareResult, files: Mapping[str, bytes], *, command: 
         Per-unit speeds of the waveform panels.
     extra : mapping, optional
         Further manifest entries (:func:`make_manifest`).
+    executor : concurrent.futures.Executor, optional
+        Run the waveforms' simulations on it (:func:`waveforms`).
 
     Returns
     -------
     dict of str to bytes
         ``waveforms.csv``, ``manifest.json`` and, with ``report``, ``report.html``.
     """
-    drive = res.drive
-    controls = res.controls or default_controls(drive, float(np.min(res.analytic["Omega_pu"])))
-    wf, points = waveforms(drive, waveform_speeds, controls=controls)
-    new: dict[str, bytes] = {"waveforms.csv": wf.to_csv(index=False, float_format="%.6g").encode()}
-    names = [*files, "waveforms.csv", MANIFEST, *([REPORT] if report else [])]
-    manifest = make_manifest(res, controls, command=command, files=names, motor_source=motor_source or drive.name,
-                             waveform_points=points, extra=extra)
+    controls = _controls_of(res)
+    wf = waveforms(res.drive, waveform_speeds, controls=controls, executor=executor)
+    return _outputs(res, files, list(files), controls, wf, command=command, motor_source=motor_source, report=report,
+                    extra=extra)
+
+
+def _controls_of(res: CompareResult) -> Mapping[str, tuple[Control, float]]:
+    """Return the controllers a comparison ran (its defaults for results that do not say)."""
+    return res.controls or default_controls(res.drive, float(np.min(res.analytic["Omega_pu"])))
+
+
+def _outputs(res: CompareResult, files: Mapping[str, bytes], names: Sequence[str],
+             controls: Mapping[str, tuple[Control, float]], wf: tuple[pd.DataFrame, list[dict[str, Any]]], *,
+             command: str, motor_source: str | None, report: bool, extra: Mapping[str, Any] | None
+             ) -> dict[str, bytes]:
+    """Return :func:`compare_outputs` from the waveforms; ``names``: every file before (``files``: the data ones)."""
+    table, points = wf
+    new: dict[str, bytes] = {"waveforms.csv": table.to_csv(index=False, float_format="%.6g").encode()}
+    names = [*names, "waveforms.csv", MANIFEST, *([REPORT] if report else [])]
+    manifest = make_manifest(res, controls, command=command, files=names,
+                             motor_source=motor_source or res.drive.name, waveform_points=points, extra=extra)
     new[MANIFEST] = (json.dumps(manifest, indent=2, allow_nan=False) + "\n").encode()
     if report:
         results = Results.from_files({**files, **new}, source="the run itself (bldclab compare)")
         results.files = sorted(set(names))
         new[REPORT] = render(results, report_command=command).encode()
     return new
+
+
+def compare_directory(res: CompareResult, *, command: str, motor_source: str | None = None, report: bool = True,
+                      executor: Executor | None = None) -> dict[str, bytes]:
+    """Return every file of ``bldclab compare``'s results directory, in the order it writes them.
+
+    :func:`compare_files` then :func:`compare_outputs`: the same files. On an executor (the pool that ran the
+    comparison), paper 1's Figs 9, 11 and 12 and the waveforms run and the figures are drawn on its workers, while
+    this process writes the data files, the manifest and the report (it needs Fig 12's measurements and the
+    waveforms, which go first).
+
+    Parameters
+    ----------
+    res : CompareResult
+        The comparison (:func:`bldclab.analysis.compare.compare`).
+    command : str
+        The command line that reproduces the run.
+    motor_source : str, optional
+        The motor as the user named it; default the drive's name.
+    report : bool
+        Also render ``report.html``.
+    executor : concurrent.futures.Executor, optional
+        Where the simulations of the figures and waveforms run and the figures are drawn; in this process if omitted.
+
+    Returns
+    -------
+    dict of str to bytes
+    """
+    if executor is None:
+        files = compare_files(res)
+        files.update(compare_outputs(res, files, command=command, motor_source=motor_source, report=report))
+        return files
+    controls = _controls_of(res)
+    jobs = _figure_jobs(res, True)
+    drawing = {_DYNAMOMETER: executor.submit(plots.render_figure, jobs.pop(_DYNAMOMETER))}
+    running = [executor.submit(_waveform, job) for job in _waveform_jobs(res.drive, WAVEFORM_SPEEDS, controls,
+                                                                         WAVEFORM_SUB)]
+    drawing.update({name: executor.submit(plots.render_figure, job) for name, job in jobs.items()})
+    files = _data_files(res)
+    files["dynamometer.csv"] = drawing[_DYNAMOMETER].result()[1].to_csv(index=False).encode()
+    wf = _waveform_table([f.result() for f in running])
+    outputs = _outputs(res, files, [*files, *_figure_names(True)[1:]], controls, wf, command=command,
+                       motor_source=motor_source, report=report, extra=None)
+    files.update(_figure_files({name: f.result() for name, f in drawing.items()}, True))
+    files.update(outputs)
+    return files
 
 
 def motor_results(drive: Drive, speeds_pu: Sequence[float], *, command: str, motor_source: str,
@@ -412,19 +524,45 @@ def read_results(path: Path) -> dict[str, bytes]:
     return files
 
 
-def comparison_figures(res: CompareResult) -> dict[str, Figure]:
-    """Torque, ripple and efficiency vs speed: analytic curves of paper 1 and simulated points, both supplies."""
+def _split(res: CompareResult) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Return the simulated points of the sinusoidal and of the square-wave supply."""
     sim = res.simulated
-    sq = sim[sim.supply == "square"]
-    si = sim[sim.supply == "sine"]
+    return sim[sim.supply == "sine"], sim[sim.supply == "square"]
+
+
+def torque_figure(res: CompareResult) -> Figure:
+    """Torque vs speed: paper 1's curves (Fig 7) and the simulated points of both supplies."""
+    si, sq = _split(res)
     over_t = {"simulated, sinusoidal": si.rename(columns={"T_pu": "T_s_pu"})[["Omega_pu", "T_s_pu"]],
               "simulated, square-wave": sq.rename(columns={"T_pu": "T_q_pu"})[["Omega_pu", "T_q_pu"]]}
+    fig, _ = plots.plot_torque_speed(res.analytic, overlays=over_t, title=f"{res.drive.name}: torque vs speed")
+    return fig
+
+
+def ripple_figure(res: CompareResult) -> Figure:
+    """Torque ripple vs speed: paper 1's curves (Fig 8) and the simulated points on the averaged inverter."""
+    si, sq = _split(res)
     # one point set (one marker) for the averaged inverter; each supply's points carry their own column
     avg = si.rename(columns={"TR_avg_pu": "TR_s_pu"})[["Omega_pu", "TR_s_pu"]].merge(
         sq.rename(columns={"TR_avg_pu": "TR_q_pu"})[["Omega_pu", "TR_q_pu"]], on="Omega_pu", how="outer")
-    over_r = {"simulated, averaged inverter": avg}
-    fig_t, _ = plots.plot_torque_speed(res.analytic, overlays=over_t, title=f"{res.drive.name}: torque vs speed")
-    fig_r, _ = plots.plot_ripple(res.analytic, overlays=over_r, title=f"{res.drive.name}: torque ripple vs speed")
-    fig_e, _ = plots.plot_efficiency(res.analytic, {"sinusoidal": si, "square-wave": sq},
-                                     title=f"{res.drive.name}: efficiency vs speed")
-    return {"torque_speed": fig_t, "ripple_speed": fig_r, "efficiency_speed": fig_e}
+    fig, _ = plots.plot_ripple(res.analytic, overlays={"simulated, averaged inverter": avg},
+                               title=f"{res.drive.name}: torque ripple vs speed")
+    return fig
+
+
+def efficiency_figure(res: CompareResult) -> Figure:
+    """Efficiency vs speed: paper 1's (38)/(39) and the simulated points of both supplies."""
+    si, sq = _split(res)
+    fig, _ = plots.plot_efficiency(res.analytic, {"sinusoidal": si, "square-wave": sq},
+                                   title=f"{res.drive.name}: efficiency vs speed")
+    return fig
+
+
+#: The characteristics of a comparison, by file stem.
+_COMPARISON_FIGURES = {"torque_speed": torque_figure, "ripple_speed": ripple_figure,
+                       "efficiency_speed": efficiency_figure}
+
+
+def comparison_figures(res: CompareResult) -> dict[str, Figure]:
+    """Torque, ripple and efficiency vs speed: analytic curves of paper 1 and simulated points, both supplies."""
+    return {name: make(res) for name, make in _COMPARISON_FIGURES.items()}

@@ -7,17 +7,19 @@ returns a new figure. Axes: speed (rpm) across, torque reference (N m) up; point
 
 from __future__ import annotations
 
+from concurrent.futures import Executor
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..analysis.effmap import EffMapResult
+from .plots import FigureJob, render_figures
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["plot_difference", "plot_efficiency_maps", "plot_losses"]
+__all__ = ["effmap_figures", "plot_difference", "plot_efficiency_maps", "plot_losses"]
 
 _NAMES = {"square": "square-wave supply", "sine": "sinusoidal supply"}
 _BUCKET_NAMES = {"p_Rsrc": "source resistance", "p_cu": "copper (windings)", "p_sw": "switch conduction",
@@ -105,3 +107,26 @@ def plot_losses(res: EffMapResult) -> Figure:
     if zero:
         fig.suptitle(f"{res.drive.name}: zero everywhere: {', '.join(zero)}", fontsize=9)
     return fig
+
+
+def effmap_figures(res: EffMapResult, executor: Executor | None = None) -> dict[str, bytes]:
+    """Return the figure files of ``bldclab effmap``: efficiency, difference and loss maps, PNG and SVG each.
+
+    Parameters
+    ----------
+    res : EffMapResult
+    executor : concurrent.futures.Executor, optional
+        Draw the three figures on its workers, in parallel (the pool that ran the map); in this process if omitted.
+
+    Returns
+    -------
+    dict of str to bytes
+        ``effmap_efficiency.png``, ``effmap_efficiency.svg``, ``effmap_difference.png``, ... (undated SVG: reruns
+        give equal files).
+    """
+    jobs = {"effmap_losses": FigureJob(plot_losses, (res,), dated=False),  # the costliest first
+            "effmap_efficiency": FigureJob(plot_efficiency_maps, (res,), dated=False),
+            "effmap_difference": FigureJob(plot_difference, (res,), dated=False)}
+    drawn = render_figures(jobs, executor)
+    return {f"{stem}.{fmt}": drawn[stem][0][fmt]
+            for stem in ("effmap_efficiency", "effmap_difference", "effmap_losses") for fmt in ("png", "svg")}

@@ -7,24 +7,32 @@ given ``Axes`` or a new figure and returns ``(figure, axes)``.
 Simulated or measured points go on top of the analytic curves through ``overlays``: a mapping from a label to
 a ``DataFrame`` with an ``Omega_pu`` column and any of the characteristic's columns (``T_s_pu``, ``T_q_pu``
 for Fig 7, ``TR_s_pu``, ``TR_q_pu`` for Fig 8); missing columns are skipped.
+
+The figures of a command's results are drawn to files through :func:`render_figures`: each :class:`FigureJob` (a
+function that makes the figure, its arguments, the formats) runs in this process or on an executor's worker
+processes, which draw a command's figures in parallel.
 """
 
 from __future__ import annotations
 
 import io
-from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
 from ..errors import BldclabError
 
 if TYPE_CHECKING:
+    from concurrent.futures import Executor
+
+    import pandas as pd
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["figure_bytes", "plot_efficiency", "plot_ripple", "plot_torque_speed"]
+__all__ = ["FigureJob", "figure_bytes", "load_matplotlib", "plot_efficiency", "plot_ripple", "plot_torque_speed",
+           "render_figure", "render_figures"]
 
 #: Marker style per supply, as in paper 1: x for sinusoidal, o for real square-wave.
 _STYLE = {
@@ -228,3 +236,90 @@ def figure_bytes(fig: Figure, fmt: str, *, dpi: int = 120, dated: bool = True) -
     meta = {} if dated or fmt != "svg" else {"Date": None}
     fig.savefig(buf, format=fmt, dpi=dpi, metadata=meta)
     return buf.getvalue()
+
+
+def load_matplotlib() -> None:
+    """Import matplotlib's figures and its PNG and SVG backends now, not at the first figure.
+
+    A command that draws its figures on a process pool calls this before the pool starts: the workers, forked from
+    this process (the default on Linux), then draw without importing matplotlib each (0.3 s a process).
+    """
+    # deferred (as in _axes): only the commands that draw load matplotlib
+    import matplotlib.backends.backend_agg  # PNG
+    import matplotlib.backends.backend_svg  # SVG
+    import matplotlib.figure  # noqa: F401
+
+
+@dataclass(frozen=True)
+class FigureJob:
+    """A figure to draw to files: what makes it and how it is saved. Picklable, to run on a worker process.
+
+    Parameters
+    ----------
+    make : callable
+        A module-level function: ``make(*args)`` returns a :class:`~matplotlib.figure.Figure`, or ``(figure, data)``
+        when it also computes data the caller keeps (paper 1's Fig 12 and its measurements).
+    args : tuple
+        Its arguments (picklable: a result, a drive).
+    formats : tuple of str
+        ``"png"``, ``"svg"``: saved in this order.
+    dpi : int
+        Resolution of the PNG (dots per inch).
+    dated : bool
+        Keep matplotlib's creation date in an SVG (:func:`figure_bytes`).
+    """
+
+    make: Callable[..., Any]
+    args: tuple[Any, ...] = ()
+    formats: tuple[str, ...] = ("png", "svg")
+    dpi: int = 120
+    dated: bool = True
+
+
+def render_figure(job: FigureJob) -> tuple[dict[str, bytes], Any]:
+    """Make a figure and save it in each format of the job.
+
+    The layout (matplotlib's constrained layout: text extents, colour bars) is computed once, for the first format,
+    and kept for the others instead of being computed again.
+
+    Parameters
+    ----------
+    job : FigureJob
+
+    Returns
+    -------
+    dict of str to bytes
+        The file content per format.
+    object
+        The data the job's function returned beside the figure, else None.
+    """
+    made = job.make(*job.args)
+    fig, data = made if isinstance(made, tuple) else (made, None)
+    out: dict[str, bytes] = {}
+    for fmt in job.formats:
+        out[fmt] = figure_bytes(fig, fmt, dpi=job.dpi, dated=job.dated)
+        if fig.get_layout_engine() is not None:
+            fig.set_layout_engine("none")  # the axes keep the positions the first format's drawing gave them
+    return out, data
+
+
+def render_figures(jobs: Mapping[str, FigureJob], executor: Executor | None = None
+                   ) -> dict[str, tuple[dict[str, bytes], Any]]:
+    """Draw several figures to files, in this process or on an executor (its workers draw them in parallel).
+
+    Parameters
+    ----------
+    jobs : mapping of str to FigureJob
+        By name; put the costliest first (they start first on an executor).
+    executor : concurrent.futures.Executor, optional
+        Where the figures are drawn, e.g. the process pool that ran the simulations; in this process if omitted.
+
+    Returns
+    -------
+    dict
+        Name -> :func:`render_figure`'s ``(files by format, data)``, in the order of ``jobs``.
+    """
+    if executor is None:
+        return {name: render_figure(job) for name, job in jobs.items()}
+    futures = {name: executor.submit(render_figure, job) for name, job in jobs.items()}
+    return {name: f.result() for name, f in futures.items()}

@@ -21,7 +21,7 @@ supply), :mod:`~bldclab.model.analytic.square` (IV.A: real square-wave supply),
 :mod:`~bldclab.model.analytic.blac` (IV.B: the equivalent BLAC motor), :mod:`~bldclab.model.analytic.efficiency`
 (IV.C), :mod:`~bldclab.model.analytic.numeric` (R-aware numeric base speeds),
 :mod:`~bldclab.model.analytic.premises` (where the closed forms apply) and :mod:`~bldclab.model.analytic.table`
-(Table I, the characteristic).
+(Table I and its text, the characteristic).
 """
 
 from __future__ import annotations
@@ -86,7 +86,7 @@ from .speed_range import (
     tr_s_pu,
 )
 from .square import omega_qB_pu, t_q_high_pu, t_q_low_pu, t_q_sat_pu, t_qB_pu, tr_q_high_pu, tr_q_low_pu, tr_q_sat_pu
-from .table import CHARACTERISTIC_COLUMNS, TABLE1_ROWS, Table1, characteristic, table1
+from .table import CHARACTERISTIC_COLUMNS, TABLE1_ROWS, Table1, characteristic, table1, table1_text
 
 __all__ = [
     "CHARACTERISTIC_COLUMNS",
@@ -150,6 +150,7 @@ __all__ = [
     "t_s_sat",
     "t_s_sat_pu",
     "table1",
+    "table1_text",
     "theta_m",
     "tr_q_high_pu",
     "tr_q_low_pu",

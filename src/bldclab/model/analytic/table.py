@@ -1,11 +1,17 @@
 """Paper 1 Table I and the characteristic (Figs 7-8) of a drive.
 
-The derived quantities of section IV in one record (:func:`table1`), and torque, ripple and efficiency of both
-supplies over speed as a table (:func:`characteristic`).
+The derived quantities of section IV in one record (:func:`table1`) and its text as a table, CSV or JSON
+(:func:`table1_text`), and torque, ripple and efficiency of both supplies over speed as a table
+(:func:`characteristic`).
 """
 
 from __future__ import annotations
 
+import csv
+import io
+import json
+import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING
 
@@ -56,6 +62,7 @@ __all__ = [
     "Table1",
     "characteristic",
     "table1",
+    "table1_text",
 ]
 
 
@@ -266,3 +273,67 @@ def characteristic(drive: Drive, speeds_pu: ArrayLike) -> pd.DataFrame:
     import pandas as pd  # imported here: `import bldclab` (and every sweep worker) starts 0.3 s faster without it
 
     return pd.DataFrame(data, columns=list(CHARACTERISTIC_COLUMNS))
+
+
+def _fmt_value(value: float | bool) -> str:
+    """Format a table value for people: yes/no for flags, n/a for NaN, 6 significant digits otherwise."""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if math.isnan(value):
+        return "n/a"
+    return f"{value:.6g}"
+
+
+def _json_value(value: float | bool) -> float | bool | None:
+    """Return a JSON-safe value: NaN (a quantity undefined for this motor) becomes null."""
+    if isinstance(value, float) and math.isnan(value):
+        return None
+    return value
+
+
+def table1_text(t: Table1, fmt: str, not_applicable: Sequence[str] = ()) -> str:
+    """Render a :class:`Table1` as ``table`` (aligned text), ``csv`` or ``json``.
+
+    Parameters
+    ----------
+    t : Table1
+        The quantities.
+    fmt : {"table", "csv", "json"}
+        Output format.
+    not_applicable : sequence of str
+        Why the closed forms do not describe the drive (:func:`bldclab.model.analytic.applicability`): one line each
+        under the table, a ``not_applicable`` list in JSON (CSV: not written, the file stays one table).
+
+    Returns
+    -------
+    str
+        The text, ending with a newline.
+
+    """
+    rows = t.rows()  # NaN marks a quantity that is undefined for this motor (e.g. (40) above its base speed)
+    if fmt == "json":
+        doc = {"motor": t.name,
+               "quantities": [{"key": k, "description": d, "value": _json_value(v), "unit": u, "source": s}
+                              for k, d, v, u, s in rows],
+               "not_applicable": list(not_applicable)}
+        return json.dumps(doc, indent=2, allow_nan=False) + "\n"
+    if fmt == "csv":
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(["key", "description", "value", "unit", "source"])
+        for k, d, v, u, s in rows:
+            w.writerow([k, d, repr(v) if not isinstance(v, bool) else str(v).lower(), u, s])
+        return buf.getvalue()
+    if fmt != "table":
+        raise BldclabError("--format", f"unknown format {fmt!r}")
+    head = ("key", "quantity", "value", "unit", "source")
+    body = [(k, d, _fmt_value(v), u, s) for k, d, v, u, s in rows]
+    widths = [max(len(r[j]) for r in [head, *body]) for j in range(len(head))]
+    lines = [f"Paper 1 Table I and derived quantities: {t.name or '(unnamed drive)'}"]
+    for r in [head, *body]:
+        lines.append("  ".join(c.rjust(widths[j]) if j == 2 else c.ljust(widths[j])
+                               for j, c in enumerate(r)).rstrip())
+    if not_applicable:
+        lines.append("The closed forms (sources (13) to (44)) are outside paper 1's premises for this drive:")
+        lines += [f"  - {reason}" for reason in not_applicable]
+    return "\n".join(lines) + "\n"
