@@ -156,3 +156,26 @@ def test_the_api_refuses_a_trace_it_cannot_hold_before_running():
     with pytest.raises(BldclabError):
         bl.simulate(d, bl.SixStep(), short, max_trace_bytes=1000)
     assert bl.simulate(d, bl.SixStep(), short, max_trace_bytes=None).metrics is not None
+
+
+def test_flag_statistics_tell_start_up_from_the_window():
+    """Per flag, the runner counts the samples that raised it and the first and last of them, over the run and inside
+    the metric window: the sinusoidal supply at 0.95 Omega_0 saturates only while its currents build up (nothing in
+    a window after that), the square wave at 0.3 Omega_0 at every commutation (the incoming phase at full voltage)."""
+    d = bl.load("htm-48v")
+    sine = bl.simulate(d, bl.Sine(), bl.Scenario(duration=0.05, speed=0.95 * d.Omega_0, ref=30.0, trace=False,
+                                                 window=(0.02, 0.05)))
+    sat = sine.meta["flags"]["SATURATED"]
+    assert "window" not in sat and sat["run"]["samples"] > 0 and sat["run"]["last"] < 0.02
+    assert sat["run"]["share"] == pytest.approx(sat["run"]["samples"] / sine.meta["samples"])
+    sq = bl.simulate(d, bl.SixStep(), bl.Scenario(duration=0.05, speed=0.3 * d.Omega_0, ref=30.0, trace=False,
+                                                  window=(0.02, 0.05)))
+    run, win = sq.meta["flags"]["SATURATED"]["run"], sq.meta["flags"]["SATURATED"]["window"]
+    assert 0 < win["samples"] <= run["samples"] and 0.0 < win["share"] < 0.1
+    assert 0.02 <= win["first"] <= win["last"] < 0.05 and run["first"] <= win["first"]
+    # the same counts from a trace: one row per sample
+    tr = bl.simulate(d, bl.SixStep(), bl.Scenario(duration=0.05, speed=0.3 * d.Omega_0, ref=30.0,
+                                                  window=(0.02, 0.05)))
+    sat_rows = (tr["ctrl_flags"].astype(int) & bl.flag("SATURATED")) != 0
+    in_win = (tr.t >= 0.02) & (tr.t < 0.05)
+    assert int(np.sum(sat_rows)) == run["samples"] and int(np.sum(sat_rows & in_win)) == win["samples"]

@@ -272,6 +272,20 @@ static void advance_chunk(const bc_sim_config *cfg, bc_sim_state *s, double t)
     }
 }
 
+/* Count the flag bits raised at the sample at t (over the run, and in the window if in_window). */
+static void flags_count(bc_sim_state *s, uint32_t flags, double t, int in_window)
+{
+    if (in_window) s->m.n_samples += 1;
+    for (int j = 0; flags != 0u && j < BC_SIM_NFLAG; ++j, flags >>= 1) {
+        if (!(flags & 1u)) continue;
+        if (s->flag_run_n[j]++ == 0) s->flag_run_t0[j] = t;
+        s->flag_run_t1[j] = t;
+        if (!in_window) continue;
+        if (s->m.flag_n[j]++ == 0) s->m.flag_t0[j] = t;
+        s->m.flag_t1[j] = t;
+    }
+}
+
 /* ---- the loop ------------------------------------------------------------------------------------------ */
 
 int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *in, int64_t n, bc_trace_row *rows,
@@ -310,6 +324,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         cfg->ctrl.step(cfg->ctrl.params, cfg->ctrl.state, &ci, &co);
         s->last = co;
         s->flags_seen |= co.flags;
+        flags_count(s, co.flags, t_k, has_window && t_k >= cfg->metric_t0 && t_k < cfg->metric_t1);
         s->last_in = ci;
 
         /* 3. apply; gate edges at t_k book their energies (E_on, E_off, E_rr) here, and belong to a row or metric

@@ -637,6 +637,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         "scenario": _describe_scenario(scenario),
         "samples": n,
         "controller_flags": int(st["flags_seen"]),
+        "flags": _flag_stats(c, st, n, t_half),
         "stats": {"steps": int(plant_st["n_steps"]), "events": int(plant_st["n_events"]),
                   "plant_flags": int(plant_st["flags"]), "e_fault": float(plant_st["e_fault"]),
                   "hw_trip": float(plant_st["t_trip"]) if int(plant_st["tripped"]) else None},
@@ -649,6 +650,29 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     meta["warnings"] = issued + _guards_after(drive, res, imposed, check)
     res.metrics = metrics
     return res
+
+
+def _flag_stats(c: Any, st: np.void, n: int, t_half: float) -> dict[str, dict[str, dict[str, float]]]:
+    """Return, per controller flag raised, how often and when: over the run and inside the metric window.
+
+    ``{"SATURATED": {"run": {"samples": 12, "share": 0.002, "first": 0.0, "last": 5e-4}, "window": {...}}}``: the
+    samples (half PWM periods) at which the controller raised it, their share of the run's (the window's) samples,
+    and the first and last of them (s). A flag raised only outside the window has no "window" entry.
+    """
+    out: dict[str, dict[str, dict[str, float]]] = {}
+    m = st["m"]
+    n_win = int(m["n_samples"])
+    for name, bit in sorted(c.groups["flag"].items(), key=lambda kv: kv[1]):
+        j = int(bit).bit_length() - 1
+        if bit != 1 << j or int(st["flag_run_n"][j]) == 0:
+            continue
+        entry = {"run": {"samples": int(st["flag_run_n"][j]), "share": int(st["flag_run_n"][j]) / max(n, 1),
+                         "first": float(st["flag_run_t0"][j]), "last": float(st["flag_run_t1"][j])}}
+        if int(m["flag_n"][j]) > 0:
+            entry["window"] = {"samples": int(m["flag_n"][j]), "share": int(m["flag_n"][j]) / max(n_win, 1),
+                               "first": float(m["flag_t0"][j]), "last": float(m["flag_t1"][j])}
+        out[name.removeprefix("BC_FLAG_")] = entry
+    return out
 
 
 def _check_estimate(drive: Drive, estimate: Drive | None) -> None:

@@ -18,7 +18,8 @@
  * window [metric_t0, metric_t1] given in time (not samples), so that a caller can measure exactly whole
  * electrical periods. State is caller-owned: a long run can be done in chunks, the result is the same (bldclab's
  * simulate calls bc_sim_run on pieces of its run, so memory does not grow with the duration). The state also keeps
- * the OR of every controller flag raised (flags_seen) and the unwrapped electrical angle travelled (th_run, from
+ * the OR of every controller flag raised (flags_seen), for each flag bit the number of samples that raised it and
+ * the first and last of them (over the run, and inside the metric window), and the unwrapped electrical angle travelled (th_run, from
  * which the window's mean speed is (th1 - th0) / (p (t1 - t0)) without a trace).
  */
 #ifndef BC_SIM_H
@@ -81,6 +82,9 @@ typedef struct {
 #undef BC_TRACE_MEMBER
 } bc_trace_row;
 
+/* Controller flag bits counted per sample (the BC_FLAG_* of bc_types.h and any a controller adds, up to bit 15). */
+#define BC_SIM_NFLAG 16
+
 /* Metrics over [t0, t1]. Three views of the torque's extremes (docs/plant.md, "Metrics"):
  *
  *   tau_min, tau_max        the instantaneous torque over every integration step and event: step ends, and the
@@ -108,6 +112,10 @@ typedef struct {
     double tau_s_min;        /* extremes of the torque at the samples (carrier valleys and peaks), N m: there the */
     double tau_s_max;        /* currents cross their PWM-period average, so this is the ripple without PWM */
     double i_peak[3];        /* largest |i_x|, A */
+    int32_t n_samples;       /* controller samples inside the window (t_k in [t0, t1)) */
+    int32_t flag_n[BC_SIM_NFLAG];  /* ... at which the controller raised flag bit j (BC_FLAG_*: bit j = 1 << j) */
+    double flag_t0[BC_SIM_NFLAG];  /* first and last such sample time, s (0 if none) */
+    double flag_t1[BC_SIM_NFLAG];
     int32_t n_ma;            /* continuous moving-average values seen */
     int32_t n_ma_grid;       /* sample-grid moving-average values seen */
     int32_t ma_lost;         /* continuous moving-average evaluations skipped (history ring too short) */
@@ -147,6 +155,9 @@ typedef struct {
     bc_ctrl_out last;          /* last controller output */
     bc_ctrl_in last_in;        /* last measurements */
     uint32_t flags_seen;       /* BC_FLAG_* bits the controller raised at any sample so far (OR) */
+    int32_t flag_run_n[BC_SIM_NFLAG]; /* samples of the whole run at which flag bit j was raised */
+    double flag_run_t0[BC_SIM_NFLAG]; /* first and last such sample time, s (0 if none) */
+    double flag_run_t1[BC_SIM_NFLAG];
     double th_prev;            /* plant angle at the last step end, rad */
     double th_run;             /* electrical angle travelled since the start, unwrapped, rad */
     bc_sim_metrics m;
