@@ -161,6 +161,13 @@ static const bc_field_desc FIELDS[] = {
     F(bc_ctrl_in, ref, "f4"),
     F(bc_ctrl_in, omega_ref, "f4"),
     F(bc_ctrl_in, fault_pin, "u4"),
+    F(bc_ctrl_in, zc_state, "u4"),
+    F(bc_ctrl_in, zc_count, "u4"),
+    F(bc_ctrl_in, zc_tick, "u4"),
+    F(bc_ctrl_in, v_term, "f4"),
+    F(bc_ctrl_in, v_neutral, "f4"),
+    F(bc_ctrl_in, n_adc, "u4"),
+    F(bc_ctrl_in, tick_adc, "u4"),
 
     F(bc_ctrl_out, leg, "bc_leg_cmd"),
     F(bc_ctrl_out, diag, "f4"),

@@ -62,6 +62,15 @@ typedef struct {
     float ref;           /* primary reference: torque N m, current A or duty, per controller */
     float omega_ref;     /* speed reference, rad/s (controllers with a speed loop) */
     uint32_t fault_pin;  /* 1: the inverter's hardware protection has tripped (its gates are off, latched) */
+    /* back-EMF sensing of a sensorless drive (all zero where the drive has none; docs/sensing.md): */
+    uint32_t zc_state;    /* comparator outputs, bit x: phase x's filtered terminal voltage above the reference */
+    uint32_t zc_count[3]; /* edges of comparator x seen since start (wraps) */
+    uint32_t zc_tick[3];  /* capture-timer tick of comparator x's last edge */
+    float v_term[3];      /* ADC samples of the terminal voltages (phase to DC minus), V at the terminal: through the
+                             divider and its RC filter, converted, scaled back by the divider ratio */
+    float v_neutral;      /* ADC sample of the comparators' reference (virtual star point or half the bus), V */
+    uint32_t n_adc;       /* ADC conversions since start (wraps): a new one when it changes */
+    uint32_t tick_adc;    /* capture-timer tick of the last conversion's sampling instant */
 } bc_ctrl_in;
 
 /* What a controller returns at one sample. The legs apply to the next half period (with the runner's one-sample
