@@ -1,7 +1,9 @@
 """Built-in drives: motor files shipped with bldclab.
 
 ``htm-48v``: paper 1 Table II. ``htm-48v-losses``: the same drive with the losses of a real inverter (onsemi NTB5860NL
-MOSFETs, datasheet values) and core (EN 10106 grade M270-35A). ``lu-4kw``: paper 2 appendix with a synthetic non-ideal
+MOSFETs, datasheet values) and core (EN 10106 grade M270-35A). ``f60prov-2550kv``: a 5-inch racing-drone motor (T-Motor
+F60PRO V 2207.5 KV2550, 4S) from the parameters its maker supplied. ``mn3110-780kv``: an 11-inch multirotor motor
+(T-Motor MN3110 KV780, 4S) from CTU MRS's bench tables. ``lu-4kw``: paper 2 appendix with a synthetic non-ideal
 back-EMF (see :mod:`bldclab.model.catalog.synthetic` for how it is made). ``outrunner-24v``: a 24 V, 21-pole-pair
 outrunner with a sinusoidal back-EMF, from the motor parameters of Ben Katz's open-source Mini Cheetah
 motor-controller firmware. ``servo-2k2``: a 540 V, 2.2 kW PMSM with a sinusoidal back-EMF and 51 mH, from the
