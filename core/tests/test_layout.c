@@ -18,7 +18,7 @@ static uint32_t struct_size(const char *name)
 int main(void)
 {
     /* structs the host fills completely must have no undescribed member */
-    static const char *const complete[] = {"bc_fault", "bc_leg_cmd", "bc_emf_shape", "bc_plant_params", "bc_sensor_params",
+    static const char *const complete[] = {"bc_fault", "bc_leg_cmd", "bc_emf_shape", "bc_plant_params", "bc_sensor_params", "bc_sense_params",
                                            "bc_ctrl", "bc_sim_config", "bc_sim_inputs", "bc_sim_metrics",
                                            "bc_ctrl_in", "bc_ctrl_out"};
     const char *names[64];

@@ -73,12 +73,35 @@ static const bc_field_desc FIELDS[] = {
     F(bc_sensor_params, seed, "u8"),
     F(bc_sensor_params, fault, "bc_fault"),
 
+    F(bc_sense_params, on, "i4"),
+    F(bc_sense_params, tau, "f8"),
+    F(bc_sense_params, ref, "i4"),
+    F(bc_sense_params, offset, "f8"),
+    F(bc_sense_params, hyst, "f8"),
+    F(bc_sense_params, delay, "f8"),
+    F(bc_sense_params, adc_at, "f8"),
+    F(bc_sense_params, adc_lsb, "f8"),
+    F(bc_sense_params, adc_max, "f8"),
+    F(bc_sense_params, adc_noise, "f8"),
+    F(bc_sense_params, f_pwm, "f8"),
+    F(bc_sense_params, f_tick, "f8"),
+    F(bc_sense_params, seed, "u8"),
+
+    F(bc_sense_state, vf, "f8"),
+    F(bc_sense_state, out, "u4"),
+    F(bc_sense_state, seen, "u4"),
+    F(bc_sense_state, count, "u4"),
+    F(bc_sense_state, n_edges, "u4"),
+    F(bc_sense_state, overrun, "i4"),
+    F(bc_sense_state, n_adc, "u4"),
+
     F(bc_ctrl, step, "ptr"),
     F(bc_ctrl, params, "ptr"),
     F(bc_ctrl, state, "ptr"),
 
     F(bc_sim_config, plant, "ptr"),
     F(bc_sim_config, sensors, "ptr"),
+    F(bc_sim_config, sense, "ptr"),
     F(bc_sim_config, ctrl, "bc_ctrl"),
     F(bc_sim_config, delay, "i4"),
     F(bc_sim_config, trace_every, "i4"),
@@ -142,6 +165,7 @@ static const bc_field_desc FIELDS[] = {
     F(bc_plant_state, t_trip, "f8"),
 
     F(bc_sim_state, plant, "bc_plant_state"),
+    F(bc_sim_state, sense, "bc_sense_state"),
     F(bc_sim_state, k, "i8"),
     F(bc_sim_state, flags_seen, "u4"),
     F(bc_sim_state, flag_run_n, "i4"),
@@ -182,7 +206,7 @@ static const bc_field_desc FIELDS[] = {
 static const bc_struct_desc STRUCTS[] = {
     S(bc_fault),        S(bc_leg_cmd),      S(bc_emf_shape),    S(bc_plant_params), S(bc_plant_state), S(bc_sensor_params),
     S(bc_sensor_state), S(bc_ctrl),         S(bc_sim_config),   S(bc_sim_inputs),  S(bc_sim_metrics),
-    S(bc_sim_state),    S(bc_trace_row),    S(bc_ctrl_in),      S(bc_ctrl_out),
+    S(bc_sim_state),    S(bc_trace_row),    S(bc_ctrl_in),      S(bc_ctrl_out),     S(bc_sense_params), S(bc_sense_state),
 };
 
 #define K BC_BIND_CONST
@@ -200,6 +224,7 @@ static const bc_const_desc CONSTS[] = {
     K("inverter", BC_INV_SWITCHING), K("inverter", BC_INV_AVERAGE),
     K("fault", BC_FAULT_NONE),       K("fault", BC_FAULT_PHASE_OPEN),     K("fault", BC_FAULT_HALL_STUCK),
     K("fault", BC_FAULT_HALL_GLITCH), K("fault", BC_FAULT_CURRENT_OFFSET), K("fault", BC_FAULT_CURRENT_LOSS),
+    K("sense_ref", BC_SENSE_REF_STAR), K("sense_ref", BC_SENSE_REF_HALF),
     K("plant_flag", BC_PLANT_BAD_DUTY), K("plant_flag", BC_PLANT_CHATTER), K("plant_flag", BC_PLANT_HALL_OVERRUN),
 };
 

@@ -477,6 +477,7 @@ static void lanes_select(const bc_plant_params *p, bc_plant_state *s, int level)
     if (level >= BC_ACC_ALL) {
         m |= (1u << BC_ACC_VA) | (1u << BC_ACC_VB) | (1u << BC_ACC_VC) | (1u << BC_ACC_VN) | (1u << BC_ACC_IDC);
     }
+    if (s->term_on) m |= (1u << BC_ACC_VA) | (1u << BC_ACC_VB) | (1u << BC_ACC_VC);
     s->acc_mask = m;
     s->acc_hi = 0;
     for (int j = 0; j < BC_ACC_N; ++j) { /* acc_step adds zero on the lanes not integrated */
@@ -486,6 +487,7 @@ static void lanes_select(const bc_plant_params *p, bc_plant_state *s, int level)
         s->work.fd[0][j] = s->work.fd[1][j] = 0.0;
     }
     s->acc_on = level;
+    s->lanes_on = m != 0u;
 }
 
 /* Circuit coefficients of the present conduction states (bc_plant.h, tc_*). Call after any change of cond[]. */
@@ -1123,7 +1125,7 @@ static void work_fill(const bc_plant_params *p, bc_plant_state *s, const double 
     s->work.tau = a->tau;
     s->work.wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
     (void)watch_eval(p, s, y, a, s->work.wdir, s->work.w[s->work.cur]);
-    if (s->acc_on) lanes(p, s, y, dy, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
+    if (s->lanes_on) lanes(p, s, y, dy, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
     s->work.valid = 1;
 }
 
@@ -1141,7 +1143,7 @@ static void resolve_open(const bc_plant_params *p, bc_plant_state *s)
     double tol = 1e-9 * (1.0 + fabs(s->v_src));
     for (int iter = 0; iter < 4; ++iter) {
         pack(s, y);
-        core(p, s, y, dy, &a, s->acc_on ? WANT_DK : 0, 0);
+        core(p, s, y, dy, &a, s->lanes_on ? WANT_DK : 0, 0);
         int changed = 0;
         if (a.n_conn == 0) {
             int hi = -1, lo = -1;
@@ -1223,7 +1225,7 @@ static int switch_update(const bc_plant_params *p, bc_plant_state *s, const int3
               (s->cond[x] == BC_COND_SW_U || s->cond[x] == BC_COND_SW_L);
     }
     if (!sw) (void)watch_eval(p, s, y, a, s->work.wdir, s->work.w[s->work.cur]);
-    if (s->acc_on) lanes(p, s, y, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
+    if (s->lanes_on) lanes(p, s, y, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
     return 1;
 }
 
@@ -1344,7 +1346,7 @@ static double watch_at(const bc_plant_params *p, const bc_plant_state *s, const 
 {
     double g[NW];
     state_step(p, s, y0, k1, c, rp->y);
-    core(p, s, rp->y, rp->dy, &rp->a, s->acc_on ? WANT_DK : 0, s->work.cs);
+    core(p, s, rp->y, rp->dy, &rp->a, s->lanes_on ? WANT_DK : 0, s->work.cs);
     rp->h = c;
     (void)watch_eval(p, s, rp->y, &rp->a, dir_om, g);
     return g[w];
@@ -1813,7 +1815,7 @@ static void ensure_k1(const bc_plant_params *p, bc_plant_state *s)
     double y[NY], dy[NY];
     aux_t a;
     pack(s, y);
-    core(p, s, y, dy, &a, s->acc_on ? WANT_DK : 0, 0);
+    core(p, s, y, dy, &a, s->lanes_on ? WANT_DK : 0, 0);
     work_fill(p, s, y, dy, &a);
 }
 
@@ -1861,8 +1863,13 @@ static void hermite_extremes(double h, double f0, double f1, double d0, double d
 static void step_done(const bc_plant_params *p, bc_plant_state *s, double h, const double *y1, const double *dy1,
                       const aux_t *a1, double *f1, double *fd1)
 {
+    if (s->lanes_on) lanes(p, s, y1, dy1, a1, f1, fd1);
+    if (s->term_on && s->on_term && h > 0.0) {
+        const double *f0 = s->work.f[s->work.cur], *fd0 = s->work.fd[s->work.cur];
+        s->on_term(s->on_step_ctx, s->t - h, s->t, f0 + BC_ACC_VA, fd0 + BC_ACC_VA, f1 + BC_ACC_VA, fd1 + BC_ACC_VA,
+                   a1->vbus);
+    }
     if (s->acc_on) {
-        lanes(p, s, y1, dy1, a1, f1, fd1);
         if (h > 0.0) acc_step(s->acc, s->acc_hi, h, s->work.f[s->work.cur], s->work.fd[s->work.cur], f1, fd1);
         double tau0 = s->work.tau, tau1 = a1->tau;
         if (tau1 < s->tau_min) s->tau_min = tau1;
@@ -1939,7 +1946,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             }
         }
         state_step(p, s, y0, s->work.k1, h, y1);
-        core(p, s, y1, k1n, a1, s->acc_on ? WANT_DK : 0, 0);
+        core(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, 0);
         /* watched functions: the first that goes negative inside the step is an event */
         int dir_om = s->work.wdir;
         int any_neg = watch_eval(p, s, y1, a1, dir_om, g1);
@@ -1975,7 +1982,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                 *a1 = rbest.a;
             } else if (h_hit < h) {
                 state_step(p, s, y0, s->work.k1, h_hit, y1);
-                core(p, s, y1, k1n, a1, s->acc_on ? WANT_DK : 0, 0);
+                core(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, 0);
             }
             unpack(s, y1);
             s->work.a_ok = 0; /* the cache holds the step's start */
@@ -2015,7 +2022,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
         s->n_steps += 1;
         zero_len = 0;
         s->hold_open = 0;
-        if (angle_step && angles_cross(p, s, th_ev) && s->acc_on) {
+        if (angle_step && angles_cross(p, s, th_ev) && s->lanes_on) {
             /* the shapes are continuous, so the cached derivative stays valid; their slopes are not: the power
              * flows' rates start the next step on the new pieces */
             aux_t *a = &s->work.a[s->work.cur];
@@ -2057,15 +2064,14 @@ double bc_plant_tau(const bc_plant_params *p, bc_plant_state *s)
     return s->work.tau;
 }
 
-void bc_plant_set_accumulate(const bc_plant_params *p, bc_plant_state *s, int level)
+/* Select the lanes for accumulation level `level` and the terminals' watch; lanes that start being computed get
+ * their rates at the current state (the start of the next step). The cached derivative stays: the state's path is
+ * the same whatever is computed. */
+static void lanes_change(const bc_plant_params *p, bc_plant_state *s, int level)
 {
-    int v = level <= BC_ACC_OFF ? BC_ACC_OFF : (level >= BC_ACC_ALL ? BC_ACC_ALL : BC_ACC_METRICS);
-    if (v == s->acc_on) return;
-    int had = s->acc_on;
-    lanes_select(p, s, v);
-    if (v > had && s->work.valid) {
-        /* the power flows at the start of the next step; the cached derivative stays (the state's path is the
-         * same whatever is integrated) */
+    uint32_t had = s->acc_mask;
+    lanes_select(p, s, level);
+    if ((s->acc_mask & ~had) != 0u && s->work.valid) {
         double y[NY], dy[NY];
         aux_t *a = &s->work.a[s->work.cur]; /* with dk now: the power flows need it */
         pack(s, y);
@@ -2073,6 +2079,20 @@ void bc_plant_set_accumulate(const bc_plant_params *p, bc_plant_state *s, int le
         s->work.a_ok = 1;
         lanes(p, s, y, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
     }
+}
+
+void bc_plant_set_accumulate(const bc_plant_params *p, bc_plant_state *s, int level)
+{
+    int v = level <= BC_ACC_OFF ? BC_ACC_OFF : (level >= BC_ACC_ALL ? BC_ACC_ALL : BC_ACC_METRICS);
+    if (v != s->acc_on) lanes_change(p, s, v);
+}
+
+void bc_plant_set_terminals(const bc_plant_params *p, bc_plant_state *s, int on)
+{
+    int v = on ? 1 : 0;
+    if (v == s->term_on) return;
+    s->term_on = v;
+    lanes_change(p, s, s->acc_on);
 }
 
 void bc_plant_reset_extremes(const bc_plant_params *p, bc_plant_state *s)

@@ -30,39 +30,43 @@ int bc_sensor_init(const bc_sensor_params *p, bc_sensor_state *s)
     return BC_OK;
 }
 
-static double uniform01(bc_sensor_state *s)
+static double uniform01(uint64_t *rng)
 {
-    uint64_t x = s->rng;
+    uint64_t x = *rng;
     x ^= x >> 12;
     x ^= x << 25;
     x ^= x >> 27;
-    s->rng = x;
+    *rng = x;
     uint64_t r = x * 0x2545F4914F6CDD1Dull;
     return ((double)(r >> 11) + 0.5) * (1.0 / 9007199254740992.0); /* (0, 1) */
 }
 
-static double normal(bc_sensor_state *s)
+double bc_rng_normal(uint64_t *rng, int32_t *has_spare, double *spare)
 {
-    if (s->has_spare) {
-        s->has_spare = 0;
-        return s->spare;
+    if (*has_spare) {
+        *has_spare = 0;
+        return *spare;
     }
-    double u1 = uniform01(s), u2 = uniform01(s);
+    double u1 = uniform01(rng), u2 = uniform01(rng);
     double r = sqrt(-2.0 * log(u1));
-    s->spare = r * sin(BC_TWO_PI * u2);
-    s->has_spare = 1;
+    *spare = r * sin(BC_TWO_PI * u2);
+    *has_spare = 1;
     return r * cos(BC_TWO_PI * u2);
 }
 
+static double normal(bc_sensor_state *s) { return bc_rng_normal(&s->rng, &s->has_spare, &s->spare); }
+
 static double quantise(double v, double lsb) { return lsb > 0.0 ? lsb * floor(v / lsb + 0.5) : v; }
 
-uint32_t bc_sensor_tick(const bc_sensor_params *p, double t)
+uint32_t bc_tick_at(double f_tick, double t)
 {
     if (!(t >= 0.0) || !isfinite(t)) return 0u;
-    double ticks = floor(t * p->f_tick);
+    double ticks = floor(t * f_tick);
     /* mod 2^32: the conversion of an integer below 2^64 to uint64_t, then to uint32_t, takes it exactly */
     return ticks < 18446744073709551616.0 ? (uint32_t)(uint64_t)ticks : (uint32_t)(uint64_t)fmod(ticks, 4294967296.0);
 }
+
+uint32_t bc_sensor_tick(const bc_sensor_params *p, double t) { return bc_tick_at(p->f_tick, t); }
 
 void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_plant_state *ps, double v_bus,
                        bc_ctrl_in *in)

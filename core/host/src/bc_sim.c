@@ -5,6 +5,10 @@
 #include <string.h>
 
 static void sim_on_step(void *ctx, double t, const double *acc, double tau);
+static void sim_on_term(void *ctx, double t0, double t1, const double v0[3], const double dv0[3],
+                        const double v1[3], const double dv1[3], double v_bus1);
+
+static int sense_on(const bc_sim_config *c) { return c->sense != 0 && c->sense->on; }
 
 /* the history ring is indexed with a mask: its length is a power of two */
 typedef char bc_sim_hist_pow2[(BC_SIM_HIST & (BC_SIM_HIST - 1)) == 0 ? 1 : -1];
@@ -27,6 +31,12 @@ int bc_sim_init(const bc_sim_config *cfg, bc_sim_state *s, double theta0, double
     if (rc != BC_OK) return rc;
     rc = bc_sensor_init(cfg->sensors, &s->sensors);
     if (rc != BC_OK) return rc;
+    if (sense_on(cfg)) {
+        bc_plant_out po;
+        bc_plant_output(cfg->plant, &s->plant, &po);
+        rc = bc_sense_init(cfg->sense, &s->sense, s->plant.t, po.v, po.v_bus);
+        if (rc != BC_OK) return rc;
+    }
     s->k = 0;
     s->th_prev = s->plant.theta;
     s->th_run = 0.0;
@@ -197,6 +207,15 @@ static void sim_on_step(void *ctx, double t, const double *acc, double tau)
     }
 }
 
+/* The plant's terminal observer: the back-EMF sensing follows every step. */
+static void sim_on_term(void *ctx, double t0, double t1, const double v0[3], const double dv0[3],
+                        const double v1[3], const double dv1[3], double v_bus1)
+{
+    bc_sim_state *s = (bc_sim_state *)ctx;
+    (void)t0;
+    bc_sense_step(s->sense_p, &s->sense, t1, v0, dv0, v1, dv1, v_bus1);
+}
+
 /* ---- metrics ------------------------------------------------------------------------------------------- */
 
 static double w_kin(const bc_plant_params *p, const bc_plant_state *ps)
@@ -299,6 +318,9 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
     *rows_written = 0;
     s->plant.on_step = sim_on_step; /* set on every call: the state may have been copied */
     s->plant.on_step_ctx = s;
+    s->plant.on_term = sim_on_term;
+    s->sense_p = cfg->sense;
+    bc_plant_set_terminals(pp, &s->plant, sense_on(cfg));
     /* the power flows and extremes are integrated where something reads them: a trace, the metric window */
     bc_plant_set_accumulate(pp, &s->plant, rows != 0 ? BC_ACC_ALL : (s->m.state == 1 ? BC_ACC_METRICS : BC_ACC_OFF));
 
@@ -317,6 +339,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         bc_ctrl_in ci;
         memset(&ci, 0, sizeof ci);
         bc_sensor_measure(cfg->sensors, &s->sensors, ps, bc_plant_vbus(pp, ps), &ci);
+        if (sense_on(cfg)) bc_sense_fill(cfg->sense, &s->sense, t_k, &ci);
         ci.ref = (float)input_at(in->ref, in->ref_c, j);
         ci.omega_ref = (float)input_at(in->omega_ref, in->omega_ref_c, j);
         bc_ctrl_out co;

@@ -277,6 +277,14 @@ typedef struct {
  * The runner (bc_sim) uses it for the continuous PWM-period moving average of the torque. */
 typedef void (*bc_plant_step_fn)(void *ctx, double t, const double *acc, double tau);
 
+/* Observer of the terminal voltages over every accepted step of positive length [t0, t1], called before on_step
+ * while the terminals are watched (bc_plant_set_terminals): v0, dv0 their values and exact time derivatives just
+ * after the step's start (after any gate edge or event there), v1, dv1 at its end (before any), V and V/s, and v_bus1 the DC bus at its
+ * end, V. Inside
+ * the step they are smooth. The back-EMF sensing of a sensorless drive (bc_sense) filters them. */
+typedef void (*bc_plant_term_fn)(void *ctx, double t0, double t1, const double v0[3], const double dv0[3],
+                                 const double v1[3], const double dv1[3], double v_bus1);
+
 /* Circuit quantities computed with a derivative (private to bc_plant.c, like bc_plant_work). */
 typedef struct {
     double k[3], dk[3], e[3], v[3]; /* shapes, dk/dtheta (when asked for), back-EMFs, terminals (where read) */
@@ -352,6 +360,8 @@ typedef struct {
                                after init) */
     uint32_t acc_mask;      /* bit j: lane j of acc[] is integrated (its rate can be nonzero at this level) */
     int32_t acc_hi;         /* lanes 0 .. acc_hi - 1 are added up each step (1 + the last integrated one) */
+    int32_t term_on;        /* 1: the terminal voltages' rates are computed every step for on_term, at any level */
+    int32_t lanes_on;       /* 1: the rates f, fd are computed every step (acc_on or term_on) */
     /* circuit coefficients of the present conduction states, set whenever they change (internal) */
     int32_t tc_cond[3];     /* conduction state the coefficients of a switching leg were set for (-1: averaged or
                                none yet) */
@@ -406,7 +416,8 @@ typedef struct {
                                 its end values and exact time derivatives (error O(h^4), as the RK4 step) */
     double i_peak[3];        /* largest |i_x| since then */
     bc_plant_step_fn on_step; /* NULL or called after every accepted step (not copied meaningfully: a runner sets it) */
-    void *on_step_ctx;
+    void *on_step_ctx;        /* ... and of on_term */
+    bc_plant_term_fn on_term; /* NULL or called with the terminal voltages over every step while term_on */
     /* statistics */
     uint32_t flags;          /* BC_PLANT_* */
     int64_t n_steps;         /* accepted RK4 steps */
@@ -454,6 +465,10 @@ double bc_plant_vbus(const bc_plant_params *p, const bc_plant_state *s);
  * parameters keep at zero (no R_src, R_on, diode drop, cogging, friction, iron or averaged switching loss) is never
  * integrated. A runner lowers the level where nothing reads the lanes (outside a metric window, no trace). */
 void bc_plant_set_accumulate(const bc_plant_params *p, bc_plant_state *s, int level);
+
+/* Watch the terminal voltages (on = 1): their values and time derivatives are computed at every step's ends and
+ * passed to on_term, whatever the accumulation level (the state evolves bit for bit the same). */
+void bc_plant_set_terminals(const bc_plant_params *p, bc_plant_state *s, int on);
 
 /* Electromagnetic torque tau_e at the current state, N m (cheaper than bc_plant_output: cached). */
 double bc_plant_tau(const bc_plant_params *p, bc_plant_state *s);

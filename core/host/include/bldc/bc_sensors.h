@@ -47,4 +47,10 @@ void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_p
 /* Capture-timer tick at time t (0 for t < 0 or non-finite t). */
 uint32_t bc_sensor_tick(const bc_sensor_params *p, double t);
 
+/* ... of a timer counting at f_tick, Hz: floor(t f_tick) mod 2^32. */
+uint32_t bc_tick_at(double f_tick, double t);
+
+/* A standard normal variate from the xorshift64* state *rng (Box-Muller; the second variate kept in *spare). */
+double bc_rng_normal(uint64_t *rng, int32_t *has_spare, double *spare);
+
 #endif /* BC_SENSORS_H */

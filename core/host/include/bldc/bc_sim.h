@@ -4,7 +4,8 @@
  * One sample k (t_k = k T/2, carrier valley for even k, peak for odd k):
  *
  *   1. hold the per-sample inputs (imposed speed, load torque, DC source voltage) over [t_k, t_k+1]
- *   2. measure the plant at t_k (bc_sensor_measure), add the references, call the controller
+ *   2. measure the plant at t_k (bc_sensor_measure; the back-EMF sensing's comparator edges and ADC conversions up
+ *      to t_k, bc_sense_fill), add the references, call the controller
  *   3. apply a command for [t_k, t_k+1]: the controller's previous output (delay = 1, as on a DSP that loads the
  *      PWM shadow registers at the next carrier extreme) or this one (delay = 0, ideal), and the leg change it
  *      schedules inside the half period, if any (bc_ctrl_out.has_at: a commutation timer; bc_plant_schedule)
@@ -28,6 +29,7 @@
 #include <stdint.h>
 
 #include "bldc/bc_plant.h"
+#include "bldc/bc_sense.h"
 #include "bldc/bc_sensors.h"
 #include "bldc/bc_types.h"
 
@@ -129,6 +131,7 @@ typedef struct {
 typedef struct {
     const bc_plant_params *plant;
     const bc_sensor_params *sensors;
+    const bc_sense_params *sense; /* NULL or off: no back-EMF sensing (bc_ctrl_in's zc_*, v_term, ... stay 0) */
     bc_ctrl ctrl;
     int32_t delay;        /* 0 or 1 sample of computation delay */
     int32_t trace_every;  /* >= 1: samples per trace row */
@@ -150,6 +153,8 @@ typedef struct {
 typedef struct {
     bc_plant_state plant;
     bc_sensor_state sensors;
+    bc_sense_state sense;      /* back-EMF sensing (bc_sim_config.sense) */
+    const bc_sense_params *sense_p; /* cfg->sense while bc_sim_run runs (the plant's terminal observer reads it) */
     int64_t k;                 /* next sample index */
     bc_ctrl_out pending;       /* controller output waiting for the next sample (delay 1): legs and a timed change */
     bc_ctrl_out last;          /* last controller output */
