@@ -38,6 +38,8 @@ class Control:
 
     c_name: ClassVar[str] = ""
     ref_meaning: ClassVar[str] = ""
+    #: The controller reads the back-EMF sensing (bc_ctrl_in's zc_*, v_term, v_neutral): the runner turns it on.
+    needs_bemf_sensing: ClassVar[bool] = False
 
     def c_record(self, drive: Drive, core: Core, n_samples: int) -> CParams:
         """Return the filled C parameter record, owning the arrays it points to.

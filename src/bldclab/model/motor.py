@@ -469,9 +469,34 @@ class Sensors:
         an edge is seen ``tau ln 2`` late, a pulse shorter than that never; 0 for none. A number is used for all
         three. The model of all four is in docs/hall.md.
     f_tick : float
-        Capture-timer frequency (Hz) used to time-stamp Hall edges.
+        Capture-timer frequency (Hz) used to time-stamp Hall edges (and back-EMF comparator edges).
     seed : int
         Seed of the noise generator (runs are deterministic).
+    bemf : bool
+        The drive has back-EMF sensing (terminal-voltage dividers, RC filters, comparators and an ADC; the model is
+        in docs/sensing.md). A controller that needs it (a sensorless one) turns it on; ``True`` turns it on for any
+        controller (your own in the loop). The ``bemf_*`` settings below are in volts at the motor terminal: a
+        value at the MCU pin is divided by the divider ratio.
+    bemf_tau : float
+        Time constant of the RC filter between the divider and the comparators and ADC (s), >= 0; 0 for none.
+    bemf_reference : str
+        The comparators' reference: ``"star"`` (the virtual star point of the three dividers, default) or
+        ``"half"`` (half the DC bus).
+    bemf_offset : float
+        Comparator input offset (V at the terminal).
+    bemf_hysteresis : float
+        Comparator hysteresis, total width (V at the terminal), >= 0.
+    bemf_delay : float
+        Comparator propagation delay (s), >= 0: the MCU sees an edge this much later.
+    bemf_adc_at : float
+        ADC sampling instant after the carrier peak (s), in [-T/2, T/2) with T the PWM period: one conversion of the
+        three filtered terminals and the reference per PWM period.
+    bemf_adc_lsb : float
+        ADC quantisation step (V at the terminal), >= 0; 0 for none.
+    bemf_adc_max : float
+        ADC full scale (V at the terminal), > 0; ``inf`` for none.
+    bemf_adc_noise : float
+        ADC noise, standard deviation (V at the terminal), >= 0.
 
     """
 
@@ -490,6 +515,21 @@ class Sensors:
     hall_tau: tuple[float, float, float] = (0.0, 0.0, 0.0)
     f_tick: float = 10e6
     seed: int = 1
+    bemf: bool = False
+    bemf_tau: float = 0.0
+    bemf_reference: str = "star"
+    bemf_offset: float = 0.0
+    bemf_hysteresis: float = 0.0
+    bemf_delay: float = 0.0
+    bemf_adc_at: float = 0.0
+    bemf_adc_lsb: float = 0.0
+    bemf_adc_max: float = math.inf
+    bemf_adc_noise: float = 0.0
+
+    #: The back-EMF sensing settings and their defaults (a file writes only those it changes).
+    BEMF_FIELDS: ClassVar[tuple[str, ...]] = ("bemf", "bemf_tau", "bemf_reference", "bemf_offset", "bemf_hysteresis",
+                                              "bemf_delay", "bemf_adc_at", "bemf_adc_lsb", "bemf_adc_max",
+                                              "bemf_adc_noise")
 
     def __post_init__(self) -> None:
         ph = self.current_phases
@@ -519,6 +559,18 @@ class Sensors:
         check_number("f_tick", self.f_tick, lo=1e3, hi=1e10)
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise BldclabError("seed", f"must be an integer >= 0, got {self.seed!r}")
+        if not isinstance(self.bemf, bool):
+            raise BldclabError("bemf", f"must be true or false, got {self.bemf!r}")
+        for name in ("bemf_tau", "bemf_hysteresis", "bemf_delay", "bemf_adc_lsb", "bemf_adc_noise"):
+            check_number(name, getattr(self, name), lo=0.0)
+        check_number("bemf_offset", self.bemf_offset)
+        check_number("bemf_adc_at", self.bemf_adc_at)
+        if isinstance(self.bemf_adc_max, bool) or not isinstance(self.bemf_adc_max, int | float | np.floating) or \
+                math.isnan(self.bemf_adc_max) or not self.bemf_adc_max > 0.0:
+            raise BldclabError("bemf_adc_max", f"must be a number > 0 (inf for no clipping), got {self.bemf_adc_max!r}")
+        if self.bemf_reference not in ("star", "half"):
+            raise BldclabError("bemf_reference", f"must be 'star' (virtual star point) or 'half' (half the DC bus), "
+                               f"got {self.bemf_reference!r}")
 
     @property
     def current_mask(self) -> int:
@@ -559,6 +611,11 @@ class Drive:
         for key in ("name", "description"):
             if not isinstance(getattr(self, key), str):
                 raise BldclabError(key, f"expected a string, got {getattr(self, key)!r}")
+        half = 0.5 / self.inverter.f_pwm
+        if not -half <= self.sensors.bemf_adc_at < half:
+            raise BldclabError("sensors.bemf_adc_at", f"must be within [-T/2, T/2) = [{-half * 1e6:.4g}, "
+                               f"{half * 1e6:.4g}) us of the carrier peak (T = 1/f_pwm), got "
+                               f"{self.sensors.bemf_adc_at * 1e6:.4g} us")
 
     def scaled(self, *, R: float = 1.0, L: float = 1.0, emf: float = 1.0) -> Drive:
         """Return the drive with the motor's resistance, inductance and back-EMF scaled (a controller's estimate).
@@ -744,6 +801,15 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
                 kw[key] = ss.quantity(key, dim)
         if ss.has("seed"):
             kw["seed"] = ss.integer("seed")
+        if ss.has("bemf"):
+            kw["bemf"] = ss.boolean("bemf")
+        if ss.has("bemf_reference"):
+            kw["bemf_reference"] = ss.string("bemf_reference")
+        for key, dim in (("bemf_tau", "time"), ("bemf_offset", "voltage"), ("bemf_hysteresis", "voltage"),
+                         ("bemf_delay", "time"), ("bemf_adc_at", "time"), ("bemf_adc_lsb", "voltage"),
+                         ("bemf_adc_max", "voltage"), ("bemf_adc_noise", "voltage")):
+            if ss.has(key):
+                kw[key] = ss.quantity(key, dim)
         sensors = wrap("sensors", Sensors, **kw)
         ss.finish()
     top.finish()
@@ -844,5 +910,9 @@ def _drive_to_toml(d: Drive) -> str:
             del sen[key]  # no hysteresis / filter (the default): written as before they existed
         else:
             sen[key] = v[0] if v[0] == v[1] == v[2] else list(v)
+    defaults = Sensors()
+    for key in Sensors.BEMF_FIELDS:
+        if sen[key] == getattr(defaults, key):
+            del sen[key]  # no back-EMF sensing settings (the default): written as before they existed
     out.append(toml_table("sensors", sen))
     return "\n".join(out)

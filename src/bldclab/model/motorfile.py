@@ -74,6 +74,15 @@ class Section:
             raise BldclabError(self.name(key), f"expected a string, got {v!r}")
         return v
 
+    def boolean(self, key: str, default: object = ...) -> Any:
+        """Return ``key`` as a boolean (``true`` or ``false``)."""
+        v = self.raw(key, default)
+        if v is default and default is not ...:
+            return v
+        if not isinstance(v, bool):
+            raise BldclabError(self.name(key), f"expected true or false, got {v!r}")
+        return v
+
     def numbers(self, key: str, scale: float = 1.0) -> list[float]:
         """Return ``key`` as a list of finite numbers, each times ``scale``."""
         v = self.raw(key)

@@ -458,6 +458,27 @@ def _sensor_params(drive: Drive) -> np.ndarray:
     return rec
 
 
+def _sense_params(drive: Drive, on: bool) -> np.ndarray:
+    """Return the back-EMF sensing record (``on``: the drive asks for it or the controller needs it)."""
+    c = core()
+    rec = c.record("bc_sense_params")
+    s = drive.sensors
+    rec["on"] = 1 if on else 0
+    rec["tau"] = s.bemf_tau
+    rec["ref"] = c.const("BC_SENSE_REF_HALF" if s.bemf_reference == "half" else "BC_SENSE_REF_STAR")
+    rec["offset"] = s.bemf_offset
+    rec["hyst"] = s.bemf_hysteresis
+    rec["delay"] = s.bemf_delay
+    rec["adc_at"] = s.bemf_adc_at
+    rec["adc_lsb"] = s.bemf_adc_lsb
+    rec["adc_max"] = s.bemf_adc_max
+    rec["adc_noise"] = s.bemf_adc_noise
+    rec["f_pwm"] = drive.inverter.f_pwm
+    rec["f_tick"] = s.f_tick
+    rec["seed"] = s.seed + 1  # a stream apart from the current and voltage sensors'
+    return rec
+
+
 def samples_of(drive: Drive, duration: float) -> int:
     """Return the number of controller samples (half PWM periods) covering ``duration`` seconds."""
     n = duration * 2.0 * drive.inverter.f_pwm
@@ -532,6 +553,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
 
     plant = _plant_params(drive, imposed, scenario.h_max, keep)
     sensors = _sensor_params(drive)
+    sense = _sense_params(drive, drive.sensors.bemf or control.needs_bemf_sensing)
     slots = {"plant": 0, "sensors": 0}
     for f in scenario.faults:
         name, where = _FAULT_KINDS[f.kind]
@@ -572,6 +594,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     cfg = c.record("bc_sim_config")
     cfg["plant"] = plant.ctypes.data
     cfg["sensors"] = sensors.ctypes.data
+    cfg["sense"] = sense.ctypes.data
     cfg["ctrl"]["step"] = info.step_ptr
     cfg["ctrl"]["params"] = cparams.ctypes.data
     cfg["ctrl"]["state"] = cstate.ctypes.data
@@ -638,6 +661,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         "samples": n,
         "controller_flags": int(st["flags_seen"]),
         "flags": _flag_stats(c, st, n, t_half),
+        "bemf": _bemf_stats(st) if int(sense["on"][0]) else None,
         "stats": {"steps": int(plant_st["n_steps"]), "events": int(plant_st["n_events"]),
                   "plant_flags": int(plant_st["flags"]), "e_fault": float(plant_st["e_fault"]),
                   "hw_trip": float(plant_st["t_trip"]) if int(plant_st["tripped"]) else None},
@@ -650,6 +674,17 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     meta["warnings"] = issued + _guards_after(drive, res, imposed, check)
     res.metrics = metrics
     return res
+
+
+def _bemf_stats(st: np.void) -> dict[str, Any]:
+    """Return the back-EMF sensing's counts at the end of the run.
+
+    Comparator edges located at the inputs, and seen by the MCU per phase; ADC conversions; whether edges closer
+    than the delay overflowed its queue.
+    """
+    se = st["sense"]
+    return {"edges": int(se["n_edges"]), "seen": [int(v) for v in se["count"]], "conversions": int(se["n_adc"]),
+            "overrun": bool(int(se["overrun"]))}
 
 
 def _flag_stats(c: Any, st: np.void, n: int, t_half: float) -> dict[str, dict[str, dict[str, float]]]:
