@@ -143,6 +143,16 @@ PARAMETERS: dict[str, tuple[tuple[str, str, str], ...]] = {
         ("hall_tau", "Hall line RC filter time constants a, b, c", "s"),
         ("f_tick", "capture-timer frequency (Hall edge time stamps)", "Hz"),
         ("seed", "noise generator seed", "-"),
+        ("bemf", "back-EMF sensing fitted (also without a sensorless controller)", "-"),
+        ("bemf_tau", "back-EMF sensing: RC filter time constant", "s"),
+        ("bemf_reference", "back-EMF comparators' reference (star point or half bus)", "-"),
+        ("bemf_offset", "back-EMF comparator offset (at the terminal)", "V"),
+        ("bemf_hysteresis", "back-EMF comparator hysteresis (at the terminal)", "V"),
+        ("bemf_delay", "back-EMF comparator propagation delay", "s"),
+        ("bemf_adc_at", "back-EMF ADC sampling instant after the carrier peak", "s"),
+        ("bemf_adc_lsb", "back-EMF ADC step (at the terminal)", "V"),
+        ("bemf_adc_max", "back-EMF ADC full scale (at the terminal)", "V"),
+        ("bemf_adc_noise", "back-EMF ADC noise (standard deviation)", "V"),
     ),
 }
 
