@@ -595,8 +595,63 @@ static void test_scheduled_change(void)
     }
 }
 
+/* The ideal current limiter (BC_LEG_HOLD): a+ b(hold at -20 A) with both back-EMFs on their flat tops. Free at full
+ * voltage until i_b reaches -20 A, then held there exactly at d* = 1 - (2 R I + e_a - e_b) / V; a bus too low to
+ * hold frees it at d = 0 (the current falls), restoring the bus holds it again. Refused (leg off, BAD_DUTY) on the
+ * switching inverter and for two HOLD legs. */
+static void test_hold(void)
+{
+    fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    f.p.inverter = BC_INV_AVERAGE;
+    f.p.h_max = 0.25 * bc_plant_t_half(&f.p); /* the balance below converges at fourth order: 1.3e-7 at T/2, 6e-10 */
+    bc_plant_state s;
+    const double om = 1.0, th0 = 1.2; /* e_a = +0.32 V, e_b = -0.32 V (flat tops), c on its ramp */
+    CHECK(bc_plant_init(&f.p, &s, 0.0, th0, om, I0, 48.0) == BC_OK, "init");
+    bc_leg_cmd c[3];
+    legs(c, BC_LEG_HIGH, 1.0f, BC_LEG_HOLD, 1.0f, BC_LEG_OFF, 0.0f);
+    bc_plant_set_hold(&f.p, &s, -20.0, 0.0);
+    long k = 0;
+    run_halves(&f.p, &s, c, 14, &k); /* 0.5 ms */
+    CHECK(s.hold_x == 1 && s.hold_on == 1, "holding phase b");
+    CHECK(s.i[1] == -20.0 && s.i[0] == 20.0, "the held current is the reference exactly: %.17g, %.17g", s.i[0], s.i[1]);
+    bc_plant_out o;
+    bc_plant_output(&f.p, &s, &o);
+    double want = 1.0 - (2.0 * 0.05 * 20.0 + 2.0 * 0.32 * om) / 48.0;
+    CHECK(fabs(o.d_hold - want) < 1e-12, "d* %.15f vs %.15f", o.d_hold, want);
+    CHECK(fabs(o.v[1] - want * 48.0) < 1e-9, "the held leg's terminal is d* V: %.12g", o.v[1]);
+    CHECK(s.flags == 0u, "no plant flag");
+    /* the bus drops below what holding needs: free at d = 0, the current falls; back to 48 V: held again */
+    bc_plant_set_inputs(&f.p, &s, om, 0.0, 2.0);
+    run_halves(&f.p, &s, c, 4, &k);
+    CHECK(s.hold_on == 0 && s.hold_d == 0.0 && s.i[1] > -20.0, "freed at d = 0 (i_b %.6g A)", s.i[1]);
+    bc_plant_set_inputs(&f.p, &s, om, 0.0, 48.0);
+    run_halves(&f.p, &s, c, 14, &k);
+    CHECK(s.hold_on == 1 && s.i[1] == -20.0, "held again (i_b %.17g A)", s.i[1]);
+    /* energy: what the source gives, the copper and the back-EMF take (magnetic energy from 0) */
+    double w_l = 0.5 * f.p.L * (s.i[0] * s.i[0] + s.i[1] * s.i[1] + s.i[2] * s.i[2]);
+    double out = s.acc[BC_ACC_CU] + s.acc[BC_ACC_EMF] + w_l;
+    CHECK(fabs(s.acc[BC_ACC_SRC] - out) < 2e-9 * s.acc[BC_ACC_SRC], "energy balance %.3g relative",
+          (s.acc[BC_ACC_SRC] - out) / s.acc[BC_ACC_SRC]);
+
+    /* refused: the switching inverter, or two legs */
+    for (int q = 0; q < 2; ++q) {
+        fixture_htm(&f, BC_MECH_IMPOSED);
+        if (q == 1) f.p.inverter = BC_INV_AVERAGE;
+        CHECK(bc_plant_init(&f.p, &s, 0.0, th0, om, I0, 48.0) == BC_OK, "init");
+        if (q == 0) legs(c, BC_LEG_HIGH, 1.0f, BC_LEG_HOLD, 1.0f, BC_LEG_OFF, 0.0f);
+        else legs(c, BC_LEG_HOLD, 1.0f, BC_LEG_HOLD, 1.0f, BC_LEG_OFF, 0.0f);
+        bc_plant_set_hold(&f.p, &s, -20.0, 0.0);
+        k = 0;
+        run_halves(&f.p, &s, c, 4, &k);
+        CHECK((s.flags & BC_PLANT_BAD_DUTY) && s.hold_x == -1 && s.i[1] == 0.0, "%s: refused, leg off",
+              q == 0 ? "switching inverter" : "two HOLD legs");
+    }
+}
+
 int main(void)
 {
+    test_hold();
     test_standstill_dc();
     test_hall_both_directions();
     test_open_circuit();

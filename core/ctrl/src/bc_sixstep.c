@@ -16,7 +16,7 @@ static int fin(float v) { return isfinite(v) ? 1 : 0; }
 int bc_sixstep_init(const bc_sixstep_params *p, bc_sixstep_state *s)
 {
     if (p == 0 || s == 0) return BC_ERR_PARAM;
-    if (p->reg < BC_SIXSTEP_PI || p->reg > BC_SIXSTEP_DUTY) return BC_ERR_PARAM;
+    if (p->reg < BC_SIXSTEP_PI || p->reg > BC_SIXSTEP_IDEAL) return BC_ERR_PARAM;
     if ((p->timed != 0 && p->timed != 1) || (p->comm != BC_SIXSTEP_COMM_HALL && p->comm != BC_SIXSTEP_COMM_ENCODER) ||
         !fin(p->adv_angle) || !fin(p->adv_time) || p->adv_angle < 0.0f || p->adv_time < 0.0f)
         return BC_ERR_PARAM;
@@ -171,6 +171,22 @@ static void build(int chop, int pos, int neg, int chop_leg, float m, bc_leg_cmd 
     }
 }
 
+/* The ideal limiter's legs (BC_SIXSTEP_IDEAL): the continuing phase fully on, the incoming phase x held at sgn_x I_ref
+ * (pos: +, neg: -), the third off. */
+static void build_ideal(int pos, int neg, int x, float i_ref, bc_leg_cmd c[3], float *i_hold)
+{
+    for (int j = 0; j < 3; ++j) {
+        c[j].mode = BC_LEG_OFF;
+        c[j].duty = 0.0f;
+    }
+    c[pos].mode = BC_LEG_HIGH;
+    c[pos].duty = 1.0f;
+    c[neg].mode = BC_LEG_LOW;
+    c[neg].duty = 1.0f;
+    c[x].mode = BC_LEG_HOLD;
+    *i_hold = x == pos ? i_ref : -i_ref;
+}
+
 static void safe(bc_sixstep_state *s, bc_ctrl_out *out, uint32_t flags)
 {
     bc_legs_off(out);
@@ -317,6 +333,8 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
     for (int j = 0; j < BC_DIAG_N; ++j) out->diag[j] = 0.0f;
     out->flags = 0u;
     out->has_at = 0u; /* no timed commutation unless one is scheduled below */
+    out->i_hold = 0.0f;
+    out->i_hold_at = 0.0f;
 
     bc_hall_out h;
     bc_hall_step(&s->hall_p, &s->hall, in, &h);
@@ -434,6 +452,8 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
         float d = fabsf(ref);
         m = bc_clampf(d, 0.0f, 1.0f);
         sat = d > 1.0f;
+    } else if (p->reg == BC_SIXSTEP_IDEAL) {
+        m = 1.0f; /* the plant regulates (diagnostic: full voltage available) */
     } else if (p->reg == BC_SIXSTEP_HYST) {
         /* m = 1 below I_ref - band/2, m = m_lo above I_ref + band/2, else unchanged */
         if (i_reg < i_ref - 0.5f * p->band) s->hyst_on = 1;
@@ -451,7 +471,11 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
     }
     m = fin(m) ? bc_clampf(m, m_lo, 1.0f) : 0.0f;
 
-    build((int)p->chop, pos, neg, chop_leg, m, out->leg);
+    if (p->reg == BC_SIXSTEP_IDEAL) {
+        build_ideal(pos, neg, x, i_ref, out->leg, &out->i_hold);
+    } else {
+        build((int)p->chop, pos, neg, chop_leg, m, out->leg);
+    }
     if (next >= 0) { /* the timed commutation: the next sector's legs from t_next, the same pair voltage */
         int pn, nn;
         (void)bc_sector_phases(next, &pn, &nn);
@@ -462,7 +486,11 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
         }
         set_sector(s, next); /* the sector in force at the interval's end, and its incoming phase */
         int xn = (s->incoming == pn || s->incoming == nn) ? s->incoming : pn;
-        build((int)p->chop, pn, nn, chop_leg_of(p, pn, nn, xn, 0.0f), m, out->leg_at);
+        if (p->reg == BC_SIXSTEP_IDEAL) {
+            build_ideal(pn, nn, xn, i_ref, out->leg_at, &out->i_hold_at);
+        } else {
+            build((int)p->chop, pn, nn, chop_leg_of(p, pn, nn, xn, 0.0f), m, out->leg_at);
+        }
         out->has_at = 1u;
         out->t_at = t_next;
     }

@@ -199,6 +199,8 @@ static const bc_field_desc FIELDS[] = {
     F(bc_ctrl_out, has_at, "u4"),
     F(bc_ctrl_out, t_at, "f4"),
     F(bc_ctrl_out, leg_at, "bc_leg_cmd"),
+    F(bc_ctrl_out, i_hold, "f4"),
+    F(bc_ctrl_out, i_hold_at, "f4"),
 };
 
 #define S BC_BIND_STRUCT
@@ -216,7 +218,7 @@ static const bc_const_desc CONSTS[] = {
     K("flag", BC_FLAG_SAFE),         K("flag", BC_FLAG_HALL_INVALID),     K("flag", BC_FLAG_OVERCURRENT),
     K("flag", BC_FLAG_BAD_INPUT),    K("flag", BC_FLAG_SATURATED),
     K("leg", BC_LEG_OFF),            K("leg", BC_LEG_PWM),                K("leg", BC_LEG_HIGH),
-    K("leg", BC_LEG_LOW),
+    K("leg", BC_LEG_LOW),            K("leg", BC_LEG_HOLD),
     K("err", BC_OK),                 K("err", BC_ERR_PARAM),              K("err", BC_ERR_SIZE),
     K("err", BC_ERR_INPUT),
     K("emf", BC_EMF_TABLE),          K("emf", BC_EMF_FOURIER),

@@ -35,6 +35,7 @@ static const bc_ctrl_info SIXSTEP_INFO = {
 static const bc_const_desc SIXSTEP_CONSTS[] = {
     BC_BIND_CONST("sixstep_reg", BC_SIXSTEP_PI),        BC_BIND_CONST("sixstep_reg", BC_SIXSTEP_HYST),
     BC_BIND_CONST("sixstep_reg", BC_SIXSTEP_PRED),      BC_BIND_CONST("sixstep_reg", BC_SIXSTEP_DUTY),
+    BC_BIND_CONST("sixstep_reg", BC_SIXSTEP_IDEAL),
     BC_BIND_CONST("sixstep_comm", BC_SIXSTEP_COMM_HALL), BC_BIND_CONST("sixstep_comm", BC_SIXSTEP_COMM_ENCODER),
     BC_BIND_CONST("sixstep_chop", BC_SIXSTEP_BIPOLAR),
     BC_BIND_CONST("sixstep_chop", BC_SIXSTEP_HIGH),     BC_BIND_CONST("sixstep_chop", BC_SIXSTEP_PWMPWM),

@@ -190,6 +190,16 @@ static void core(const bc_plant_params *restrict p, const bc_plant_state *restri
     } else {
         dy[Y_I] = dy[Y_I + 1] = dy[Y_I + 2] = 0.0;
     }
+    double dh = 0.0;
+    if (s->hold_on) { /* the ideal limiter: the duty d* that holds di_x/dt = 0 (topology_set put d = 0 in up) */
+        const int x = s->hold_x;
+        const double cx = s->v_src * s->tc_hcol[x];
+        if (cx > 0.0) {
+            dh = -dy[Y_I + x] / cx;
+            for (int j = 0; j < 3; ++j) dy[Y_I + j] += dh * s->v_src * s->tc_hcol[j];
+            dy[Y_I + x] = 0.0;
+        }
+    }
     const double tau_cog = p->n_cog > 0 ? cogging_at(p, s, th) : 0.0;
     const double tau = k[0] * i0 + k[1] * i1 + k[2] * i2 + tau_cog;
     const double tau_net = tau - s->tau_load;
@@ -235,10 +245,11 @@ static void core(const bc_plant_params *restrict p, const bc_plant_state *restri
     a->t_fric = t_fric;
     a->sgn = sgn;
     a->n_conn = s->tc_n;
+    a->dh = dh;
     /* the circuit quantities: DC current and bus, and the terminals v_x = up v_bus + U0 - r i (averaged legs with
      * R_src: up v_src - R_src w_x + U0 - r i), the open terminals floating at e + v_n; the terminals only where
      * something reads them (an open phase's watches, the trace's lanes, the outputs) */
-    const double idc = s->tc_up[0] * i0 + s->tc_up[1] * i1 + s->tc_up[2] * i2;
+    const double idc = s->tc_up[0] * i0 + s->tc_up[1] * i1 + s->tc_up[2] * i2 + (s->hold_on ? dh * y[Y_I + s->hold_x] : 0.0);
     const double vbus = s->v_src - p->R_src * idc;
     a->idc = idc;
     a->vbus = vbus;
@@ -277,6 +288,12 @@ static void aux_terminals(const bc_plant_params *restrict p, const bc_plant_stat
         v0 = s->tc_up[0] * vbus + s->tc_u0[0] - r0 * i0;
         v1 = s->tc_up[1] * vbus + s->tc_u0[1] - r1 * i1;
         v2 = s->tc_up[2] * vbus + s->tc_u0[2] - r2 * i2;
+    }
+    if (s->hold_on) { /* the hold leg's d* v_bus (its up is 0 in the coefficients) */
+        const double vh = a->dh * vbus;
+        if (s->hold_x == 0) v0 += vh;
+        else if (s->hold_x == 1) v1 += vh;
+        else v2 += vh;
     }
     const double u0 = v0 - R * i0 - e0, u1 = v1 - R * i1 - e1, u2 = v2 - R * i2 - e2;
     const double c0 = s->tc_conn[0], c1 = s->tc_conn[1], c2 = s->tc_conn[2];
@@ -319,7 +336,19 @@ static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restr
         de[x] = dom * a->k[x] + om * dkt[x]; /* de/dt = domega/dt k + omega dk/dt */
         sq[x] = i[x] * i[x];
     }
-    const double didc = s->tc_up[0] * di[0] + s->tc_up[1] * di[1] + s->tc_up[2] * di[2];
+    double didc = s->tc_up[0] * di[0] + s->tc_up[1] * di[1] + s->tc_up[2] * di[2];
+    /* the hold leg's duty d* and its rate d(d^*)/dt = ((B di)_x + pc_x (de_x - sum cn de)) / (v_src c_x) (R_src = 0) */
+    double ddh = 0.0;
+    if (s->hold_on) {
+        const int x = s->hold_x;
+        const double cx = s->v_src * s->tc_hcol[x];
+        if (cx > 0.0) {
+            const double *B = s->tc_b + 3 * x;
+            const double deb = s->tc_cn[0] * de[0] + s->tc_cn[1] * de[1] + s->tc_cn[2] * de[2];
+            ddh = (B[0] * di[0] + B[1] * di[1] + B[2] * di[2] + s->tc_pc[x] * (de[x] - deb)) / cx;
+        }
+        didc += ddh * i[x] + a->dh * di[x];
+    }
     const double dvbus = -R_src * didc;
 
     f[BC_ACC_SRC] = s->v_src * a->idc;
@@ -399,6 +428,7 @@ static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restr
         } else {
             for (int x = 0; x < 3; ++x) dv[x] = s->tc_up[x] * dvbus - s->tc_r[x] * di[x];
         }
+        if (s->hold_on) dv[s->hold_x] += ddh * a->vbus + a->dh * dvbus;
         for (int x = 0; x < 3; ++x) du[x] = dv[x] - R * di[x] - de[x];
         const double dvn = s->tc_n > 0 ? (s->tc_conn[0] * du[0] + s->tc_conn[1] * du[1] + s->tc_conn[2] * du[2]) *
                                              s->tc_inv_n
@@ -522,7 +552,7 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
             if (s->cond[x] == BC_COND_D_U || s->cond[x] == BC_COND_D_L) r = rsw + fo * p->r_d;
             /* switching losses (bc_plant.h): PWM legs switch hard at either sign, HIGH legs for i > 0 (D_L in the
              * off fraction), LOW legs for i < 0 (D_U) */
-            int hard = conn != 0.0 && ((s->fr_u[x] > 0.0 && s->fr_l[x] > 0.0) ||
+            int hard = conn != 0.0 && ((s->fr_u[x] > 0.0 && s->fr_l[x] > 0.0) || (s->hold_on && s->hold_x == x) ||
                                        (s->fr_u[x] > 0.0 && s->cond[x] == BC_COND_D_L) ||
                                        (s->fr_l[x] > 0.0 && s->cond[x] == BC_COND_D_U));
             swk = hard ? p->f_pwm * (p->E_on + p->E_off) * s->sw_inv_vi : 0.0;
@@ -589,6 +619,9 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
         s->tc_cn[x] = s->tc_conn[x] * s->tc_inv_n;
         s->tc_pc[x] = s->tc_gain * s->tc_conn[x];
     }
+    if (s->hold_on) { /* d(di/dt)/dd = v_src P e_x: column x of P, (P e_x)_j = pc_j (delta_jx - cn_x) */
+        for (int j = 0; j < 3; ++j) s->tc_hcol[j] = s->tc_pc[j] * ((j == s->hold_x ? 1.0 : 0.0) - s->tc_cn[s->hold_x]);
+    }
     const double *cn = s->tc_cn, *pc = s->tc_pc;
     const double ub = cn[0] * s->tc_up[0] + cn[1] * s->tc_up[1] + cn[2] * s->tc_up[2];
     const double u0b = cn[0] * s->tc_u0[0] + cn[1] * s->tc_u0[1] + cn[2] * s->tc_u0[2];
@@ -634,7 +667,7 @@ static void aux_to_out(const bc_plant_params *p, const bc_plant_state *s, const 
     out->tau_shaft = a->tau - p->B * om - p->tau_c * sign_of(om);
     if (s->fe_on && om != 0.0) out->tau_shaft -= a->tau_fe; /* at rest, as tau_c: none */
     out->w_l = 0.5 * p->L * (y[Y_I] * y[Y_I] + y[Y_I + 1] * y[Y_I + 1] + y[Y_I + 2] * y[Y_I + 2]);
-    (void)s;
+    out->d_hold = s->hold_x < 0 ? 0.0 : (s->hold_on ? a->dh : s->hold_d);
 }
 
 static void pack(const bc_plant_state *s, double *y)
@@ -681,7 +714,7 @@ static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double 
  * of three derivative evaluations. */
 static int linear_step_ok(const bc_plant_params *p, const bc_plant_state *s)
 {
-    return s->emf_tables && (p->mech == BC_MECH_IMPOSED || s->stuck);
+    return s->emf_tables && (p->mech == BC_MECH_IMPOSED || s->stuck) && !s->hold_on;
 }
 
 static void taylor4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
@@ -1248,6 +1281,9 @@ static void resolve(const bc_plant_params *p, bc_plant_state *s)
 #define W_OMEGA 10 /* moving: omega keeps its sign */
 #define W_STICK 11 /* stuck: |tau_net| <= tau_c */
 #define W_TRIP 12  /* + phase: |i_x| below the hardware trip level */
+#define W_HOLD_LO 15 /* holding: d* >= 0 */
+#define W_HOLD_HI 16 /* holding: d* <= 1 */
+#define W_REACH 17   /* free: the held current not yet reached (i_ref - i_x, signed by the drive's direction) */
 #define NW BC_PLANT_NW
 
 static int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
@@ -1285,6 +1321,17 @@ static int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const d
             neg |= g[W_TRIP + x] < 0.0;
         }
     }
+    if (s->hold_x >= 0) {
+        if (s->hold_on) {
+            g[W_HOLD_LO] = a->dh;
+            g[W_HOLD_HI] = 1.0 - a->dh;
+            neg |= (a->dh < 0.0) | (a->dh > 1.0);
+        } else {
+            double gr = s->hold_d > 0.5 ? s->hold_i - y[Y_I + s->hold_x] : y[Y_I + s->hold_x] - s->hold_i;
+            g[W_REACH] = gr;
+            neg |= gr < 0.0;
+        }
+    }
     if (p->mech == BC_MECH_DYNAMIC) {
         if (s->stuck) {
             g[W_STICK] = p->tau_c + s->fe_tc - fabs(a->tau_net);
@@ -1307,6 +1354,12 @@ static double watch_tol(const bc_plant_params *p, const bc_plant_state *s, int w
     }
     if (w == W_OMEGA) {
         return 1e-12 * (1.0 + fabs(s->omega));
+    }
+    if (w == W_HOLD_LO || w == W_HOLD_HI) {
+        return 1e-12;
+    }
+    if (w == W_REACH) {
+        return 1e-12 * (1.0 + fabs(s->hold_i));
     }
     if (w >= W_TRIP) {
         return 1e-9 * (1.0 + p->i_trip);
@@ -1417,6 +1470,34 @@ static double root_find(const bc_plant_params *p, const bc_plant_state *s, const
     return b;
 }
 
+/* The held current reached its reference (free -> hold): hold if d* is in [0, 1] there, else stay free at the bound
+ * beyond which d* lies (the current then moves away from the reference and the reach watch stays positive). */
+static int leg_average(const bc_plant_params *p, bc_plant_state *s, int x, int32_t mode, double d, double t);
+
+static void hold_engage(const bc_plant_params *p, bc_plant_state *s)
+{
+    const int x = s->hold_x;
+    /* on the reference exactly (the event located it to the watch's tolerance), the sum kept zero */
+    double r = s->i[x] - s->hold_i;
+    int others = 0;
+    for (int z = 0; z < 3; ++z) others += (z != x && s->cond[z] != BC_COND_OPEN);
+    for (int z = 0; z < 3 && others > 0; ++z) {
+        if (z != x && s->cond[z] != BC_COND_OPEN) s->i[z] += r / others;
+    }
+    if (others > 0) s->i[x] = s->hold_i;
+    s->hold_on = 1;
+    (void)leg_average(p, s, x, BC_LEG_PWM, 0.0, s->t);
+    topology_set(p, s);
+    double y[NY], dy[NY];
+    aux_t a;
+    pack(s, y);
+    core(p, s, y, dy, &a, 0, 0);
+    if (a.dh >= 0.0 && a.dh <= 1.0 && s->v_src * s->tc_hcol[x] > 0.0) return;
+    s->hold_on = 0;
+    s->hold_d = a.dh > 1.0 ? 1.0 : 0.0;
+    (void)leg_average(p, s, x, BC_LEG_PWM, s->hold_d, s->t);
+}
+
 /* Apply the transition of watch w at the current state. */
 static void apply_event(const bc_plant_params *p, bc_plant_state *s, int w, const aux_t *a)
 {
@@ -1461,8 +1542,17 @@ static void apply_event(const bc_plant_params *p, bc_plant_state *s, int w, cons
                 pieces_locate(p, s);
             }
         }
+    } else if (w == W_HOLD_LO || w == W_HOLD_HI) {
+        /* d* left [0, 1]: free at the bound it crossed (the current leaves the reference) */
+        s->hold_on = 0;
+        s->hold_d = w == W_HOLD_HI ? 1.0 : 0.0;
+        (void)leg_average(p, s, s->hold_x, BC_LEG_PWM, s->hold_d, s->t);
+    } else if (w == W_REACH) {
+        hold_engage(p, s);
     } else if (w >= W_TRIP) {
-        s->tripped = 1; /* every gate off from now on: the diodes carry the currents to zero */
+        s->tripped = 1;
+        s->hold_x = -1;
+        s->hold_on = 0; /* every gate off from now on: the diodes carry the currents to zero */
         s->t_trip = s->t;
         for (int x = 0; x < 3; ++x) {
             if (s->avg[x]) leg_average_end(s, x, s->t);
@@ -1536,6 +1626,7 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
 
     memset(s, 0, sizeof *s);
     s->tc_cond[0] = s->tc_cond[1] = s->tc_cond[2] = -1; /* no conduction coefficients computed yet */
+    s->hold_x = -1; /* no ideal current limiter */
     s->t = t0;
     s->sw_on = sw_on;
     s->sw_inv_vi = sw_on ? 1.0 / (p->V_test * p->I_test) : 0.0;
@@ -1648,14 +1739,43 @@ static int leg_average(const bc_plant_params *p, bc_plant_state *s, int x, int32
 /* Apply leg commands from time t inside the current half period (started at t_half, rising or not): each leg's gate
  * follows the centre-aligned carrier, so at t it is where the command puts it at that instant (bc_plant.h), with its
  * remaining edge pending. Averaged legs apply the command's half-period average from t. */
-static void legs_apply(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], double t)
+static void legs_apply(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], double i_hold, double t)
 {
     double th = bc_plant_t_half(p);
     double t0 = s->t_half;
     int changed = 0;
+    /* the ideal current limiter: one HOLD leg with a finite current, on the averaged inverter without R_src */
+    int hx = -1;
+    for (int x = 0; x < 3; ++x) {
+        if (cmd[x].mode != BC_LEG_HOLD) continue;
+        if (hx >= 0 || p->inverter != BC_INV_AVERAGE || p->R_src > 0.0 || !isfinite(i_hold) || s->tripped) {
+            s->flags |= BC_PLANT_BAD_DUTY; /* the legs asking for it are off */
+            hx = -2;
+        } else {
+            hx = x;
+        }
+    }
+    if (hx >= 0) {
+        double ir = i_hold;
+        if (hx != s->hold_x || ir != s->hold_i) { /* a new reference or leg starts free, at full drive toward it */
+            s->hold_x = hx;
+            s->hold_i = ir;
+            s->hold_on = 0;
+            s->hold_d = s->i[hx] < ir ? 1.0 : 0.0;
+        }
+    } else {
+        s->hold_x = -1;
+        s->hold_on = 0;
+    }
     for (int x = 0; x < 3; ++x) {
         int32_t mode = cmd[x].mode;
         float d = cmd[x].duty;
+        if (mode == BC_LEG_HOLD && x == s->hold_x) {
+            s->cmd[x] = cmd[x];
+            s->edge_to[x] = -1;
+            changed |= leg_average(p, s, x, BC_LEG_PWM, s->hold_on ? 0.0 : s->hold_d, t);
+            continue;
+        }
         if (mode < BC_LEG_OFF || mode > BC_LEG_LOW) {
             mode = BC_LEG_OFF;
             s->flags |= BC_PLANT_BAD_DUTY;
@@ -1719,7 +1839,14 @@ void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg
     s->t_half = s->t;
     s->rising = rising ? 1 : 0;
     s->at_on = 0;
-    legs_apply(p, s, cmd, s->t);
+    legs_apply(p, s, cmd, s->hold_req, s->t);
+}
+
+void bc_plant_set_hold(const bc_plant_params *p, bc_plant_state *s, double i_hold, double i_hold_at)
+{
+    (void)p;
+    s->hold_req = i_hold;
+    s->hold_req_at = i_hold_at;
 }
 
 void bc_plant_schedule(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], double dt)
@@ -1728,11 +1855,12 @@ void bc_plant_schedule(const bc_plant_params *p, bc_plant_state *s, const bc_leg
     if (!(dt >= 0.0)) dt = 0.0; /* NaN or negative: now */
     if (dt >= th) return;        /* beyond this half period: not in it */
     for (int x = 0; x < 3; ++x) s->at_cmd[x] = cmd[x];
+    s->at_hold = s->hold_req_at;
     s->at_t = s->t_half + dt;
     s->at_on = 1;
     if (!(s->at_t > s->t)) { /* due now */
         s->at_on = 0;
-        legs_apply(p, s, s->at_cmd, s->t);
+        legs_apply(p, s, s->at_cmd, s->at_hold, s->t);
     }
 }
 
@@ -1801,7 +1929,7 @@ static int process_due(const bc_plant_params *p, bc_plant_state *s)
     }
     if (s->at_on && s->at_t <= s->t) { /* a scheduled command change (bc_plant_schedule) */
         s->at_on = 0;
-        legs_apply(p, s, s->at_cmd, s->t);
+        legs_apply(p, s, s->at_cmd, s->at_hold, s->t);
         changed = 1;
     }
     return changed;

@@ -72,9 +72,10 @@ static void row_open(const bc_sim_config *cfg, bc_sim_state *s)
     r->mode_a = (double)ps->cmd[0].mode;
     r->mode_b = (double)ps->cmd[1].mode;
     r->mode_c = (double)ps->cmd[2].mode;
-    r->duty_a = (double)ps->cmd[0].duty;
-    r->duty_b = (double)ps->cmd[1].duty;
-    r->duty_c = (double)ps->cmd[2].duty;
+    /* a held leg (BC_LEG_HOLD) shows the duty it has now, not the current it holds */
+    r->duty_a = ps->cmd[0].mode == BC_LEG_HOLD ? po.d_hold : (double)ps->cmd[0].duty;
+    r->duty_b = ps->cmd[1].mode == BC_LEG_HOLD ? po.d_hold : (double)ps->cmd[1].duty;
+    r->duty_c = ps->cmd[2].mode == BC_LEG_HOLD ? po.d_hold : (double)ps->cmd[2].duty;
     r->d0 = (double)s->last.diag[0];
     r->d1 = (double)s->last.diag[1];
     r->d2 = (double)s->last.diag[2];
@@ -355,6 +356,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         double pre_swloss = ps->acc[BC_ACC_SWLOSS], pre_rr = ps->acc[BC_ACC_RR];
         const bc_ctrl_out applied = cfg->delay ? s->pending : co;
         s->pending = co;
+        bc_plant_set_hold(pp, ps, (double)applied.i_hold, (double)applied.i_hold_at);
         bc_plant_set_half(pp, ps, applied.leg, (k % 2) == 0);
         if (applied.has_at) bc_plant_schedule(pp, ps, applied.leg_at, (double)applied.t_at);
 

@@ -33,10 +33,14 @@ from ..sim import plausibility as _plaus
 from .experiments import base_speed, map_points, steady_state
 from .losses import copper_only_efficiency, loss_buckets, point_losses
 
-__all__ = ["EFFICIENCY_COUNTS", "VERDICT_TOLERANCE", "CompareResult", "base_speed_table", "compare", "default_controls",
-           "efficiency_table", "speed_grid"]
+__all__ = ["EFFICIENCY_COUNTS", "IDEAL_LIMITER", "VERDICT_TOLERANCE", "CompareResult", "base_speed_table",
+           "compare", "default_controls", "efficiency_table", "speed_grid"]
 
 SUPPLIES = ("square", "sine")
+
+
+#: Paper 1's ideal current limiter: the square wave's paper-comparable point (``TR_avg_pu``) on the averaged inverter.
+IDEAL_LIMITER = SixStep(regulation="ideal", commutation="encoder", timed=True)
 
 
 def default_controls(drive: Drive, lowest_speed_pu: float = 0.05,
@@ -94,18 +98,33 @@ def _run_point(args: tuple[Drive, str, Control, float, float, int]) -> dict[str,
         for key, rng in (("T_pu", point.tau_mean_range), ("TR_pu", point.ripple_sampled_range),
                          ("TR_ma_pu", point.ripple_ma_range)):
             row[f"{key}_min"], row[f"{key}_max"] = rng[0] / T_N, rng[1] / T_N
-    # the paper-comparable point: the same drive and controller on the averaged inverter (no PWM ripple, paper 1's
-    # ideal current limiter idealised as far as a sampled controller goes), its exact instantaneous extremes
-    if drive.inverter.model == "average":
-        avg = point
-    else:
-        drive_avg = dataclasses.replace(drive, inverter=dataclasses.replace(drive.inverter, model="average"))
-        with _plaus.collect() as caught_avg:
-            avg, _ = steady_state(drive_avg, control, w_pu * drive.Omega_0, ref)
-        # the same operating point: only what the switching run did not already say
-        row["_warnings"] += [f"{supply} at {w_pu:.3g} p.u., averaged inverter: {text}" for text in caught_avg
-                             if text not in caught]
-    row["T_avg_pu"], row["TR_avg_pu"] = avg.tau_mean_pu, avg.ripple_pu
+    # the paper-comparable point, its exact instantaneous extremes on the averaged inverter (no PWM ripple): the
+    # sinusoidal supply's controller, and for the square wave paper 1's ideal current limiter (commutation at the
+    # exact angles, the incoming current held in continuous time), which a sampled controller approaches only while
+    # a commutation spans several PWM periods; that one's averaged point is kept as T_avg_ctrl_pu, TR_avg_ctrl_pu
+    drive_avg = drive if drive.inverter.model == "average" else dataclasses.replace(
+        drive, inverter=dataclasses.replace(drive.inverter, model="average"))
+    runs = [("ctrl", control)]
+    if supply == "square":
+        runs.append(("ideal", IDEAL_LIMITER))
+    for kind, ctl in runs:
+        if kind == "ctrl" and drive.inverter.model == "average":
+            avg = point
+        else:
+            d_run = drive_avg
+            if kind == "ideal" and d_run.inverter.R_src > 0.0:  # the limiter holds the current on an ideal source
+                d_run = dataclasses.replace(d_run, inverter=dataclasses.replace(d_run.inverter, R_src=0.0))
+            with _plaus.collect() as caught_avg:
+                avg, _ = steady_state(d_run, ctl, w_pu * drive.Omega_0, ref)
+            # the same operating point: only what the switching run did not already say
+            label = "averaged inverter" if kind == "ctrl" else "ideal current limiter"
+            row["_warnings"] += [f"{supply} at {w_pu:.3g} p.u., {label}: {text}" for text in caught_avg
+                                 if text not in caught]
+        row[f"T_avg_{kind}_pu"], row[f"TR_avg_{kind}_pu"] = avg.tau_mean_pu, avg.ripple_pu
+    key = "ideal" if supply == "square" else "ctrl"
+    row["T_avg_pu"], row["TR_avg_pu"] = row[f"T_avg_{key}_pu"], row[f"TR_avg_{key}_pu"]
+    row.pop("T_avg_ideal_pu", None)
+    row.pop("TR_avg_ideal_pu", None)
     return row
 
 
@@ -154,9 +173,11 @@ class CompareResult:
     simulated : pandas.DataFrame
         One row per supply and speed: per-unit and SI mean torque; ripple of the switching drive at the controller
         samples ``TR``, instantaneous (exact extremes, with PWM) ``TR_inst`` and of its continuous one-PWM-period
-        average ``TR_ma``; the same point on the averaged inverter, ``T_avg_pu`` and ``TR_avg_pu`` (exact extremes,
-        no PWM: the ripple paper 1's closed forms describe, and the one the verdict compares); efficiency; powers;
-        currents; energy-balance residue.
+        average ``TR_ma``; the paper-comparable point on the averaged inverter, ``T_avg_pu`` and ``TR_avg_pu``
+        (exact extremes, no PWM: the ripple paper 1's closed forms describe, and the one the verdict compares; for
+        the square wave with paper 1's ideal current limiter, :data:`IDEAL_LIMITER`), and the compared controller on
+        the averaged inverter, ``T_avg_ctrl_pu`` and ``TR_avg_ctrl_pu`` (the same for the sinusoidal supply);
+        efficiency; powers; currents; energy-balance residue.
     analytic : pandas.DataFrame
         Paper 1's closed forms on the same speeds (:func:`bldclab.model.analytic.characteristic`).
     table1 : analytic.Table1
@@ -185,6 +206,9 @@ class CompareResult:
         :func:`efficiency_table`: per supply and speed the efficiency by each loss count of
         :data:`EFFICIENCY_COUNTS` (paper 1's copper-only closed forms with 3 P_R and with the consistent 2 R I_N^2,
         the simulated copper-only and the simulated full-loss efficiency) and the loss buckets (W).
+    commutation : str
+        How many PWM periods the square-wave commutation lasts (:func:`bldclab.model.analytic.commutation_premise`);
+        below about three the verdict repeats it as a premise.
     controls : dict
         The controllers and references compared, ``{"square": (control, ref), "sine": (control, ref)}``: the
         waveforms and the manifest of the results (:func:`bldclab.report.bundle.compare_outputs`) use the same.
@@ -202,6 +226,7 @@ class CompareResult:
     not_applicable: list[str] = field(default_factory=list)
     efficiency: pd.DataFrame | None = None
     controls: dict[str, tuple[Control, float]] = field(default_factory=dict)
+    commutation: str = ""
 
 
 #: The efficiency columns of :attr:`CompareResult.efficiency`, each with the loss count it uses.
@@ -335,6 +360,9 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
                    + (_base_speed_verdict(bst) if bst is not None else []))
     res.warnings = caught
     res.not_applicable = analytic.applicability(drive)
+    res.commutation, few = analytic.commutation_premise(drive)
+    if few:
+        res.verdict.append(f"premise: {res.commutation}")
     line = _plaus.summary(caught, len(jobs))
     if line:
         warnings.warn(line, PlausibilityWarning, stacklevel=2)

@@ -64,6 +64,7 @@ def run_command(args: argparse.Namespace) -> int:
         write_files(args.out, files)
     sys.stdout.write(text)
     if args.format == "table":  # csv and json stay machine-readable
+        sys.stdout.write(analytic.commutation_premise(drive)[0] + "\n")
         sys.stdout.write(_speeds_in_rpm(drive, t) + "\n")
     return 0
 

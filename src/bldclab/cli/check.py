@@ -79,4 +79,5 @@ def run_command(args: argparse.Namespace) -> int:
             print(f"  - {reason}")
     else:
         print("paper 1's closed forms (bldclab analyze) apply: ideal trapezoid, R negligible, V_dc = V_N")
+    print(analytic.commutation_premise(drive)[0])
     return 0

@@ -81,7 +81,8 @@ def _print(args: argparse.Namespace, drive: Drive, w: list[float], res: CompareR
           f"{bs.get('sine', math.nan):.3f} / {bs.get('square', math.nan):.3f} p.u.")
     na = "*" if res.not_applicable else ""  # closed-form columns outside paper 1's premises: labelled, kept
     print(f"  {'Omega':>6} {'rpm':>6} {'T sine':>7} {'T sq':>6} {'(13)/(24)' + na:>10} {'(26)-(32)' + na:>10} | "
-          f"{'TR sine':>7} {'sw':>6} {'(15)/(25)' + na:>10} | {'TR sq':>6} {'sw':>6} {'(27)-(33)' + na:>10} | "
+          f"{'TR sine':>7} {'sw':>6} {'(15)/(25)' + na:>10} | {'TR sq':>6} {'ctrl':>6} {'sw':>6} "
+          f"{'(27)-(33)' + na:>10} | "
           f"{'eta sine':>8} {'eta sq':>6}")
     an = res.analytic.set_index("Omega_pu")
     for wp in w:  # every speed of the heading
@@ -91,12 +92,14 @@ def _print(args: argparse.Namespace, drive: Drive, w: list[float], res: CompareR
         rpm = wp * drive.Omega_0 * RPM_PER_RAD_S
         print(f"  {wp:>6.3f} {rpm:>6.0f} {a.T_pu:>7.3f} {b.T_pu:>6.3f} {r.T_s_pu:>10.3f} {r.T_q_pu:>10.3f} | "
               f"{a.TR_avg_pu:>7.3f} {a.TR_ma_pu:>6.3f} {r.TR_s_pu:>10.3f} | "
-              f"{b.TR_avg_pu:>6.3f} {b.TR_ma_pu:>6.3f} {r.TR_q_pu:>10.3f} | "
+              f"{b.TR_avg_pu:>6.3f} {b.TR_avg_ctrl_pu:>6.3f} {b.TR_ma_pu:>6.3f} {r.TR_q_pu:>10.3f} | "
               f"{a.eta:>8.3f} {b.eta:>6.3f}")
     print("  (p.u. of Omega_0, T_N; rpm: the speed in rpm; "
           f"T: mean torque, {drive.inverter.model} inverter; TR: torque ripple peak to peak "
-          "on the averaged inverter (no PWM, the paper-comparable one), sw: the switching drive's, of its "
+          "on the averaged inverter (no PWM, the paper-comparable one; square wave: paper 1's ideal current limiter), "
+          "ctrl: the square-wave controller's own on the averaged inverter, sw: the switching drive's, of its "
           "one-PWM-period average; (13)-(33): paper 1, R neglected)")
+    print(f"  {res.commutation}")
     if args.pwm_phases > 1:
         spread = {k: float((sim[f"{k}_max"] - sim[f"{k}_min"]).max()) for k in ("T_pu", "TR_pu", "TR_ma_pu")}
         print(f"  over {args.pwm_phases} PWM-grid phases the largest spread is {spread['T_pu']:.4f} p.u. in torque, "

@@ -27,7 +27,7 @@ __all__ = ["CHOPPINGS", "SixStep"]
 
 # the settings' C constants (values read from the library: bldclab._core)
 _REG = {"pi": "BC_SIXSTEP_PI", "hysteresis": "BC_SIXSTEP_HYST", "predictive": "BC_SIXSTEP_PRED",
-        "duty": "BC_SIXSTEP_DUTY"}
+        "duty": "BC_SIXSTEP_DUTY", "ideal": "BC_SIXSTEP_IDEAL"}
 _COMM = {"hall": "BC_SIXSTEP_COMM_HALL", "encoder": "BC_SIXSTEP_COMM_ENCODER"}
 _CHOP = {"bipolar": "BC_SIXSTEP_BIPOLAR", "high": "BC_SIXSTEP_HIGH", "pwm-on-pwm": "BC_SIXSTEP_PWMPWM",
          "sync": "BC_SIXSTEP_SYNC"}
@@ -48,12 +48,16 @@ class SixStep(Control):
 
     Parameters
     ----------
-    regulation : {"predictive", "pi", "hysteresis", "duty"}
+    regulation : {"predictive", "pi", "hysteresis", "duty", "ideal"}
         ``predictive``: the duty that brings the incoming phase's current to the reference at the sample after next,
         from an average model of the inverter and motor (full voltage when it cannot: paper 1's idealisation);
         ``pi``: PI on the line current with back-EMF feed-forward, gains from :func:`bldclab.model.design.pi_gains` for
         the line ``2 R``, ``2 L``; ``hysteresis``: on below ``I - band/2``, off above ``I + band/2`` at the samples;
-        ``duty``: no current loop, the reference is the duty (voltage mode, as a hobby ESC's throttle).
+        ``duty``: no current loop, the reference is the duty (voltage mode, as a hobby ESC's throttle); ``ideal``:
+        paper 1's ideal current limiter, a reference model on the averaged inverter (``Inverter(model="average")``,
+        no source resistance): the incoming phase's current is held at the reference in continuous time while a
+        duty in [0, 1] can hold it, driven at full voltage toward it otherwise (docs/sixstep.md, "The ideal current
+        limiter"). Use it with ``commutation="encoder", timed=True`` for commutation at the exact angles.
     chopping : {"pwm-on-pwm", "bipolar", "high", "sync"}
         ``pwm-on-pwm``: a phase chops in the first and last 30 degrees of its conduction and is fully on in the
         middle 60 (the pattern that realises paper 1's commutation); ``bipolar``: both conducting legs chop;
@@ -111,7 +115,7 @@ class SixStep(Control):
         the commutation instant. ``None``: the nominal edges ``pi/6 + j pi/3``.
     """
 
-    regulation: Literal["predictive", "pi", "hysteresis"] = "predictive"
+    regulation: Literal["predictive", "pi", "hysteresis", "duty", "ideal"] = "predictive"
     chopping: Literal["pwm-on-pwm", "bipolar", "high", "sync"] = "pwm-on-pwm"
     reference: Literal["current", "torque"] = "current"
     delay: int = 1
@@ -185,6 +189,10 @@ class SixStep(Control):
 
     def c_record(self, drive: Drive, core: Core, n_samples: int) -> CParams:  # noqa: D102
         m, inv = drive.motor, drive.inverter
+        if self.regulation == "ideal" and (inv.model != "average" or inv.R_src > 0.0):
+            raise BldclabError("control.regulation", "'ideal' (paper 1's ideal current limiter) holds the current in "
+                               "continuous time on the averaged inverter: needs inverter.model = 'average' and "
+                               f"R_src = 0 (got model {inv.model!r}, R_src {inv.R_src:g} Ohm)")
         kp, ki = self.gains(drive)
         return CParams(core.filled(
             "bc_sixstep_params",

@@ -81,6 +81,11 @@
  *                    the measured bus), limited to [m_lo, 1] (m_lo = -1 with BIPOLAR or regen, else 0); the
  *                    integrator is updated with the realised m (anti-windup on the realised duty, bc_pi.h). Gains
  *                    for the line R-L (2R, 2L): bldclab.design.pi_gains.
+ *  BC_SIXSTEP_IDEAL  paper 1's ideal current limiter, in continuous time, on the plant's averaged inverter: the
+ *                    continuing phase fully on (HIGH or LOW at duty 1), the incoming phase x BC_LEG_HOLD at sgn_x
+ *                    I_ref (its current held there while a duty in [0, 1] can, at full voltage toward it
+ *                    otherwise: bc_plant.h), the third leg off. Not a controller for an MCU: the legs are no PWM
+ *                    pattern; it gives the torque of (26)-(33)'s premise on any motor.
  *  BC_SIXSTEP_HYST   m = 1 when i_reg < I_ref - band/2, m = m_lo when i_reg > I_ref + band/2, else the previous
  *                    (evaluated at the samples; band = total width, A).
  *  BC_SIXSTEP_PRED   predictive ("deadbeat"): the m that brings i_reg to I_ref at the sample after next:
@@ -137,6 +142,8 @@
 #define BC_SIXSTEP_HYST 1
 #define BC_SIXSTEP_PRED 2
 #define BC_SIXSTEP_DUTY 3 /* no current loop: m = |ref| (a duty in [0, 1], ref's sign the direction), as an ESC */
+#define BC_SIXSTEP_IDEAL 4 /* paper 1's ideal current limiter (a reference model for the averaged inverter, not an
+                              MCU's): the incoming phase's leg is BC_LEG_HOLD at sgn_x I_ref, the plant holds it */
 
 /* commutation angle source */
 #define BC_SIXSTEP_COMM_HALL 0    /* the Hall sensors (bc_hall_commutate) */
@@ -149,7 +156,7 @@
 #define BC_SIXSTEP_SYNC 3
 
 typedef struct {
-    int32_t reg;          /* BC_SIXSTEP_PI, _HYST, _PRED, _DUTY */
+    int32_t reg;          /* BC_SIXSTEP_PI, _HYST, _PRED, _DUTY, _IDEAL */
     int32_t chop;         /* BC_SIXSTEP_BIPOLAR, _HIGH, _PWMPWM, _SYNC */
     int32_t ref_torque;   /* 0: ref = current amplitude I (A); 1: ref = torque (N m), I = ref / k_e */
     int32_t delay;        /* samples between computing and applying an output, 0 or 1 (as the runner/DSP) */

@@ -32,6 +32,12 @@
 #define BC_LEG_PWM 1   /* complementary: upper on for duty d, lower on otherwise */
 #define BC_LEG_HIGH 2  /* upper switch chops with duty d, lower off */
 #define BC_LEG_LOW 3   /* lower switch chops with duty d, upper off */
+/* A plant idealisation, not hardware: paper 1's ideal current limiter. On the averaged inverter the leg's duty is set
+ * in continuous time so that its phase current stays at bc_ctrl_out.i_hold (A, signed; i_hold_at for leg_at), and at
+ * full drive (duty 0 or 1) toward it while it cannot be held; the leg's own duty is unused (1). At most one leg per
+ * command; the switching inverter treats it as off. Only reference models use it (SixStep regulation "ideal"); no
+ * controller for an MCU may. */
+#define BC_LEG_HOLD 4
 
 typedef struct {
     int32_t mode; /* BC_LEG_* */
@@ -84,6 +90,8 @@ typedef struct {
     uint32_t has_at;       /* 1: leg_at from t_at on */
     float t_at;            /* s after the start of the half period, in [0, T/2) (a later time is ignored) */
     bc_leg_cmd leg_at[3];  /* legs from t_at on */
+    float i_hold;          /* current a BC_LEG_HOLD leg of leg holds, A (plant idealisation; 0 otherwise) */
+    float i_hold_at;       /* ... of leg_at */
 } bc_ctrl_out;
 
 /* A controller slot: the runner calls step(params, state, in, out) once per sample. */

@@ -50,6 +50,15 @@
  * 1, dead time between such states, the open phase and the trip are those of the switching model. No gate edge
  * falls inside a half period, so steps are as long as h_max (half a PWM period) allows.
  *
+ * Ideal current limiter (BC_LEG_HOLD, averaged inverter, R_src = 0): paper 1's idealisation of a current controller
+ * infinitely faster than the commutation. Leg x is an always-connected PWM leg whose duty d follows the state: while
+ * holding, d = d*(y), the duty at which di_x/dt = 0 (di/dt is affine in d: di_x/dt = base_x + v_src c_x d, c_x =
+ * (1 - 1/n)/L over the n connected phases, so d* = -base_x / (v_src c_x), and its rate follows from the chain rule,
+ * d(d^*)/dt = -(d base_x/dt) / (v_src c_x)); i_x stays at the reference. While d* would leave [0, 1] (a watched event) the
+ * leg is free at full drive toward the reference (d = 1 below it, 0 above) until i_x reaches it again (an event),
+ * where it holds if d* is in [0, 1]. The terminal, i_dc and the power flows use d* (the trace's duty column shows
+ * it at the row start). A new reference or leg starts free.
+ *
  * Switching losses (an accounting on top of the ideal switches; the circuit above is unchanged). At each gate
  * edge of a switching leg, with i = i_x and v_bus the bus voltage at the edge:
  *
@@ -184,7 +193,7 @@ enum {
 
 #define BC_HALL_QUEUE 8
 #define BC_PLANT_FZ_N 16 /* Fourier shapes up to this many orders share one cos/sin recurrence for the three phases */
-#define BC_PLANT_NW 15 /* functions watched for sign changes inside a step (diodes, open phases, speed, trip) */
+#define BC_PLANT_NW 18 /* functions watched for sign changes inside a step (diodes, open phases, speed, trip, hold) */
 
 /* Faults the plant injects (bc_plant_params.fault): each active on [t_on, t_off). */
 #define BC_FAULT_MAX 4
@@ -267,6 +276,7 @@ typedef struct {
     double tau_cog;   /* cogging torque, N m */
     double tau_shaft; /* tau_e - B omega - tau_c sign(omega) - tau_fe: what a dynamometer holds, N m */
     double w_l;       /* magnetic energy (L/2) sum i^2, J */
+    double d_hold;    /* the hold leg's duty now (BC_LEG_HOLD), or 0 */
 } bc_plant_out;
 
 typedef struct {
@@ -291,6 +301,7 @@ typedef struct {
     double cs[3];                   /* {theta, cos, sin} for Fourier shapes (theta = HUGE_VAL: none) */
     double w[3];                    /* averaged legs with R_src: sum_y M_xy i_y */
     double vn, vbus, idc, tau, tau_cog, tau_net, tau_fe, t_fric, p_rsrc;
+    double dh;                      /* holding: the hold leg's duty d* (BC_LEG_HOLD) */
     double sgn;                     /* sign of the motion the Coulomb-like drags used (0: no drag) */
     int32_t n_conn;
 } bc_plant_aux;
@@ -346,6 +357,13 @@ typedef struct {
     double fr_l[3];         /* ... with the lower switch on */
     double fr_o[3];         /* ... with both off */
     int32_t hold_open;      /* bit x: phase x stays open until time advances (a spurious diode turn-on) */
+    int32_t hold_x;         /* BC_LEG_HOLD: the leg whose current is held (-1: none) */
+    double hold_i;          /* ... the current it holds, A */
+    int32_t hold_on;        /* 1: holding (d = d*(y)); 0: free at d = hold_d */
+    double hold_d;          /* free duty, 0 or 1 */
+    double tc_hcol[3];      /* holding: d(di/dt)/d(d) / v_src, 1/(H) */
+    double hold_req, hold_req_at; /* the currents the HOLD legs of the next commands hold (bc_plant_set_hold), A */
+    double at_hold;         /* ... of the scheduled change */
     int32_t sw_on;          /* 1 if any of E_on, E_off, E_rr is positive (set at init) */
     double sw_inv_vi;       /* 1 / (V_test I_test), 1/(V A) (0 without switching losses) */
     int32_t fe_on;          /* 1 if k_fe_e, k_fe_h or k_fe_x is positive (set at init) */
@@ -443,6 +461,10 @@ void bc_plant_set_half(const bc_plant_params *p, bc_plant_state *s, const bc_leg
  * cmd puts it at that instant; an averaged leg applies cmd's average). dt >= T/2: ignored (not in this half period);
  * dt <= now: at once. Call after bc_plant_set_half; a new half period cancels a change not yet due. */
 void bc_plant_schedule(const bc_plant_params *p, bc_plant_state *s, const bc_leg_cmd cmd[3], double dt);
+
+/* The currents the BC_LEG_HOLD leg of the next bc_plant_set_half (i_hold) and bc_plant_schedule (i_hold_at) holds,
+ * A (the ideal current limiter; bc_ctrl_out.i_hold, i_hold_at). */
+void bc_plant_set_hold(const bc_plant_params *p, bc_plant_state *s, double i_hold, double i_hold_at);
 
 /* Integrate to t_end (<= the end of the current half period), landing on every event. */
 void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end);

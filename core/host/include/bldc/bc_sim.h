@@ -61,7 +61,7 @@
     X(v_c, "V", "mean terminal voltage c")                                                          \
     X(v_n, "V", "mean star-point voltage")                                                          \
     X(i_dc, "A", "mean DC current")                                                                 \
-    X(mode_a, "-", "leg a mode applied (0 off, 1 pwm, 2 high, 3 low)")                              \
+    X(mode_a, "-", "leg a mode applied (0 off, 1 pwm, 2 high, 3 low, 4 hold)")                              \
     X(mode_b, "-", "leg b mode applied")                                                            \
     X(mode_c, "-", "leg c mode applied")                                                            \
     X(duty_a, "-", "leg a duty applied")                                                            \

@@ -43,11 +43,14 @@ from .efficiency import (
 )
 from .numeric import omega_qB_numeric_pu, omega_sB_numeric_pu
 from .premises import (
+    COMMUTATION_PERIODS_MIN,
     R_DROP_MAX,
     SHAPE_DEVIATION_MAX,
     SINUSOIDAL_THD_MAX,
     VDC_MISMATCH_MAX,
     applicability,
+    commutation_periods,
+    commutation_premise,
     harmonic_ratio,
     shape_deviation,
     sine_torque_pu,
@@ -90,6 +93,7 @@ from .table import CHARACTERISTIC_COLUMNS, TABLE1_ROWS, Table1, characteristic, 
 
 __all__ = [
     "CHARACTERISTIC_COLUMNS",
+    "COMMUTATION_PERIODS_MIN",
     "REGION_Q_HIGH",
     "REGION_Q_LOW",
     "REGION_Q_SAT",
@@ -108,6 +112,8 @@ __all__ = [
     "Table1",
     "applicability",
     "characteristic",
+    "commutation_periods",
+    "commutation_premise",
     "condition_18",
     "e_1",
     "e_N",

@@ -19,11 +19,14 @@ from .sine import (
 )
 
 __all__ = [
+    "COMMUTATION_PERIODS_MIN",
     "R_DROP_MAX",
     "SHAPE_DEVIATION_MAX",
     "SINUSOIDAL_THD_MAX",
     "VDC_MISMATCH_MAX",
     "applicability",
+    "commutation_periods",
+    "commutation_premise",
     "harmonic_ratio",
     "shape_deviation",
     "sine_torque_pu",
@@ -127,6 +130,62 @@ def sine_torque_pu(drive: Drive) -> float:
         a, b = s.fourier(1)
         k1 += math.hypot(float(a[1]), float(b[1]))
     return k1 / (2.0 * SQRT3 * drive.motor.k_phi)
+
+
+#: Fewest PWM periods a square-wave commutation may last for a sampled current controller to shape it: below about
+#: three the commutation spike is shorter than the controller's reaction (two samples with its computation delay),
+#: and the switching drive's ripple departs from (27)-(33) by several hundredths of T_N (a fan motor at one PWM period
+#: per commutation: 0.05-0.08 p.u.). :func:`commutation_premise` warns below it.
+COMMUTATION_PERIODS_MIN = 3.0
+
+
+def commutation_periods(drive: Drive, omega_pu: float) -> float:
+    """PWM periods the square wave's commutation lasts at a speed: ``f_pwm 3 L I_N / (V_dc (1 + W))``.
+
+    The time the outgoing phase's current takes to fall from ``I_N`` to zero through its diode (paper 1, IV.A; R
+    neglected): the first part of every commutation, at any speed ``W`` (per unit of ``Omega_0``).
+
+    Parameters
+    ----------
+    drive : Drive
+    omega_pu : float
+        Speed (per unit of ``Omega_0``), >= 0.
+
+    Returns
+    -------
+    float
+        PWM periods (-).
+    """
+    t_c = 3.0 * drive.motor.L * drive.motor.I_N / (drive.inverter.V_dc * (1.0 + omega_pu))
+    return t_c * drive.inverter.f_pwm
+
+
+def commutation_premise(drive: Drive) -> tuple[str, bool]:
+    """One line stating how many PWM periods the square-wave commutation lasts, and whether that is too few.
+
+    Paper 1's square-wave closed forms (26)-(33) assume an ideal current limiter, infinitely faster than the
+    commutation; a sampled controller approaches it only while a commutation spans several PWM periods
+    (:data:`COMMUTATION_PERIODS_MIN`). bldclab's ideal limiter (``SixStep(regulation="ideal")``, compare's averaged
+    column) holds the premise at any rate.
+
+    Returns
+    -------
+    tuple of (str, bool)
+        The line, and True when the commutation lasts fewer than :data:`COMMUTATION_PERIODS_MIN` periods at the
+        no-load speed.
+    """
+    n0, n1 = commutation_periods(drive, 0.0), commutation_periods(drive, 1.0)
+    line = (f"square-wave commutation lasts {n0:.3g} PWM periods at standstill, {n1:.3g} at Omega_0 "
+            f"(3 L I_N / (V_dc (1 + W)) at {drive.inverter.f_pwm:g} Hz)")
+    few = n1 < COMMUTATION_PERIODS_MIN
+    if few:
+        # n(W) = n0 / (1 + W) falls below the minimum above W = n0 / min - 1
+        w_lo = n0 / COMMUTATION_PERIODS_MIN - 1.0
+        where = "at every speed" if w_lo <= 0.0 else f"above {w_lo:.2f} Omega_0"
+        line += (f"; fewer than {COMMUTATION_PERIODS_MIN:g} {where}: there a sampled current controller cannot shape "
+                 "it and the switching drive's square-wave ripple departs from (27)-(33) (compare's averaged column, "
+                 "the ideal current limiter, keeps paper 1's premise)")
+    return line, few
 
 
 def applicability(drive: Drive) -> list[str]:
