@@ -331,7 +331,7 @@ static void test_fuzz(void)
     bc_sine_params base;
     sine_params(&base, &f);
     static const float special[] = {NAN, INFINITY, -INFINITY, 3e38f, -3e38f, 1e-38f, -1e-38f, 0.0f, 1e6f, -1e6f};
-    int bad_out = 0, n_sine = 0;
+    int bad_out = 0, n_sine = 0, n_rearm = 0;
     for (int variant = 0; variant < 8; ++variant) {
         bc_sine_params p = base;
         p.angle = variant & 1;
@@ -379,11 +379,28 @@ static void test_fuzz(void)
             }
             for (int j = 0; j < BC_DIAG_N; ++j) bad_out += !isfinite(out.diag[j]);
             n_sine += s.mode == BC_SINE_MODE_SINE;
-            if (s.guard.latched) (void)bc_sine_init(&p, &s);
+            if (s.guard.latched) {
+                /* re-arm the over-current trip with one valid sample, currents 0 (bc_guard.h), rather than
+                 * re-initialising: the test stays in bc_sine_step, and the re-arm path is exercised too */
+                bc_ctrl_in in0 = in;
+                for (int x = 0; x < 3; ++x) in0.i_abc[x] = 0.0f;
+                in0.i_mask = 3u;
+                in0.v_dc = 48.0f;
+                in0.hall = hall_code;
+                in0.n_edges = edges;
+                in0.tick_edge = tick_edge;
+                in0.theta_enc = 1.0f;
+                in0.ref = 10.0f;
+                in0.omega_ref = 10.0f;
+                bc_sine_step(&p, &s, &in0, &out);
+                n_rearm += 1;
+                CHECK(!s.guard.latched, "variant %d: re-armed by a valid sample", variant);
+            }
         }
     }
     CHECK(bad_out == 0, "every output finite, duties in [0, 1]: %d bad", bad_out);
     CHECK(n_sine > 1000, "the sine mode was exercised: %d samples", n_sine);
+    CHECK(n_rearm > 100, "the over-current trip was re-armed %d times", n_rearm);
 }
 
 /* Limits of the current reference, linear modulation, and the bumpless hand-off on a synthetic rotor. */
