@@ -331,7 +331,7 @@ static void test_fuzz(void)
     bc_sine_params base;
     sine_params(&base, &f);
     static const float special[] = {NAN, INFINITY, -INFINITY, 3e38f, -3e38f, 1e-38f, -1e-38f, 0.0f, 1e6f, -1e6f};
-    int bad_out = 0, n_sine = 0;
+    int bad_out = 0, n_sine = 0, n_rearm = 0;
     for (int variant = 0; variant < 8; ++variant) {
         bc_sine_params p = base;
         p.angle = variant & 1;
@@ -379,11 +379,29 @@ static void test_fuzz(void)
             }
             for (int j = 0; j < BC_DIAG_N; ++j) bad_out += !isfinite(out.diag[j]);
             n_sine += s.mode == BC_SINE_MODE_SINE;
-            if (s.guard.latched) (void)bc_sine_init(&p, &s);
+            if (s.guard.latched) {
+                /* re-arm the over-current trip with one valid sample, currents 0 (bc_guard.h), rather than
+                 * re-initialising: the test stays in bc_sine_step (bc_sine_init tabulates the speed limit, tens of
+                 * microseconds), and the re-arm path is exercised too */
+                bc_ctrl_in in0 = in;
+                for (int x = 0; x < 3; ++x) in0.i_abc[x] = 0.0f;
+                in0.i_mask = 3u;
+                in0.v_dc = 48.0f;
+                in0.hall = hall_code;
+                in0.n_edges = edges;
+                in0.tick_edge = tick_edge;
+                in0.theta_enc = 1.0f;
+                in0.ref = 10.0f;
+                in0.omega_ref = 10.0f;
+                bc_sine_step(&p, &s, &in0, &out);
+                n_rearm += 1;
+                CHECK(!s.guard.latched, "variant %d: re-armed by a valid sample", variant);
+            }
         }
     }
     CHECK(bad_out == 0, "every output finite, duties in [0, 1]: %d bad", bad_out);
     CHECK(n_sine > 1000, "the sine mode was exercised: %d samples", n_sine);
+    CHECK(n_rearm > 100, "the over-current trip was re-armed %d times", n_rearm);
 }
 
 /* Limits of the current reference, linear modulation, and the bumpless hand-off on a synthetic rotor. */
@@ -530,6 +548,263 @@ static void test_speed_limit_sinusoid(void)
             }
         }
     }
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* The speed limit's table (bc_sine.h, 5.) against the scan it tabulates, written here in double: v_req(omega_e, J)
+ * over the M grid angles with the margins (dev and dev_c sampled as bc_sine_init samples them), and the exact
+ * largest current by lines (hexagon: I <= (v_dc - m_e -+ e) / (m_g -+ s G) for every line with a positive slope;
+ * circle: the positive root of |E + s I G| = v_dc / sqrt(3) - m_c at every angle). */
+
+#define SCAN_M BC_SINE_LIM_N
+typedef struct {
+    int hex, p;
+    double R, L, i_s, dev, dev_c, k_e;
+    double k[3][SCAN_M], i[3][SCAN_M], di[3][SCAN_M]; /* line values at the grid angles */
+} scan;
+
+static double scan_pwl(const float *k, int n, double th)
+{
+    double u = th / (2.0 * BC_PI) * n;
+    u -= n * floor(u / n);
+    int j = (int)u;
+    if (j < 0) j = 0;
+    if (j > n - 1) j = n - 1; /* u rounded to n: the end of the last segment */
+    double fr = fmin(fmax(u - j, 0.0), 1.0);
+    int j1 = j + 1 < n ? j + 1 : 0;
+    return (double)k[j] + fr * ((double)k[j1] - (double)k[j]);
+}
+
+static void scan_line_k(const bc_sine_params *p, double th, double k[3])
+{
+    double kx[3];
+    for (int x = 0; x < 3; ++x) kx[x] = scan_pwl(p->emf_k[x], p->emf_n, th - x * 2.0 * BC_PI / 3.0);
+    for (int x = 0; x < 3; ++x) k[x] = kx[x] - kx[(x + 1) % 3];
+}
+
+static double scan_norm(const double k[3])
+{
+    double a = (k[0] - k[2]) / 3.0, b = k[1] / sqrt(3.0);
+    return sqrt(a * a + b * b);
+}
+
+static void scan_init(scan *sc, const bc_sine_params *p)
+{
+    sc->hex = p->limit == BC_SINE_LIMIT_HEX;
+    sc->p = p->p;
+    sc->R = p->R;
+    sc->L = p->L;
+    sc->i_s = p->i_s_max;
+    double kmax = 0.0, kmax_c = 0.0;
+    sc->dev = sc->dev_c = 0.0;
+    int n_sub = 2 * (p->emf_n / SCAN_M + 1);
+    for (int j = 0; j < SCAN_M; ++j) {
+        double th = 2.0 * BC_PI * j / SCAN_M, k0[3], k1[3], k[3];
+        scan_line_k(p, th, k0);
+        scan_line_k(p, 2.0 * BC_PI * ((j + 1) % SCAN_M) / SCAN_M, k1);
+        for (int x = 0; x < 3; ++x) {
+            int y = (x + 1) % 3;
+            sc->k[x][j] = k0[x];
+            sc->i[x][j] = sin(th - x * 2.0 * BC_PI / 3.0) - sin(th - y * 2.0 * BC_PI / 3.0);
+            sc->di[x][j] = cos(th - x * 2.0 * BC_PI / 3.0) - cos(th - y * 2.0 * BC_PI / 3.0);
+            kmax = fmax(kmax, fabs(k0[x]));
+        }
+        double n0 = scan_norm(k0), n1 = scan_norm(k1);
+        kmax_c = fmax(kmax_c, n0);
+        for (int q = 1; q < n_sub; ++q) {
+            double u = (double)q / n_sub;
+            scan_line_k(p, 2.0 * BC_PI * (j + u) / SCAN_M, k);
+            for (int x = 0; x < 3; ++x) sc->dev = fmax(sc->dev, fabs(k[x] - (k0[x] + u * (k1[x] - k0[x]))));
+            sc->dev_c = fmax(sc->dev_c, scan_norm(k) - (n0 + u * (n1 - n0)));
+        }
+    }
+    sc->k_e = sc->hex ? kmax + sc->dev : sqrt(3.0) * (kmax_c + sc->dev_c); /* v_req(omega_e, 0) = |omega_m| k_e */
+}
+
+/* v_req(omega_e, J) */
+static double scan_v(const scan *sc, double we, double J)
+{
+    double wm = we / sc->p, x_e = we * sc->L, best = 0.0;
+    for (int j = 0; j < SCAN_M; ++j) {
+        if (sc->hex) {
+            for (int x = 0; x < 3; ++x) {
+                best = fmax(best, fabs(wm * sc->k[x][j] + J * (sc->R * sc->i[x][j] + x_e * sc->di[x][j])));
+            }
+        } else {
+            double ea = wm * (sc->k[0][j] - sc->k[2][j]) / 3.0, eb = wm * sc->k[1][j] / sqrt(3.0);
+            double ga = (sc->R * (sc->i[0][j] - sc->i[2][j]) + x_e * (sc->di[0][j] - sc->di[2][j])) / 3.0;
+            double gb = (sc->R * sc->i[1][j] + x_e * sc->di[1][j]) / sqrt(3.0);
+            best = fmax(best, hypot(ea + J * ga, eb + J * gb));
+        }
+    }
+    if (sc->hex) {
+        return best + fabs(wm) * sc->dev + fabs(J) * (1.0 - cos(BC_PI / SCAN_M)) * sqrt(3.0) * hypot(sc->R, x_e);
+    }
+    return sqrt(3.0) * (best + fabs(wm) * sc->dev_c);
+}
+
+/* The exact min(i_s, I_s,sat) of the scan. */
+static double scan_limit(const scan *sc, double we, double v_dc, double sgn)
+{
+    double wm = we / sc->p, x_e = we * sc->L, best = sc->i_s;
+    if (!(scan_v(sc, we, 0.0) <= v_dc)) return 0.0;
+    if (sc->hex) {
+        double m_e = fabs(wm) * sc->dev, m_g = (1.0 - cos(BC_PI / SCAN_M)) * sqrt(3.0) * hypot(sc->R, x_e);
+        for (int j = 0; j < SCAN_M; ++j) {
+            for (int x = 0; x < 3; ++x) {
+                double e = wm * sc->k[x][j], g = sgn * (sc->R * sc->i[x][j] + x_e * sc->di[x][j]);
+                for (int side = -1; side <= 1; side += 2) {
+                    double slope = side * g + m_g;
+                    if (slope > 0.0) best = fmin(best, (v_dc - m_e - side * e) / slope);
+                }
+            }
+        }
+    } else {
+        double r = v_dc / sqrt(3.0) - fabs(wm) * sc->dev_c;
+        for (int j = 0; j < SCAN_M; ++j) {
+            double ea = wm * (sc->k[0][j] - sc->k[2][j]) / 3.0, eb = wm * sc->k[1][j] / sqrt(3.0);
+            double ga = sgn * (sc->R * (sc->i[0][j] - sc->i[2][j]) + x_e * (sc->di[0][j] - sc->di[2][j])) / 3.0;
+            double gb = sgn * (sc->R * sc->i[1][j] + x_e * sc->di[1][j]) / sqrt(3.0);
+            double gg = ga * ga + gb * gb, eg = ea * ga + eb * gb, ee = ea * ea + eb * eb;
+            if (gg > 0.0) best = fmin(best, (-eg + sqrt(fmax(eg * eg + gg * (r * r - ee), 0.0))) / gg);
+        }
+    }
+    return fmin(fmax(best, 0.0), sc->i_s);
+}
+
+/* At random speeds (both signs, up to 1.05 times the no-load speed w0 of the bus, two thirds of them near w0 where
+ * a small drop binds), buses from 0.3 to 2 V_dc and both torque signs, the table's limit I is
+ *   - never above the scan's: I <= I_scan(v_dc);
+ *   - at most tol I_s,N below it where the back-EMF alone needs at most 99.5 % of the bus. Nearer w0 the scan's
+ *     limit is steep in v_dc and speed, and it steps: braking, from 0 (the back-EMF alone above v_dc) to the current
+ *     that brings the voltage back down to v_dc; the table's rounding up moves that step by about 1e-4 of v_dc;
+ *   - everywhere at least the scan's on a bus btol lower: I >= I_scan((1 - btol) v_dc).
+ * Also every node of the table lies at or above v_req. Prints the worst shortfalls and the bus the table costs
+ * (the smallest d with I >= I_scan((1 - d) v_dc), by bisection); returns the first (fraction of I_s,N). */
+static double check_limit_table(const char *what, bc_sine_params *p, double tol, double btol)
+{
+    static bc_sine_state s;
+    static scan sc;
+    CHECK(bc_sine_init(p, &s) == BC_OK && s.lim_shape == 1, "%s: init with the table", what);
+    scan_init(&sc, p);
+    double node_low = 0.0, node_high = 0.0;
+    for (int n = 0; n <= BC_SINE_LIM_W; ++n) {
+        int nf = BC_SINE_LIM_WF, nc = BC_SINE_LIM_W / 2 - nf, k = n - BC_SINE_LIM_W / 2, ak = k < 0 ? -k : k;
+        double wt = (double)s.lim_w_top, w1 = (double)BC_SINE_LIM_W1 * wt;
+        double we = ak <= nf ? ak * w1 / nf : w1 + (ak - nf) * (wt - w1) / nc;
+        if (k < 0) we = -we;
+        for (int m = 0; m <= 2 * BC_SINE_LIM_J; ++m) {
+            double J = (m - BC_SINE_LIM_J) * (double)s.lim_h;
+            double stored = (double)s.lim_base[n] + (double)s.lim_q[n] * s.lim_tab[n][m];
+            node_low = fmax(node_low, scan_v(&sc, we, J) - stored);
+            node_high = fmax(node_high, stored - scan_v(&sc, we, J));
+        }
+    }
+    CHECK(node_low <= 0.0, "%s: every node at or above v_req (%.3g V below)", what, node_low);
+    double below = 0.0, above = 0.0, edge = 0.0, bus = 0.0;
+    int n_mid = 0, n_away = 0;
+    for (int k = 0; k < 4000; ++k) {
+        double v_dc = 48.0 * (0.3 + 1.7 * rnd());
+        double w0 = sc.p * v_dc / sc.k_e; /* the back-EMF alone needs v_dc */
+        double lo = k % 3 == 0 ? 0.0 : (k % 3 == 1 ? 0.75 : 0.97), hi = k % 3 == 0 ? 1.05 : 1.005;
+        double we = (rnd() < 0.5 ? -1.0 : 1.0) * (lo + (hi - lo) * rnd()) * w0, sgn = rnd() < 0.5 ? -1.0 : 1.0;
+        double tb = (double)bc_sine_i_limit(p, &s, (float)v_dc, (float)we, (float)sgn);
+        double ex = scan_limit(&sc, we, v_dc, sgn), short_i = (ex - tb) / sc.i_s;
+        above = fmax(above, -short_i);
+        if (scan_v(&sc, we, 0.0) <= 0.995 * v_dc) {
+            below = fmax(below, short_i);
+            n_away += 1;
+        } else {
+            edge = fmax(edge, short_i);
+        }
+        n_mid += tb > 0.0 && tb < sc.i_s;
+        CHECK(tb >= scan_limit(&sc, we, (1.0 - btol) * v_dc, sgn) - 1e-5 * sc.i_s,
+              "%s: at least the scan's limit on a bus %.1f %% lower (%.4f rad/s, %.3f V, sign %g: %.4f A)", what,
+              100.0 * btol, we, v_dc, sgn, tb);
+        if (short_i > 1e-4) { /* the bus the table costs here (below 1e-4 of I_s,N: a few 1e-5 of v_dc) */
+            double d_lo = 0.0, d_hi = btol;
+            for (int it = 0; it < 14; ++it) {
+                double d = 0.5 * (d_lo + d_hi);
+                if (tb >= scan_limit(&sc, we, (1.0 - d) * v_dc, sgn) - 1e-5 * sc.i_s) {
+                    d_hi = d;
+                } else {
+                    d_lo = d;
+                }
+            }
+            bus = fmax(bus, d_hi);
+        }
+    }
+    printf("speed limit table, %s: %.3f %% of I_s,N below the scan (%d samples; nearer w0 %.1f %%), %.1e above; "
+           "bus cost %.3f %%; nodes up to %.2g V above v_req\n", what, 100.0 * below, n_away, 100.0 * edge, above,
+           100.0 * bus, node_high);
+    CHECK(above <= 1e-5, "%s: never above the scan (%.2g of I_s,N)", what, above);
+    CHECK(below <= tol, "%s: %.3f %% of I_s,N below the scan (tolerance %.2f %%)", what, 100.0 * below, 100.0 * tol);
+    CHECK(n_mid > 100 && n_away > 1500, "%s: the limit binds in %d samples, %d away from w0", what, n_mid, n_away);
+    return below;
+}
+
+/* The table on a trapezoid (the htm-48v fixture), a sinusoid with a large drop and a table with even harmonics that
+ * differ between phases, with R = 0 and R > 0, both limits; and its answer to inputs no drive gives. */
+static void test_speed_limit_table(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    static bc_sine_params p;
+    static float tab[3][EMF_N];
+    double worst = 0.0;
+    for (int shape = 0; shape < 3; ++shape) {
+        sine_params(&p, &f); /* the trapezoid of the fixture in emf_tab */
+        if (shape > 0) {
+            for (int x = 0; x < 3; ++x) {
+                for (int j = 0; j < EMF_N; ++j) {
+                    double th = 2.0 * BC_PI * j / EMF_N;
+                    double k = shape == 1 ? sin(th)
+                                          : sin(th) + 0.15 * sin(3.0 * th) + 0.08 * cos(5.0 * th + 0.3 * x) +
+                                                0.05 * sin(2.0 * th + x);
+                    tab[x][j] = (float)((shape == 1 ? 0.33 : 0.3) * k);
+                }
+                p.emf_k[x] = tab[x];
+            }
+            p.L = 750e-6f; /* a drop comparable with the back-EMF */
+        }
+        for (int rr = 0; rr <= 1; ++rr) {
+            for (int lim = 0; lim <= 1; ++lim) {
+                char what[64];
+                p.R = rr ? 0.05f : 0.0f;
+                p.limit = lim ? BC_SINE_LIMIT_CIRCLE : BC_SINE_LIMIT_HEX;
+                static const char *const names[] = {"trapezoid", "sinusoid", "table"};
+                snprintf(what, sizeof what, "%s, R = %g, %s", names[shape], (double)p.R, lim ? "circle" : "hexagon");
+                worst = fmax(worst, check_limit_table(what, &p, 0.015, 0.01));
+            }
+        }
+    }
+    printf("speed limit table: worst %.3f %% of I_s,N below the scan\n", 100.0 * worst);
+
+    /* inputs no drive gives: 0 or a value in [0, i_s_max], never NaN */
+    static bc_sine_state s;
+    sine_params(&p, &f);
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    static const float bad_w[] = {NAN, INFINITY, -INFINITY, 3e38f, -3e38f, 1e6f, -1e6f};
+    for (unsigned k = 0; k < sizeof bad_w / sizeof bad_w[0]; ++k) {
+        CHECK(bc_sine_i_limit(&p, &s, 48.0f, bad_w[k], 1.0f) == 0.0f, "speed %g: 0", (double)bad_w[k]);
+    }
+    static const float bad_v[] = {NAN, -INFINITY, -48.0f, 0.0f, -1e-38f};
+    for (unsigned k = 0; k < sizeof bad_v / sizeof bad_v[0]; ++k) {
+        for (int w = -600; w <= 600; w += 300) {
+            CHECK(bc_sine_i_limit(&p, &s, bad_v[k], (float)w, -1.0f) == 0.0f, "v_dc %g at %d rad/s: 0",
+                  (double)bad_v[k], w);
+        }
+    }
+    float big = bc_sine_i_limit(&p, &s, INFINITY, 300.0f, 1.0f);
+    CHECK(big == p.i_s_max, "infinite bus: i_s_max (%g)", (double)big);
+    CHECK(bc_sine_i_limit(&p, &s, 48.0f, 0.0f, 1.0f) == p.i_s_max, "standstill: i_s_max");
+    p.speed_limit = 0;
+    CHECK(bc_sine_i_limit(&p, &s, NAN, NAN, 1.0f) == p.i_s_max, "no speed limit: i_s_max");
+    /* all-zero shape tables: no w_top, the closed form (23) */
+    static float zero[EMF_N];
+    sine_params(&p, &f);
+    for (int x = 0; x < 3; ++x) p.emf_k[x] = zero;
+    CHECK(bc_sine_init(&p, &s) == BC_OK && s.lim_shape == 0, "zero back-EMF: (23)");
 }
 
 /* Decoupling from the measured currents: two controllers in the same state, given currents that differ only in
@@ -742,6 +1017,7 @@ int main(void)
     test_decoupling_measured();
     test_flying_start();
     test_speed_limit_sinusoid();
+    test_speed_limit_table();
     test_closed_loop_imposed();
     test_closed_loop_start();
     return bc_test_summary("test_sine");

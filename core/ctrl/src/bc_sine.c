@@ -17,52 +17,273 @@ static float lim_norm(float ab, float bc, float ca)
     return sqrtf(a * a + b * b);
 }
 
-/* Tables of the shape-aware speed limit (bc_sine.h, 5.) at theta_j = 2 pi j / M: line-to-line back-EMF shape
- * k_xy, current i_xy of i_q = 1 A (i_x = sin(theta - x 2 pi/3)) and di_xy/dtheta. */
-static void lim_tables(const bc_sine_params *p, bc_sine_state *s)
+/* k(theta) of a table of n points uniform on [0, 2 pi), linear, periodic (table_k without fmodf, for bc_sine_init). */
+static float lim_pwl(const float *k, int32_t n, float theta)
 {
-    for (int32_t j = 0; j < BC_SINE_LIM_N; ++j) {
-        float th = (float)j * (BC_TWO_PI_F / (float)BC_SINE_LIM_N);
-        float k[3], ix[3], dix[3];
-        for (int x = 0; x < 3; ++x) {
-            float ph = th - (float)x * (BC_TWO_PI_F / 3.0f);
-            k[x] = table_k(p->emf_k[x], p->emf_n, ph);
-            ix[x] = sinf(ph);
-            dix[x] = cosf(ph);
-        }
-        for (int x = 0; x < 3; ++x) {
-            int y = (x + 1) % 3;
-            s->lim_k[x][j] = k[x] - k[y];
-            s->lim_i[x][j] = ix[x] - ix[y];
-            s->lim_di[x][j] = dix[x] - dix[y];
-        }
+    float u = theta * ((float)n / BC_TWO_PI_F);
+    u -= (float)n * floorf(u / (float)n);
+    int32_t j = (int32_t)u;
+    if (j < 0) j = 0;
+    if (j > n - 1) j = n - 1; /* u rounded to n: the end of the last segment */
+    float fr = bc_clampf(u - (float)j, 0.0f, 1.0f);
+    int32_t j1 = j + 1 < n ? j + 1 : 0;
+    return k[j] + fr * (k[j1] - k[j]);
+}
+
+/* Line values k_xy (pairs ab, bc, ca) of the back-EMF shape at the angle th. */
+static void lim_k(const bc_sine_params *p, float th, float k[3])
+{
+    float kx[3];
+    for (int x = 0; x < 3; ++x) kx[x] = lim_pwl(p->emf_k[x], p->emf_n, th - (float)x * (BC_TWO_PI_F / 3.0f));
+    for (int x = 0; x < 3; ++x) k[x] = kx[x] - kx[(x + 1) % 3];
+}
+
+/* Upper envelope of the M lines c_g + S_g J of one row of the hexagon's table, at the nodes J_m = (m - N_J) h,
+ * m = 0 .. 2 N_J: out[m] = max_g (c_g + S_g J_m), c_g = a K_g, S_g = sqrt(3) (R cos(phi_g) - x_e sin(phi_g)),
+ * phi_g = 2 pi g / M.
+ *
+ * S_g = -A cos(phi_g - phi_0) (A = sqrt(3) |R + j x_e|, phi_0 = pi - atan2(x_e, R)) grows with the distance of
+ * phi_g from phi_0, so the lines taken alternately from both sides of phi_0 (the nearer first) come in increasing
+ * slope, without sorting; the cosine follows each side by rotation (a relative error of about 1e-5 after M/2
+ * steps, covered by lim_table's pad). The convex hull trick keeps the lines of the envelope (the top line goes when
+ * the new one overtakes its predecessor no later than it does; of equal slopes, or unequal by rounding, the larger
+ * intercept stays), and the nodes, in increasing J, walk along them: O(M + N_J) per row instead of M (2 N_J + 1).
+ * Scratch: the slopes hs and groups hg of the hull's lines, M each. */
+static void lim_row_hex(const float *kk, float a, float R, float x_e, float h, float *out, float *hs, uint8_t *hg)
+{
+    enum { M = BC_SINE_LIM_N, NQ = 2 * BC_SINE_LIM_J + 1 };
+    const float d = BC_TWO_PI_F / (float)M, cd = cosf(d), sd = sinf(d);
+    float amp = BC_SQRT3_F * sqrtf(R * R + x_e * x_e);
+    if (!(amp > 0.0f)) { /* no drop (R = 0 at standstill): every slope is 0 */
+        float c = -3.0e38f;
+        for (int32_t g = 0; g < M; ++g) c = fmaxf(c, a * kk[g]);
+        for (int32_t m = 0; m < NQ; ++m) out[m] = c;
+        return;
     }
-    /* lim_dev: the largest deviation of a line shape k_xy above or below the chord between neighbouring grid
-     * angles (0 for a piecewise-linear shape whose corners are grid angles, (1 - cos(pi/M)) sqrt(3) k_1 for a
-     * sinusoid), sampled at every table spacing or finer */
-    int32_t n_sub = 2 * (p->emf_n / BC_SINE_LIM_N + 1);
-    float dev = 0.0f, dev_c = 0.0f;
-    for (int32_t j = 0; j < BC_SINE_LIM_N; ++j) {
-        int32_t j1 = (j + 1) % BC_SINE_LIM_N;
+    /* phi_0 at the grid position t: the left side starts at g_l = floor(t), the right one at g_l + 1 */
+    float t = (BC_PI_F - atan2f(x_e, R)) / d;
+    t -= (float)M * floorf(t / (float)M);
+    int32_t gl = (int32_t)t;
+    if (gl < 0 || gl >= M) gl = 0;
+    int32_t gr = gl + 1 < M ? gl + 1 : 0;
+    float fl = t - (float)gl; /* distances in steps: fl + i on the left, 1 - fl + i on the right */
+    float cl = cosf(fl * d), sl = sinf(fl * d), cr = cosf((1.0f - fl) * d), sr = sinf((1.0f - fl) * d);
+    int left = fl <= 0.5f;
+    int32_t size = 0;
+    for (int32_t r = 0; r < M; ++r) {
+        int32_t g;
+        float sg, c2;
+        if (left) {
+            g = gl;
+            sg = -amp * cl;
+            gl = gl > 0 ? gl - 1 : M - 1;
+            c2 = cl * cd - sl * sd; /* one step further from phi_0 */
+            sl = sl * cd + cl * sd;
+            cl = c2;
+        } else {
+            g = gr;
+            sg = -amp * cr;
+            gr = gr + 1 < M ? gr + 1 : 0;
+            c2 = cr * cd - sr * sd;
+            sr = sr * cd + cr * sd;
+            cr = c2;
+        }
+        left = !left;
+        float c = a * kk[g];
+        int skip = 0;
+        while (size > 0 && !(sg > hs[size - 1])) { /* equal slopes: the larger intercept stays */
+            if (c <= a * kk[hg[size - 1]]) {
+                skip = 1;
+                break;
+            }
+            --size;
+        }
+        if (skip) continue;
+        /* the top line b goes when the new line overtakes its predecessor q no later than b does:
+         * (c_q - c) / (S - S_q) <= (c_q - c_b) / (S_b - S_q) */
+        while (size >= 2) {
+            float cq = a * kk[hg[size - 2]], sq = hs[size - 2], cb = a * kk[hg[size - 1]], sb = hs[size - 1];
+            if (!((cq - c) * (sb - sq) <= (cq - cb) * (sg - sq))) break;
+            --size;
+        }
+        hs[size] = sg;
+        hg[size] = (uint8_t)g;
+        ++size;
+    }
+    int32_t k = 0;
+    float ck = a * kk[hg[0]];
+    for (int32_t m = 0; m < NQ; ++m) {
+        float J = (float)(m - BC_SINE_LIM_J) * h;
+        while (k + 1 < size) {
+            float c1 = a * kk[hg[k + 1]];
+            if (!(c1 + hs[k + 1] * J >= ck + hs[k] * J)) break;
+            ++k;
+            ck = c1;
+        }
+        out[m] = ck + hs[k] * J;
+    }
+}
+
+/* Speed of node n of the speed limit's table (bc_sine.h, 5.): k = n - N_W/2 cells from 0, N_F fine ones of
+ * w_1 / N_F up to w_1 = BC_SINE_LIM_W1 w_top, then N_W/2 - N_F coarse ones up to w_top. */
+static float lim_node_w(int32_t n, float w_top)
+{
+    const int32_t nf = BC_SINE_LIM_WF, nc = BC_SINE_LIM_W / 2 - BC_SINE_LIM_WF;
+    const float w1 = BC_SINE_LIM_W1 * w_top;
+    int32_t k = n - BC_SINE_LIM_W / 2, ak = k < 0 ? -k : k;
+    float w = ak <= nf ? (float)ak * (w1 / (float)nf) : w1 + (float)(ak - nf) * ((w_top - w1) / (float)nc);
+    return k < 0 ? -w : w;
+}
+
+/* Table of the shape-aware speed limit (bc_sine.h, 5.): v_req(omega_n, J_m) as b_n + q_n tab[n][m], rounded up.
+ *
+ * Hexagon: the line of the pair xy at theta_j is e + J G with e = omega_m k_xy(theta_j) and, since i_xy = sqrt(3)
+ * cos(phi) and di_xy/dtheta = -sqrt(3) sin(phi) with phi = theta_j - (2x + 1) pi/3, G = S(phi) = sqrt(3) (R cos(phi)
+ * - omega_e L sin(phi)); -(e + J G) has the slope S(phi + pi). The 6 M lines of the |.| thus fall into M groups
+ * of equal slope S_g = S(2 pi g / M), of which only the largest intercept counts:
+ *
+ *     v_req - m_e - |J| m_g = max_g (|omega_m| K_g + J S_g)     (omega_m >= 0; K_{g + M/2} for omega_m < 0)
+ *     K_g = max(k_xy(theta_j) of the lines e + J G of group g, -k_xy(theta_j) of the lines -(e + J G) of group g)
+ *
+ * K_g from one pass over the M angles, then each row's envelope by lim_row_hex. If K_{-g} = K_g (a shape symmetric
+ * about the zero of its fundamental: all but lu-4kw's), v_req(-omega_e, -J) = v_req(omega_e, J) (the substitution
+ * g -> M/2 - g), and the rows of omega_e < 0 are those of omega_e > 0 read backwards in J.
+ *
+ * Circle: |E_j + J G_j|^2 = |E_j|^2 + 2 J E_j.G_j + J^2 |R + j omega_e L|^2 (G_j = R u_j + omega_e L du_j/dtheta,
+ * u_j = (sin theta_j, -cos theta_j) the current's alpha-beta direction: |u_j| = |du_j/dtheta| = 1, orthogonal), so
+ * the largest over j is that of M lines in J, each evaluated at every node, then one square root.
+ *
+ * Stack: about 1.3 kB (Cortex-M4, -Os; M = 96, N_J = 24). */
+static void lim_table(const bc_sine_params *p, bc_sine_state *s)
+{
+    enum { M = BC_SINE_LIM_N, NJ = BC_SINE_LIM_J, NQ = 2 * BC_SINE_LIM_J + 1, NW = BC_SINE_LIM_W };
+    const int hex = p->limit == BC_SINE_LIMIT_HEX;
+    const float d = BC_TWO_PI_F / (float)M;
+    float scr[2][M]; /* hexagon: K_g and the hull's slopes; circle: k_alpha, k_beta at theta_j */
+    float row[NQ];   /* a row's maxima */
+    uint8_t hg[M];   /* hexagon: the hull's groups */
+    for (int32_t g = 0; g < M; ++g) scr[0][g] = -3.0e38f;
+
+    /* one pass over the grid angles: dev (the largest deviation of a line shape k_xy from the chord between
+     * neighbouring grid angles), dev_c (the excess of |k_alpha,beta| over the chord of its grid values), both sampled
+     * at every table spacing or finer; kmax, kmax_c (the largest |k_xy|, |k_alpha,beta| at the grid angles); K_g */
+    int32_t n_sub = 2 * (p->emf_n / M + 1);
+    float dev = 0.0f, dev_c = 0.0f, kmax = 0.0f, kmax_c = 0.0f;
+    float k0[3], k1[3], k[3];
+    lim_k(p, 0.0f, k0);
+    for (int32_t j = 0; j < M; ++j) {
+        lim_k(p, (float)((j + 1) % M) * d, k1);
+        float n0 = lim_norm(k0[0], k0[1], k0[2]), n1 = lim_norm(k1[0], k1[1], k1[2]);
+        kmax_c = fmaxf(kmax_c, n0);
         for (int32_t q = 1; q < n_sub; ++q) {
             float u = (float)q / (float)n_sub;
-            float th = ((float)j + u) * (BC_TWO_PI_F / (float)BC_SINE_LIM_N);
-            float k[3];
-            for (int x = 0; x < 3; ++x) k[x] = table_k(p->emf_k[x], p->emf_n, th - (float)x * (BC_TWO_PI_F / 3.0f));
+            lim_k(p, ((float)j + u) * d, k);
+            for (int x = 0; x < 3; ++x) dev = fmaxf(dev, fabsf(k[x] - (k0[x] + u * (k1[x] - k0[x]))));
+            dev_c = fmaxf(dev_c, lim_norm(k[0], k[1], k[2]) - (n0 + u * (n1 - n0)));
+        }
+        if (hex) {
             for (int x = 0; x < 3; ++x) {
-                float kxy = k[x] - k[(x + 1) % 3];
-                float chord = s->lim_k[x][j] + u * (s->lim_k[x][j1] - s->lim_k[x][j]);
-                dev = fmaxf(dev, fabsf(kxy - chord));
+                int32_t g = (j - (2 * x + 1) * (M / 6) + M) % M; /* e + J G in group g, -(e + J G) in g + M/2 */
+                int32_t g2 = (g + M / 2) % M;
+                kmax = fmaxf(kmax, fabsf(k0[x]));
+                scr[0][g] = fmaxf(scr[0][g], k0[x]);
+                scr[0][g2] = fmaxf(scr[0][g2], -k0[x]);
             }
-            /* circle: the length of the alpha-beta vector above the chord of the lengths */
-            float n0 = lim_norm(s->lim_k[0][j], s->lim_k[1][j], s->lim_k[2][j]);
-            float n1 = lim_norm(s->lim_k[0][j1], s->lim_k[1][j1], s->lim_k[2][j1]);
-            float nk = lim_norm(k[0] - k[1], k[1] - k[2], k[2] - k[0]);
-            dev_c = fmaxf(dev_c, nk - (n0 + u * (n1 - n0)));
+        } else {
+            scr[0][j] = (k0[0] - k0[2]) * (1.0f / 3.0f); /* alpha = (k_ab - k_ca) / 3, beta = k_bc / sqrt(3) */
+            scr[1][j] = k0[1] * BC_INV_SQRT3_F;
+        }
+        for (int x = 0; x < 3; ++x) k0[x] = k1[x];
+    }
+    /* v_req(omega_e, 0) = |omega_m| K_e; w_top = p v_max / K_e */
+    float k_e = hex ? kmax + dev : BC_SQRT3_F * (kmax_c + dev_c);
+    float w_top = (float)p->p * p->v_max / k_e;
+    float c_m = cosf(BC_PI_F / (float)M); /* a sinusoid's samples reach c_M of its peak */
+    if (!(k_e > 0.0f) || !isfinite(w_top)) return; /* no back-EMF: (23) with R */
+    float h = p->i_s_max / (float)NJ;
+
+    /* hexagon: K_{-g} = K_g to rounding makes the rows of omega_e < 0 mirror those of omega_e > 0; K_g then takes
+     * the larger of the two (never lower) */
+    int mirror = 0;
+    if (hex) {
+        float asym = 0.0f;
+        for (int32_t g = 1; g < M; ++g) asym = fmaxf(asym, fabsf(scr[0][g] - scr[0][M - g]));
+        mirror = asym <= 1e-6f * k_e;
+        if (mirror) {
+            for (int32_t g = 1; g < M / 2; ++g) scr[0][g] = scr[0][M - g] = fmaxf(scr[0][g], scr[0][M - g]);
         }
     }
-    s->lim_dev = dev;
-    s->lim_dev_c = dev_c;
+    for (int32_t n = mirror ? NW / 2 : 0; n <= NW; ++n) {
+        float we = lim_node_w(n, w_top), wm = we / (float)p->p, awm = fabsf(wm), x_e = we * p->L;
+        float zz = p->R * p->R + x_e * x_e;
+        if (hex) {
+            if (wm < 0.0f) { /* K_{g + M/2}: the halves swapped for the row, then back */
+                for (int32_t g = 0; g < M / 2; ++g) {
+                    float tmp = scr[0][g];
+                    scr[0][g] = scr[0][g + M / 2];
+                    scr[0][g + M / 2] = tmp;
+                }
+            }
+            lim_row_hex(scr[0], awm, p->R, x_e, h, row, scr[1], hg);
+            if (wm < 0.0f) {
+                for (int32_t g = 0; g < M / 2; ++g) {
+                    float tmp = scr[0][g];
+                    scr[0][g] = scr[0][g + M / 2];
+                    scr[0][g + M / 2] = tmp;
+                }
+            }
+        } else {
+            float sj = 0.0f, cj = 1.0f, cd = cosf(d), sd = sinf(d); /* sin, cos of theta_j by rotation */
+            for (int32_t m = 0; m < NQ; ++m) row[m] = -3.0e38f;
+            for (int32_t j = 0; j < M; ++j) {
+                float ea = wm * scr[0][j], eb = wm * scr[1][j];
+                float ga = p->R * sj + x_e * cj, gb = -p->R * cj + x_e * sj; /* G_j = R u_j + omega_e L du_j */
+                float c = ea * ea + eb * eb, sl = 2.0f * (ea * ga + eb * gb);  /* |E_j|^2 + J 2 E_j.G_j */
+                for (int32_t m = 0; m < NQ; ++m) {
+                    float v = c + (float)(m - NJ) * h * sl;
+                    row[m] = v > row[m] ? v : row[m]; /* finite values: no fmaxf call */
+                }
+                float c2 = cj * cd - sj * sd;
+                sj = sj * cd + cj * sd;
+                cj = c2;
+            }
+        }
+        float m_g = (1.0f - c_m) * BC_SQRT3_F * sqrtf(zz);
+        float v_lo = 3.0e38f, v_up = 0.0f;
+        for (int32_t m = 0; m < NQ; ++m) {
+            float J = (float)(m - NJ) * h;
+            if (hex) {
+                row[m] += awm * dev + fabsf(J) * m_g; /* + m_e + |J| m_g */
+            } else {
+                /* sqrt(3) (|E + J G| + m_c) */
+                row[m] = BC_SQRT3_F * (sqrtf(fmaxf(row[m] + J * J * zz, 0.0f)) + awm * dev_c);
+            }
+            row[m] = fmaxf(row[m], 0.0f);
+            v_lo = fminf(v_lo, row[m]);
+            v_up = fmaxf(v_up, row[m]);
+        }
+        /* rounding pad: the float sums (1e-6 of the largest value) and the rotations that follow cos(phi) (2e-5 of
+         * the drop sqrt(3) |R + j omega_e L| i_s_max); then counts of q_n above b_n, rounded up: the stored
+         * b_n + q_n tab lies between v_req + pad and v_req + pad + q_n */
+        float pad = 1e-6f * v_up + 2e-5f * BC_SQRT3_F * sqrtf(zz) * p->i_s_max;
+        float qn = fmaxf(v_up + pad - v_lo, 1e-30f) / 65000.0f, inv = 1.0f / qn;
+        for (int32_t m = 0; m < NQ; ++m) {
+            s->lim_tab[n][m] = (uint16_t)((uint32_t)fminf((row[m] + pad - v_lo) * inv, 65000.0f) + 1u);
+        }
+        s->lim_base[n] = v_lo;
+        s->lim_q[n] = qn;
+    }
+    if (mirror) {
+        for (int32_t n = 0; n < NW / 2; ++n) {
+            for (int32_t m = 0; m < NQ; ++m) s->lim_tab[n][m] = s->lim_tab[NW - n][NQ - 1 - m];
+            s->lim_base[n] = s->lim_base[NW - n];
+            s->lim_q[n] = s->lim_q[NW - n];
+        }
+    }
+    s->lim_w_top = w_top;
+    s->lim_inv_df = (float)BC_SINE_LIM_WF / (BC_SINE_LIM_W1 * w_top);
+    s->lim_inv_dc = (float)(NW / 2 - BC_SINE_LIM_WF) / ((1.0f - BC_SINE_LIM_W1) * w_top);
+    s->lim_h = h;
     s->lim_shape = 1;
 }
 
@@ -120,7 +341,7 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
                 if (!isfinite(p->emf_k[x][j])) return BC_ERR_PARAM;
             }
         }
-        lim_tables(p, s);
+        lim_table(p, s);
     }
     return BC_OK;
 }
@@ -187,55 +408,56 @@ static float i_sat(const bc_sine_params *p, float v_dc, float omega_e)
     return isfinite(i) ? i : p->i_s_max;
 }
 
-/* min(cap, I_s,sat) from the shape tables (bc_sine.h, 5.): the largest I in [0, cap] with the steady-state
- * voltage e + I G of currents of sign sgn within the linear range at every tabulated angle. */
-static float i_sat_shape(const bc_sine_params *p, const bc_sine_state *s, float v_dc, float omega_e, float sgn,
-                         float cap)
+/* V(i) of the speed limit (bc_sine.h, 5.): the table at column i interpolated along omega_e, V = b + c0 t0[i] +
+ * c1 t1[i]. */
+static float lim_v(const uint16_t *t0, const uint16_t *t1, float b, float c0, float c1, int32_t i)
 {
-    const float c_m = cosf(BC_PI_F / (float)BC_SINE_LIM_N); /* a sinusoid's samples reach c_M of its peak */
-    float wm = omega_e / (float)p->p;
-    float x_e = omega_e * p->L;
-    float r_g = sgn * p->R, x_g = sgn * x_e; /* G = s (R i_xy + omega_e L di_xy) */
-    /* margins for the peaks between grid points: the back-EMF's deviation above its chords, and that of the
-     * drop, a sinusoid of amplitude sqrt(3) |R + j omega_e L| I */
-    float m_e = fabsf(wm) * s->lim_dev;
-    float m_g = (1.0f - c_m) * BC_SQRT3_F * sqrtf(p->R * p->R + x_e * x_e);
-    float best = cap;
-    if (p->limit == BC_SINE_LIMIT_HEX) {
-        float lim = v_dc - m_e;
-        for (int x = 0; x < 3; ++x) {
-            const float *kk = s->lim_k[x], *ii = s->lim_i[x], *di = s->lim_di[x];
-            for (int32_t j = 0; j < BC_SINE_LIM_N; ++j) {
-                float e = wm * kk[j];
-                float g = r_g * ii[j] + x_g * di[j];
-                if (!(fabsf(e) <= lim)) return 0.0f; /* the back-EMF alone exceeds the limit (or NaN) */
-                float num = lim - (g >= 0.0f ? e : -e), den = fabsf(g) + m_g; /* I <= num / den */
-                if (num < best * den) best = num / den;
-            }
-        }
-    } else {
-        /* the drop of balanced sinusoidal currents is a vector of constant length: only the back-EMF's margin */
-        float r = v_dc * BC_INV_SQRT3_F - fabsf(wm) * s->lim_dev_c, r2 = r * r;
-        if (!(r > 0.0f)) return 0.0f;
-        for (int32_t j = 0; j < BC_SINE_LIM_N; ++j) {
-            /* alpha = (v_ab - v_ca) / 3, beta = v_bc / sqrt(3) */
-            float ea = wm * (s->lim_k[0][j] - s->lim_k[2][j]) * (1.0f / 3.0f);
-            float eb = wm * s->lim_k[1][j] * BC_INV_SQRT3_F;
-            float ga = (r_g * (s->lim_i[0][j] - s->lim_i[2][j]) + x_g * (s->lim_di[0][j] - s->lim_di[2][j])) *
-                       (1.0f / 3.0f);
-            float gb = (r_g * s->lim_i[1][j] + x_g * s->lim_di[1][j]) * BC_INV_SQRT3_F;
-            float ee = ea * ea + eb * eb;
-            if (!(ee <= r2)) return 0.0f;
-            float va = ea + best * ga, vb = eb + best * gb;
-            if (va * va + vb * vb > r2) {
-                /* |E + I G|^2 = r^2: I = (-E.G + sqrt((E.G)^2 + |G|^2 (r^2 - |E|^2))) / |G|^2 */
-                float gg = ga * ga + gb * gb, eg = ea * ga + eb * gb;
-                float i = (-eg + sqrtf(fmaxf(eg * eg + gg * (r2 - ee), 0.0f))) / gg;
-                best = isfinite(i) ? bc_clampf(i, 0.0f, best) : 0.0f;
-            }
+    return b + c0 * (float)t0[i] + c1 * (float)t1[i];
+}
+
+/* min(cap, I_s,sat) from the table (bc_sine.h, 5.): the largest I with V(s I) <= v_dc, linear between current
+ * nodes. Safe on any input: a NaN or out-of-range speed and a NaN or non-positive bus give 0. */
+static float i_sat_table(const bc_sine_state *s, float v_dc, float omega_e, float sgn, float cap)
+{
+    float aw = fabsf(omega_e), w1 = BC_SINE_LIM_W1 * s->lim_w_top;
+    if (!(aw < s->lim_w_top)) return 0.0f; /* |omega_e| >= w_top (or NaN): the back-EMF alone exceeds v_max */
+    /* the position among the nodes: the fine cells up to w_1, the coarse ones above */
+    float pos = aw < w1 ? aw * s->lim_inv_df : (float)BC_SINE_LIM_WF + (aw - w1) * s->lim_inv_dc;
+    float u = (float)(BC_SINE_LIM_W / 2) + (omega_e < 0.0f ? -pos : pos);
+    int32_t n = (int32_t)u;
+    if (n < 0) n = 0;
+    if (n > BC_SINE_LIM_W - 1) n = BC_SINE_LIM_W - 1;
+    float a = bc_clampf(u - (float)n, 0.0f, 1.0f);
+    const uint16_t *t0 = &s->lim_tab[n][BC_SINE_LIM_J], *t1 = &s->lim_tab[n + 1][BC_SINE_LIM_J];
+    /* V = (1 - a) (b_n + q_n t0) + a (b_n+1 + q_n+1 t1) */
+    float b = (1.0f - a) * s->lim_base[n] + a * s->lim_base[n + 1];
+    float c0 = (1.0f - a) * s->lim_q[n], c1 = a * s->lim_q[n + 1];
+    int32_t d = sgn < 0.0f ? -1 : 1; /* the side of the torque's sign */
+    float v_lo = lim_v(t0, t1, b, c0, c1, 0);
+    if (!(v_lo <= v_dc)) return 0.0f; /* the back-EMF alone exceeds v_dc (or v_dc is NaN) */
+    float v_hi = lim_v(t0, t1, b, c0, c1, d * BC_SINE_LIM_J);
+    if (v_hi <= v_dc) return cap;
+    int32_t lo = 0, hi = BC_SINE_LIM_J; /* V(lo) <= v_dc < V(hi) */
+    while (hi - lo > 1) {
+        int32_t mid = (lo + hi) / 2;
+        float v = lim_v(t0, t1, b, c0, c1, d * mid);
+        if (v <= v_dc) {
+            lo = mid;
+            v_lo = v;
+        } else {
+            hi = mid;
+            v_hi = v;
         }
     }
-    return isfinite(best) ? bc_clampf(best, 0.0f, cap) : 0.0f;
+    float i = s->lim_h * ((float)lo + (v_dc - v_lo) / (v_hi - v_lo)); /* I = h (m + (v_dc - V(m)) / (V(m+1) - V(m))) */
+    return bc_clampf(i, 0.0f, cap);
+}
+
+float bc_sine_i_limit(const bc_sine_params *p, const bc_sine_state *s, float v_dc, float omega_e, float sgn)
+{
+    if (!p->speed_limit) return p->i_s_max;
+    if (s->lim_shape) return i_sat_table(s, v_dc, omega_e, sgn, p->i_s_max);
+    return bc_clampf(i_sat(p, v_dc, omega_e), 0.0f, p->i_s_max);
 }
 
 /* Enter the start mode: the square-wave controller starts afresh, the d,q integrators are cleared (the hand-off
@@ -332,12 +554,8 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     out->diag[7] = (float)s->mode;
     if (s->mode == BC_SINE_MODE_START) return;
 
-    /* 5. current references (45), (8), I_s,sat from the shape tables or (23) with R */
-    float i_lim = p->i_s_max;
-    if (p->speed_limit) {
-        i_lim = s->lim_shape ? i_sat_shape(p, s, v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f, i_lim)
-                             : fminf(i_lim, i_sat(p, v_dc, omega_e));
-    }
+    /* 5. current references (45), (8), I_s,sat from the table or (23) with R */
+    float i_lim = bc_sine_i_limit(p, s, v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f);
     float iq_ref = bc_clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
     float id_ref = 0.0f;
     if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, 1.5f * p->k_1 * iq_ref);

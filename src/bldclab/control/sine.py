@@ -92,8 +92,10 @@ class Sine(Control):
     speed_limit : bool
         Reduce the current amplitude above the base speed to the largest whose steady-state voltage
         ``R i + L di/dt + e`` stays in the linear range over the whole period, from the drive's back-EMF shapes
-        (tabulated at 96 angles by the C controller; (23) with R on the ideal trapezoid). Off: the current stays at
-        the reference and the voltage limit does the rest (for measuring the base speed).
+        (paper 1's (23) with R on the ideal trapezoid). The C controller computes, at init, the voltage this current
+        needs from 96 angles of the shapes on a grid of speeds and currents, and each sample interpolates it
+        (never above the 96-angle scan; ``docs/sine.md``, section 4). Off: the current stays at the reference and
+        the voltage limit does the rest (for measuring the base speed).
     decoupling : bool
         Add the R-L voltages ``R i_ref + omega_e L J i`` to the PI outputs, the rotational part from the *measured*
         currents: it cancels the d,q cross-coupling of the motor, so each PI sees ``R + s L`` at any speed. Off, a

@@ -40,26 +40,86 @@
  *
  *     I_s,sat is the largest amplitude I >= 0 of balanced currents i_x = s I sin(theta - x 2 pi/3) (s = sign of
  *     tau; in phase with the fundamental, i_q = s I) whose steady-state voltage stays within the linear range at
- *     every angle of the period:
+ *     every angle of the period. With J = s I, the signed current:
  *
- *         v_xy(theta) = omega_m k_xy(theta) + s I (R i_xy(theta) + omega_e L di_xy/dtheta(theta))
- *                     = e_xy(theta) + I G_xy(theta)         (pairs ab, bc, ca; i_xy, di_xy of i_q = 1 A)
+ *         v_xy(theta) = omega_m k_xy(theta) + J (R i_xy(theta) + omega_e L di_xy/dtheta(theta))
+ *                     = e_xy(theta) + J G_xy(theta)         (pairs ab, bc, ca; i_xy, di_xy of i_q = 1 A)
  *
- *         BC_SINE_LIMIT_HEX:     |e_xy + I G_xy| + m_e + m_g I <= v_dc  at every theta_j and pair:
- *                                I <= (v_dc - m_e - sign(G_xy) e_xy) / (|G_xy| + m_g)
- *         BC_SINE_LIMIT_CIRCLE:  |E + I G| <= r = v_dc / sqrt(3) - m_c at every theta_j (alpha-beta vectors, from
- *                                the line values: alpha = (v_ab - v_ca)/3, beta = v_bc/sqrt(3)): the positive
- *                                root of |E|^2 + 2 I E.G + I^2 |G|^2 = r^2
+ *     The voltage this needs, from the grid theta_j = 2 pi j / M (M = BC_SINE_LIM_N; k_xy from the emf_k tables,
+ *     i_xy and di_xy/dtheta exact) and margins for the peaks between grid angles:
  *
- *     on the grid theta_j = 2 pi j / M, M = BC_SINE_LIM_N (k_xy from the emf_k tables, i_xy and di_xy/dtheta
- *     exact, all tabulated by bc_sine_init; each step costs 3 M multiply-adds, a division only where the bound
- *     tightens). Margins cover peaks between grid angles: m_e = |omega_m| lim_dev (lim_dev, from bc_sine_init, the
- *     largest deviation of k_xy from its chords between grid angles: 0 for a piecewise-linear shape whose corners
- *     are grid angles, (1 - cos(pi/M)) sqrt(3) k_1 for a sinusoid), m_g = (1 - cos(pi/M)) sqrt(3) |R + j omega_e L|
- *     (the drop is a sinusoid); on the circle m_c = |omega_m| lim_dev_c (the excess of |k_alpha,beta| over the
- *     chords of its grid values; the drop's vector has a constant length). If the back-EMF alone
- *     exceeds the limit somewhere on the grid, I_s,sat = 0. For sinusoidal shapes (R = 0, HEX) this is
- *     sqrt(3) |omega_m k_1 + j omega_e L I| <= v_dc: the back-EMF and the inductive drop add in quadrature.
+ *         BC_SINE_LIMIT_HEX:     v_req(omega_e, J) = max_{j,xy} |e_xy(theta_j) + J G_xy(theta_j)| + m_e + |J| m_g
+ *         BC_SINE_LIMIT_CIRCLE:  v_req(omega_e, J) = sqrt(3) (max_j |E_j + J G_j| + m_c)   (alpha-beta vectors
+ *                                of the line values: alpha = (v_ab - v_ca)/3, beta = v_bc/sqrt(3))
+ *
+ *         m_e = |omega_m| dev    dev: the largest deviation of k_xy from its chords between grid angles (0 for a
+ *                                piecewise-linear shape whose corners are grid angles, e.g. the ideal trapezoid;
+ *                                (1 - cos(pi/M)) sqrt(3) k_1 for a sinusoid), sampled at the tables' spacing or finer
+ *         m_g = (1 - cos(pi/M)) sqrt(3) |R + j omega_e L|   (the drop is a sinusoid of amplitude sqrt(3) |R + j
+ *                                omega_e L| |J|)
+ *         m_c = |omega_m| dev_c  dev_c: the excess of |k_alpha,beta| over the chords of its grid values (the drop's
+ *                                vector has a constant length)
+ *
+ *         I_s,sat = 0                                          if v_req(omega_e, 0) > v_dc (the back-EMF alone)
+ *         I_s,sat = max {I in [0, i_s_max] : v_req(omega_e, s I) <= v_dc}   otherwise
+ *
+ *     v_req is convex in J, so the currents that fit form an interval that contains 0. For sinusoidal shapes (R = 0,
+ *     HEX) this is sqrt(3) |omega_m k_1 + j omega_e L I| <= v_dc: the back-EMF and the inductive drop add in
+ *     quadrature.
+ *
+ *     v_req is tabulated by bc_sine_init, not scanned at every step. It is convex in omega_e at fixed J (|.| of
+ *     functions affine in omega_e, |omega_m|, |R + j omega_e L|) and convex in J at fixed omega_e, so its bilinear
+ *     interpolation between nodes over-estimates it (along omega_e on each of the two J nodes, then along J): the
+ *     table's I_s,sat is never above the scan's. Nodes, N_W = BC_SINE_LIM_W speed cells (omega_e = 0 is a node) and
+ *     N_J = BC_SINE_LIM_J current cells per sign:
+ *
+ *         omega_n, n = 0 .. N_W: N_F = BC_SINE_LIM_WF cells of w_1 / N_F on each side of 0 up to w_1 =
+ *                     BC_SINE_LIM_W1 w_top, then N_W/2 - N_F cells of (w_top - w_1) / (N_W/2 - N_F) up to w_top
+ *                     (the resistive drop's share of the voltage, which bends v_req in omega_e, changes fastest at
+ *                     low speed)
+ *         w_top = p v_max / K_e       v_req(omega_e, 0) = |omega_m| K_e (hexagon: K_e = max |k_xy(theta_j)| + dev;
+ *                                     circle: sqrt(3) (max |k_alpha,beta(theta_j)| + dev_c)): beyond w_top the
+ *                                     back-EMF alone needs more than v_max >= v_dc, and I_s,sat = 0
+ *         J_m = m h,                  m = -N_J .. N_J,  h = i_s_max / N_J
+ *         tab[n][m] = floor((v_req(omega_n, J_m) + pad_n - b_n) / q_n) + 1   (uint16, rounded up)
+ *                     b_n = min_m v_req(omega_n, J_m), q_n = (max_m v_req + pad_n - b_n) / 65000, pad_n = 1e-6
+ *                     max_m v_req + 2e-5 sqrt(3) |R + j omega_n L| i_s_max (covers the float rounding of the
+ *                     computation): b_n + q_n tab[n][m] lies between v_req + pad_n and v_req + pad_n + q_n
+ *
+ *     The node values come from the M grid angles in O(M) per row, not M (2 N_J + 1). Hexagon: since i_xy =
+ *     sqrt(3) cos(phi) and di_xy/dtheta = -sqrt(3) sin(phi), phi = theta_j - (2x + 1) pi/3, the line of a pair at
+ *     an angle has the slope S(phi) = sqrt(3) (R cos(phi) - omega_e L sin(phi)) in J, and -(e + J G) has S(phi +
+ *     pi): the 6 M lines of the |.| fall into M groups of equal slope S_g = S(2 pi g / M), whose largest intercept
+ *     alone counts,
+ *
+ *         max_{j,xy} |e_xy + J G_xy| = max_g (|omega_m| K_g + J S_g)     (omega_m >= 0; K_{g + M/2} if < 0)
+ *         K_g = the largest k_xy(theta_j) of the lines of group g, -k_xy(theta_j) of their negatives
+ *
+ *     S_g = -sqrt(3) |R + j omega_e L| cos(phi_g - phi_0) grows with the distance of phi_g from phi_0 = pi -
+ *     atan2(omega_e L, R): the groups taken alternately from both sides of phi_0 come in increasing slope, and the
+ *     convex hull trick gives the upper envelope at the J nodes. If K_{-g} = K_g (shapes symmetric about the zero
+ *     of their fundamental), v_req(-omega_e, -J) = v_req(omega_e, J) and the rows of omega_e < 0 are copies.
+ *     Circle: |E_j + J G_j|^2 = |E_j|^2 + 2 J E_j.G_j + J^2 |R + j omega_e L|^2 at every angle (|G_j| is constant),
+ *     the largest of M lines in J at every node (M (2 N_J + 1) multiply-adds a row), then one square root.
+ *     bc_sine_init thus costs 0.3 to 0.7 million host instructions with the hexagon (the fewer for a symmetric
+ *     shape and 12-point tables: the margins' deviations are sampled at the tables' spacing), 2 million with the
+ *     circle, and about 1.3 kB of stack (Cortex-M4, -Os).
+ *
+ *     Each step (s: the sign of tau):
+ *
+ *         the cell n of |omega_e| (fine below w_1, coarse above; |omega_e| >= w_top or NaN: I_s,sat = 0), and a in
+ *         [0, 1] its position in the cell
+ *         V(m) = (1 - a) (b_n + q_n tab[n][N_J + s m]) + a (b_n+1 + q_n+1 tab[n+1][N_J + s m]),  m = 0 .. N_J
+ *         V(0) > v_dc (or v_dc NaN): I_s,sat = 0;  V(N_J) <= v_dc: I_s,sat = i_s_max
+ *         otherwise the m with V(m) <= v_dc < V(m+1) (bisection, log2 N_J probes) and
+ *         I_s,sat = h (m + (v_dc - V(m)) / (V(m+1) - V(m)))
+ *
+ *     Against the scan (tested in core/tests/test_sine.c and tests/test_sine.py, measured by
+ *     benchmarks/sine_limit.py; docs/sine.md, section 4): never above it. Below it by at most 0.75 % of I_s,N on the
+ *     catalog drives (measured 0.5 %), 1.5 % on the C test's harsher shapes and 3 % on random Fourier shapes where
+ *     the back-EMF alone needs at most 99.5 % of the bus (nearer the no-load speed the scan's limit is steep in v_dc
+ *     and, braking, steps); everywhere at least the scan's limit of a bus 0.1 % lower on the catalog drives (1 % and
+ *     1.5 % on the others).
  *     Without shape tables (an emf_k pointer is null) the closed form of the ideal 120-degree trapezoid is used
  *     (paper 1 (23) with R):
  *
@@ -69,8 +129,9 @@
  *
  *     the peak line-to-line voltage of balanced currents of peak I is then at most 2 k_phi |omega_m| + g I (for
  *     the trapezoid the back-EMF and the drop add linearly: the drop peaks inside the flat top when (18) holds).
- *     On the trapezoid the tables give the same I_s,sat up to the margin m_g; on other shapes (23) is wrong:
- *     for a sinusoid it adds what adds in quadrature and lowers the current well below the base speed.
+ *     On the trapezoid the table gives the same I_s,sat up to its tolerance; on other shapes (23) is wrong:
+ *     for a sinusoid it adds what adds in quadrature and lowers the current well below the base speed. (23) is
+ *     also used when the shape tables are all zero (no w_top).
  *  6. Current PIs (bc_pi), output first:
  *
  *         u_d = k_p e_d + x_d + ff_d,   e_d = i_d,ref - i_d,   ff_d = R i_d,ref - omega_e L i_q   (decouple)
@@ -143,7 +204,12 @@
 #define BC_SINE_MODE_SINE 1
 
 #define BC_SINE_EMF_N_MAX 4096 /* largest back-EMF table */
-#define BC_SINE_LIM_N 96       /* angles per electrical period of the shape-aware speed limit (multiple of 12) */
+#define BC_SINE_LIM_N 96 /* angles per electrical period the speed limit's table is computed from (multiple of 12,
+                             at most 252) */
+#define BC_SINE_LIM_W 32    /* speed cells of the speed limit's table over [-w_top, w_top] (even) */
+#define BC_SINE_LIM_WF 10   /* of the N_W/2 cells of each side, the fine ones over [0, w_1] */
+#define BC_SINE_LIM_W1 0.3f /* w_1 / w_top */
+#define BC_SINE_LIM_J 24 /* current cells per torque sign of the speed limit's table over [0, i_s_max] */
 
 typedef struct {
     /* the controller's motor model */
@@ -156,7 +222,8 @@ typedef struct {
     float ts;       /* sampling period, s (> 0): half the PWM period */
     float kp;       /* d,q PI proportional gain, V/A (>= 0) */
     float ki;       /* d,q PI integral gain, V/(A s) (>= 0) */
-    float v_max;    /* bound of the d,q PI integrators and largest plausible DC-bus measurement, V (> 0) */
+    float v_max;    /* bound of the d,q PI integrators and largest plausible DC-bus measurement, V (> 0); sets
+                       the speed range of the speed limit's table (5.) */
     float i_s_max;  /* I_s,N: limit of |i_q,ref|, A (> 0) */
     float i_max;    /* over-current trip, A (> 0) */
     int32_t speed_limit; /* 1: |i_q,ref| <= I_s,sat above base speed (from the shape tables if given, else (23)
@@ -205,19 +272,25 @@ typedef struct {
     bc_guard_state guard;    /* input guard: the over-current latch (bc_guard.h) */
     int32_t six_run; /* start mode: the square-wave controller runs (0: coasting, flying_start) */
     int32_t n_quiet; /* samples since the last Hall edge while coasting */
-    /* shape-aware speed limit (5.), filled by bc_sine_init: line-to-line values (pairs ab, bc, ca) at the angles
-     * theta_j = 2 pi j / BC_SINE_LIM_N of the back-EMF shape k_xy, the current i_xy of i_q = 1 A and its
-     * derivative di_xy/dtheta */
-    int32_t lim_shape; /* 1: the tables below are used; 0: (23) with R */
-    float lim_dev;     /* largest deviation of k_xy from its chords between grid angles, V s/rad */
-    float lim_dev_c;   /* largest excess of |k_alpha,beta| over the chord of its grid values, V s/rad */
-    float lim_k[3][BC_SINE_LIM_N];
-    float lim_i[3][BC_SINE_LIM_N];
-    float lim_di[3][BC_SINE_LIM_N];
+    /* shape-aware speed limit (5.), filled by bc_sine_init */
+    int32_t lim_shape; /* 1: the table below is used; 0: (23) with R */
+    float lim_w_top;   /* w_top: the table spans |omega_e| < w_top, electrical rad/s */
+    float lim_inv_df;  /* fine cells per rad/s (below w_1) */
+    float lim_inv_dc;  /* coarse cells per rad/s (above w_1) */
+    float lim_h;       /* current node spacing h = i_s_max / BC_SINE_LIM_J, A */
+    float lim_base[BC_SINE_LIM_W + 1]; /* b_n: the smallest v_req of row n, V */
+    float lim_q[BC_SINE_LIM_W + 1];    /* q_n: volts per count of row n, V */
+    uint16_t lim_tab[BC_SINE_LIM_W + 1][2 * BC_SINE_LIM_J + 1]; /* v_req(omega_n, J_m) ~ b_n + q_n tab (rounded
+                                                                    up); column BC_SINE_LIM_J + m is J_m */
 } bc_sine_state;
 
 /* Validate the parameters (BC_ERR_PARAM) and reset the state: start mode, integrators 0, trip cleared. */
 int bc_sine_init(const bc_sine_params *p, bc_sine_state *s);
+
+/* The current limit of step 5: min(i_s_max, I_s,sat) for the electrical speed omega_e (rad/s), the bus v_dc (V) and
+ * the torque's sign sgn (< 0: negative), from the table (or (23) with R without shape tables); i_s_max with
+ * speed_limit = 0. Any input (NaN, inf, v_dc <= 0) gives a value in [0, i_s_max]. For diagnostics and tests. */
+float bc_sine_i_limit(const bc_sine_params *p, const bc_sine_state *s, float v_dc, float omega_e, float sgn);
 
 /* One sample: measurements in, leg commands for the next half period and diagnostics out. */
 void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *in, bc_ctrl_out *out);
