@@ -93,7 +93,7 @@ static void test_init(void)
     bad[n].q = params(BC_SIXSTEP_PRED, BC_SIXSTEP_PWMPWM); \
     bad[n].q.field = value;                  \
     ++n
-    BAD(reg, 4);
+    BAD(reg, BC_SIXSTEP_IDEAL + 1);
     BAD(timed, 2);
     BAD(comm, 2);
     BAD(adv_angle, -0.1f);
@@ -177,6 +177,37 @@ static void test_commutation_table(void)
     bc_sixstep_step(&p, &s, &in, &o);
     CHECK_NEAR(o.diag[1], 12.0f, 1e-6, "mask a, c");
     CHECK_NEAR(o.diag[7], 28.0f, 1e-6, "reconstructed b");
+}
+
+/* BC_SIXSTEP_IDEAL: the continuing phase fully on, the incoming phase HOLD at +-I_ref (i_hold), the third off; every
+ * duty in [0, 1] (the held current travels in i_hold, not in a duty). */
+static void test_ideal_legs(void)
+{
+    static const int pos_t[6] = {0, 0, 1, 1, 2, 2}, neg_t[6] = {1, 2, 2, 0, 0, 1};
+    static const int inc_fwd[6] = {0, 2, 1, 0, 2, 1};
+    bc_sixstep_params p = params(BC_SIXSTEP_IDEAL, BC_SIXSTEP_PWMPWM);
+    bc_sixstep_state s;
+    bc_ctrl_out o;
+    CHECK(bc_sixstep_init(&p, &s) == BC_OK, "init ideal");
+    for (int k = 0; k < 13; ++k) {
+        int sec = k % 6;
+        bc_ctrl_in in = input(bc_sector_code(sec), 0.0f, 0.0f, 48.0f, 30.0f);
+        in.n_edges = (uint32_t)k;
+        bc_sixstep_step(&p, &s, &in, &o);
+        int pos = pos_t[sec], neg = neg_t[sec], third = 3 - pos - neg;
+        int inc = k == 0 ? pos : inc_fwd[sec];
+        int cont = inc == pos ? neg : pos;
+        CHECK(o.leg[inc].mode == BC_LEG_HOLD && o.i_hold == (inc == pos ? 30.0f : -30.0f),
+              "sector %d: incoming %d held at %g A", sec, inc, (double)o.i_hold);
+        CHECK(o.leg[cont].mode == (cont == pos ? BC_LEG_HIGH : BC_LEG_LOW) && o.leg[cont].duty == 1.0f &&
+                  o.leg[third].mode == BC_LEG_OFF,
+              "sector %d: continuing fully on, third off", sec);
+        for (int x = 0; x < 3; ++x) CHECK(o.leg[x].duty >= 0.0f && o.leg[x].duty <= 1.0f, "duty in [0, 1]");
+    }
+    /* an invalid input: all legs off, nothing held */
+    bc_ctrl_in bad = input(0u, 0.0f, 0.0f, 48.0f, 30.0f);
+    bc_sixstep_step(&p, &s, &bad, &o);
+    CHECK(all_off(&o) && (o.flags & BC_FLAG_SAFE), "safe state");
 }
 
 static void test_safe_states(void)
@@ -802,6 +833,7 @@ static void test_timed_commutation(void)
 
 int main(void)
 {
+    test_ideal_legs();
     test_init();
     test_commutation_table();
     test_safe_states();
