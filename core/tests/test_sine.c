@@ -149,6 +149,22 @@ static void test_transforms(void)
     }
     CHECK_NEAR(bc_wrap_2pi(-0.5f), 2.0 * BC_PI - 0.5, 1e-5, "wrap negative");
     CHECK(bc_wrap_2pi(NAN) == 0.0f && bc_wrap_2pi(INFINITY) == 0.0f, "wrap non-finite");
+    {
+        /* the fast path (within a turn of the range) gives fmodf's result: every 31st float in [-20, 20], and
+         * large angles */
+        long differ = 0;
+        for (float x = -20.0f; x <= 20.0f;) {
+            float ref = fmodf(x, BC_TWO_PI_F);
+            if (ref < 0.0f) ref += BC_TWO_PI_F;
+            if (ref >= BC_TWO_PI_F) ref = 0.0f;
+            float got = bc_wrap_2pi(x);
+            differ += !(got == ref && got >= 0.0f && got < BC_TWO_PI_F);
+            for (int j = 0; j < 31; ++j) x = nextafterf(x, 100.0f);
+        }
+        CHECK(differ == 0, "wrap equals fmodf's reference: %ld differ", differ);
+        CHECK(bc_wrap_2pi(1e6f) == fmodf(1e6f, BC_TWO_PI_F) && bc_wrap_2pi(-1e6f) == fmodf(-1e6f, BC_TWO_PI_F) +
+              BC_TWO_PI_F, "wrap large angles");
+    }
     CHECK_NEAR(bc_theta_d(0.25f), 0.25 + BC_PI, 1e-5, "theta_d = theta - pi, wrapped");
 }
 

@@ -44,7 +44,14 @@ bc_ab bc_park_inv(bc_dq x, float s, float c)
 float bc_wrap_2pi(float theta)
 {
     if (!isfinite(theta)) return 0.0f;
-    theta = fmodf(theta, BC_TWO_PI_F);
+    /* an angle within one turn of the range (every call of a running controller) without fmodf: the same result,
+     * since fmodf's remainder of a value in [2 pi, 4 pi) is exactly theta - 2 pi (Sterbenz), and below 0 both add
+     * 2 pi once */
+    if (theta >= BC_TWO_PI_F) {
+        theta = theta < 2.0f * BC_TWO_PI_F ? theta - BC_TWO_PI_F : fmodf(theta, BC_TWO_PI_F);
+    } else if (theta < -BC_TWO_PI_F) {
+        theta = fmodf(theta, BC_TWO_PI_F);
+    }
     if (theta < 0.0f) theta += BC_TWO_PI_F;
     if (theta >= BC_TWO_PI_F) theta = 0.0f;
     return theta;
