@@ -58,7 +58,8 @@ static double normal(bc_sensor_state *s) { return bc_rng_normal(&s->rng, &s->has
 
 static double quantise(double v, double lsb) { return lsb > 0.0 ? lsb * floor(v / lsb + 0.5) : v; }
 
-uint32_t bc_tick_at(double f_tick, double t)
+/* floor(t f_tick) mod 2^32, in this file's own calls inlined (an exported function in a shared library is not) */
+static inline uint32_t tick_at(double f_tick, double t)
 {
     if (!(t >= 0.0) || !isfinite(t)) return 0u;
     double ticks = floor(t * f_tick);
@@ -66,7 +67,9 @@ uint32_t bc_tick_at(double f_tick, double t)
     return ticks < 18446744073709551616.0 ? (uint32_t)(uint64_t)ticks : (uint32_t)(uint64_t)fmod(ticks, 4294967296.0);
 }
 
-uint32_t bc_sensor_tick(const bc_sensor_params *p, double t) { return bc_tick_at(p->f_tick, t); }
+uint32_t bc_tick_at(double f_tick, double t) { return tick_at(f_tick, t); }
+
+uint32_t bc_sensor_tick(const bc_sensor_params *p, double t) { return tick_at(p->f_tick, t); }
 
 void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_plant_state *ps, double v_bus,
                        bc_ctrl_in *in)
@@ -92,8 +95,8 @@ void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_p
     in->v_dc = (float)quantise(v, p->v_lsb);
     in->hall = (uint32_t)ps->hall_out;
     in->n_edges = ps->n_edges;
-    in->tick_edge = bc_sensor_tick(p, ps->t_edge);
-    in->tick_now = bc_sensor_tick(p, ps->t);
+    in->tick_edge = tick_at(p->f_tick, ps->t_edge);
+    in->tick_now = tick_at(p->f_tick, ps->t);
     in->theta_enc = (float)ps->theta;
     if (in->theta_enc >= BC_TWO_PI_F) in->theta_enc = 0.0f;
     in->omega_enc = (float)ps->omega;
