@@ -649,8 +649,34 @@ static void test_hold(void)
     }
 }
 
+/* A propeller load on a coasting rotor (legs off, the back-EMF below the bus: no current): J domega/dt = -k_q omega^2,
+ * so omega(t) = omega_0 / (1 + k_q omega_0 t / J), and the load takes the kinetic energy lost. */
+static void test_propeller_coast(void)
+{
+    fixture f;
+    fixture_htm(&f, BC_MECH_DYNAMIC);
+    f.p.J = 0.02;
+    f.p.k_q = 2e-3;
+    bc_plant_state s;
+    const double om0 = 50.0;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, om0, I0, 48.0) == BC_OK, "init");
+    bc_leg_cmd c[3];
+    legs(c, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f, BC_LEG_OFF, 0.0f);
+    long k = 0;
+    run_halves(&f.p, &s, c, 2800, &k); /* 0.1 s */
+    double want = om0 / (1.0 + f.p.k_q * om0 * s.t / f.p.J);
+    CHECK(fabs(s.omega - want) < 1e-9 * om0, "omega %.12g vs %.12g rad/s", s.omega, want);
+    CHECK(s.i[0] == 0.0 && s.i[1] == 0.0, "no current");
+    double dw = 0.5 * f.p.J * (om0 * om0 - s.omega * s.omega);
+    CHECK(fabs(s.acc[BC_ACC_LOAD] - dw) < 1e-9 * dw, "the load takes the kinetic energy: %.12g vs %.12g J",
+          s.acc[BC_ACC_LOAD], dw);
+    f.p.k_q = -1.0;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, om0, I0, 48.0) == BC_ERR_PARAM, "negative k_q refused");
+}
+
 int main(void)
 {
+    test_propeller_coast();
     test_hold();
     test_standstill_dc();
     test_hall_both_directions();

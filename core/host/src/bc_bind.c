@@ -53,6 +53,7 @@ static const bc_field_desc FIELDS[] = {
     F(bc_plant_params, J, "f8"),
     F(bc_plant_params, B, "f8"),
     F(bc_plant_params, tau_c, "f8"),
+    F(bc_plant_params, k_q, "f8"),
     F(bc_plant_params, hall_error, "f8"),
     F(bc_plant_params, hall_hyst, "f8"),
     F(bc_plant_params, hall_delay, "f8"),

@@ -202,7 +202,8 @@ static void core(const bc_plant_params *restrict p, const bc_plant_state *restri
     }
     const double tau_cog = p->n_cog > 0 ? cogging_at(p, s, th) : 0.0;
     const double tau = k[0] * i0 + k[1] * i1 + k[2] * i2 + tau_cog;
-    const double tau_net = tau - s->tau_load;
+    const double t_prop = s->prop_on ? p->k_q * om * fabs(om) : 0.0; /* smooth through 0: no event needed */
+    const double tau_net = tau - s->tau_load - t_prop;
     double t_fric = 0.0, t_fe = 0.0, sgn = 0.0;
     if (s->drag_on && !s->stuck) {
         /* the Coulomb-like terms take the sign of the motion at the step start (work.wdir, valid inside a step):
@@ -243,6 +244,7 @@ static void core(const bc_plant_params *restrict p, const bc_plant_state *restri
     a->tau_net = tau_net;
     a->tau_fe = t_fe;
     a->t_fric = t_fric;
+    a->t_prop = t_prop;
     a->sgn = sgn;
     a->n_conn = s->tc_n;
     a->dh = dh;
@@ -357,8 +359,8 @@ static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restr
     fd[BC_ACC_CU] = 2.0 * R * (i[0] * di[0] + i[1] * di[1] + i[2] * di[2]);
     f[BC_ACC_EMF] = a->e[0] * i[0] + a->e[1] * i[1] + a->e[2] * i[2];
     fd[BC_ACC_EMF] = de[0] * i[0] + de[1] * i[1] + de[2] * i[2] + a->e[0] * di[0] + a->e[1] * di[1] + a->e[2] * di[2];
-    f[BC_ACC_LOAD] = s->tau_load * om;
-    fd[BC_ACC_LOAD] = s->tau_load * dom;
+    f[BC_ACC_LOAD] = (s->tau_load + a->t_prop) * om;
+    fd[BC_ACC_LOAD] = (s->tau_load + 3.0 * a->t_prop) * dom; /* d(k_q omega^2 |omega|)/dt = 3 k_q omega |omega| */
     /* dtau/dt = sum_x (k_x di_x/dt + p omega dk_x/dtheta i_x) + dtau_cog/dt */
     double dtau = 0.0;
     for (int x = 0; x < 3; ++x) dtau += a->k[x] * di[x] + (double)p->p * om * a->dk[x] * i[x];
@@ -1611,7 +1613,7 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
         return BC_ERR_PARAM;
     if (p->mech != BC_MECH_IMPOSED && p->mech != BC_MECH_DYNAMIC) return BC_ERR_PARAM;
     if (p->mech == BC_MECH_DYNAMIC && !(isfinite(p->J) && p->J > 0.0)) return BC_ERR_PARAM;
-    if (!finite_nonneg(p->B) || !finite_nonneg(p->tau_c)) return BC_ERR_PARAM;
+    if (!finite_nonneg(p->B) || !finite_nonneg(p->tau_c) || !finite_nonneg(p->k_q)) return BC_ERR_PARAM;
     if (!isfinite(p->h_max)) return BC_ERR_PARAM;
     for (int j = 0; j < BC_FAULT_MAX; ++j) {
         const bc_fault *f = &p->fault[j];
@@ -1633,6 +1635,7 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     s->fe_on = p->k_fe_e > 0.0 || p->k_fe_h > 0.0 || p->k_fe_x > 0.0;
     s->fe_tc = (double)p->p * p->k_fe_h;
     s->drag_on = p->B > 0.0 || p->tau_c > 0.0 || s->fe_on;
+    s->prop_on = p->k_q > 0.0 && p->mech == BC_MECH_DYNAMIC;
     /* the optional lanes integrate when a rate can be nonzero: iron loss, or switching losses on averaged legs
      * (the switching inverter books them at its gate edges) */
     lanes_select(p, s, BC_ACC_ALL);

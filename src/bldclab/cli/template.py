@@ -68,6 +68,7 @@ FIELDS: dict[tuple[str, str], str] = {
     ("mechanics", "J"): "kg m^2: inertia of rotor and load",
     ("mechanics", "B"): "N m s/rad: viscous friction",
     ("mechanics", "tau_c"): "N m: Coulomb friction",
+    ("mechanics", "k_q"): "N m s^2/rad^2: propeller or fan load k_q omega^2 (rotor dynamics; 0: none)",
     ("sensors", "current_phases"): "measured phase currents: two or three of a, b, c",
     ("sensors", "current_gain"): "-: gain of each current sensor (a, b, c)",
     ("sensors", "current_offset"): "A: offset of each current sensor (a, b, c)",

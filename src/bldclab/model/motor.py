@@ -395,27 +395,33 @@ def switching_energies(V_test: float, I_test: float, t_rise: float, t_fall: floa
 
 @dataclass(frozen=True)
 class Mechanics:
-    """Rotor mechanics ``J dw/dt = tau_e - tau_L - B w - tau_c sign(w)``.
+    """Rotor mechanics ``J dw/dt = tau_e - tau_L - k_q w |w| - B w - tau_c sign(w)``.
 
     Parameters
     ----------
     J : float
-        Inertia of rotor and load (kg m^2), > 0.
+        Inertia of rotor and load (kg m^2), > 0 (with a propeller: the propeller's too).
     B : float
         Viscous friction (N m s/rad), >= 0.
     tau_c : float
-        Coulomb friction (N m), >= 0.
+        Coulomb friction (N m), >= 0 (a propeller's constant torque ``tau_0``, if any, goes here).
+    k_q : float
+        Propeller or fan load ``tau = k_q w^2`` against the motion (N m s^2/rad^2), >= 0; 0 for none. It acts with
+        rotor dynamics (at an imposed speed the dynamometer is the load) and is booked as the load's energy, so its
+        power counts as output: ``k_q = C_P rho D^5 / (2 pi)^3`` from a propeller's power coefficient.
 
     """
 
     J: float = 1e-3
     B: float = 0.0
     tau_c: float = 0.0
+    k_q: float = 0.0
 
     def __post_init__(self) -> None:
         check_number("J", self.J, lo=0.0, lo_open=True)
         check_number("B", self.B, lo=0.0)
         check_number("tau_c", self.tau_c, lo=0.0)
+        check_number("k_q", self.k_q, lo=0.0)
 
 
 def _per_sensor(name: str, v: object, hi: float | None) -> tuple[float, float, float]:
@@ -772,7 +778,8 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
     mech_s = top.sub("mechanics")
     if mech_s is not None:
         mech = wrap("mechanics", Mechanics, J=mech_s.quantity("J", "inertia"),
-                     B=mech_s.quantity("B", "damping", 0.0), tau_c=mech_s.quantity("tau_c", "torque", 0.0))
+                     B=mech_s.quantity("B", "damping", 0.0), tau_c=mech_s.quantity("tau_c", "torque", 0.0),
+                     k_q=mech_s.quantity("k_q", "propeller", 0.0))
         mech_s.finish()
 
     sensors = Sensors()
@@ -899,7 +906,10 @@ def _drive_to_toml(d: Drive) -> str:
         for k in Inverter.SWITCHING_LOSS_FIELDS:
             del inv[k]  # no switching losses (the default): written as before they existed
     out.append(toml_table("inverter", inv))
-    out.append(toml_table("mechanics", dataclasses.asdict(d.mechanics)))
+    mech = dataclasses.asdict(d.mechanics)
+    if mech["k_q"] == 0.0:
+        del mech["k_q"]  # no propeller (the default): written as before it existed
+    out.append(toml_table("mechanics", mech))
     sen = dataclasses.asdict(d.sensors)
     sen["current_gain"] = list(sen["current_gain"])
     sen["current_offset"] = list(sen["current_offset"])

@@ -29,6 +29,7 @@ DIMENSIONS: dict[str, dict[str, float]] = {
     "inertia": {"kg m^2": 1.0, "kg m2": 1.0, "kg*m^2": 1.0, "g cm^2": 1e-7},
     "emf_constant": {"V s/rad": 1.0, "Vs/rad": 1.0, "N m/A": 1.0, "Nm/A": 1.0},
     "damping": {"N m s/rad": 1.0, "Nms/rad": 1.0},
+    "propeller": {"N m s^2/rad^2": 1.0, "N m s^2": 1.0, "Nms^2": 1.0, "N m/(rad/s)^2": 1.0},
     "power": {"W": 1.0, "kW": 1e3},
     "energy": {"J": 1.0, "mJ": 1e-3, "uJ": 1e-6, "nJ": 1e-9},
     "charge": {"C": 1.0, "mC": 1e-3, "uC": 1e-6, "nC": 1e-9},

@@ -126,6 +126,7 @@ PARAMETERS: dict[str, tuple[tuple[str, str, str], ...]] = {
         ("J", "inertia of rotor and load", "kg m^2"),
         ("B", "viscous friction", "N m s/rad"),
         ("tau_c", "Coulomb friction", "N m"),
+        ("k_q", "propeller or fan load k_q w^2", "N m s^2/rad^2"),
     ),
     "sensors": (
         ("current_phases", "measured phase currents", "-"),

@@ -433,6 +433,7 @@ def _plant_params(drive: Drive, imposed: bool, h_max: float, keep: list[object])
     rec["J"] = mech_p.J
     rec["B"] = mech_p.B
     rec["tau_c"] = mech_p.tau_c
+    rec["k_q"] = mech_p.k_q
     rec["hall_error"] = sen.hall_error
     rec["hall_hyst"] = sen.hall_hysteresis
     rec["hall_delay"] = sen.hall_delay

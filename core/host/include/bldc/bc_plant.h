@@ -5,7 +5,9 @@
  *
  *     v_x - v_n = R i_x + L di_x/dt + e_x,    e_x = omega_m k_x(theta_e - x 2pi/3),    i_a + i_b + i_c = 0
  *     tau_e = sum_x k_x i_x + tau_cog(theta_m),                 theta_e = p theta_m
- *     J domega_m/dt = tau_e - tau_L - B omega_m - tau_c sign(omega_m) - tau_fe   (or omega_m imposed; tau_fe: the
+ *     J domega_m/dt = tau_e - tau_L - k_q omega_m |omega_m| - B omega_m - tau_c sign(omega_m) - tau_fe
+ *     (or omega_m imposed, whose dynamometer is the load; k_q: a propeller or fan, booked with tau_L as the load's
+ *     energy, acc LOAD; tau_fe: the
  *                                                                              iron-loss drag, "Iron losses" below)
  *
  * Inverter: each leg's gate state (upper on, lower on, both off) comes from the half-period command
@@ -251,6 +253,7 @@ typedef struct {
     double J;               /* inertia, kg m^2 */
     double B;               /* viscous friction, N m s/rad */
     double tau_c;           /* Coulomb friction, N m */
+    double k_q;             /* propeller or fan load k_q omega_m |omega_m| (rotor dynamics only), N m s^2/rad^2 */
     /* Hall sensors */
     double hall_error[3];   /* placement error of each sensor, rad (electrical), |.| < pi/6 */
     double hall_hyst[3];    /* hysteresis of each sensor, rad (electrical), in [0, pi/3): its edges sit dir h/2
@@ -301,6 +304,7 @@ typedef struct {
     double cs[3];                   /* {theta, cos, sin} for Fourier shapes (theta = HUGE_VAL: none) */
     double w[3];                    /* averaged legs with R_src: sum_y M_xy i_y */
     double vn, vbus, idc, tau, tau_cog, tau_net, tau_fe, t_fric, p_rsrc;
+    double t_prop;                  /* the propeller's load torque k_q omega |omega|, N m */
     double dh;                      /* holding: the hold leg's duty d* (BC_LEG_HOLD) */
     double sgn;                     /* sign of the motion the Coulomb-like drags used (0: no drag) */
     int32_t n_conn;
@@ -374,6 +378,7 @@ typedef struct {
     double fz_b[3][BC_PLANT_FZ_N]; /* series of phase x in the global angle (its offset 2 pi x/3 folded in), V s/rad */
     double fe_tc;           /* Coulomb-like hysteresis drag p k_fe_h, N m */
     int32_t drag_on;        /* 1 if B, tau_c or an iron-loss coefficient is positive (set at init) */
+    int32_t prop_on;        /* 1 if k_q > 0 with rotor dynamics (set at init) */
     int32_t acc_on;         /* BC_ACC_OFF, _METRICS or _ALL: what is integrated (bc_plant_set_accumulate; _ALL
                                after init) */
     uint32_t acc_mask;      /* bit j: lane j of acc[] is integrated (its rate can be nonzero at this level) */
