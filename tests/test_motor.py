@@ -755,7 +755,8 @@ def test_every_unit_converts_and_every_foreign_unit_fails(dim: str) -> None:
             to_si(f"1 {unit}", dim, "motor.x", "file.toml")
         assert info.value.field == "motor.x"
         assert info.value.source == "file.toml"
-        assert f"not a unit of {dim.replace('_', ' ')}" in info.value.problem
+        problem = info.value.problem
+        assert f"not a unit of {dim.replace('_', ' ')}" in problem or (" as written, not " in problem), problem
 
 
 @pytest.mark.parametrize(
@@ -1010,3 +1011,47 @@ def test_doc_lists_every_unit() -> None:
         for unit in units:
             if unit:
                 assert f"`{unit}`" in text, unit
+
+
+# ----------------------------------------------------------------------------------------------------------
+# units: case, plurals, SI prefixes, ambiguous spellings (issue 23, item 4)
+
+@pytest.mark.parametrize(("text", "dim", "si"), [
+    ("50 mohm", "resistance", 0.05), ("0.08 ohm", "resistance", 0.08), ("0.08 ohms", "resistance", 0.08),
+    ("80 mOhms", "resistance", 0.08), ("0.08 OHM", "resistance", 0.08), ("48 khz", "frequency", 48e3),
+    ("48 KHZ", "frequency", 48e3), ("48 KHz", "frequency", 48e3), ("15 uh", "inductance", 15e-6),
+    ("15 UH", "inductance", 15e-6), ("2.4 mV s/rad", "emf_constant", 2.4e-3), ("2.4 mv s/rad", "emf_constant", 2.4e-3),
+    ("2.4 uV s/rad", "emf_constant", 2.4e-6), ("1 kV s/rad", "emf_constant", 1e3), ("3 MV s/rad", "emf_constant", 3e6),
+    ("90 degrees", "angle", math.pi / 2), ("90 degs", "angle", math.pi / 2), ("1 radians", "angle", 1.0),
+    ("3000 RPM", "speed", 3000 * TWO_PI / 60), ("1950 rpm/V", "speed_constant", 1950 * TWO_PI / 60),
+    ("2 GHz", "frequency", 2e9), ("5 kN m", "torque", 5e3), ("3 pH", "inductance", 3e-12), ("1 mw", "power", 1e-3),
+    ("1 Ms", "time", 1e6), ("20 ms", "time", 0.02),
+])
+def test_units_case_plurals_and_prefixes(text: str, dim: str, si: float) -> None:
+    """Case is free where it does not change the meaning; plurals; any SI prefix on an SI symbol."""
+    assert to_si(text, dim, "x") == pytest.approx(si, rel=1e-15)
+
+
+@pytest.mark.parametrize(("text", "dim", "both"), [
+    ("20 mS", "time", ("millisiemens", "'ms'")),  # S is the siemens: millisiemens as typed, not milliseconds
+    ("1 S", "time", ("siemens", "'s'")),
+    ("1 MW", "power", ("'MW' (mega)", "'mW' (milli)")),  # in capitals: the prefix's case is lost
+    ("50 MOHM", "resistance", ("'MOhm' (mega)", "'mOhm' (milli)")),
+    ("48 MHZ", "frequency", ("'MHz' (mega)", "'mHz' (milli)")),
+    ("5 nm", "torque", ("a unit of length", "'Nm'")),  # nanometre as typed
+])
+def test_ambiguous_spellings_are_refused_naming_both_readings(text: str, dim: str, both: tuple[str, str]) -> None:
+    with pytest.raises(BldclabError) as info:
+        to_si(text, dim, "motor.x")
+    assert info.value.field == "motor.x"
+    for reading in both:
+        assert reading in info.value.problem, info.value.problem
+
+
+def test_a_unit_scales_the_number_by_its_power_of_ten_exactly() -> None:
+    """"30 uH" is the double of 3e-05 (30 * 1e-6 is 2.9999999999999997e-05): a file written back shows 3e-05."""
+    assert 30 * 1e-6 != 3e-05
+    assert to_si("30 uH", "inductance", "x") == 3e-05
+    assert repr(to_si("0.1 mOhm", "resistance", "x")) == "0.0001"
+    assert repr(to_si("7 ms", "time", "x")) == "0.007"
+    assert to_si("3000 rpm", "speed", "x") == 3000 * (2 * math.pi / 60)  # non-decimal: times the factor

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import re
 import warnings
 from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
@@ -19,7 +18,7 @@ from ..errors import BldclabError, PlausibilityWarning
 from ..model import analytic
 from ..model.catalog import load
 from ..model.motor import Drive, Inverter
-from ..model.units import to_si
+from ..model.units import per_unit, to_si
 from ..sim import plausibility as _plaus
 
 __all__ = ["CONTROLS", "add_inverter_option", "check_speed_range", "control_of", "load_drive", "parse_speed",
@@ -34,12 +33,9 @@ def parse_speed(text: str, drive: Drive, option: str = "--speed") -> float:
 
     ``option`` is the option named in the error.
     """
-    m = re.fullmatch(r"\s*([-+]?[\d.]+(?:[eE][-+]?\d+)?)\s*pu\s*", text)
-    if m:
-        try:
-            return float(m.group(1)) * drive.Omega_0
-        except ValueError:
-            raise BldclabError(option, f"cannot read {text!r}") from None
+    pu = per_unit(text)
+    if pu is not None:
+        return pu * drive.Omega_0
     return to_si(text, "speed", option)
 
 
