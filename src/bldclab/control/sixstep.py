@@ -142,8 +142,9 @@ class SixStep(Control):
             if isinstance(v, str):
                 object.__setattr__(self, name, to_si(v, dim, f"control.{name}"))
             check_number(name, getattr(self, name), allow_zero=True)
-        if self.timing > math.pi / 6:
-            raise BldclabError("control.timing", f"must be at most 30 deg (pi/6 rad), got {self.timing:.4g} rad")
+        timing = float(self.timing)  # a number now: read from its string above
+        if timing > math.pi / 6:
+            raise BldclabError("control.timing", f"must be at most 30 deg (pi/6 rad), got {timing:.4g} rad")
         for name, table in (("regulation", _REG), ("chopping", _CHOP), ("reference", _REF), ("commutation", _COMM)):
             if getattr(self, name) not in table:
                 raise BldclabError(f"control.{name}", f"must be one of {', '.join(table)}, got {getattr(self, name)!r}")
