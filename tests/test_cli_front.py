@@ -291,3 +291,26 @@ def test_analyze_gives_the_speeds_in_rpm(capsys: pytest.CaptureFixture[str]) -> 
                                            "71.64 rad/s = 684.1 rpm")
     rc, out, _ = run_main(capsys, "analyze", "htm-48v", "--format", "json")
     assert rc == 0 and "rpm" not in out.splitlines()[-1]
+
+
+DRONE = Path(__file__).resolve().parent / "data" / "drone-2207.toml"
+
+
+def test_check_prints_both_forms_of_the_ratings(capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 23, item 3: pole pairs and poles, phase and line-to-line R and L, KV and k_phi/k_1."""
+    rc, out, err = run_main(capsys, "check", str(DRONE))
+    assert rc == 0 and err == ""
+    assert "7 pole pairs = 14 poles" in out
+    assert "40 mOhm per phase = 80 mOhm line to line" in out and "7.5 uH per phase = 15 uH line to line" in out
+    assert "1950 rpm/V (KV_rms 2757.72 rpm/V)" in out
+    assert "0.00244854 V s/rad" in out and "0.00282733 V s/rad" in out  # k_phi, k_1
+
+
+def test_check_warns_when_pole_pairs_look_like_a_pole_count(tmp_path: Path, capsys: pytest.CaptureFixture[str]
+                                                            ) -> None:
+    f = tmp_path / "p14.toml"
+    f.write_text(DRONE.read_text().replace("poles = 14", "p = 14"))
+    rc, out, err = run_main(capsys, "check", str(f))
+    assert rc == 0 and "14 pole pairs = 28 poles" in out
+    assert err.startswith("bldclab: warning: ") and err.count("\n") == 1
+    assert "motor.p: p = 14 pole pairs (28 poles)" in err and "if 14 is the pole count (7 pole pairs" in err

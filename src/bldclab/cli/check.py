@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import math
 
+import numpy as np
+
 from ..model import analytic
 from ..model.catalog import load
 from ..model.motor import Drive
@@ -38,13 +40,23 @@ def derived(drive: Drive) -> list[tuple[str, str, str]]:
     r = m.R + inv.R_on
     tau = m.L / r if r > 0 else math.inf
     f_e = m.p * drive.Omega_0 / (2.0 * math.pi)
+    k1 = [float(np.hypot(*(c[1] for c in sh.fourier(1)))) for sh in m.emf.shapes]
     rows = [
+        ("p", f"{m.p} pole pairs = {m.poles} poles", "theta_e = p theta_m"),
+        ("R", f"{_eng(m.R, 'Ohm')} per phase = {_eng(m.R_ll, 'Ohm')} line to line",
+         "winding resistance; line to line R_ll = 2 R (star, two phases in series)"),
+        ("L", f"{_eng(m.L, 'H')} per phase = {_eng(m.L_ll, 'H')} line to line",
+         "inclusive inductance L_self - M; line to line L_ll = 2 L"),
+        ("KV", f"{m.KV:.6g} rpm/V (KV_rms {m.KV_rms:.6g} rpm/V)",
+         "speed per volt of peak line-to-line back-EMF = Omega_0 / V_dc; KV_rms: per volt rms"),
         ("Omega_0", f"{drive.Omega_0:.6g} rad/s = {drive.Omega_0 * RPM_PER_RAD_S:.6g} rpm",
          "no-load speed V_dc / (2 k_phi), the speed base (paper 1 (2))"),
         ("Omega_N", f"{m.Omega_nominal:.6g} rad/s = {m.Omega_nominal * RPM_PER_RAD_S:.6g} rpm",
          "rated speed" + (" (given)" if m.Omega_N is not None else " (V_N - 2 R I_N) / (2 k_phi), paper 1 (2)")),
         ("T_N", f"{drive.T_N:.6g} N m", "torque base 2 k_phi I_N (paper 1 (6))"),
         ("k_phi", f"{m.k_phi:.6g} V s/rad", "motor constant: half the peak line-to-line back-EMF per rad/s"),
+        ("k_1", f"{sum(k1) / 3:.6g} V s/rad", "peak of a phase's back-EMF fundamental per rad/s (mean of the phases); "
+         f"sinusoidal torque 3/2 k_1 = {1.5 * sum(k1) / 3:.4g} N m per peak phase amp"),
         ("back-EMF", drive_kind(drive), "shape kind"),
         ("Theta_m", f"{analytic.theta_m(drive):.6g} rad", "p L I_N / (2 k_phi), paper 1 (22)"),
         ("L/R", "infinite (R = 0)" if math.isinf(tau) else f"{tau * 1e3:.6g} ms",
@@ -59,6 +71,14 @@ def derived(drive: Drive) -> list[tuple[str, str, str]]:
         rows.append(("iron loss at Omega_0", f"{m.iron_loss(drive.Omega_0):.4g} W",
                      "stator iron loss the model books at Omega_0 (any load; docs/plant.md, \"Iron losses\")"))
     return rows
+
+
+def _eng(value: float, unit: str) -> str:
+    """``value`` with a prefix that keeps three digits before the point at most: 0.04 Ohm -> "40 mOhm"."""
+    for prefix, scale in (("", 1.0), ("m", 1e-3), ("u", 1e-6), ("n", 1e-9)):
+        if abs(value) >= scale or prefix == "n":
+            return f"{value / scale:.6g} {prefix}{unit}"
+    return f"{value:.6g} {unit}"  # pragma: no cover - the loop returns
 
 
 def run_command(args: argparse.Namespace) -> int:
