@@ -314,3 +314,41 @@ def test_check_warns_when_pole_pairs_look_like_a_pole_count(tmp_path: Path, caps
     assert rc == 0 and "14 pole pairs = 28 poles" in out
     assert err.startswith("bldclab: warning: ") and err.count("\n") == 1
     assert "motor.p: p = 14 pole pairs (28 poles)" in err and "if 14 is the pole count (7 pole pairs" in err
+
+
+@pytest.mark.parametrize("name", names())
+def test_template_examples_are_the_drives_own_and_load_uncommented(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                                   name: str) -> None:
+    """Issue 23, item 10: no float noise, no example value of another drive, no comment naming another unit.
+
+    Every commented-out example line, uncommented, still gives a loadable file: its units are those of the field.
+    """
+    rc, out, _ = run_main(capsys, "template", "--from", name)
+    assert rc == 0
+    for noise in ("99999999", "00000001"):
+        assert noise not in out.replace(bl.load(name).description, "")
+    assert "# Omega_N = 67.0" not in out  # htm-48v's rated speed, once shown for every drive
+    lines = out.splitlines()
+    for line in lines:
+        if line.startswith("# ") and " = \"" in line and "rpm\"" in line:
+            assert "# rad/s" not in line, line
+    uncommented = []
+    for line in lines:
+        body = line[2:].split("  #")[0] if line.startswith("# ") else line
+        if line.startswith("# ") and (re_key(body) or body.startswith("[motor.cogging]")):
+            uncommented.append(body)
+        else:
+            uncommented.append(line)
+    f = tmp_path / "all.toml"
+    f.write_text("\n".join(uncommented) + "\n")
+    d, base = bl.load(f), bl.load(name)
+    if base.motor.Omega_N is None:  # the example is this drive's own default rated speed, to 4 digits
+        assert d.motor.Omega_N == pytest.approx(base.motor.Omega_nominal, rel=1e-3)
+    if base.inverter.E_on == 0:  # the energies' test point is this drive's bus and rated current
+        assert (d.inverter.V_test, d.inverter.I_test) == (base.inverter.V_dc, pytest.approx(base.motor.I_N, rel=1e-5))
+
+
+def re_key(text: str) -> bool:
+    """Whether ``text`` is a ``key = value`` line."""
+    key = text.split("=")[0].strip()
+    return "=" in text and key.isidentifier()
