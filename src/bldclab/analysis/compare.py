@@ -28,6 +28,7 @@ import pandas as pd
 from ..control import Control, Sine, SixStep
 from ..errors import BldclabError, PlausibilityWarning
 from ..model import analytic
+from ..model.limits import TOP_SPEED_PU
 from ..model.motor import Drive
 from ..sim import plausibility as _plaus
 from .experiments import base_speed, map_points, steady_state
@@ -66,7 +67,7 @@ def default_controls(drive: Drive, lowest_speed_pu: float = 0.05,
     return {"square": (square, drive.motor.I_N), "sine": (Sine(handoff_speed=handoff), T_sN)}
 
 
-def speed_grid(n: int, lo: float = 0.05, hi: float = 0.98) -> list[float]:
+def speed_grid(n: int, lo: float = 0.05, hi: float = TOP_SPEED_PU) -> list[float]:
     """Return ``n`` equally spaced per-unit speeds from ``lo`` to ``hi``."""
     if n < 2:
         raise BldclabError("--speeds", f"needs at least 2 speeds, got {n}")

@@ -4,15 +4,18 @@ from __future__ import annotations
 
 import argparse
 import math
+import warnings
 
 import numpy as np
 
+from ..errors import PlausibilityWarning
 from ..model import analytic
 from ..model.catalog import load
+from ..model.limits import PWM_PER_PERIOD_WARN, TOP_SPEED_PU, check_pwm
 from ..model.motor import Drive
 from .drives import drive_kind
 
-__all__ = ["configure_command", "derived", "run_command"]
+__all__ = ["configure_command", "derived", "premises", "run_command"]
 
 RPM_PER_RAD_S = 30.0 / math.pi
 
@@ -63,7 +66,8 @@ def derived(drive: Drive) -> list[tuple[str, str, str]]:
          "electrical time constant, R + R_on"),
         ("f_e at Omega_0", f"{f_e:.6g} Hz", "electrical frequency p Omega_0 / (2 pi)"),
         ("PWM per commutation", f"{inv.f_pwm / (6.0 * f_e):.4g}",
-         "PWM periods in a sixth of an electrical period at Omega_0"),
+         f"PWM periods in a sixth of an electrical period at Omega_0 (simulations warn below "
+         f"{PWM_PER_PERIOD_WARN / 6:g}: {PWM_PER_PERIOD_WARN:g} per electrical period)"),
     ]
     if not math.isinf(tau):
         rows.append(("PWM per L/R", f"{inv.f_pwm * tau:.4g}", "PWM periods in the electrical time constant"))
@@ -81,6 +85,31 @@ def _eng(value: float, unit: str) -> str:
     return f"{value:.6g} {unit}"  # pragma: no cover - the loop returns
 
 
+def premises(drive: Drive) -> list[str]:
+    """Return what the simulations of ``bldclab compare`` warn about for this drive before any run, in their words.
+
+    The drive-only premises of :mod:`bldclab.model.limits` (PWM against ``L/R`` and against the electrical frequency)
+    at the top speed ``compare`` runs by default (:data:`~bldclab.model.limits.TOP_SPEED_PU`); an error there is
+    said to be one. Paper 1's premises (back-EMF shape, R, bus voltage) are
+    :func:`bldclab.model.analytic.applicability`'s, printed by :func:`run_command` as ``compare`` prints them.
+
+    Parameters
+    ----------
+    drive : Drive
+
+    Returns
+    -------
+    list of str
+        One line per finding.
+    """
+    w = TOP_SPEED_PU * drive.Omega_0
+    out = []
+    for f in check_pwm(drive, w):
+        refused = "; simulations refuse this as an error" if f.level == "error" else ""
+        out.append(f"at {TOP_SPEED_PU:g} Omega_0 (bldclab compare's top speed{refused}): {f}")
+    return out
+
+
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab check``: load the file (one error line and exit 2 if it is bad), print the derived quantities."""
     drive = load(args.motor)
@@ -92,6 +121,8 @@ def run_command(args: argparse.Namespace) -> int:
     w1 = max(len(r[1]) for r in rows)
     for name, value, meaning in rows:
         print(f"  {name:<{w0}}  {value:<{w1}}  {meaning}")
+    for finding in premises(drive):  # what bldclab compare warns about, in its words
+        warnings.warn(finding, PlausibilityWarning, stacklevel=2)
     reasons = analytic.applicability(drive)
     if reasons:
         print("paper 1's closed forms (bldclab analyze) do not describe this drive exactly, because:")

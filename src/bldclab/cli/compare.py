@@ -12,6 +12,7 @@ from ..analysis.compare import CompareResult, compare, default_controls, speed_g
 from ..control.sixstep import CHOPPINGS
 from ..errors import BldclabError
 from ..model import analytic
+from ..model.limits import TOP_SPEED_PU
 from ..model.motor import Drive
 from ..report.bundle import compare_command, compare_directory
 from ..report.plots import load_matplotlib
@@ -29,7 +30,8 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", type=Path, help="directory for CSV, figures and the report (default out/<motor>)")
     p.add_argument("--speeds", type=int, default=32, help="speeds per supply (default 32)")
     p.add_argument("--min-speed", type=float, default=0.05, help="lowest speed, p.u. of Omega_0 (default 0.05)")
-    p.add_argument("--max-speed", type=float, default=0.98, help="highest speed, p.u. of Omega_0 (default 0.98)")
+    p.add_argument("--max-speed", type=float, default=TOP_SPEED_PU,
+                   help=f"highest speed, p.u. of Omega_0 (default {TOP_SPEED_PU:g})")
     p.add_argument("--workers", type=positive_int, help="processes, >= 1 (default: all cores; 1: serial)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (it is shown on a terminal only)")
     p.add_argument("--no-report", action="store_true", help="do not write report.html (docs/report.md)")
