@@ -40,6 +40,21 @@ def test_option_errors_name_the_option_and_come_before_the_run(argv, option, wor
     assert not (tmp_path / "o").exists()
 
 
+def test_an_unusable_out_is_refused_before_the_run(tmp_path, capsys, monkeypatch):
+    """Issue 23, item 2: --out an existing file (or below one) fails at once, as compare and effmap do."""
+    def no_run(*a, **k):
+        raise AssertionError("simulate ran")
+
+    monkeypatch.setattr("bldclab.cli.simulate.simulate", no_run)
+    existing = tmp_path / "existing"
+    existing.write_text("keep")
+    for out in (existing, existing / "below"):
+        assert main(["simulate", "htm-48v", "--duration", "200 s", "--no-trace", "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("bldclab: error: --out:") and "is not a directory" in err[0], err
+    assert existing.read_text() == "keep"
+
+
 def test_long_run_refusal_states_the_bytes(capsys):
     assert main(["simulate", "htm-48v", "--duration", "1000 s"]) == 2
     err = capsys.readouterr().err

@@ -21,6 +21,7 @@ from ..model.units import to_si
 from ..report import plots
 from ..sim import CHUNK, TRACE_LIMIT, Piecewise, Scenario, parse_profile, samples_of, simulate, trace_bytes, trace_rows
 from .common import CONTROLS, add_inverter_option, control_of, load_drive, parse_speed
+from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
 
@@ -89,6 +90,7 @@ def _reference(args: argparse.Namespace, default: float, unit: str) -> float:
 
 def _check_options(args: argparse.Namespace) -> None:
     """Refuse option combinations before any work (each error names the option typed)."""
+    check_out_dir(args.out)  # before the run: a bad --out fails at once, not after the simulation
     if args.plot and args.out is None:
         raise BldclabError("--plot", "needs --out DIR to write the figures into")
     if args.plot and args.no_trace:
