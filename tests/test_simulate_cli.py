@@ -69,7 +69,7 @@ def test_table_shows_rpm_and_decoded_flags(capsys):
     lines = {ln.split()[0]: ln.split()[1:] for ln in out.splitlines()[1:]}
     assert float(lines["speed_rpm"][0]) == pytest.approx(300, rel=1e-4)
     assert float(lines["speed_rad_s"][0]) == pytest.approx(10 * math.pi, rel=1e-4)
-    assert lines["controller_flags"] == ["SATURATED"]  # current-regulated six-step at rated current, half speed
+    assert lines["flags"][:2] == ["SATURATED", "in"]  # current-regulated six-step at rated current: in the window
 
 
 def test_profiles_and_thinned_trace(tmp_path, capsys):
@@ -110,3 +110,51 @@ def test_progress_line_on_request(capsys):
     assert main(["simulate", "htm-48v", "--periods", "2", "--no-trace", "--progress"]) == 0
     err = capsys.readouterr().err
     assert err.startswith("\rsimulating") and "100.0 %" in err and err.endswith("s elapsed)\n")
+
+
+def test_flags_say_when_they_were_raised(tmp_path, capsys):
+    """Issue 23, item 5: a flag inside the metric window is a finding (share of the window's samples, first and last
+    time); one raised only at start-up says so. Terminal, JSON and the plot's title."""
+    assert main(["simulate", "htm-48v", "--control", "sine", "--torque", "10 N m"]) == 0
+    lines = {ln.split()[0]: ln.split(None, 1)[1] for ln in capsys.readouterr().out.splitlines()[1:]}
+    assert lines["flags"].startswith("at start-up only (before the window): SATURATED (")
+    out = tmp_path / "o"
+    assert main(["simulate", "htm-48v", "--format", "json", "--out", str(out), "--plot"]) == 0
+    summary = json.loads(capsys.readouterr().out.split("\nwrote")[0])
+    win = summary["flags"]["SATURATED"]["window"]  # predictive six-step at rated current: full voltage at commutation
+    assert win["first"] >= summary["window_s"][0] and win["last"] <= summary["window_s"][1]
+    assert summary["flags_summary"] == (f"SATURATED in {100 * win['share']:.3g} % of the window's samples "
+                                        f"({win['first']:.4g}-{win['last']:.4g} s)")
+    res = bl.SimResult.load(out / "result.npz")
+    assert summary["flags_summary"] in " ".join(res.plot().get_suptitle().split())
+
+
+@pytest.mark.filterwarnings("ignore:scenario.window")
+def test_speed_ref_is_the_reference_shown_and_drawn(tmp_path, capsys):
+    """Issue 23, item 6: with --speed-ref the heading and the title name the speed reference (the torque reference
+    is the loop's limit), and the speed panel draws it."""
+    out = tmp_path / "o"
+    rc = main(["simulate", "htm-48v", "--control", "sine", "--mechanics", "--speed-ref", "0 s: 0 rpm, 0.1 s: 300 rpm",
+               "--duration", "0.3 s", "--out", str(out), "--plot"])
+    assert rc == 0
+    heading = capsys.readouterr().out.splitlines()[0]
+    assert "speed reference 0 s: 0 rpm, 0.1 s: 300 rpm (speed loop; torque up to 33.69 N m)" in heading
+    assert "reference 33.69" not in heading
+    res = bl.SimResult.load(out / "result.npz")
+    fig = res.plot()
+    assert "speed reference 0 s: 0 rpm, 0.1 s: 300 rpm" in " ".join(fig.get_suptitle().split())
+    ref = [ln for ax in fig.axes for ln in ax.get_lines() if ln.get_label() == "speed reference"]
+    assert len(ref) == 1
+    t_ms, w = ref[0].get_data()
+    assert w[0] == 0.0 and w[-1] == pytest.approx(300 * math.pi / 30, rel=1e-5) and t_ms[-1] == pytest.approx(300, 0.01)
+
+
+def test_a_long_drive_name_keeps_the_title_inside_the_figure():
+    """Issue 23, item 7: the title wraps instead of running off both edges."""
+    drive = bl.load("htm-48v").replace(name="a very long drive name for a 2207 drone motor, 1950 KV, 14 poles, on 24 V")
+    res = bl.simulate(drive, bl.SixStep(), bl.Scenario(duration=0.02, speed="0.5 pu", ref=50.0, window=(0.01, 0.02)))
+    fig = res.plot()
+    fig.canvas.draw()
+    box = fig._suptitle.get_window_extent()
+    assert box.x0 >= 0 and box.x1 <= fig.bbox.x1
+    assert fig.get_suptitle().count("\n") >= 1

@@ -222,8 +222,18 @@ def run_command(args: argparse.Namespace) -> int:
     m = res.metrics
     assert m is not None  # the window ends with the run
     flags = int(res.meta["controller_flags"])
+    speed_loop = args.speed_ref is not None
+    if speed_loop:  # the loop's reference is the speed; Scenario.ref is not used
+        assert isinstance(ctl, Sine)
+        ref_text, limit = args.speed_ref, ctl.torque_limit(drive)
+        reference: dict[str, Any] = {"reference": ref_text, "reference_unit": "speed (as given)",
+                                     "torque_limit_N_m": limit}
+        heading = f"speed reference {ref_text} (speed loop; torque up to {limit:.4g} N m)"
+    else:
+        reference = {"reference": ref, "reference_unit": unit}
+        heading = f"reference {ref:.4g} {unit}"
     summary: dict[str, Any] = {
-        "motor": drive.name, "control": args.control, "reference": ref, "reference_unit": unit,
+        "motor": drive.name, "control": args.control, **reference,
         "inverter": drive.inverter.model, "duration_s": sc.duration,
         "speed_rad_s": m.omega_mean, "speed_rpm": m.omega_mean * _RPM, "speed_pu": m.omega_mean / drive.Omega_0,
         "window_s": [m.t0, m.t1],
@@ -233,6 +243,7 @@ def run_command(args: argparse.Namespace) -> int:
         "p_dc_W": m.p_src_total, "p_copper_W": m.p_cu,
         "p_inverter_W": m.p_sw + m.p_diode + m.p_Rsrc + m.p_swloss + m.p_rr, "p_iron_W": m.p_fe,
         "i_rms_A": list(m.i_rms), "i_peak_A": list(m.i_peak), "energy_balance_residue": m.balance_electrical,
+        "flags_summary": res.flags_summary(), "flags": res.meta["flags"],
         "controller_flags": decode_flags(flags) or "none", "controller_flags_bits": flags,
         "trace_rows": len(res),
         "warnings": list(res.meta.get("warnings", [])),
@@ -242,15 +253,15 @@ def run_command(args: argparse.Namespace) -> int:
     if args.format == "json":
         print(json.dumps(summary, indent=2))
     else:
-        print(f"{drive.name}, {args.control} control, reference {ref:.4g} {unit}, "
+        print(f"{drive.name}, {args.control} control, {heading}, "
               f"{'dynamometer' if sc.speed is not None else 'rotor dynamics'}, {drive.inverter.model} inverter")
         for key, value in summary.items():
-            if key in ("motor", "control", "reference", "reference_unit", "inverter", "warnings",
-                       "controller_flags_bits"):  # warnings: stderr
+            if key in ("motor", "control", "reference", "reference_unit", "torque_limit_N_m", "inverter", "warnings",
+                       "flags", "controller_flags", "controller_flags_bits"):  # warnings: stderr; flags: the summary
                 continue
             text = ", ".join(f"{v:.4g}" for v in value) if isinstance(value, list) else (
                 f"{value:.5g}" if isinstance(value, float) else str(value))
-            print(f"  {key:<28} {text}")
+            print(f"  {'flags' if key == 'flags_summary' else key:<28} {text}")
     if args.out is not None:
         files: dict[str, bytes] = {}
         if sc.trace:
