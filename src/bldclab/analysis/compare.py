@@ -177,8 +177,10 @@ class CompareResult:
     seconds : float
         Wall time of the simulations.
     warnings : list of str
-        Plausibility warnings of the runs (:mod:`bldclab.sim.plausibility`), each prefixed by its supply and speed;
-        :func:`compare` issues one :class:`~bldclab.errors.PlausibilityWarning` summarising them.
+        Plausibility warnings of the runs (:mod:`bldclab.sim.plausibility`), each prefixed by its supply and speed
+        (repeats kept); :func:`compare` issues one :class:`~bldclab.errors.PlausibilityWarning` summarising them.
+        :func:`bldclab.report.bundle.compare_files` and :func:`~bldclab.report.bundle.compare_outputs` add those of
+        the waveforms and paper 1's figures they run.
     not_applicable : list of str
         Why paper 1's closed forms (the ``analytic`` columns) do not describe this drive
         (:func:`bldclab.model.analytic.applicability`); empty where their premises hold.
@@ -266,7 +268,7 @@ def _progress(total: int, enabled: bool) -> Callable[[int], None]:
 
 def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls: dict[str, tuple[Control, float]]
             | None = None, workers: int | None = None, progress: bool = False, pwm_phases: int = 1,
-            base_speeds: bool = True, executor: Executor | None = None) -> CompareResult:
+            base_speeds: bool = True, executor: Executor | None = None, summarise: bool = True) -> CompareResult:
     """Compare square-wave and sinusoidal supply of a drive over speed.
 
     Parameters
@@ -290,6 +292,10 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
     executor : concurrent.futures.Executor, optional
         Where the points run instead of a pool of ``workers`` processes: e.g. a pool the caller keeps to draw the
         figures on it next. Results do not depend on where the points run.
+    summarise : bool
+        Issue one :class:`~bldclab.errors.PlausibilityWarning` summarising the runs' warnings
+        (:func:`bldclab.sim.plausibility.summary`); False leaves that to the caller, which runs more (the waveforms
+        and figures of :func:`bldclab.report.bundle.compare_directory`) and summarises them all in one line.
 
     Returns
     -------
@@ -337,7 +343,7 @@ def compare(drive: Drive, speeds_pu: Sequence[float] | None = None, *, controls:
     res.warnings = caught
     res.not_applicable = analytic.applicability(drive)
     line = _plaus.summary(caught, len(jobs))
-    if line:
+    if line and summarise:
         warnings.warn(line, PlausibilityWarning, stacklevel=2)
     return res
 

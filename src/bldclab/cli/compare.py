@@ -14,9 +14,18 @@ from ..errors import BldclabError
 from ..model import analytic
 from ..model.limits import TOP_SPEED_PU
 from ..model.motor import Drive
-from ..report.bundle import compare_command, compare_directory
+from ..report.bundle import compare_command, compare_directory, runs_text
 from ..report.plots import load_matplotlib
-from .common import add_inverter_option, check_speed_range, load_drive, positive_int, worker_pool, workers_of
+from .common import (
+    add_inverter_option,
+    add_verbose_option,
+    check_speed_range,
+    load_drive,
+    positive_int,
+    summarise,
+    worker_pool,
+    workers_of,
+)
 from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
@@ -42,6 +51,7 @@ def configure_command(p: argparse.ArgumentParser) -> None:
                    help="square-wave supply's chopping pattern (default pwm-on-pwm; sync: the positive leg "
                         "complementary, no freewheeling through a diode in the off-time)")
     add_inverter_option(p)
+    add_verbose_option(p)
 
 
 def run_command(args: argparse.Namespace) -> int:
@@ -60,12 +70,14 @@ def run_command(args: argparse.Namespace) -> int:
     with worker_pool(workers) as pool:  # the points, then paper 1's figures and the waveforms, and the drawing
         res = compare(drive, w, workers=workers, executor=pool,
                       progress=not args.no_progress and sys.stderr.isatty(), pwm_phases=args.pwm_phases,
-                      controls=default_controls(drive, min(w), args.chopping))
+                      controls=default_controls(drive, min(w), args.chopping), summarise=False)
         _print(args, drive, w, res)
         files = compare_directory(res, command=compare_command(args, out), motor_source=args.motor,
                                   report=not args.no_report, executor=pool)
     for path in write_files(out, files):
         print(f"wrote {path}")
+    # one line for every run: the points, the waveforms and paper 1's figures (manifest.json lists them all)
+    summarise(res.warnings, runs_text(res, figures=True), args.verbose)
     return 0
 
 

@@ -16,7 +16,16 @@ from ..report.effmap_plots import effmap_figures
 from ..report.plots import load_matplotlib
 from ..sweep.effmap_store import EffMapStore
 from ..sweep.store import Store
-from .common import add_inverter_option, check_speed_range, load_drive, positive_int, worker_pool, workers_of
+from .common import (
+    add_inverter_option,
+    add_verbose_option,
+    check_speed_range,
+    load_drive,
+    positive_int,
+    summarise,
+    worker_pool,
+    workers_of,
+)
 from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
@@ -46,6 +55,7 @@ def configure_command(p: argparse.ArgumentParser) -> None:
                    help="square-wave supply's chopping pattern (default pwm-on-pwm; sync: the positive leg "
                         "complementary, no freewheeling through a diode in the off-time)")
     add_inverter_option(p)
+    add_verbose_option(p)
 
 
 def _store_path(out: Path, store: Path | None) -> Path:
@@ -79,13 +89,14 @@ def run_command(args: argparse.Namespace) -> int:
     load_matplotlib()  # before the pool starts: its workers draw the figures with it already loaded
     with worker_pool(workers) as pool:  # the points, then the figures
         if args.no_store:
-            res = efficiency_map(drive, torques, speeds, workers=workers, executor=pool, controls=controls)
+            res = efficiency_map(drive, torques, speeds, workers=workers, executor=pool, controls=controls,
+                                 summarise=False)
         else:
             path = _store_path(out, args.store)
             path.parent.mkdir(parents=True, exist_ok=True)
             with Store(path) as st:
                 res = efficiency_map(drive, torques, speeds, workers=workers, executor=pool, controls=controls,
-                                     cache=EffMapStore(st))
+                                     cache=EffMapStore(st), summarise=False)
             print(f"store {path}: {res.cached} of {len(res.points)} points found there, "
                   f"{len(res.points) - res.cached} simulated")
         mode = "generating (braking)" if args.generating else "motoring"
@@ -101,4 +112,5 @@ def run_command(args: argparse.Namespace) -> int:
         files.update(effmap_figures(res, pool))
     for path in write_files(out, files):
         print(f"wrote {path}")
+    summarise(res.warnings, len(res.points), args.verbose)  # one line for every point (--verbose: each one)
     return 0

@@ -16,13 +16,14 @@ processes, which draw a command's figures in parallel.
 from __future__ import annotations
 
 import io
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import BldclabError
+from ..errors import BldclabError, PlausibilityWarning
 
 if TYPE_CHECKING:
     from concurrent.futures import Executor
@@ -276,11 +277,13 @@ class FigureJob:
     dated: bool = True
 
 
-def render_figure(job: FigureJob) -> tuple[dict[str, bytes], Any]:
+def render_figure(job: FigureJob) -> tuple[dict[str, bytes], Any, list[str]]:
     """Make a figure and save it in each format of the job.
 
     The layout (matplotlib's constrained layout: text extents, colour bars) is computed once, for the first format,
-    and kept for the others instead of being computed again.
+    and kept for the others instead of being computed again. The plausibility warnings of the simulations the
+    figure runs (paper 1's Figs 9, 11, 12) are recorded and returned, not shown: on a worker process they would go
+    to its stderr one by one, past the command's one summary line.
 
     Parameters
     ----------
@@ -292,19 +295,27 @@ def render_figure(job: FigureJob) -> tuple[dict[str, bytes], Any]:
         The file content per format.
     object
         The data the job's function returned beside the figure, else None.
+    list of str
+        The messages of the :class:`~bldclab.errors.PlausibilityWarning` raised while making it.
     """
-    made = job.make(*job.args)
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always", PlausibilityWarning)
+        made = job.make(*job.args)
+    caught = [str(w.message) for w in rec if issubclass(w.category, PlausibilityWarning)]
+    for w in rec:
+        if not issubclass(w.category, PlausibilityWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     fig, data = made if isinstance(made, tuple) else (made, None)
     out: dict[str, bytes] = {}
     for fmt in job.formats:
         out[fmt] = figure_bytes(fig, fmt, dpi=job.dpi, dated=job.dated)
         if fig.get_layout_engine() is not None:
             fig.set_layout_engine("none")  # the axes keep the positions the first format's drawing gave them
-    return out, data
+    return out, data, caught
 
 
 def render_figures(jobs: Mapping[str, FigureJob], executor: Executor | None = None
-                   ) -> dict[str, tuple[dict[str, bytes], Any]]:
+                   ) -> dict[str, tuple[dict[str, bytes], Any, list[str]]]:
     """Draw several figures to files, in this process or on an executor (its workers draw them in parallel).
 
     Parameters
@@ -317,7 +328,7 @@ def render_figures(jobs: Mapping[str, FigureJob], executor: Executor | None = No
     Returns
     -------
     dict
-        Name -> :func:`render_figure`'s ``(files by format, data)``, in the order of ``jobs``.
+        Name -> :func:`render_figure`'s ``(files by format, data, warnings)``, in the order of ``jobs``.
     """
     if executor is None:
         return {name: render_figure(job) for name, job in jobs.items()}

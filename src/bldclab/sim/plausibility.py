@@ -48,6 +48,7 @@ Thresholds and why (``T_pwm = 1 / f_pwm``, ``tau_el = L / R``, ``f_e = p |Omega|
 from __future__ import annotations
 
 import math
+import re
 import warnings
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
@@ -71,8 +72,8 @@ from ..model.motor import Drive
 from .results import SimResult
 
 __all__ = ["BALANCE_ERROR", "BALANCE_WARN", "CHECK_MODES", "PWM_PER_PERIOD_ERROR", "PWM_PER_PERIOD_WARN",
-           "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "Finding", "apply", "check_pwm", "check_reference",
-           "check_result", "check_speed", "check_steady", "collect", "summary"]
+           "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "Finding", "apply", "cause_of", "check_pwm",
+           "check_reference", "check_result", "check_speed", "check_steady", "collect", "distinct", "summary"]
 
 #: Accepted values of ``simulate(..., check=)``.
 CHECK_MODES = ("error", "warn", "off")
@@ -316,16 +317,44 @@ def collect() -> Iterator[list[str]]:
     # the list is complete once the block has ended
 
 
-def summary(messages: Sequence[str], runs: int) -> str | None:
-    """One line for many warnings: their count, the runs they came from and the first message (``None`` if none).
+_CAUSE = re.compile(r"(?:^|: )((?:inverter|scenario|result|motor|control)\.[A-Za-z_]+)(?=: )")
+
+
+def distinct(messages: Iterable[str]) -> list[str]:
+    """Return the messages with repeats left out, in the order of their first appearance."""
+    return list(dict.fromkeys(messages))
+
+
+def cause_of(message: str) -> str | None:
+    """Return the cause of a warning's message (``"inverter.f_pwm"``: :attr:`Finding.cause`), None if it names none.
+
+    The message may carry a prefix saying where it came from (``"square at 0.74 p.u.: inverter.f_pwm: ..."``).
+    """
+    m = _CAUSE.search(message)
+    return m.group(1) if m else None
+
+
+def summary(messages: Sequence[str], runs: int | str) -> str | None:
+    """One line for many warnings: how many distinct ones, where from, their causes and the first (``None`` if none).
+
+    Identical messages (the same finding at the same point, from two runs of it) count once, and the line says how
+    many repeats there were: ``"12 plausibility warnings in 64 runs (7 repeats counted once); cause: inverter.f_pwm;
+    first: square at 0.74 p.u.: inverter.f_pwm: ..."``.
 
     Parameters
     ----------
     messages : sequence of str
-    runs : int
-        Simulations run.
+        Every warning's message, repeats included.
+    runs : int or str
+        Simulations run (``"in 64 runs"``), or what ran, as text (``"in 64 points and 4 waveforms"``).
     """
     if not messages:
         return None
-    return (f"{len(messages)} plausibility warning{'s' if len(messages) != 1 else ''} in {runs} runs; first: "
-            f"{messages[0]}")
+    uniq = distinct(messages)
+    causes = distinct(c for c in map(cause_of, uniq) if c)
+    repeats = len(messages) - len(uniq)
+    where = f"{runs} runs" if isinstance(runs, int) else runs
+    return (f"{len(uniq)} plausibility warning{'s' if len(uniq) != 1 else ''} in {where}"
+            + (f" ({repeats} repeat{'s' if repeats != 1 else ''} counted once)" if repeats else "")
+            + (f"; cause{'s' if len(causes) != 1 else ''}: {', '.join(causes)}" if causes else "")
+            + f"; first: {uniq[0]}")
