@@ -374,3 +374,86 @@ def test_check_warns_about_the_premises_compare_warns_about_in_its_words(capsys:
     assert "sinusoidal back-EMF" in out  # paper 1's premises: the lines compare prints under its table
     rc, _, err = run_main(capsys, "check", "htm-48v")
     assert rc == 0 and err == ""  # 24 PWM periods per commutation: nothing to warn about
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# compare's bottom line and figures, the comparison each command makes (issue 23, items 8 and 9)
+
+def _pair(t_sine: float, t_square: float, eta_sine: float, eta_square: float) -> pd.DataFrame:
+    rows = []
+    for w in (0.2, 0.5, 0.8, 0.95):  # htm-48v: Omega_N = 640 rpm = 0.894 p.u.: three speeds in the rated range
+        rows.append({"supply": "sine", "Omega_pu": w, "T_pu": t_sine if w < 0.9 else 0.1, "eta": eta_sine})
+        rows.append({"supply": "square", "Omega_pu": w, "T_pu": t_square if w < 0.9 else 0.5, "eta": eta_square})
+    return pd.DataFrame(rows)
+
+
+@pytest.mark.parametrize(("numbers", "line"), [
+    ((1.05, 1.0, 0.90, 0.88), "5.0 % more torque with sinusoidal supply at equal rms current, at 2.0 percentage "
+                              "points better efficiency"),
+    ((1.0, 1.1, 0.90, 0.88), "10.0 % more torque with square-wave supply at equal rms current, at 2.0 percentage "
+                             "points worse efficiency"),
+    ((1.0, 1.002, 0.90, 0.903), "the same torque with either supply (within 0.005 p.u.) at equal rms current, and "
+                                "the same efficiency (within 0.5 percentage points)"),
+])
+def test_compare_bottom_line_is_computed_over_the_rated_range(numbers: tuple[float, ...], line: str) -> None:
+    from bldclab.analysis.compare import bottom_line
+
+    text = bottom_line(bl.load("htm-48v"), _pair(*numbers))
+    assert text == f"bottom line: in its rated range (up to 0.89 p.u., 640 rpm: 3 speeds) this drive gives {line}"
+
+
+def test_compare_prints_its_comparison_and_bottom_line_first(compare_htm48v: Path) -> None:
+    from bldclab.analysis.compare import COMPARISON
+
+    verdict = (compare_htm48v / "verdict.txt").read_text().splitlines()
+    assert verdict[0].startswith("bottom line: in its rated range (up to 0.89 p.u., 640 rpm")
+    assert "% more torque with sinusoidal supply at equal rms current" in verdict[0]
+    assert all("rpm" in v for v in verdict if v.startswith("mean torque"))  # the detail names the speeds in rpm too
+    page = (compare_htm48v / "report.html").read_text()
+    assert "Comparison at equal current" in COMPARISON and COMPARISON in page and f"<b>{verdict[0]}</b>" in page
+
+
+def test_compare_figures_are_in_rpm_and_n_m_with_closed_forms_named_or_left_out() -> None:
+    """rpm and N m, per unit on the opposite axes; paper 1's curves labelled as closed forms, and not drawn for a
+    sinusoidal back-EMF (outside their premises), with a note."""
+    import warnings
+
+    from bldclab.analysis.compare import compare
+    from bldclab.report.bundle import torque_figure
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for name, closed in (("htm-48v", True), (str(DRONE), False)):
+            drive = bl.load(name)
+            fig = torque_figure(compare(drive, [0.3, 0.6], workers=1, base_speeds=False))
+            ax = fig.axes[0]
+            assert ax.get_xlabel() == "speed (rpm)" and ax.get_ylabel() == "torque (N m)"
+            assert ax.get_xlim()[1] == pytest.approx(drive.Omega_0 * 30 / np.pi)
+            labels = [ln.get_label() for ln in ax.get_lines()]
+            points = [ln for ln in ax.get_lines() if ln.get_label().startswith("simulated, sinusoidal")]
+            assert points[0].get_xdata()[0] == pytest.approx(0.3 * drive.Omega_0 * 30 / np.pi)
+            secondary = ax.child_axes  # matplotlib's secondary axes: speed and torque in per unit
+            assert any("per unit of" in a.get_xlabel() for a in secondary)
+            assert any("per unit of" in a.get_ylabel() for a in secondary)
+            closed_forms = [lab for lab in labels if lab.startswith("paper 1 closed form, ")]
+            assert bool(closed_forms) == closed, labels
+            notes = [t.get_text() for t in ax.texts]
+            assert closed or any("closed forms not drawn" in t for t in notes)
+
+
+def test_effmap_says_it_compares_at_equal_torque(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from bldclab.analysis.effmap import COMPARISON
+
+    rc, out, _ = run_main(capsys, "effmap", "htm-48v", "--torques", "2", "--speeds", "2", "--workers", "1",
+                          "--no-store", "--out", str(tmp_path / "m"))
+    assert rc == 0 and out.splitlines()[1] == f"  {COMPARISON}"
+    assert COMPARISON.startswith("Comparison at equal torque")
+
+
+def test_compare_bottom_line_above_the_rated_speed_uses_every_speed() -> None:
+    from bldclab.analysis.compare import bottom_line
+
+    sim = _pair(1.05, 1.0, 0.90, 0.88)
+    text = bottom_line(bl.load("htm-48v"), sim[sim.Omega_pu > 0.9])
+    assert text.startswith("bottom line: over the speeds compared (all above the rated speed 0.89 p.u.) this drive "
+                           "gives 400.0 % more torque with square-wave supply")

@@ -49,6 +49,7 @@ from .experiments import map_points, steady_state
 from .losses import LOSS_BUCKETS, NOT_LOSSES, loss_buckets, point_losses
 
 __all__ = [
+    "COMPARISON",
     "FEASIBLE_TOL_PU",
     "LOSS_BUCKETS",
     "NOT_LOSSES",
@@ -71,6 +72,11 @@ RESOLUTION = VERDICT_TOLERANCE["eta"]
 
 SUPPLIES = ("square", "sine")
 _RPM = 30.0 / math.pi
+
+#: The comparison :func:`efficiency_map` makes, in one sentence (printed by ``bldclab effmap`` and in the report).
+COMPARISON = ("Comparison at equal torque: at every point both supplies are asked for the same torque, each drawing "
+              "the current it needs, so the efficiencies are at the same output (bldclab compare compares at equal "
+              "current).")
 
 
 def map_controls(drive: Drive, lowest_speed: float, chopping: str = "pwm-on-pwm") -> dict[str, Control]:

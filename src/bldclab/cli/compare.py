@@ -89,6 +89,7 @@ def _print(args: argparse.Namespace, drive: Drive, w: list[float], res: CompareR
     print(f"{drive.name}: square-wave (SixStep{chop}, I_N = {drive.motor.I_N:g} A) vs sinusoidal (Sine, "
           f"T_sN = {analytic.t_sN(drive):.4g} N m), {args.speeds} speeds x 2 supplies in {res.seconds:.1f} s; "
           f"Omega_0 = {drive.Omega_0:.4g} rad/s = {drive.Omega_0 * RPM_PER_RAD_S:.4g} rpm")
+    print(f"  {res.comparison}")
     bs = {} if res.base_speeds is None else res.base_speeds.set_index("supply").simulated_pu.to_dict()
     print(f"  Theta_m {t1.Theta_m * 1e3:.2f} mrad; base speed (21) sine {t1.Omega_sB_pu:.3f} p.u., (30) square "
           f"{t1.Omega_qB_pu:.3f} p.u.; with R: {t1.Omega_sB_R_pu:.3f} / {t1.Omega_qB_R_pu:.3f} p.u.; simulated: "
@@ -119,6 +120,8 @@ def _print(args: argparse.Namespace, drive: Drive, w: list[float], res: CompareR
         print("  * not applicable to this drive (paper 1's closed forms, shown for reference), because:")
         for reason in res.not_applicable:
             print(f"    - {reason}")
-    print("verdict:")
-    for line in res.verdict:
+    head, *detail = res.verdict
+    print(head if head.startswith("bottom line") else f"  - {head}")
+    print("verdict in detail:")
+    for line in detail:
         print(f"  - {line}")

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .._files import write_files
-from ..analysis.effmap import FEASIBLE_TOL_PU, efficiency_map, map_controls
+from ..analysis.effmap import COMPARISON, FEASIBLE_TOL_PU, efficiency_map, map_controls
 from ..control.sixstep import CHOPPINGS
 from ..errors import BldclabError
 from ..report.effmap_plots import effmap_figures
@@ -104,6 +104,7 @@ def run_command(args: argparse.Namespace) -> int:
               f"(square wave: {args.chopping} chopping) in "
               f"{res.seconds:.1f} s (T_N = {drive.T_N:.4g} N m, Omega_0 = {drive.Omega_0 * RPM_PER_RAD_S:.4g} rpm; "
               f"a point is feasible when its mean torque is within {FEASIBLE_TOL_PU:g} T_N of the reference)")
+        print(f"  {COMPARISON}")
         for line in res.summary():
             print(f"  {line}")
         print(f"  loss buckets: {', '.join(res.buckets)}")

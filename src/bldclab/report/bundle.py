@@ -31,6 +31,7 @@ from ..analysis.compare import SUPPLIES, CompareResult, compare, default_control
 from ..analysis.experiments import electrical_period, map_points, steady_state
 from ..control import Control, Lu
 from ..errors import BldclabError, PlausibilityWarning
+from ..model import analytic
 from ..model.analytic.table import table1_text
 from ..model.motor import Drive
 from ..sim import Scenario
@@ -583,31 +584,46 @@ def _split(res: CompareResult) -> tuple[pd.DataFrame, pd.DataFrame]:
     return sim[sim.supply == "sine"], sim[sim.supply == "square"]
 
 
+def _physical(res: CompareResult, torque: bool) -> plots.Physical:
+    """Return how the comparison's figures are drawn: rpm (and N m), per unit on the opposite axes.
+
+    The closed forms are left out where the back-EMF is not paper 1's trapezoid
+    (:func:`bldclab.model.analytic.shape_applies`), with a note saying so.
+    """
+    d = res.drive
+    closed = analytic.shape_applies(d)
+    note = ("paper 1's closed forms not drawn: they assume the ideal trapezoidal back-EMF, which this drive does not "
+            "have (bldclab check)") if not closed else ""
+    return plots.Physical(rpm=d.Omega_0 * 30.0 / math.pi, y_base=d.T_N if torque else None,
+                          y_unit="N m" if torque else "", closed_forms=closed, note=note)
+
+
 def torque_figure(res: CompareResult) -> Figure:
-    """Torque vs speed: paper 1's curves (Fig 7) and the simulated points of both supplies."""
+    """Torque vs speed in rpm and N m (p.u. on the opposite axes): paper 1's closed forms (Fig 7), simulated points."""
     si, sq = _split(res)
     over_t = {"simulated, sinusoidal": si.rename(columns={"T_pu": "T_s_pu"})[["Omega_pu", "T_s_pu"]],
               "simulated, square-wave": sq.rename(columns={"T_pu": "T_q_pu"})[["Omega_pu", "T_q_pu"]]}
-    fig, _ = plots.plot_torque_speed(res.analytic, overlays=over_t, title=f"{res.drive.name}: torque vs speed")
+    fig, _ = plots.plot_torque_speed(res.analytic, overlays=over_t, title=f"{res.drive.name}: torque vs speed",
+                                     physical=_physical(res, True))
     return fig
 
 
 def ripple_figure(res: CompareResult) -> Figure:
-    """Torque ripple vs speed: paper 1's curves (Fig 8) and the simulated points on the averaged inverter."""
+    """Torque ripple vs speed in rpm and N m: paper 1's closed forms (Fig 8), the points on the averaged inverter."""
     si, sq = _split(res)
     # one point set (one marker) for the averaged inverter; each supply's points carry their own column
     avg = si.rename(columns={"TR_avg_pu": "TR_s_pu"})[["Omega_pu", "TR_s_pu"]].merge(
         sq.rename(columns={"TR_avg_pu": "TR_q_pu"})[["Omega_pu", "TR_q_pu"]], on="Omega_pu", how="outer")
     fig, _ = plots.plot_ripple(res.analytic, overlays={"simulated, averaged inverter": avg},
-                               title=f"{res.drive.name}: torque ripple vs speed")
+                               title=f"{res.drive.name}: torque ripple vs speed", physical=_physical(res, True))
     return fig
 
 
 def efficiency_figure(res: CompareResult) -> Figure:
-    """Efficiency vs speed: paper 1's (38)/(39) and the simulated points of both supplies."""
+    """Efficiency vs speed in rpm: paper 1's closed forms (38)/(39) and the simulated points of both supplies."""
     si, sq = _split(res)
     fig, _ = plots.plot_efficiency(res.analytic, {"sinusoidal": si, "square-wave": sq},
-                                   title=f"{res.drive.name}: efficiency vs speed")
+                                   title=f"{res.drive.name}: efficiency vs speed", physical=_physical(res, False))
     return fig
 
 

@@ -49,6 +49,7 @@ from .premises import (
     VDC_MISMATCH_MAX,
     applicability,
     harmonic_ratio,
+    shape_applies,
     shape_deviation,
     sine_torque_pu,
 )
@@ -135,6 +136,7 @@ __all__ = [
     "r_total",
     "region_q",
     "region_s",
+    "shape_applies",
     "shape_deviation",
     "sine_torque_pu",
     "t_N",
