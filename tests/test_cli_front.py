@@ -457,3 +457,41 @@ def test_compare_bottom_line_above_the_rated_speed_uses_every_speed() -> None:
     text = bottom_line(bl.load("htm-48v"), sim[sim.Omega_pu > 0.9])
     assert text.startswith("bottom line: over the speeds compared (all above the rated speed 0.89 p.u.) this drive "
                            "gives 400.0 % more torque with square-wave supply")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# did you mean; the cause first in composed errors (issue 23, item 13)
+
+@pytest.mark.parametrize(("argv", "hint"), [
+    (["simulate", "htm-48v", "--contrl", "sine"], "unrecognized arguments: --contrl sine: did you mean --control?"),
+    (["simulate", "htm-48v", "--contrl=sine"], "did you mean --control?"),
+    (["compare", "htm-48v", "--min-sped", "0.1", "--workrs", "2"],
+     "did you mean --min-speed (for --min-sped), --workers (for --workrs)?"),
+    (["simulat", "htm-48v"], "invalid choice: 'simulat': did you mean 'simulate'? (choose from"),
+    (["torque-contrl", "lu-4kw"], "did you mean 'torque-control'?"),
+    (["simulate", "htm-48v", "--control", "sinus"], "invalid choice: 'sinus': did you mean 'sine'?"),
+    (["--vesion"], "did you mean --version?"),
+])
+def test_mistyped_options_and_commands_get_the_nearest_spelling(capsys: pytest.CaptureFixture[str], argv: list[str],
+                                                                hint: str) -> None:
+    rc, out, err = run_main(capsys, *argv)
+    assert rc == 2 and out == "" and err.count("\n") == 1 and err.startswith("bldclab: error: ")
+    assert hint in err, err
+
+
+def test_no_suggestion_without_a_near_spelling(capsys: pytest.CaptureFixture[str]) -> None:
+    rc, _, err = run_main(capsys, "simulate", "htm-48v", "--xyzzy", "1")
+    assert rc == 2 and err == "bldclab: error: unrecognized arguments: --xyzzy 1\n"
+
+
+def test_a_failed_run_names_its_cause_first(capsys: pytest.CaptureFixture[str]) -> None:
+    """--speed 300 (rad/s) on htm-48v is 4 times Omega_0: the back-EMF drives the currents past the hardware trip.
+    One line, the speed first, not a warning then an error about currents."""
+    rc, out, err = run_main(capsys, "simulate", "htm-48v", "--speed", "300")
+    assert rc == 2 and out == ""
+    assert err.count("\n") == 1, err
+    assert err.startswith("bldclab: error: scenario.speed: 300 rad/s (2865 rpm) is 4 times the no-load speed")
+    assert "; the run then failed: result.currents: a phase current reached" in err
+    with pytest.warns(bl.errors.PlausibilityWarning), pytest.raises(bl.errors.PlausibilityError) as info:  # the API
+        bl.simulate(bl.load("htm-48v"), bl.SixStep(), bl.Scenario(duration=0.01, speed=300.0, ref=50.0))
+    assert info.value.field == "scenario.speed" and "result.currents" in info.value.problem

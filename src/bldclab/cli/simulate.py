@@ -8,6 +8,7 @@ import json
 import math
 import sys
 import time
+import warnings
 from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
@@ -16,7 +17,7 @@ from .._core import decode_flags
 from .._files import write_files
 from ..analysis.experiments import electrical_period
 from ..control import Sine
-from ..errors import BldclabError
+from ..errors import BldclabError, PlausibilityError, PlausibilityWarning
 from ..model.units import to_si
 from ..report import plots
 from ..sim import CHUNK, TRACE_LIMIT, Piecewise, Scenario, parse_profile, samples_of, simulate, trace_bytes, trace_rows
@@ -193,6 +194,15 @@ class _Progress:
         sys.stderr.flush()
 
 
+def _show(caught: list[warnings.WarningMessage]) -> None:
+    """Issue again the warnings recorded during a run (the program shows plausibility warnings as one line each)."""
+    for w in caught:
+        if issubclass(w.category, PlausibilityWarning):
+            warnings.warn(str(w.message), PlausibilityWarning, stacklevel=2)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+
 def _fmt_bytes(b: float) -> str:
     for unit in ("B", "kB", "MB", "GB", "TB"):
         if b < 1000 or unit == "TB":
@@ -218,7 +228,14 @@ def run_command(args: argparse.Namespace) -> int:
                            "drop it with --no-trace")
     n = samples_of(drive, sc.duration)
     progress = _Progress(args.progress, sc.duration) if (args.progress or n > 4 * CHUNK) else None
-    res = simulate(drive, ctl, sc, progress=progress)
+    with warnings.catch_warnings(record=True) as caught:  # shown after the run: a failed run's cause is in its error
+        warnings.simplefilter("always", PlausibilityWarning)
+        try:
+            res = simulate(drive, ctl, sc, progress=progress)
+        except PlausibilityError as exc:
+            _show([w for w in caught if str(w.message) not in str(exc)])  # what the error leads with: not again
+            raise
+    _show(caught)
     m = res.metrics
     assert m is not None  # the window ends with the run
     flags = int(res.meta["controller_flags"])

@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._core import core
 from .._version import __version__
 from ..control import Control
-from ..errors import BldclabError
+from ..errors import BldclabError, PlausibilityError
 from ..model.motor import Drive
 from ..model.units import per_unit, to_si
 from . import plausibility as _plaus
@@ -598,7 +598,8 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         For invalid scenario inputs (NaN in a profile, wrong length) or parameters the C core rejects.
     PlausibilityError
         With ``check="error"``, for a run whose result would be physically meaningless (a subclass of
-        :class:`~bldclab.errors.BldclabError` naming the cause and the numbers).
+        :class:`~bldclab.errors.BldclabError` naming the cause and the numbers). When its inputs raised warnings
+        before the run, the error leads with them as the cause (:func:`bldclab.sim.plausibility.cause_first`).
     """
     if check not in _plaus.CHECK_MODES:
         raise BldclabError("check", f"must be one of {', '.join(_plaus.CHECK_MODES)}, got {check!r}")
@@ -739,7 +740,10 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     chosen = scenario.window is not None
     # the default window (the whole run) is not checked as a measurement: guards see the run as before it existed
     res = SimResult(signals, units, docs, metrics if chosen else None, meta)
-    meta["warnings"] = issued + _guards_after(drive, res, imposed, check)
+    try:
+        meta["warnings"] = issued + _guards_after(drive, res, imposed, check)
+    except PlausibilityError as exc:  # the inputs' warnings are its cause: they lead the message
+        raise _plaus.cause_first(exc, issued) from None
     res.metrics = metrics
     return res
 

@@ -72,8 +72,9 @@ from ..model.motor import Drive
 from .results import SimResult
 
 __all__ = ["BALANCE_ERROR", "BALANCE_WARN", "CHECK_MODES", "PWM_PER_PERIOD_ERROR", "PWM_PER_PERIOD_WARN",
-           "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "Finding", "apply", "cause_of", "check_pwm",
-           "check_reference", "check_result", "check_speed", "check_steady", "collect", "distinct", "summary"]
+           "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "Finding", "apply", "cause_first", "cause_of",
+           "check_pwm", "check_reference", "check_result", "check_speed", "check_steady", "collect", "distinct",
+           "summary"]
 
 #: Accepted values of ``simulate(..., check=)``.
 CHECK_MODES = ("error", "warn", "off")
@@ -292,6 +293,34 @@ def apply(findings: Iterable[Finding], check: str, stacklevel: int = 3) -> list[
             if f.level == "error":
                 raise PlausibilityError(f.cause, f.message)
     return issued
+
+
+def cause_first(error: PlausibilityError, before: Sequence[str]) -> PlausibilityError:
+    """Return the error of a finished run led by the warnings its inputs raised before it ran: the cause first.
+
+    A run that failed after warnings on its inputs (``--speed 300`` on ``htm-48v``: 4 times the no-load speed, so
+    the back-EMF drives the currents through the diodes past the hardware trip) is reported as
+    ``scenario.speed: 300 rad/s ... is 4 times the no-load speed ...; the run then failed: result.currents: ...``,
+    naming the input as the field; without such warnings the error is returned as it is.
+
+    Parameters
+    ----------
+    error : PlausibilityError
+        What the finished run's check found.
+    before : sequence of str
+        The warnings the inputs raised (``"cause: message"``), in order.
+
+    Returns
+    -------
+    PlausibilityError
+    """
+    if not before:
+        return error
+    cause = cause_of(before[0]) or error.field
+    first = before[0].removeprefix(f"{cause}: ")
+    rest = "".join(f"; {text}" for text in before[1:])
+    return PlausibilityError(cause, f"{first}{rest}; the run then failed: {error.field}: {error.problem}",
+                             error.source)
 
 
 @contextmanager
