@@ -495,3 +495,12 @@ def test_a_failed_run_names_its_cause_first(capsys: pytest.CaptureFixture[str]) 
     with pytest.warns(bl.errors.PlausibilityWarning), pytest.raises(bl.errors.PlausibilityError) as info:  # the API
         bl.simulate(bl.load("htm-48v"), bl.SixStep(), bl.Scenario(duration=0.01, speed=300.0, ref=50.0))
     assert info.value.field == "scenario.speed" and "result.currents" in info.value.problem
+
+
+def test_torque_control_warns_like_the_other_commands(capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 23, item 12: rect misses its torque on lu-4kw at 3000 rpm (96.5 %): the line starts bldclab: warning:."""
+    rc, _, err = run_main(capsys, "torque-control", "lu-4kw", "--torques", "100%", "--speeds", "3000 rpm",
+                          "--methods", "rect")
+    assert rc == 0 and err
+    assert all(line.startswith("bldclab: warning: ") for line in err.splitlines()), err
+    assert "rect at 100 % of T_N, 3000 rpm: mean torque 96.5 % of the reference" in err
