@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import pytest
 
@@ -112,6 +113,7 @@ def test_progress_line_on_request(capsys):
     assert err.startswith("\rsimulating") and "100.0 %" in err and err.endswith("s elapsed)\n")
 
 
+@pytest.mark.slow
 def test_flags_say_when_they_were_raised(tmp_path, capsys):
     """Issue 23, item 5: a flag inside the metric window is a finding (share of the window's samples, first and last
     time); one raised only at start-up says so. Terminal, JSON and the plot's title."""
@@ -129,13 +131,14 @@ def test_flags_say_when_they_were_raised(tmp_path, capsys):
     assert summary["flags_summary"] in " ".join(res.plot().get_suptitle().split())
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:scenario.window")
 def test_speed_ref_is_the_reference_shown_and_drawn(tmp_path, capsys):
     """Issue 23, item 6: with --speed-ref the heading and the title name the speed reference (the torque reference
     is the loop's limit), and the speed panel draws it."""
     out = tmp_path / "o"
     rc = main(["simulate", "htm-48v", "--control", "sine", "--mechanics", "--speed-ref", "0 s: 0 rpm, 0.1 s: 300 rpm",
-               "--duration", "0.3 s", "--out", str(out), "--plot"])
+               "--duration", "0.3 s", "--trace-every", "4", "--out", str(out), "--plot"])
     assert rc == 0
     heading = capsys.readouterr().out.splitlines()[0]
     assert "speed reference 0 s: 0 rpm, 0.1 s: 300 rpm (speed loop; torque up to 33.69 N m)" in heading
@@ -158,3 +161,44 @@ def test_a_long_drive_name_keeps_the_title_inside_the_figure():
     box = fig._suptitle.get_window_extent()
     assert box.x0 >= 0 and box.x1 <= fig.bbox.x1
     assert fig.get_suptitle().count("\n") >= 1
+
+
+def test_six_step_settings_reach_the_controller(tmp_path, capsys):
+    """Issue 23, item 14: --regulation, --timed, --timing, --timing-time, --commutation set SixStep's fields."""
+    out = tmp_path / "o"
+    assert main(["simulate", "htm-48v", "--regulation", "duty", "--timed", "--timing", "15 deg", "--timing-time",
+                 "20 us", "--commutation", "encoder", "--no-trace", "--out", str(out)]) == 0
+    heading = capsys.readouterr().out.splitlines()[0]
+    assert "reference 0.5 duty" in heading  # without a current loop the reference is the duty (default 0.5)
+    ctl = bl.SimResult.load(out / "result.npz").meta["control"]
+    assert (ctl["regulation"], ctl["timed"], ctl["commutation"]) == ("duty", True, "encoder")
+    assert ctl["timing"] == pytest.approx(math.radians(15)) and ctl["timing_time"] == pytest.approx(20e-6)
+
+
+def test_timing_advance_raises_the_drone_motors_torque_at_full_duty(capsys):
+    """At 35,000 rpm (1.5 PWM periods per commutation) and full duty, 15 deg of advance gives more torque."""
+    drone = str(Path(__file__).resolve().parent / "data" / "drone-2207.toml")
+    torque = {}
+    for timing in ("0 deg", "15 deg"):
+        assert main(["simulate", drone, "--speed", "35000 rpm", "--regulation", "duty", "--duty", "1", "--timed",
+                     "--timing", timing, "--format", "json", "--no-trace"]) == 0
+        torque[timing] = json.loads(capsys.readouterr().out)["tau_mean_N_m"]
+    assert torque["15 deg"] > 1.05 * torque["0 deg"] > 0
+
+
+@pytest.mark.parametrize("argv, option, words", [
+    (["--control", "sine", "--timed"], "--timed", "--control square"),
+    (["--control", "sixv", "--timing", "10 deg"], "--timing", "--control square"),
+    (["--timing", "40 deg"], "--timing", "30 deg"),
+    (["--timing", "15 V"], "--timing", "not a unit of angle"),
+    (["--timing-time", "-2 us"], "--timing-time", ""),
+    (["--regulation", "duty", "--current", "10 A"], "--current", "duty"),
+])
+def test_six_step_settings_are_checked_before_the_run(argv, option, words, capsys, monkeypatch):
+    def no_run(*a, **k):
+        raise AssertionError("simulate ran")
+
+    monkeypatch.setattr("bldclab.cli.simulate.simulate", no_run)
+    assert main(["simulate", "htm-48v", *argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"bldclab: error: {option}") and words in err[0], err

@@ -16,7 +16,9 @@ from typing import Any
 from .._core import decode_flags
 from .._files import write_files
 from ..analysis.experiments import electrical_period
-from ..control import Sine
+from ..control import Control, Sine, SixStep
+from ..control.sixstep import COMMUTATIONS as SIXSTEP_COMMUTATIONS
+from ..control.sixstep import REGULATIONS as SIXSTEP_REGULATIONS
 from ..errors import BldclabError, PlausibilityError, PlausibilityWarning
 from ..model.units import to_si
 from ..report import plots
@@ -47,7 +49,21 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     ref = p.add_mutually_exclusive_group()
     ref.add_argument("--torque", help='torque reference, e.g. "20 N m" (sine, lu, rect)')
     ref.add_argument("--current", help='current reference, e.g. "50 A" (square)')
-    ref.add_argument("--duty", type=float, help="duty in [-1, 1] (sixv)")
+    ref.add_argument("--duty", type=float, help="duty in [-1, 1] (sixv; square with --regulation duty)")
+    six = p.add_argument_group("six-step settings (--control square: bldclab.SixStep, docs/sixstep.md)")
+    six.add_argument("--regulation", choices=SIXSTEP_REGULATIONS,
+                     help="current regulation (default predictive); duty: no current loop, the reference is the duty "
+                          "(an ESC's throttle; give it with --duty, default 0.5)")
+    six.add_argument("--timed", action="store_true",
+                     help="commutate at the predicted instant inside the PWM period (an ESC's commutation timer), "
+                          "not at the sample nearest it")
+    six.add_argument("--timing", metavar="ANGLE",
+                     help='timing advance, electrical: "15 deg" (or rad); with --timing-time at most 30 deg')
+    six.add_argument("--timing-time", metavar="TIME",
+                     help='timing advance per speed, "20 us": the advance grows by |Omega_e| times it')
+    six.add_argument("--commutation", choices=SIXSTEP_COMMUTATIONS,
+                     help="where the commutation instants come from (default hall; encoder: the exact angle, the "
+                          "ideal commutation)")
     p.add_argument("--speed-ref",
                    help='speed reference for a speed loop (--control sine with --mechanics; the loop sets the '
                         'torque): "1000 rpm", "0.5 pu"' + _PROFILE_HELP.format(u="rpm", v=1000))
@@ -84,13 +100,44 @@ def _reference(args: argparse.Namespace, default: float, unit: str) -> float:
         return to_si(args.current, "current", "--current")
     if args.duty is not None:
         if unit != "duty" or not -1.0 <= args.duty <= 1.0 or math.isnan(args.duty):
-            raise BldclabError("--duty", f"needs --control sixv and a value in [-1, 1], got {args.duty}")
+            raise BldclabError("--duty", f"needs --control sixv (or square with --regulation duty) and a value in "
+                               f"[-1, 1], got {args.duty}")
         return float(args.duty)
     return default
 
 
+#: The six-step settings on the command line: option, attribute of the parsed arguments.
+_SIXSTEP_OPTIONS = (("--regulation", "regulation"), ("--timed", "timed"), ("--timing", "timing"),
+                    ("--timing-time", "timing_time"), ("--commutation", "commutation"))
+
+
+def _sixstep(args: argparse.Namespace, ctl: Control) -> Control:
+    """Return ``SixStep`` with the six-step settings of the command line (each read as the option it came from)."""
+    if not isinstance(ctl, SixStep):
+        return ctl
+    kw: dict[str, Any] = {}
+    for option, attr in _SIXSTEP_OPTIONS:
+        value = getattr(args, attr)
+        if value is None or value is False:
+            continue
+        if attr == "timing":
+            value = to_si(value, "angle", option)
+        elif attr == "timing_time":
+            value = to_si(value, "time", option)
+        kw[attr] = value
+    try:
+        return replace(ctl, **kw)
+    except BldclabError as exc:  # SixStep's own check (an advance above 30 deg, ...): name the option
+        option = next((o for o, a in _SIXSTEP_OPTIONS if exc.field == f"control.{a}"), exc.field)
+        raise BldclabError(option, exc.problem) from None
+
+
 def _check_options(args: argparse.Namespace) -> None:
     """Refuse option combinations before any work (each error names the option typed)."""
+    for option, attr in _SIXSTEP_OPTIONS:
+        if getattr(args, attr) not in (None, False) and args.control != "square":
+            raise BldclabError(option, f"is a six-step setting: it needs --control square, got --control "
+                               f"{args.control}")
     check_out_dir(args.out)  # before the run: a bad --out fails at once, not after the simulation
     if args.plot and args.out is None:
         raise BldclabError("--plot", "needs --out DIR to write the figures into")
@@ -216,6 +263,9 @@ def run_command(args: argparse.Namespace) -> int:
     _check_options(args)
     drive = load_drive(args)
     ctl, default_ref, unit = control_of(args.control, drive)
+    ctl = _sixstep(args, ctl)
+    if isinstance(ctl, SixStep) and ctl.regulation == "duty":  # no current loop: the reference is the duty
+        default_ref, unit = 0.5, "duty"
     ref = _reference(args, default_ref, unit)
     if args.speed_ref is not None and isinstance(ctl, Sine):  # --speed-ref: --control sine, checked above
         ctl = replace(ctl, speed_loop=True)

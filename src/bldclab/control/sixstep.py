@@ -23,7 +23,7 @@ from ..model.units import to_si
 from .base import Control, check_number
 from .hall import check_hall_options, hall_record, normalize_table
 
-__all__ = ["CHOPPINGS", "SixStep"]
+__all__ = ["CHOPPINGS", "COMMUTATIONS", "REGULATIONS", "SixStep"]
 
 # the settings' C constants (values read from the library: bldclab._core)
 _REG = {"pi": "BC_SIXSTEP_PI", "hysteresis": "BC_SIXSTEP_HYST", "predictive": "BC_SIXSTEP_PRED",
@@ -35,6 +35,10 @@ _REF = {"current": 0, "torque": 1}  # ref_torque, a 0/1 switch
 
 #: The chopping patterns of :class:`SixStep` (its ``chopping`` field).
 CHOPPINGS: tuple[str, ...] = tuple(_CHOP)
+#: The regulations of :class:`SixStep` (its ``regulation`` field).
+REGULATIONS: tuple[str, ...] = ("predictive", "pi", "hysteresis", "duty")
+#: Where :class:`SixStep` takes its commutation instants from (its ``commutation`` field).
+COMMUTATIONS: tuple[str, ...] = tuple(_COMM)
 
 
 @dataclass(frozen=True)
@@ -111,7 +115,7 @@ class SixStep(Control):
         the commutation instant. ``None``: the nominal edges ``pi/6 + j pi/3``.
     """
 
-    regulation: Literal["predictive", "pi", "hysteresis"] = "predictive"
+    regulation: Literal["predictive", "pi", "hysteresis", "duty"] = "predictive"
     chopping: Literal["pwm-on-pwm", "bipolar", "high", "sync"] = "pwm-on-pwm"
     reference: Literal["current", "torque"] = "current"
     delay: int = 1

@@ -91,8 +91,8 @@ STEADY_TORQUE = 0.05
 
 def _reference_kind(control: Control) -> str | None:
     """Return ``"current"``, ``"torque"`` or ``None`` (a duty, an open-loop command or a speed loop's output)."""
-    if getattr(control, "speed_loop", False):
-        return None
+    if getattr(control, "speed_loop", False) or getattr(control, "regulation", None) == "duty":
+        return None  # the output of a speed loop, or a duty (six-step without a current loop)
     if control.ref_meaning.startswith("current"):
         return str(getattr(control, "reference", "current"))
     if control.ref_meaning.startswith("torque"):
