@@ -110,9 +110,8 @@ def _split(factor: float) -> Factor:
         e = round(math.log10(factor))
         if float(f"1e{e}") == factor:
             return 1.0, e
-        for e in (3, -3):  # krpm, a thousand times a non-decimal unit
-            if factor / 10.0**e in (_RPM,):
-                return factor / 10.0**e, e
+        if factor == 1e3 * _RPM:  # krpm (krpm/V): a thousand times the rpm
+            return _RPM, 3
     return factor, 0
 
 
