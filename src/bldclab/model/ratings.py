@@ -42,8 +42,6 @@ KV_CONVENTIONS: dict[str, str] = {"KV": "peak", "KV_rms": "rms"}
 #: 5.5 kHz.
 POLE_FREQUENCY_MAX = 8000.0
 
-_GRID = 1 << 14  # points per electrical period for the rms (piecewise-linear shapes: relative error about 1e-9)
-
 
 def pole_pairs(p: object = None, poles: object = None) -> int:
     """Return the pole pairs from ``p`` or from ``poles`` (exactly one of them given).
@@ -89,11 +87,9 @@ def line_rms(emf: BackEmf) -> float:
     Returns
     -------
     float
-        ``sqrt(mean over the three pairs of mean (k_x - k_y)^2)``.
+        ``sqrt(mean over the three pairs of mean (k_x - k_y)^2)`` (:meth:`BackEmf.line_rms`, cached).
     """
-    th = np.arange(_GRID) * (TWO_PI / _GRID)
-    k = emf.k_abc(th)
-    return math.sqrt(float(np.mean([(k[x] - k[y]) ** 2 for x, y in ((0, 1), (1, 2), (2, 0))])))
+    return emf.line_rms()
 
 
 def line_crest_factor(emf: BackEmf) -> float:
