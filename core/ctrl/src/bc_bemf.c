@@ -53,7 +53,7 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
         return BC_ERR_PARAM;
     if (!nonneg(p->align_time) || !in01(p->align_duty) || !nonneg(p->ramp_w0) || !(fin(p->ramp_w1) && p->ramp_w1 > 0.0f) ||
         p->ramp_w1 < p->ramp_w0 || !nonneg(p->ramp_accel) || (p->ramp_w0 == 0.0f && !(p->ramp_accel > 0.0f)) ||
-        !in01(p->ramp_duty) || p->ramp_hold < 1 || p->n_handover < 2 || p->n_handover > 1000)
+        !in01(p->ramp_duty) || !nonneg(p->ramp_vf) || p->ramp_hold < 1 || p->n_handover < 2 || p->n_handover > 1000)
         return BC_ERR_PARAM;
     if (!in01(p->duty_min) || !nonneg(p->duty_rate) || !(fin(p->ref_stop) && p->ref_stop >= 0.0f && p->ref_stop < 1.0f) ||
         !nonneg(p->restart_wait) || !(fin(p->restart_max) && p->restart_max >= p->restart_wait))
@@ -391,14 +391,14 @@ static void on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, 
             }
             return;
         }
-        /* handover */
+        /* handover: the throttle ramp starts from the duty the forced ramp applied */
+        s->d_cmd = bc_clampf(p->ramp_duty + p->ramp_vf * omega_of(p, s), 0.0f, 1.0f);
         s->mode = BC_BEMF_CLOSED;
         s->t_in = 0.0f;
         s->t60 = T;
         s->t_last = T;
         s->virt = 0;
         s->misses = 0;
-        s->d_cmd = p->ramp_duty;
         s->err = 0.0f;
     } else {
         s->err = w0 * (x_zc - tdiff(s->t_c, n->tk) * s->inv_tick) - (PI6_F + s->adv_prev);
@@ -455,6 +455,17 @@ static void legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector,
     int chop_leg = pos;
     if (p->chop == BC_CHOP_PWMPWM) chop_leg = travel < PI6_F ? inc : (inc == pos ? neg : pos);
     bc_pair_legs((int)p->chop, pos, neg, chop_leg, m, c);
+}
+
+/* 2. the duty applied: the state's, limited by the current limiter */
+static float duty_of(const bc_bemf_params *p, const bc_bemf_state *s)
+{
+    float m = 0.0f;
+    if (s->mode == BC_BEMF_ALIGN) m = p->align_duty;
+    else if (s->mode == BC_BEMF_RAMP) m = fminf(p->ramp_duty + p->ramp_vf * omega_of(p, s), 1.0f);
+    else if (s->mode == BC_BEMF_CLOSED) m = fmaxf(s->d_cmd, p->duty_min);
+    m = fminf(m, s->d_lim);
+    return fin(m) ? bc_clampf(m, 0.0f, 1.0f) : 0.0f;
 }
 
 /* all legs off, coasting (STOP: not the safe state, no BC_FLAG_SAFE) */
@@ -603,18 +614,13 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
         }
     }
 
-    /* the duty applied */
-    float m = 0.0f;
-    if (s->mode == BC_BEMF_ALIGN) m = p->align_duty;
-    else if (s->mode == BC_BEMF_RAMP) m = p->ramp_duty;
-    else if (s->mode == BC_BEMF_CLOSED) m = fmaxf(s->d_cmd, p->duty_min);
-    m = bc_clampf(fminf(m, s->d_lim), 0.0f, 1.0f);
-
     /* 8. the commutation timer, and the legs */
     int shown = -1;
+    float m = 0.0f;
     if (s->mode == BC_BEMF_STOP) {
         coast(out);
     } else if (s->mode == BC_BEMF_ALIGN) {
+        m = duty_of(p, s);
         bc_pair_legs((int)p->chop, 0, 1, 0, m, out->leg); /* sector 0's pair, forward */
         shown = 0;
     } else {
@@ -641,6 +647,7 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
             }
         }
         if (s->mode != BC_BEMF_STOP) {
+            m = duty_of(p, s); /* for the interval the output applies to (the ramp's speed just updated) */
             int next = (s->sector + (s->dir > 0 ? 1 : 5)) % 6;
             float dn = tdiff(s->t_next, n.ta);
             float travel = w * tdiff(n.ta, s->t_c) * s->inv_tick;

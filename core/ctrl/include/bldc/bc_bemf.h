@@ -34,8 +34,10 @@
  *
  *         d_cmd <- d_cmd + clamp(d_ref - d_cmd, -duty_rate T_s, +duty_rate T_s)
  *
- *     and the duty applied is m = min(d_state, d_lim), d_state = align_duty (ALIGN), ramp_duty (RAMP),
- *     max(d_cmd, duty_min) (CLOSED; d_cmd starts from ramp_duty at the handover). Current limit (use_current,
+ *     and the duty applied is m = min(d_state, d_lim), d_state = align_duty (ALIGN), min(ramp_duty + ramp_vf Omega, 1)
+ *     (RAMP, Omega the speed of 5: with ramp_vf = k_e / (p V_dc) the back-EMF is compensated and the current stays
+ *     near ramp_duty V_dc / (2 R)), max(d_cmd, duty_min) (CLOSED; d_cmd starts from the ramp's duty at the handover).
+ *     Current limit (use_current,
  *     i_limit > 0), an integrating limiter on the largest measured phase current (d_lim = 1 at init and after a
  *     safe state; without a limit always 1):
  *
@@ -228,7 +230,8 @@ typedef struct {
     float ramp_w0;       /* open-loop speed at the start of the ramp, electrical rad/s (>= 0) */
     float ramp_w1;       /* open-loop speed at its end, electrical rad/s (>= ramp_w0, >= 1.5 omega_stall) */
     float ramp_accel;    /* open-loop acceleration, electrical rad/s^2 (>= 0; > 0 if ramp_w0 = 0) */
-    float ramp_duty;     /* duty of the forced commutation, [0, 1] */
+    float ramp_duty;     /* duty of the forced commutation at standstill, [0, 1] */
+    float ramp_vf;       /* ... plus ramp_vf per electrical rad/s of the speed estimate (V/f), 1/(rad/s) (>= 0) */
     int32_t ramp_hold;   /* forced sectors at ramp_w1 before the start fails (>= 1) */
     int32_t n_handover;  /* consecutive valid crossings for the handover (2 .. 1000) */
     float duty_min;      /* smallest duty in closed loop, [0, 1] */
