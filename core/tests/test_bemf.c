@@ -4,7 +4,8 @@
  * ramping speed, both directions, two PWM periods per commutation); the back-EMF integration's instant; the blanking
  * against the diode clamp's false crossing; the minimum-pulse filter; the desyncs and their reasons (a clamp
  * outlasting the crossing, a rotor that stops, a false crossing, a stall, a start that fails); the late commutation;
- * the start-up from alignment to closed loop on a dynamic rotor in both directions, a stop and a reverse; the
+ * the forced ramp following a faster rotor by its crossings, and its V/f duty; the start-up from alignment to closed
+ * loop on a dynamic rotor in both directions and from any angle without alignment, a stop and a reverse; the
  * throttle ramp and the current limit. */
 #include <math.h>
 #include <stdio.h>
@@ -708,6 +709,58 @@ static void test_late_commutation(void)
           "2.5 ticks), %ld desyncs", late, late_ok, timed, timed_ok, des);
 }
 
+static void test_ramp_follows_crossings(void)
+{
+    static synth_bemf g;
+    /* the forced ramp at half the rotor's speed (a rotor faster than the ramp): each crossing commutates its forced
+     * sector 30 degrees after it, the drive follows the rotor and hands over; the ramp's duty is the V/f law */
+    const double w = 2.0 * BC_PI * 300.0;
+    bc_bemf_params p = locked(BC_BEMF_COMPARATOR, 0.5 * w);
+    p.omega_stall = (float)(0.2 * w);
+    p.ramp_vf = 1e-4f;
+    p.ramp_duty = 0.05f;
+    sb_init(&g, TS, F_TICK, 1);
+    kin_rotor(&g, w, 1, 0.0);
+    g.demag = 20e-6;
+    bc_bemf_state s;
+    (void)bc_bemf_init(&p, &s);
+    long k_closed = -1, bad_duty = 0, n_ramp = 0;
+    for (long k = 0; k < 2400; ++k) {
+        bc_ctrl_in in;
+        sb_sample(&g, k, &in);
+        in.ref = 0.5f;
+        bc_ctrl_out o;
+        memset(&o, 0, sizeof o);
+        bc_bemf_step(&p, &s, &in, &o);
+        sb_apply(&g, k, &o);
+        if (o.diag[0] == (float)BC_BEMF_RAMP) {
+            ++n_ramp;
+            if (fabs((double)o.diag[6] - (0.05 + 1e-4 * fabs((double)o.diag[2]))) > 1e-6) ++bad_duty;
+        }
+        if (k_closed < 0 && o.diag[0] == (float)BC_BEMF_CLOSED) k_closed = k;
+    }
+    long missing = 0, n = 0;
+    double worst = 0.0;
+    for (long i = 1; i < g.n_comm; ++i) {
+        double t0 = g.t_comm[i - 1], tc = g.t_comm[i], tz = -1.0;
+        if (t0 < 2e-3) continue; /* after the first two sectors (the first has no crossing interval) */
+        for (long j = 0; j < g.n_zc; ++j)
+            if (g.zc_x[j] == g.comm_fl[i - 1] && g.t_zc[j] > t0 && g.t_zc[j] < tc) tz = g.t_zc[j];
+        if (tz < 0.0) {
+            ++missing;
+            continue;
+        }
+        double e = fabs((tc - tz) - (BC_PI / 6.0) / w);
+        if (e > worst) worst = e;
+        ++n;
+    }
+    CHECK(k_closed > 0 && missing == 0 && n > 80 && worst < 2.5 * TICK,
+          "ramp at half the rotor's speed: handover at sample %ld, %ld commutations 30 deg after their crossing "
+          "within %.3g s, %ld sectors without one", k_closed, n, worst, missing);
+    CHECK(n_ramp > 0 && bad_duty == 0, "V/f ramp duty 0.05 + 1e-4 Omega in %ld of %ld ramp samples", n_ramp - bad_duty,
+          n_ramp);
+}
+
 /* ------------------------------------------------------------------------------------------------------------ */
 /* start-up on a dynamic rotor */
 
@@ -940,6 +993,7 @@ int main(void)
     test_min_pulse();
     test_desyncs();
     test_late_commutation();
+    test_ramp_follows_crossings();
     test_start_up();
     test_stop_and_reverse();
     test_throttle_and_limit();
