@@ -21,9 +21,17 @@ float bc_lu_shape(const float *table, int32_t n, float theta)
 {
     float nf = (float)n;
     if (!isfinite(theta)) theta = 0.0f;
-    /* u = theta n / (2 pi) wrapped to [0, n); f = table[j] + (u - j) (table[j+1] - table[j]), table[n] = table[0] */
-    float u = fmodf(theta * (nf / BC_TWO_PI_F), nf);
-    if (u < 0.0f) u += nf;
+    /* u = theta n / (2 pi) wrapped to [0, n); f = table[j] + (u - j) (table[j+1] - table[j]), table[n] = table[0].
+     * Within one turn of the range (every angle a running step asks for: theta - x 2 pi/3, theta + Omega_e T_s) no
+     * fmodf: its remainder is y itself, or y - n exactly (Sterbenz: n <= y < 2 n), so the same u. */
+    float y = theta * (nf / BC_TWO_PI_F), u;
+    if (y >= 0.0f && y < nf) u = y;
+    else if (y >= nf && y < 2.0f * nf) u = y - nf;
+    else if (y < 0.0f && y > -nf) u = y + nf;
+    else {
+        u = fmodf(y, nf);
+        if (u < 0.0f) u += nf;
+    }
     if (!(u >= 0.0f && u < nf)) u = 0.0f;
     int32_t j = (int32_t)u;
     if (j > n - 1) j = n - 1;
