@@ -436,8 +436,8 @@ def test_hard_throttle_step_on_the_drone_stays_in_sync():
     """f60prov-2550kv with its propeller, default settings (no throttle ramp): at 0.3 s the throttle steps from 0.25
     to 1 in one sample. The drive stays in closed loop, without a desync or a trip, and accelerates to above 0.45
     Omega_0: the speed-dependent duty limit holds the current near I_N and the demagnetisation limiter keeps the
-    clamp at 0.6 of the window on average (measured 0.59, the duty then 0.72). Without the two limits and the fast demagnetisation the same step hides the
-    crossing behind the clamp (ZC_HIDDEN) within 40 ms."""
+    clamp at 0.6 of the window on average (measured 0.59, the duty then 0.72). Without the two limits and the fast
+    demagnetisation the same step hides the crossing behind the clamp (ZC_HIDDEN) within 40 ms."""
     d = bl.load("f60prov-2550kv")
     dur, t_step = 0.6, 0.3
     n = bl.sim.samples_of(d, dur)
