@@ -66,6 +66,7 @@ def test_versus_hall_equal_duty():
     r = sl.versus_hall(bl.load("htm-48v"), (0.2, 0.5), fast_demag=False)
     df = r.to_pandas()
     assert df["in_sync"].all()
+    assert np.allclose(df["duty_applied"], df["duties"], atol=1e-6)  # equal duty indeed: no limit acted
     assert (df["torque_rel"].abs() < 0.01).all(), df
     assert (np.abs(df["efficiency_sl"] - df["efficiency_hall"]) < 0.005).all(), df
     assert (np.abs(df["ripple_sl"] - df["ripple_hall"]) < 0.1 * df["ripple_hall"] + 0.01).all(), df
