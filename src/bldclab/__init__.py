@@ -28,6 +28,7 @@ if TYPE_CHECKING:  # the same names, for type checkers and readers; at run time 
         SixStepSensorless,
         SixStepVoltage,
     )
+    from .control.user import PythonControl, UserControl
     from .model import catalog
     from .model.catalog import load
     from .model.emf import BackEmf, Cogging, Fourier, Sinusoid, Table, Trapezoid
@@ -45,6 +46,7 @@ LAZY: Lazy = {
     "experiments": ("bldclab.analysis.experiments", None),
     **{name: ("bldclab.control", name) for name in ("Control", "HallCal", "HallCalibration", "Lu", "OpenLoop",
                                                     "Sine", "SixStep", "SixStepSensorless", "SixStepVoltage")},
+    **{name: ("bldclab.control.user", name) for name in ("PythonControl", "UserControl")},
     "catalog": ("bldclab.model.catalog", None),
     "load": ("bldclab.model.catalog", "load"),
     **{name: ("bldclab.model.emf", name) for name in ("BackEmf", "Cogging", "Fourier", "Sinusoid", "Table",
@@ -75,6 +77,7 @@ __all__ = [
     "Metrics",
     "Motor",
     "OpenLoop",
+    "PythonControl",
     "Scenario",
     "Sensors",
     "SimResult",
@@ -85,6 +88,7 @@ __all__ = [
     "SixStepVoltage",
     "Table",
     "Trapezoid",
+    "UserControl",
     "__version__",
     "calibrate_hall",
     "catalog",

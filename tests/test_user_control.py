@@ -1,0 +1,255 @@
+"""User controllers in the loop (bldclab.control.user, core bc_user.h/bc_userguard.h).
+
+The built-in six-step rewritten as a user controller (examples/user_controller/sixstep_pi.c) gives the built-in's
+trace bit for bit, in process and in a child process; a Python prototype and its C translation give the same trace;
+each failure of a user controller (crash, hang, NaN, duty out of range, read past its inputs, write to its inputs,
+init rejecting the parameters) ends the run with one ControllerError naming the controller and the sample, and this
+process goes on; bad parameters and bad libraries are refused by name.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import pickle
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import bldclab as bl
+from bldclab.control.user import build, describe_library
+from bldclab.errors import BldclabError, ControllerError
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = ROOT / "examples" / "user_controller"
+DATA = Path(__file__).parent / "data" / "user"
+HTM = bl.load("htm-48v")
+
+pytestmark = pytest.mark.xdist_group("user_control")
+
+
+def _example(name: str):
+    spec = importlib.util.spec_from_file_location(f"_user_example_{name}", EXAMPLES / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="module")
+def libs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
+    """The test and example libraries, built once."""
+    d = tmp_path_factory.mktemp("user")
+    return {
+        "sixstep_pi": str(build([EXAMPLES / "sixstep_pi.c"], d / "sixstep_pi.so")),
+        "sixstep_voltage": str(build([EXAMPLES / "sixstep_voltage.c"], d / "sixstep_voltage.so")),
+        "faulty": str(build([DATA / "faulty.c"], d / "faulty.so")),
+    }
+
+
+def _same(a: bl.SimResult, b: bl.SimResult) -> list[str]:
+    """Trace columns that differ (or exist in only one)."""
+    names = set(a.signals) | set(b.signals)
+    return sorted(k for k in names if k not in a.signals or k not in b.signals
+                  or not np.array_equal(a.signals[k], b.signals[k]))
+
+
+# ------------------------------------------------------------------------------------------------------------------
+# the example: the built-in six-step as a user controller
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("chopping", "inverter", "speed"), [("pwm-on-pwm", "switching", "0.5 pu"),
+                                                              ("high", "average", "0.8 pu")])
+def test_sixstep_rewritten_as_a_user_controller_gives_the_builtin_trace_bit_for_bit(libs, chopping, inverter, speed):
+    drive = HTM.replace(inverter__model=inverter)
+    builtin = bl.SixStep(regulation="pi", chopping=chopping)
+    params = _example("run_sixstep_pi").user_params(drive, builtin)
+    # a step of the reference mid-run (saturation, then regulation) and a current at the trip limit's edge
+    sc = bl.Scenario(duration=0.03, speed=speed, ref=lambda t: np.where(t < 0.015, 0.5, 1.5) * drive.motor.I_N,
+                     trace_sub=2, window=(0.02, 0.03))
+    ref = bl.simulate(drive, builtin, sc)
+    for isolate in (False, True):
+        res = bl.simulate(drive, bl.UserControl(libs["sixstep_pi"], params, isolate=isolate), sc)
+        assert _same(res, ref) == [], f"isolate={isolate}"
+        assert res.metrics == ref.metrics
+        assert res.meta["controller_flags"] == ref.meta["controller_flags"]
+    assert np.ptp(ref.signals["sector"]) == 5  # it did commutate through every sector
+
+
+@pytest.mark.slow
+def test_python_prototype_and_its_c_translation_give_the_same_trace(libs):
+    proto = _example("prototype")
+    sc = bl.Scenario(duration=0.02, speed="0.4 pu", ref=lambda t: 0.2 + 10.0 * t, window=(0.01, 0.02))
+    py = bl.simulate(HTM, proto.SixStepVoltage(1.0), sc)
+    c = bl.simulate(HTM, bl.UserControl(libs["sixstep_voltage"], {"gain": 1.0}), sc)
+    assert _same(py, c) == []
+    assert py.metrics == c.metrics
+    assert py.signals["sector"].min() == 0 and py.signals["sector"].max() == 5
+
+
+# ------------------------------------------------------------------------------------------------------------------
+# failures: one error naming the controller and the sample, and this process goes on
+
+FAILURES = [
+    ("F_CRASH", True, "crashed with SIGSEGV (address 0x0) at sample 50 (t = 1.78571 ms)"),
+    ("F_HANG", True, "did not return within its step-time budget of 0.3 s at sample 50 (t = 1.78571 ms)"),
+    ("F_NAN", False, "wrote leg[0].duty = nan at sample 50 (t = 1.78571 ms): a duty must be in [0, 1]"),
+    ("F_RANGE", False, "wrote leg[2].duty = 1.5 at sample 50 (t = 1.78571 ms): a duty must be in [0, 1]"),
+    ("F_OVERREAD", True, "beyond the end of its inputs (bc_ctrl_in)) at sample 50"),
+    ("F_INWRITE", False, "wrote to its const inputs (bc_ctrl_in.hall) at sample 50"),
+    ("F_REJECT", False, "its init returned -1: it rejected its parameters"),
+]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("mode", "needs_child", "message"), FAILURES, ids=[f[0] for f in FAILURES])
+def test_each_failure_is_one_error_naming_the_controller_and_the_sample(libs, mode, needs_child, message):
+    sc = bl.Scenario(duration=0.01, speed="0.5 pu", ref=0.3)
+    modes = (True, False) if not needs_child else (True,)
+    for isolate in modes:
+        ctl = bl.UserControl(libs["faulty"], {"mode": mode, "at": 50}, isolate=isolate, budget=0.3)
+        with pytest.raises(ControllerError) as err:
+            bl.simulate(HTM, ctl, sc)
+        assert err.value.field == f"control (faulty, {libs['faulty']})"
+        assert message in err.value.problem, err.value.problem
+    # the process survived, and the same controller without the fault runs
+    ok = bl.simulate(HTM, bl.UserControl(libs["faulty"], {"mode": "F_OK"}), sc)
+    assert len(ok) > 0 and np.isfinite(ok.signals["i_a"]).all()
+
+
+@pytest.mark.slow
+def test_a_guarded_run_stops_at_the_bad_sample_not_after(libs):
+    # the same controller failing at two samples: the error names each; without a fault the run is the plain run
+    sc = bl.Scenario(duration=0.01, speed="0.5 pu", ref=0.3)
+    for at in (0, 200):
+        with pytest.raises(ControllerError, match=f"at sample {at} "):
+            bl.simulate(HTM, bl.UserControl(libs["faulty"], {"mode": "F_RANGE", "at": at}, isolate=False), sc)
+    a = bl.simulate(HTM, bl.UserControl(libs["faulty"], {"mode": "F_OK"}, isolate=False), sc)
+    b = bl.simulate(HTM, bl.UserControl(libs["faulty"], {"mode": "F_OK"}, isolate=True), sc)
+    assert _same(a, b) == []
+
+
+# ------------------------------------------------------------------------------------------------------------------
+# parameters and libraries
+
+
+@pytest.mark.slow
+def test_parameters_are_filled_by_name_and_bad_ones_refused(libs):
+    lib = describe_library(libs["faulty"])
+    assert lib.name == "faulty" and list(lib.leaves) == ["mode", "at", "gain"] and lib.ref == "duty"
+    assert lib.built_by == f"bldclab {bl.__version__}"
+    ctl = bl.UserControl(libs["faulty"], {"mode": "F_NAN", "gain": 0.5})  # named constant; defaults for the rest
+    rec = ctl.c_record(HTM, bl._core.core(), 1).record
+    assert (int(rec["mode"][0]), int(rec["at"][0]), float(rec["gain"][0])) == (3, -1, 0.5)
+    cases = [({"mod": 1}, "control.params (faulty: faulty_params)", "not members: mod (members: mode, at, gain)"),
+             ({"mode": "F_X"}, "control.params.mode", "neither a number nor a named constant of faulty"),
+             ({"at": 1.5}, "control.params.at", "must be a whole number"),
+             ({"at": 2**40}, "control.params.at", "must be a whole number in [-2147483648, 2147483647]"),
+             ({"gain": [1, 2]}, "control.params.gain", "expected one number"),
+             ({"gain": float("nan")}, "control.params.gain", "must not be NaN")]
+    for params, field, problem in cases:
+        with pytest.raises(BldclabError) as err:
+            bl.UserControl(libs["faulty"], params)
+        assert err.value.field == field and problem in err.value.problem, (params, str(err.value))
+    # a library without defaults: every member must be given
+    with pytest.raises(BldclabError, match=r"members left unset: chop, delay, advance"):
+        bl.UserControl(libs["sixstep_pi"], {"p": 8})
+
+
+@pytest.mark.slow
+def test_libraries_without_the_description_or_built_against_another_contract_are_refused(tmp_path):
+    nosym = build([DATA / "nosymbol.c"], tmp_path / "nosym.so")
+    with pytest.raises(BldclabError, match="missing symbol bc_user_controller"):
+        bl.UserControl(str(nosym))
+    wrong = build([DATA / "faulty.c"], tmp_path / "wrong.so", defines=["WRONG_SIZE"])
+    with pytest.raises(BldclabError, match=r"wrong struct size or version, sizeof\(bc_ctrl_in\) \d+ \(this bldclab"):
+        bl.UserControl(str(wrong))
+    with pytest.raises(BldclabError, match="no such file"):
+        bl.UserControl(str(tmp_path / "none.so"))
+    text = tmp_path / "text.so"
+    text.write_text("not a library")
+    with pytest.raises(BldclabError, match="cannot be loaded as a shared library"):
+        bl.UserControl(str(text))
+
+
+@pytest.mark.slow
+def test_build_uses_the_cores_warnings_as_errors_and_writes_nothing_on_failure(tmp_path):
+    src = tmp_path / "bad.c"
+    src.write_text((DATA / "faulty.c").read_text().replace("int sector = bc_hall_sector(in->hall);",
+                                                            "int sector = bc_hall_sector(in->hall);\n"
+                                                            "    float lossy = in->ref * 1.0; (void)lossy;"))
+    with pytest.raises(BldclabError, match=r"(?s)the build failed .*-Werror=(double-promotion|conversion)"):
+        build([src], tmp_path / "bad.so")
+    assert not (tmp_path / "bad.so").exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["bad.c"]
+
+
+@pytest.mark.slow
+def test_a_rebuilt_library_at_the_same_path_is_loaded_again(tmp_path, libs):
+    out = tmp_path / "lib.so"
+    build([DATA / "faulty.c"], out)
+    a = describe_library(out)
+    src = tmp_path / "renamed.c"
+    src.write_text((DATA / "faulty.c").read_text().replace('.name = "faulty"', '.name = "renamed"'))
+    build([src], out)
+    b = describe_library(out)
+    assert (a.name, b.name) == ("faulty", "renamed")
+
+
+@pytest.mark.slow
+def test_a_user_controller_pickles_as_its_path_and_settings(libs):
+    ctl = bl.UserControl(libs["faulty"], {"mode": "F_OK", "gain": 0.5}, budget=2.0)
+    back = pickle.loads(pickle.dumps(ctl))
+    assert (back.library, back.params, back.isolate, back.budget) == (ctl.library, ctl.params, True, 2.0)
+
+
+# ------------------------------------------------------------------------------------------------------------------
+# the Python controller (no build needed)
+
+
+class _Constant(bl.PythonControl):
+    """Legs (HIGH d, LOW 1, OFF) whatever the sector; d from the constructor; a fault at sample ``at``."""
+
+    diag = ("k", "v_dc V")
+
+    def __init__(self, d: float, at: int = -1, what: str = "") -> None:
+        self.d, self.at, self.what, self.k = d, at, what, 0
+
+    def init(self, drive: bl.Drive) -> None:
+        self.k = 0
+
+    def step(self, inputs):
+        self.out.diag[0] = self.k
+        self.out.diag[1] = inputs.v_dc
+        d = self.d
+        if self.k == self.at:
+            if self.what == "raise":
+                raise ZeroDivisionError("the bug")
+            d = float("nan") if self.what == "nan" else 1.25
+        self.k += 1
+        return ((self.HIGH, d), (self.LOW, 1.0), (self.OFF, 0.0))
+
+
+def test_a_python_controller_runs_once_per_sample_with_the_c_inputs():
+    sc = bl.Scenario(duration=0.002, speed="0.3 pu", ref=0.0)
+    res = bl.simulate(HTM, _Constant(0.25), sc)
+    k = res.signals["k"]
+    assert res.units["v_dc"] == "V"
+    # trace_sub rows per sample: diag k counts the samples; the delay of one sample applies the legs
+    assert k[-1] == res.meta["samples"] - 1 and np.all(np.diff(np.unique(k)) == 1)
+    assert np.allclose(res.signals["v_dc"], HTM.inverter.V_dc, rtol=0.02)
+
+
+@pytest.mark.parametrize(("what", "message"), [("raise", "raised an exception at sample 7"),
+                                               ("nan", "wrote leg[0].duty = nan at sample 7"),
+                                               ("range", "wrote leg[0].duty = 1.25 at sample 7")])
+def test_a_python_controller_that_fails_ends_the_run_with_the_sample(what, message):
+    sc = bl.Scenario(duration=0.002, speed="0.3 pu", ref=0.0)
+    with pytest.raises(ControllerError) as err:
+        bl.simulate(HTM, _Constant(0.25, at=7, what=what), sc)
+    assert message in str(err.value) and err.value.field == "control (_Constant)"
+    if what == "raise":
+        assert isinstance(err.value.__cause__, ZeroDivisionError)
