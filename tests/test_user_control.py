@@ -253,3 +253,89 @@ def test_a_python_controller_that_fails_ends_the_run_with_the_sample(what, messa
     assert message in str(err.value) and err.value.field == "control (_Constant)"
     if what == "raise":
         assert isinstance(err.value.__cause__, ZeroDivisionError)
+
+
+# ------------------------------------------------------------------------------------------------------------------
+# the command line
+
+
+@pytest.mark.slow
+def test_command_line_builds_describes_and_simulates_a_user_controller(tmp_path, capsys):
+    from bldclab.cli import main
+
+    lib = tmp_path / "faulty.so"
+    assert main(["controller", "build", str(DATA / "faulty.c"), "-o", str(lib)]) == 0
+    assert "controller 'faulty', parameters faulty_params (3 members, with defaults)" in capsys.readouterr().out
+    assert main(["controller", "describe", str(lib)]) == 0
+    out = capsys.readouterr().out
+    assert "--param mode=...  int32  default 0" in out and "F_CRASH=1" in out and "ref: duty" in out
+    assert main(["simulate", "htm-48v", "--control", str(lib), "--param", "gain=0.5", "--ref", "0.6",
+                 "--format", "json", "--no-trace"]) == 0
+    import json
+
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["reference"] == 0.6 and summary["reference_unit"] == "duty" and summary["tau_mean_N_m"] > 0
+    for argv, message in [
+        (["--param", "mode=F_CRASH", "--param", "at=50"], f"control (faulty, {lib}): crashed with SIGSEGV"),
+        (["--param", "mode=F_HANG", "--param", "at=0", "--budget", "0.3"],
+         "did not return within its step-time budget of 0.3 s at sample 0 (t = 0 ms)"),
+        (["--param", "mode=4", "--param", "at=3"], "wrote leg[2].duty = 1.5 at sample 3"),
+        (["--param", "mode=F_RANGE", "--param", "at=3", "--in-process"], "wrote leg[2].duty = 1.5 at sample 3"),
+        (["--param", "mod=1"], "--param: not members: mod"),
+        (["--param", "mode"], "--param: expected KEY=VALUE"),
+        (["--param", "at=x"], "--param at: 'x' is neither a number nor a named constant"),
+        (["--current", "5 A"], "--current: your controller takes its reference with --ref"),
+    ]:
+        assert main(["simulate", "htm-48v", "--control", str(lib), "--no-trace", *argv]) == 2, argv
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, (argv, err)
+    assert main(["simulate", "htm-48v", "--control", str(tmp_path / "none.so")]) == 2
+    assert "--control: " in capsys.readouterr().err
+    assert main(["simulate", "htm-48v", "--param", "a=1"]) == 2
+    assert "--param: is a setting of your own controller" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------------------------------------------------------
+# sweeps: a user controller by name, on processes and Dask, identical to serial
+
+
+@pytest.mark.slow
+def test_a_sweep_of_a_user_controller_on_processes_and_dask_is_identical_to_serial(libs, tmp_path):
+    import pandas as pd
+
+    from bldclab import sweep as sw
+    from conftest import require_module
+
+    s = sw.Sweep(base={"drive": "htm-48v", "controller": "UserControl", "control.library": libs["faulty"],
+                       "control.params": {"gain": 1.0}, "ref": 0.8, "settle_periods": 2, "measure_periods": 1,
+                       "settle_time": 0.0},
+                 grid={"speed_pu": [0.5, 0.9], "control.params.gain": [0.5, 1.0]})
+    serial = sw.run(s, tmp_path / "s.sqlite", executor=sw.Serial(), progress=False)
+    assert (serial.computed, serial.failed) == (4, 0)
+    ref = serial.to_pandas()
+    torque = ref.set_index(["speed_pu", "control.params.gain"])["tau_mean"]
+    assert torque[(0.5, 1.0)] > torque[(0.5, 0.5)] > 0  # the parameter reached the C controller
+    runs = {"processes": sw.run(s, tmp_path / "p.sqlite", executor=sw.Processes(2), progress=False)}
+    require_module("distributed")
+    import distributed
+
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
+        runs["dask"] = sw.run(s, tmp_path / "d.sqlite", executor=sw.Dask(cluster.scheduler_address), progress=False)
+    for name, run in runs.items():
+        assert (run.computed, run.failed) == (4, 0), name
+        pd.testing.assert_frame_equal(run.to_pandas(), ref, check_exact=True)
+        run.store.close()
+    serial.store.close()
+
+
+@pytest.mark.slow
+def test_a_library_rebuilt_after_the_controller_was_made_is_refused(tmp_path):
+    out = tmp_path / "lib.so"
+    build([DATA / "faulty.c"], out)
+    ctl = bl.UserControl(str(out))
+    src = tmp_path / "changed.c"
+    src.write_text((DATA / "faulty.c").read_text().replace('.name = "faulty"', '.name = "changed"'))
+    build([src], out)
+    with pytest.raises(BldclabError, match=r"control.sha256: the library at .* has changed"):
+        pickle.loads(pickle.dumps(ctl))

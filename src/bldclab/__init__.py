@@ -23,12 +23,13 @@ if TYPE_CHECKING:  # the same names, for type checkers and readers; at run time 
         HallCalibration,
         Lu,
         OpenLoop,
+        PythonControl,
         Sine,
         SixStep,
         SixStepSensorless,
         SixStepVoltage,
+        UserControl,
     )
-    from .control.user import PythonControl, UserControl
     from .model import catalog
     from .model.catalog import load
     from .model.emf import BackEmf, Cogging, Fourier, Sinusoid, Table, Trapezoid
@@ -45,8 +46,8 @@ LAZY: Lazy = {
     "flag": ("bldclab._core", "flag"),
     "experiments": ("bldclab.analysis.experiments", None),
     **{name: ("bldclab.control", name) for name in ("Control", "HallCal", "HallCalibration", "Lu", "OpenLoop",
-                                                    "Sine", "SixStep", "SixStepSensorless", "SixStepVoltage")},
-    **{name: ("bldclab.control.user", name) for name in ("PythonControl", "UserControl")},
+                                                    "PythonControl", "Sine", "SixStep", "SixStepSensorless",
+                                                    "SixStepVoltage", "UserControl")},
     "catalog": ("bldclab.model.catalog", None),
     "load": ("bldclab.model.catalog", "load"),
     **{name: ("bldclab.model.emf", name) for name in ("BackEmf", "Cogging", "Fourier", "Sinusoid", "Table",

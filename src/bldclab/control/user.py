@@ -537,12 +537,16 @@ class UserControl(Control):
     budget : float
         Step-time budget (s): an isolated controller still inside one call (init or a step) after this long is
         killed and reported as hung.
+    sha256 : str
+        The library's content hash; default the file's now. Given (a sweep's case rebuilt in a worker), the file
+        must still have it: a library rebuilt since is refused rather than run in its place.
     """
 
     library: str
     params: Mapping[str, Any] = field(default_factory=dict)
     isolate: bool = True
     budget: float = 1.0
+    sha256: str = ""
     c_name: ClassVar[str] = "user"
 
     def __post_init__(self) -> None:
@@ -557,11 +561,18 @@ class UserControl(Control):
         if isinstance(self.budget, bool) or not isinstance(self.budget, int | float) or not (
                 math.isfinite(self.budget) and self.budget > 0):
             raise BldclabError("control.budget", f"must be a finite number of seconds > 0, got {self.budget!r}")
-        _fill(self.lib, self.params)  # refuse bad parameters now, not in the run
+        lib = self.lib
+        if not self.sha256:
+            object.__setattr__(self, "sha256", lib.sha)
+        elif self.sha256 != lib.sha:
+            raise BldclabError("control.sha256", f"the library at {self.library} has changed (sha256 "
+                               f"{lib.sha[:12]}..., "
+                               f"not {str(self.sha256)[:12]}...): it was rebuilt after this controller was made")
+        _fill(lib, self.params)  # refuse bad parameters now, not in the run
 
     def __reduce__(self) -> tuple[Any, ...]:
-        """Pickle as the path and the settings (a worker loads the library again)."""
-        return (UserControl, (self.library, dict(self.params), self.isolate, self.budget))
+        """Pickle as the path and the settings (a worker loads the library again and checks its hash)."""
+        return (UserControl, (self.library, dict(self.params), self.isolate, self.budget, self.sha256))
 
     @property
     def lib(self) -> _Library:
@@ -604,7 +615,7 @@ class UserControl(Control):
 
     def describe(self) -> dict[str, object]:  # noqa: D102
         lib = self.lib
-        return {"controller": "user", "name": lib.name, "library": self.library, "sha256": lib.sha,
+        return {"controller": "user", "name": lib.name, "library": self.library, "sha256": self.sha256,
                 "built_by": lib.built_by, "params": dict(self.params), "isolate": self.isolate,
                 "budget": self.budget}
 
