@@ -32,7 +32,7 @@ ROOT = Path(__file__).resolve().parents[1]
 EX = ROOT / "examples" / "user_controller"
 
 
-def _module(name: str):  # noqa: ANN202 - an example script as a module
+def _module(name: str):
     spec = importlib.util.spec_from_file_location(f"_bench_{name}", EX / f"{name}.py")
     assert spec is not None and spec.loader is not None
     mod = importlib.util.module_from_spec(spec)
@@ -41,7 +41,7 @@ def _module(name: str):  # noqa: ANN202 - an example script as a module
     return mod
 
 
-def _best(fn, repeats: int) -> tuple[float, bl.SimResult]:  # noqa: ANN001 - a run
+def _best(fn, repeats: int) -> tuple[float, bl.SimResult]:
     best, res = float("inf"), None
     for _ in range(repeats):
         t0 = time.perf_counter()
