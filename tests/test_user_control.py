@@ -101,6 +101,7 @@ FAILURES = [
     ("F_OVERREAD", True, "beyond the end of its inputs (bc_ctrl_in)) at sample 50"),
     ("F_INWRITE", False, "wrote to its const inputs (bc_ctrl_in.hall) at sample 50"),
     ("F_REJECT", False, "its init returned -1: it rejected its parameters"),
+    ("F_INIT_HANG", True, "did not return within its step-time budget of 0.3 s in its init"),
 ]
 
 
@@ -339,3 +340,59 @@ def test_a_library_rebuilt_after_the_controller_was_made_is_refused(tmp_path):
     build([src], out)
     with pytest.raises(BldclabError, match=r"control.sha256: the library at .* has changed"):
         pickle.loads(pickle.dumps(ctl))
+
+
+@pytest.mark.slow
+def test_a_description_generated_from_the_params_header_runs_as_a_written_one(libs, tmp_path, capsys):
+    from bldclab.cli import main
+
+    out = tmp_path / "plain.so"
+    assert main(["controller", "build", str(DATA / "plain.c"), "--params-header", str(DATA / "plain.h"),
+                 "--diag", "sector", "--ref-meaning", "duty", "-o", str(out)]) == 0
+    assert "controller 'plain', parameters plain_params (7 members)" in capsys.readouterr().out
+    lib = describe_library(out)
+    assert list(lib.leaves) == ["gain", "limits.lo", "limits.hi", "limits.unused", "order", "spare", "flags"]
+    assert lib.leaves["order"][2] == (3,) and lib.dtype.itemsize == 40 and lib.ref == "duty"
+    sc = bl.Scenario(duration=0.01, speed="0.4 pu", ref=0.3)
+    params = {"gain": 1.0, "limits": {"lo": 0.0, "hi": 1.0}, "limits.unused": 7, "order": [0, 1, 2], "spare": 0.0,
+              "flags": 0}  # a nested mapping and a dotted name
+    plain = bl.simulate(HTM, bl.UserControl(str(out), params), sc)
+    written = bl.simulate(HTM, bl.UserControl(libs["sixstep_voltage"], {"gain": 1.0}), sc)
+    assert _same(plain, written) == []
+    # a header the generator cannot read, or without the contract's functions: one error, nothing built
+    bad = tmp_path / "bad.h"
+    bad.write_text("typedef struct { float m[2][2]; } bad_params;\ntypedef struct { int k; } bad_state;\n"
+                   "int bad_init(void);\nvoid bad_step(void);\n")
+    with pytest.raises(BldclabError, match=r"bad_params.m.*more than one dimension"):
+        build([DATA / "plain.c"], tmp_path / "bad.so", params_header=bad)
+    bad.write_text("typedef struct { float k; } bad_params;\n")
+    with pytest.raises(BldclabError, match="declares bad_params but not bad_state, bad_init, bad_step"):
+        build([DATA / "plain.c"], tmp_path / "bad.so", params_header=bad)
+    assert not (tmp_path / "bad.so").exists()
+
+
+class _Sensing(bl.PythonControl):
+    """Records the back-EMF sensing inputs (ADC conversions, comparator edges) in its diagnostics."""
+
+    diag = ("n_adc", "zc_edges", "v_term_a V")
+
+    def step(self, inputs):
+        self.out.diag[0] = inputs.n_adc
+        self.out.diag[1] = sum(inputs.zc_count)
+        self.out.diag[2] = inputs.v_term[0]
+        return ((self.PWM, 0.5), (self.PWM, 0.5), (self.PWM, 0.5))
+
+
+def test_a_controller_that_reads_the_back_emf_sensing_gets_it_and_one_that_does_not_sees_zeros():
+    class Reading(_Sensing):
+        needs_bemf_sensing = True
+
+    sc = bl.Scenario(duration=0.01, speed="0.5 pu", ref=0.0)
+    on = bl.simulate(HTM, Reading(), sc)
+    off = bl.simulate(HTM, _Sensing(), sc)
+    samples = on.meta["samples"]
+    # one conversion per PWM period (every other sample); comparator edges
+    assert on.signals["n_adc"][-1] >= samples // 2 - 2 and on.signals["zc_edges"][-1] > 0
+    assert np.ptp(on.signals["v_term_a"]) > 10.0  # the terminal swings with the back-EMF and the PWM
+    assert not np.any(off.signals["n_adc"]) and not np.any(off.signals["zc_edges"])
+    assert off.meta["bemf"] is None and on.meta["bemf"]["conversions"] > 0

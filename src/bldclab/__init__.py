@@ -23,13 +23,13 @@ if TYPE_CHECKING:  # the same names, for type checkers and readers; at run time 
         HallCalibration,
         Lu,
         OpenLoop,
-        PythonControl,
         Sine,
         SixStep,
         SixStepSensorless,
         SixStepVoltage,
         UserControl,
     )
+    from .control.user import PythonControl
     from .model import catalog
     from .model.catalog import load
     from .model.emf import BackEmf, Cogging, Fourier, Sinusoid, Table, Trapezoid
@@ -46,8 +46,9 @@ LAZY: Lazy = {
     "flag": ("bldclab._core", "flag"),
     "experiments": ("bldclab.analysis.experiments", None),
     **{name: ("bldclab.control", name) for name in ("Control", "HallCal", "HallCalibration", "Lu", "OpenLoop",
-                                                    "PythonControl", "Sine", "SixStep", "SixStepSensorless",
-                                                    "SixStepVoltage", "UserControl")},
+                                                    "Sine", "SixStep", "SixStepSensorless", "SixStepVoltage",
+                                                    "UserControl")},
+    "PythonControl": ("bldclab.control.user", "PythonControl"),
     "catalog": ("bldclab.model.catalog", None),
     "load": ("bldclab.model.catalog", "load"),
     **{name: ("bldclab.model.emf", name) for name in ("BackEmf", "Cogging", "Fourier", "Sinusoid", "Table",

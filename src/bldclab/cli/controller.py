@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..control.user import WARNINGS, build, describe_library
+from ..errors import BldclabError
 
 __all__ = ["configure_command", "run_command"]
 
@@ -27,6 +28,13 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     b.add_argument("-I", dest="include", action="append", default=[], metavar="DIR", help="include directory")
     b.add_argument("-D", dest="define", action="append", default=[], metavar="NAME[=VALUE]", help="macro")
     b.add_argument("--cc", help="C compiler (default $CC, else cc)")
+    b.add_argument("--params-header", type=Path, metavar="X.h",
+                   help="write the description from this header (it declares X_params, X_state, X_init, X_step): "
+                        "the sources need no BC_USER_CONTROLLER")
+    b.add_argument("--diag", default="", metavar="NAMES",
+                   help='with --params-header: the diagnostics diag[0..7], comma-separated ("sector,i_reg A")')
+    b.add_argument("--ref-meaning", default="", metavar="TEXT",
+                   help='with --params-header: what the reference means ("current amplitude, A")')
     d = sub.add_parser("describe", help="list a user controller library's parameters, diagnostics and reference",
                        description="Read a user controller library's description (bc_user_controller): its "
                                    "parameter members with their C types (and defaults), named constants, "
@@ -38,7 +46,14 @@ def configure_command(p: argparse.ArgumentParser) -> None:
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab controller``."""
     if args.action == "build":
-        out = build(args.sources, args.output, include=args.include, defines=args.define, cc=args.cc)
+        if args.params_header is None and (args.diag or args.ref_meaning):
+            raise BldclabError("--diag" if args.diag else "--ref-meaning", "needs --params-header (otherwise your "
+                               "BC_USER_CONTROLLER description says it)")
+        diag = [d.strip() for d in args.diag.split(",")] if args.diag else []
+        if len(diag) > 8:
+            raise BldclabError("--diag", f"at most 8 diagnostics, got {len(diag)}")
+        out = build(args.sources, args.output, include=args.include, defines=args.define, cc=args.cc,
+                    params_header=args.params_header, diag=diag, ref=args.ref_meaning)
         lib = describe_library(out)
         print(f"built {out}: controller {lib.name!r}, parameters {lib.params} ({len(lib.leaves)} members"
               f"{', with defaults' if lib.defaults is not None else ''})")

@@ -197,9 +197,9 @@ def _check_options(args: argparse.Namespace) -> None:
     user = is_library(args.control)
     if not user and args.control not in CONTROLS:
         close = difflib.get_close_matches(args.control, CONTROLS, n=1)
-        near = f": did you mean {close[0]}?" if close else ""
-        raise BldclabError("--control", f"must be one of {', '.join(CONTROLS)} or the path of a controller library "
-                           f"(./my.so), got {args.control!r}{near}")
+        near = f": did you mean {close[0]!r}?" if close else ""
+        raise BldclabError("--control", f"invalid choice: {args.control!r}{near} (one of {', '.join(CONTROLS)}, or "
+                           "the path of your controller's library, ./my.so)")
     for option, given in (("--param", bool(args.param)), ("--ref", args.ref is not None),
                           ("--in-process", args.in_process)):
         if given and not user:

@@ -23,6 +23,7 @@ import math
 import mmap
 import os
 import pickle
+import re
 import select
 import signal
 import subprocess
@@ -43,7 +44,7 @@ from ..errors import BldclabError, ControllerError, PlausibilityWarning
 from ..model.motor import Drive
 from .base import Control, CSlot
 
-__all__ = ["WARNINGS", "PythonControl", "UserControl", "build", "core_dir", "describe_library"]
+__all__ = ["WARNINGS", "PythonControl", "UserControl", "build", "core_dir", "describe_header", "describe_library"]
 
 #: The core's warnings, errors here too (core/Makefile's WARN): what ``bldclab controller build`` compiles with
 WARNINGS = ("-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wdouble-promotion", "-Werror")
@@ -81,7 +82,8 @@ def core_dir() -> Path:
 
 
 def build(sources: Sequence[str | Path], output: str | Path | None = None, include: Iterable[str | Path] = (),
-          defines: Iterable[str] = (), cc: str | None = None) -> Path:
+          defines: Iterable[str] = (), cc: str | None = None, params_header: str | Path | None = None,
+          diag: Sequence[str] = (), ref: str = "") -> Path:
     """Compile a user controller into a shared library, with the core's warnings as errors.
 
     The user's files are compiled with bldclab's controller blocks (``core/ctrl/src/*.c``: ``bc_hall``, ``bc_pi``,
@@ -101,6 +103,13 @@ def build(sources: Sequence[str | Path], output: str | Path | None = None, inclu
         Macros (``-D``), ``NAME`` or ``NAME=VALUE``.
     cc : str, optional
         The C compiler (default ``$CC``, else ``cc``).
+    params_header : path, optional
+        A header declaring ``X_params``, ``X_state``, ``X_init`` and ``X_step``: the description is generated from
+        it (:func:`describe_header`), so the sources need no ``BC_USER_CONTROLLER``.
+    diag : sequence of str
+        With ``params_header``: the diagnostics' names ("name" or "name unit").
+    ref : str
+        With ``params_header``: what ``in->ref`` means.
 
     Returns
     -------
@@ -122,12 +131,21 @@ def build(sources: Sequence[str | Path], output: str | Path | None = None, inclu
     root = core_dir()
     blocks = sorted((root / "ctrl" / "src").glob("*.c"))
     compiler = cc or os.environ.get("CC") or "cc"
+    gen: list[str] = []
+    extra_inc: list[str] = []
+    if params_header is not None:
+        _x, text = describe_header(params_header, diag=diag, ref=ref)
+        fd, name = tempfile.mkstemp(prefix="bldclab-desc-", suffix=".c")
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        gen.append(name)
+        extra_inc.append(str(Path(params_header).resolve().parent))
     fd, tmp = tempfile.mkstemp(prefix=".bldclab-", suffix=".so", dir=out.parent if str(out.parent) else ".")
     os.close(fd)
     cmd = [compiler, *WARNINGS, *_OPT, "-shared", f'-DBC_USER_BUILT_BY="bldclab {__version__}"',
-           *(f"-D{d}" for d in defines), *(f"-I{i}" for i in include),
+           *(f"-D{d}" for d in defines), *(f"-I{i}" for i in (*include, *extra_inc)),
            f"-I{root / 'ctrl' / 'include'}", f"-I{root / 'host' / 'include'}",
-           *map(str, srcs), *map(str, blocks), "-lm", "-o", tmp]
+           *map(str, srcs), *gen, *map(str, blocks), "-lm", "-o", tmp]
     try:
         try:
             done = subprocess.run(cmd, capture_output=True, text=True, check=False)
@@ -138,9 +156,137 @@ def build(sources: Sequence[str | Path], output: str | Path | None = None, inclu
             raise BldclabError("sources", f"the build failed ({compiler}, the core's warnings as errors):\n{msg}")
         os.replace(tmp, out)
     finally:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
+        for name in (tmp, *gen):
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(name)
     return out
+
+
+# C type names of a header's struct members -> the description's type codes (bc_bind.h)
+_C_TYPES = {"float": "f4", "double": "f8", "int32_t": "i4", "int": "i4", "signed": "i4", "signed int": "i4",
+            "uint32_t": "u4", "unsigned": "u4", "unsigned int": "u4", "int16_t": "i2", "short": "i2",
+            "short int": "i2", "uint16_t": "u2", "unsigned short": "u2", "unsigned short int": "u2", "int8_t": "i1",
+            "signed char": "i1", "uint8_t": "u1", "unsigned char": "u1", "_Bool": "u1", "bool": "u1",
+            "int64_t": "i8", "long long": "i8", "long long int": "i8", "uint64_t": "u8",
+            "unsigned long long": "u8", "unsigned long long int": "u8"}
+
+
+def _structs_of(text: str) -> dict[str, list[tuple[str, str, int | None]]]:
+    """Return the ``typedef struct {...} NAME;`` of a C header: members (C type, name, -1 for an array or None)."""
+    code = re.sub(r"/\*.*?\*/", " ", text, flags=re.S)
+    code = re.sub(r"//[^\n]*", " ", code)
+    code = re.sub(r"^\s*#.*$", " ", code, flags=re.M)
+    out: dict[str, list[tuple[str, str, int | None]]] = {}
+    for body, name in re.findall(r"typedef\s+struct\s*\w*\s*\{([^{}]*)\}\s*(\w+)\s*;", code):
+        members: list[tuple[str, str, int | None]] = []
+        for decl in body.split(";"):
+            decl = " ".join(decl.replace("const ", " ").replace("volatile ", " ").split())
+            if not decl:
+                continue
+            m = re.fullmatch(r"((?:\w+\s+)*?\w+)\s+(\w+(?:\s*\[\s*\w+\s*\])*(?:\s*,\s*\w+(?:\s*\[\s*\w+\s*\])*)*)",
+                             decl)
+            if m is None:
+                raise BldclabError(f"--params-header ({name})", f"cannot read the member declaration {decl!r}: "
+                                   "write the description yourself (BC_USER_CONTROLLER, docs/user-controller.md)")
+            ctype = m.group(1)
+            for item in m.group(2).split(","):
+                dims = re.findall(r"\[\s*(\w+)\s*\]", item)
+                member = item.split("[")[0].strip()
+                if len(dims) > 1:
+                    raise BldclabError(f"--params-header ({name}.{member})", "arrays of more than one dimension are "
+                                       "not read: write the description yourself (BC_USER_CONTROLLER)")
+                members.append((ctype, member, None if not dims else -1))
+        out[name] = members
+    return out
+
+
+def describe_header(header: str | Path, *, diag: Sequence[str] = (), ref: str = "") -> tuple[str, str]:
+    """Return the prefix and the C source of a description generated from a header (``--params-header``).
+
+    The header declares ``X_params`` and ``X_state`` (``typedef struct {...} X_params;``) and the functions
+    ``X_init`` and ``X_step`` of the contract; the generated file includes it, describes every member of
+    ``X_params`` (numbers, one-dimensional arrays, and structs the header defines or bldclab describes), checks each
+    member's type at compile time (a pointer of the described type to it: a mismatch is an error) and exports
+    ``BC_USER_CONTROLLER`` with the name ``X``.
+
+    Raises
+    ------
+    BldclabError
+        For a header without exactly one ``*_params`` struct, without ``X_state``, ``X_init`` or ``X_step``, or with a
+        member it cannot read (then write the description by hand).
+    """
+    path = Path(header)
+    if not path.is_file():
+        raise BldclabError("--params-header", f"no such file: {header}")
+    text = path.read_text()
+    structs = _structs_of(text)
+    prefixes = [n.removesuffix("_params") for n in structs if n.endswith("_params")]
+    if len(prefixes) != 1:
+        raise BldclabError("--params-header", f"{header} must define one 'typedef struct {{...}} X_params;', found "
+                           f"{len(prefixes)} ({', '.join(p + '_params' for p in prefixes) or 'none'})")
+    x = prefixes[0]
+    code = re.sub(r"/\*.*?\*/", " ", text, flags=re.S)
+    missing = [] if f"{x}_state" in structs or re.search(rf"\b{x}_state\s*;", code) else [f"{x}_state"]
+    missing += [f for f in (f"{x}_init", f"{x}_step") if not re.search(rf"\b{f}\s*\(", code)]
+    if missing:
+        raise BldclabError("--params-header", f"{header} declares {x}_params but not {', '.join(missing)} (the "
+                           f"contract: int {x}_init(const {x}_params *, {x}_state *); void {x}_step(const "
+                           f"{x}_params *, {x}_state *, const bc_ctrl_in *, bc_ctrl_out *))")
+    fields: list[str] = []
+    checks: list[str] = []
+    nested: list[str] = []
+
+    def walk(sname: str, var: str) -> None:
+        for ctype, member, dims in structs[sname]:
+            code_ = _C_TYPES.get(ctype)
+            typ = code_ if code_ is not None else ctype
+            if code_ is None and ctype in structs:
+                if ctype not in nested:
+                    nested.append(ctype)
+                    walk(ctype, f"s_{ctype}")
+            elif code_ is None and not re.fullmatch(r"bc_\w+", ctype):
+                raise BldclabError(f"--params-header ({sname}.{member})", f"type {ctype!r} is not a number type "
+                                   f"({', '.join(sorted(set(_C_TYPES)))}), nor a struct of the header or of bldclab")
+            fields.append(f'    BC_BIND_FIELD({sname}, {member}, "{typ}"),')
+            ref_ = f"{var}->{member}" if dims is not None else f"&{var}->{member}"
+            checks.append(f"    {{ {ctype} *c = {ref_}; (void)c; }}")
+
+    checks.append(f"    /* {x}_params */")
+    walk(f"{x}_params", "p")
+    args = ", ".join([f"{x}_params *p"] + [f"{n} *s_{n}" for n in nested])
+    diag_items = ", ".join('"' + d.replace('"', "") + '"' for d in list(diag)[:8])
+    src = f"""/* generated by bldclab from {path.name} (bldclab controller build --params-header): the description of
+ * {x}_params for bc_user.h. Do not edit: build again. */
+#include "{path.name}"
+#include "bldc/bc_user.h"
+
+static const bc_field_desc BC_GEN_FIELDS[] = {{
+{chr(10).join(fields)}
+}};
+static const bc_struct_desc BC_GEN_STRUCTS[] = {{
+    {{"{x}_params", (uint32_t)sizeof({x}_params)}},
+{chr(10).join(f'    {{"{n}", (uint32_t)sizeof({n})}},' for n in nested)}
+}};
+static const bc_user_desc BC_GEN_DESC = {{
+    .name = "{x}",
+    .fields = BC_GEN_FIELDS,
+    .n_fields = BC_USER_COUNT(BC_GEN_FIELDS),
+    .structs = BC_GEN_STRUCTS,
+    .n_structs = BC_USER_COUNT(BC_GEN_STRUCTS),
+    .diag = {{{diag_items or '""'}}},
+    .ref = "{ref.replace('"', '')}",
+}};
+
+/* each member's type as described: a mismatch is a compile error (-Werror) */
+void bc_gen_typecheck({args});
+void bc_gen_typecheck({args})
+{{
+{chr(10).join(checks)}
+}}
+
+BC_USER_CONTROLLER(BC_GEN_DESC, {x}_params, {x}_state, {x}_init, {x}_step);
+"""
+    return x, src
 
 
 # ------------------------------------------------------------------------------------------------------------------

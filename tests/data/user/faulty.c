@@ -14,6 +14,7 @@
 #define F_OVERREAD 5 /* read past the end of bc_ctrl_in */
 #define F_INWRITE 6  /* write to the const inputs */
 #define F_REJECT 7   /* init rejects the parameters */
+#define F_INIT_HANG 8 /* init never returns */
 
 typedef struct {
     int32_t mode; /* F_* */
@@ -30,6 +31,9 @@ static int faulty_init(const faulty_params *p, faulty_state *s)
 {
     s->k = 0;
     s->sink = 0.0f;
+    if (p->mode == F_INIT_HANG) {
+        for (;;) s->sink += 1.0f;
+    }
     return p->mode == F_REJECT ? BC_ERR_PARAM : BC_OK;
 }
 
@@ -77,7 +81,7 @@ static const bc_field_desc FAULTY_FIELDS[] = {
 static const bc_const_desc FAULTY_CONSTS[] = {
     BC_BIND_CONST("mode", F_OK), BC_BIND_CONST("mode", F_CRASH), BC_BIND_CONST("mode", F_HANG),
     BC_BIND_CONST("mode", F_NAN), BC_BIND_CONST("mode", F_RANGE), BC_BIND_CONST("mode", F_OVERREAD),
-    BC_BIND_CONST("mode", F_INWRITE), BC_BIND_CONST("mode", F_REJECT),
+    BC_BIND_CONST("mode", F_INWRITE), BC_BIND_CONST("mode", F_REJECT), BC_BIND_CONST("mode", F_INIT_HANG),
 };
 
 static const faulty_params FAULTY_DEFAULTS = {F_OK, -1, 1.0f};
