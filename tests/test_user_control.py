@@ -396,3 +396,19 @@ def test_a_controller_that_reads_the_back_emf_sensing_gets_it_and_one_that_does_
     assert np.ptp(on.signals["v_term_a"]) > 10.0  # the terminal swings with the back-EMF and the PWM
     assert not np.any(off.signals["n_adc"]) and not np.any(off.signals["zc_edges"])
     assert off.meta["bemf"] is None and on.meta["bemf"]["conversions"] > 0
+
+
+@pytest.mark.slow
+def test_an_efficiency_map_of_a_user_controller_on_processes_is_the_builtins(libs):
+    from bldclab.analysis.effmap import efficiency_map
+
+    builtin = bl.SixStep(regulation="pi", reference="torque")
+    user = bl.UserControl(libs["sixstep_pi"], _example("run_sixstep_pi").user_params(HTM, builtin))
+    torques, speeds = [10.0, 25.0], [0.4 * HTM.Omega_0, 0.7 * HTM.Omega_0]
+    kw = {"supplies": ("square",), "summarise": False}
+    a = efficiency_map(HTM, torques, speeds, workers=1, controls={"square": builtin}, **kw)
+    b = efficiency_map(HTM, torques, speeds, workers=2, controls={"square": user}, **kw)
+    cols = [c for c in a.points.columns if c != "wall_s"]
+    assert len(a.points) == 4
+    pd_testing = pytest.importorskip("pandas.testing")
+    pd_testing.assert_frame_equal(a.points[cols], b.points[cols], check_exact=True)

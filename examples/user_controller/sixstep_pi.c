@@ -29,6 +29,7 @@ typedef struct {
     int32_t advance; /* 1: commutate at the sample nearest the predicted Hall edge; 0: on the edge seen */
     int32_t emf_ff;  /* 1: back-EMF and 2 R I feed-forward */
     int32_t regen;   /* 1: the unipolar patterns reach negative pair voltages by chopping both legs */
+    int32_t ref_torque; /* 0: in->ref is the current amplitude I (A); 1: a torque (N m), I = ref / k_e */
     int32_t p;       /* pole pairs */
     float ts;        /* sampling period, half the PWM period, s */
     float R;         /* phase resistance with the switch, Ohm */
@@ -60,7 +61,7 @@ static int ss_init(const ss_params *p, ss_state *s)
 {
     if (p->chop < BC_CHOP_BIPOLAR || p->chop > BC_CHOP_SYNC || (p->delay != 0 && p->delay != 1) ||
         (p->advance != 0 && p->advance != 1) || (p->emf_ff != 0 && p->emf_ff != 1) ||
-        (p->regen != 0 && p->regen != 1) || p->p < 1)
+        (p->regen != 0 && p->regen != 1) || (p->ref_torque != 0 && p->ref_torque != 1) || p->p < 1)
         return BC_ERR_PARAM;
     if (!(p->ts > 0.0f) || !(p->R >= 0.0f) || !(p->L > 0.0f) || !(p->k_e > 0.0f) || !(p->kp >= 0.0f) ||
         !(p->ki >= 0.0f) || !(p->i_max > 0.0f) || !(p->v_max > 0.0f) || !fin(p->ts) || !fin(p->R) || !fin(p->kp) ||
@@ -146,7 +147,7 @@ static void ss_step(const ss_params *p, ss_state *s, const bc_ctrl_in *in, bc_ct
     set_sector(s, sector);
     int pos, neg;
     (void)bc_sector_phases(sector, &pos, &neg);
-    float ref = in->ref; /* current amplitude, A; negative: reverse torque */
+    float ref = in->ref; /* current amplitude (A) or torque (N m); negative: reverse torque */
     if (ref < 0.0f) {
         int t = pos;
         pos = neg;
@@ -156,7 +157,9 @@ static void ss_step(const ss_params *p, ss_state *s, const bc_ctrl_in *in, bc_ct
     int x = (s->incoming == pos || s->incoming == neg) ? s->incoming : pos;
     float sgn = x == pos ? 1.0f : -1.0f;
     float i_reg = sgn * i[x];
-    float i_ref = bc_clampf(fabsf(ref), 0.0f, p->i_max);
+    float i_ref = fabsf(ref);
+    if (p->ref_torque) i_ref /= p->k_e;
+    i_ref = bc_clampf(i_ref, 0.0f, p->i_max);
     int chop_leg = p->chop == BC_CHOP_PWMPWM ? ((travel < 0.0f || travel < PI6_F) ? x : (x == pos ? neg : pos))
                                              : (p->chop == BC_CHOP_BIPOLAR ? 3 : pos);
 
@@ -196,7 +199,8 @@ static void ss_step(const ss_params *p, ss_state *s, const bc_ctrl_in *in, bc_ct
 static const bc_field_desc SS_FIELDS[] = {
     BC_BIND_FIELD(ss_params, chop, "i4"),   BC_BIND_FIELD(ss_params, delay, "i4"),
     BC_BIND_FIELD(ss_params, advance, "i4"), BC_BIND_FIELD(ss_params, emf_ff, "i4"),
-    BC_BIND_FIELD(ss_params, regen, "i4"),  BC_BIND_FIELD(ss_params, p, "i4"),
+    BC_BIND_FIELD(ss_params, regen, "i4"),  BC_BIND_FIELD(ss_params, ref_torque, "i4"),
+    BC_BIND_FIELD(ss_params, p, "i4"),
     BC_BIND_FIELD(ss_params, ts, "f4"),     BC_BIND_FIELD(ss_params, R, "f4"),
     BC_BIND_FIELD(ss_params, L, "f4"),      BC_BIND_FIELD(ss_params, k_e, "f4"),
     BC_BIND_FIELD(ss_params, kp, "f4"),     BC_BIND_FIELD(ss_params, ki, "f4"),
@@ -209,7 +213,7 @@ static const bc_user_desc SS = {
     .fields = SS_FIELDS,
     .n_fields = BC_USER_COUNT(SS_FIELDS),
     .diag = {"sector", "i_reg A", "i_ref A", "duty", "omega_e rad/s", "incoming", "chop_leg", "i_out A"},
-    .ref = "current amplitude, A",
+    .ref = "current amplitude, A (ref_torque = 1: torque, N m)",
 };
 
 BC_USER_CONTROLLER(SS, ss_params, ss_state, ss_init, ss_step);

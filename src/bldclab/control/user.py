@@ -761,8 +761,9 @@ class UserControl(Control):
 
     def describe(self) -> dict[str, object]:  # noqa: D102
         lib = self.lib
+        params = {k: (v if isinstance(v, str) else np.asarray(v).tolist()) for k, v in _flatten(self.params).items()}
         return {"controller": "user", "name": lib.name, "library": self.library, "sha256": self.sha256,
-                "built_by": lib.built_by, "params": dict(self.params), "isolate": self.isolate,
+                "built_by": lib.built_by, "params": params, "isolate": self.isolate,
                 "budget": self.budget}
 
 
@@ -954,6 +955,11 @@ def run_isolated(control: Control, fn: Callable[[np.ndarray], Any], t_half: floa
             if progress is not None and k > shown:
                 shown = k
                 progress(min(k, n), n)
+    except BaseException:  # Ctrl-C, a progress callback that raised: the child must not outlive the call
+        if pid:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+        raise
     finally:
         os.close(r)
         status = os.waitpid(pid, 0)[1] if pid else 0
