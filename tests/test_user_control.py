@@ -201,10 +201,19 @@ def test_a_rebuilt_library_at_the_same_path_is_loaded_again(tmp_path, libs):
 
 
 @pytest.mark.slow
-def test_a_user_controller_pickles_as_its_path_and_settings(libs):
+def test_a_user_controller_pickles_as_its_path_and_settings(libs, tmp_path):
     ctl = bl.UserControl(libs["faulty"], {"mode": "F_OK", "gain": 0.5}, budget=2.0)
     back = pickle.loads(pickle.dumps(ctl))
     assert (back.library, back.params, back.isolate, back.budget) == (ctl.library, ctl.params, True, 2.0)
+    # a worker where the path is gone runs the copy of the same content this machine loaded
+    out = tmp_path / "gone.so"
+    build([DATA / "faulty.c"], out, defines=["GONE_VARIANT=1"])
+    data = pickle.dumps(bl.UserControl(str(out), {"gain": 0.5}))
+    out.unlink()
+    again = pickle.loads(data)
+    assert again.library == str(out) and again.lib.name == "faulty"
+    res = bl.simulate(HTM, again, bl.Scenario(duration=0.002, speed="0.5 pu", ref=0.5))
+    assert len(res) > 0
 
 
 # ------------------------------------------------------------------------------------------------------------------

@@ -685,7 +685,8 @@ class UserControl(Control):
         killed and reported as hung.
     sha256 : str
         The library's content hash; default the file's now. Given (a sweep's case rebuilt in a worker), the file
-        must still have it: a library rebuilt since is refused rather than run in its place.
+        must still have it: a library rebuilt since is refused rather than run in its place. Where the path does not
+        exist, the private copy of that content this machine loaded before (a temporary directory, by hash) is used.
     """
 
     library: str
@@ -707,7 +708,12 @@ class UserControl(Control):
         if isinstance(self.budget, bool) or not isinstance(self.budget, int | float) or not (
                 math.isfinite(self.budget) and self.budget > 0):
             raise BldclabError("control.budget", f"must be a finite number of seconds > 0, got {self.budget!r}")
-        lib = self.lib
+        source: str | Path = self.library
+        if self.sha256 and not Path(self.library).is_file():  # a worker without the file: this machine's copy
+            copy = _cache_dir() / f"{str(self.sha256)[:32]}{Path(self.library).suffix or '.so'}"
+            source = copy if copy.is_file() else source
+        lib = describe_library(source)
+        object.__setattr__(self, "_lib", lib)
         if not self.sha256:
             object.__setattr__(self, "sha256", lib.sha)
         elif self.sha256 != lib.sha:
@@ -722,8 +728,9 @@ class UserControl(Control):
 
     @property
     def lib(self) -> _Library:
-        """The loaded library and its description."""
-        return describe_library(self.library)
+        """The loaded library and its description (the library this controller was made with)."""
+        lib: _Library = self.__dict__["_lib"]
+        return lib
 
     @property
     def ref_meaning(self) -> str:  # type: ignore[override]  # a ClassVar of the built-in controllers
