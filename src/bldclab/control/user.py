@@ -813,8 +813,9 @@ class PythonControl(Control):
     ...; cleared before every call) itself. A duty outside [0, 1], NaN or an exception ends the run with a
     :class:`~bldclab.errors.ControllerError` naming the sample (the exception as its cause).
 
-    Slow by design: about 10 us per sample on a desktop (docs/user-controller.md; ``benchmarks/user_control.py``),
-    against well under 1 us for the C core's controllers: prototype in Python, translate to C for long runs.
+    Slow by design: 4 to 9 us per sample for a six-step law (docs/user-controller.md; ``benchmarks/user_control.py``),
+    against about 1 us for a whole simulation step with the C translation: prototype in Python, translate to C for
+    long runs.
 
     Attributes
     ----------
