@@ -421,3 +421,21 @@ def test_an_efficiency_map_of_a_user_controller_on_processes_is_the_builtins(lib
     assert len(a.points) == 4
     pd_testing = pytest.importorskip("pandas.testing")
     pd_testing.assert_frame_equal(a.points[cols], b.points[cols], check_exact=True)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("script", ["run_sixstep_pi.py", "prototype.py"])
+def test_the_example_scripts_run_and_find_identical_traces(script, tmp_path):
+    import os
+    import subprocess
+
+    import bldclab
+
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(Path(bldclab.__file__).parents[1]),
+                                                         os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.run([sys.executable, str(EXAMPLES / script)], capture_output=True, text=True, timeout=600,
+                          cwd=tmp_path, env=env)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    flags = [line.rsplit(":", 1)[1].strip() for line in proc.stdout.splitlines() if "identical" in line]
+    assert flags and all(f == "True" for f in flags), proc.stdout
+    assert list(tmp_path.iterdir()) == []  # nothing written where it ran

@@ -3,14 +3,15 @@
 The law: the Hall code gives the sector, the sector the conducting pair; the positive phase's upper switch chops
 with the duty ``gain * ref`` (limited to [0, 1]), the negative phase's lower switch is on, the third leg is off.
 Arithmetic in float32 (``numpy.float32``), as the C controller computes, so the two traces are identical bit for bit
-(tests/test_user_control.py). Run from the repository root::
+(tests/test_user_control.py). Run from the repository root (it builds the C translation into a temporary
+directory, as ``bldclab controller build examples/user_controller/sixstep_voltage.c -o /tmp/sv.so`` would)::
 
-    bldclab controller build examples/user_controller/sixstep_voltage.c -o sixstep_voltage.so
     python examples/user_controller/prototype.py
 """
 
 from __future__ import annotations
 
+import tempfile
 import time
 from pathlib import Path
 
@@ -52,7 +53,8 @@ class SixStepVoltage(bl.PythonControl):
 def main() -> None:
     """Run the Python prototype and the C translation on the same scenario; compare traces and timings."""
     here = Path(__file__).parent
-    lib = bl.control.user.build([here / "sixstep_voltage.c"], here / "sixstep_voltage.so")
+    lib = bl.control.user.build([here / "sixstep_voltage.c"],
+                                Path(tempfile.mkdtemp(prefix="bldclab-example-")) / "sixstep_voltage.so")
     drive = bl.load("htm-48v")
     sc = bl.Scenario(duration=0.05, speed="0.5 pu", ref=0.4)
     t0 = time.perf_counter()

@@ -1,6 +1,7 @@
 """The built-in six-step (PI regulation) against its rewrite as a user controller (sixstep_pi.c): the same trace.
 
-Builds ``sixstep_pi.c`` with ``bldclab.control.user.build`` (what ``bldclab controller build`` does), fills its
+Builds ``sixstep_pi.c`` with ``bldclab.control.user.build`` (what ``bldclab controller build`` does) into a
+temporary directory, fills its
 parameters from the built-in controller's own record (the same numbers the built-in receives), runs both on the same
 scenario, and prints whether every trace column is identical and the cost per simulated second of each. Run from
 the repository root::
@@ -10,6 +11,7 @@ the repository root::
 
 from __future__ import annotations
 
+import tempfile
 import time
 from pathlib import Path
 
@@ -33,7 +35,7 @@ def user_params(drive: bl.Drive, builtin: bl.SixStep) -> dict[str, float]:
 def main() -> None:
     """Build, run both, compare."""
     here = Path(__file__).parent
-    lib = build([here / "sixstep_pi.c"], here / "sixstep_pi.so")
+    lib = build([here / "sixstep_pi.c"], Path(tempfile.mkdtemp(prefix="bldclab-example-")) / "sixstep_pi.so")
     drive = bl.load("htm-48v")
     builtin = bl.SixStep(regulation="pi", chopping="pwm-on-pwm")
     sc = bl.Scenario(duration=0.2, speed="0.5 pu", ref=drive.motor.I_N, trace_sub=1)

@@ -6,10 +6,10 @@
  * on the normalised pair voltage with back-EMF feed-forward, a chopping pattern from bc_pair_legs. It uses the
  * same controller blocks as the built-in (bc_hall, bc_guard, bc_pi, bc_commutation: linked by `bldclab controller
  * build`) and the same float operations in the same order, so its trace is the built-in's bit for bit
- * (tests/test_user_control.py). Build and run:
+ * (tests/test_user_control.py). Build it, and run it beside the built-in:
  *
  *     bldclab controller build examples/user_controller/sixstep_pi.c -o sixstep_pi.so
- *     python examples/user_controller/run_sixstep_pi.py
+ *     python examples/user_controller/run_sixstep_pi.py       (builds its own copy and compares)
  */
 #include <math.h>
 #include <stdint.h>
