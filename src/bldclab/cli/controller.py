@@ -52,8 +52,12 @@ def run_command(args: argparse.Namespace) -> int:
         diag = [d.strip() for d in args.diag.split(",")] if args.diag else []
         if len(diag) > 8:
             raise BldclabError("--diag", f"at most 8 diagnostics, got {len(diag)}")
-        out = build(args.sources, args.output, include=args.include, defines=args.define, cc=args.cc,
-                    params_header=args.params_header, diag=diag, ref=args.ref_meaning)
+        try:
+            out = build(args.sources, args.output, include=args.include, defines=args.define, cc=args.cc,
+                        params_header=args.params_header, diag=diag, ref=args.ref_meaning)
+        except BldclabError as exc:  # name the option typed
+            option = {"output": "--output", "cc": "--cc", "sources": "FILE.c"}.get(exc.field, exc.field)
+            raise BldclabError(option, exc.problem) from None
         lib = describe_library(out)
         print(f"built {out}: controller {lib.name!r}, parameters {lib.params} ({len(lib.leaves)} members"
               f"{', with defaults' if lib.defaults is not None else ''})")

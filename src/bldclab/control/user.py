@@ -128,6 +128,10 @@ def build(sources: Sequence[str | Path], output: str | Path | None = None, inclu
         if not s.is_file():
             raise BldclabError("sources", f"no such file: {s}")
     out = Path(output) if output is not None else srcs[0].with_suffix(".so")
+    if not out.parent.resolve().is_dir():
+        raise BldclabError("output", f"the directory of {out} does not exist")
+    if out.is_dir():
+        raise BldclabError("output", f"{out} is a directory: name the library file")
     root = core_dir()
     blocks = sorted((root / "ctrl" / "src").glob("*.c"))
     compiler = cc or os.environ.get("CC") or "cc"
@@ -883,8 +887,15 @@ class PythonControl(Control):
                            (bufs, init_cb, step_cb, inputs, out), failure=lambda: box[0] if box else None)
 
     def describe(self) -> dict[str, object]:  # noqa: D102
+        def plain(v: object) -> object:
+            if isinstance(v, str | bool | int | float) or v is None:
+                return v
+            if isinstance(v, np.generic | np.ndarray):
+                return v.tolist()
+            return repr(v)
+
         return {"controller": "python", "class": f"{type(self).__module__}:{type(self).__qualname__}",
-                **{k: v for k, v in vars(self).items() if k not in ("out", "OFF", "PWM", "HIGH", "LOW")}}
+                **{k: plain(v) for k, v in vars(self).items() if k not in ("out", "OFF", "PWM", "HIGH", "LOW")}}
 
 
 # ------------------------------------------------------------------------------------------------------------------
