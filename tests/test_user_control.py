@@ -439,3 +439,33 @@ def test_the_example_scripts_run_and_find_identical_traces(script, tmp_path):
     flags = [line.rsplit(":", 1)[1].strip() for line in proc.stdout.splitlines() if "identical" in line]
     assert flags and all(f == "True" for f in flags), proc.stdout
     assert list(tmp_path.iterdir()) == []  # nothing written where it ran
+
+
+@pytest.mark.slow
+def test_the_command_line_runs_the_example_as_the_builtin_from_its_params_file(libs, capsys):
+    import json
+    import tomllib
+
+    from bldclab.cli import main
+
+    toml = EXAMPLES / "sixstep_pi_htm48v.toml"
+    builtin = bl.SixStep(regulation="pi")
+    want = _example("run_sixstep_pi").user_params(HTM, builtin)
+    rec = bl.UserControl(libs["sixstep_pi"], tomllib.loads(toml.read_text())).c_record(HTM, bl._core.core(), 1)
+    assert {k: rec.record[k][0].item() for k in want} == want  # the file is what the built-in gives itself
+    common = ["--speed", "0.6 pu", "--format", "json", "--no-trace"]
+    assert main(["simulate", "htm-48v", "--control", libs["sixstep_pi"], "--params", str(toml), "--ref", "50",
+                 *common]) == 0
+    user = json.loads(capsys.readouterr().out)
+    assert main(["simulate", "htm-48v", "--control", "square", "--regulation", "pi", "--current", "50 A",
+                 *common]) == 0
+    ref = json.loads(capsys.readouterr().out)
+    differ = sorted(k for k in ref if ref[k] != user[k])
+    assert differ == ["control", "reference_unit"], differ
+    # --param overrides the file; a file that is not TOML is one error
+    assert main(["simulate", "htm-48v", "--control", libs["sixstep_pi"], "--params", str(toml), "--param", "p=0",
+                 *common]) == 2
+    assert "its init returned -1" in capsys.readouterr().err
+    assert main(["simulate", "htm-48v", "--control", libs["sixstep_pi"], "--params", str(DATA / "faulty.c"),
+                 *common]) == 2
+    assert "--params: cannot read" in capsys.readouterr().err

@@ -9,6 +9,7 @@ import json
 import math
 import sys
 import time
+import tomllib
 import warnings
 from dataclasses import asdict, replace
 from pathlib import Path
@@ -48,6 +49,9 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     user.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
                       help="a parameter member by name: a number, a named constant, or comma-separated numbers for "
                            "an array (repeat for each; 'bldclab controller describe LIB' lists them)")
+    user.add_argument("--params", type=Path, metavar="FILE.toml",
+                      help="parameters from a TOML file (KEY = VALUE lines, tables for nested structs); --param "
+                           "overrides them")
     user.add_argument("--ref", type=float, help="the reference, in the unit the controller states (default 0)")
     user.add_argument("--in-process", action="store_true",
                       help="run it in this process (default: a watched child process, so that a crash or a hang "
@@ -179,7 +183,14 @@ def parse_params(items: list[str]) -> dict[str, Any]:
 def _user_control(args: argparse.Namespace) -> UserControl:
     """Return the user controller of ``--control PATH --param ...`` (errors naming the option)."""
     try:
-        return UserControl(args.control, parse_params(args.param), isolate=not args.in_process, budget=args.budget)
+        params: dict[str, Any] = {}
+        if args.params is not None:
+            try:
+                params = tomllib.loads(args.params.read_text())
+            except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+                raise BldclabError("--params", f"cannot read {args.params}: {exc}") from None
+        params.update(parse_params(args.param))
+        return UserControl(args.control, params, isolate=not args.in_process, budget=args.budget)
     except BldclabError as exc:
         if exc.field.startswith("control.params."):
             raise BldclabError(f"--param {exc.field.removeprefix('control.params.')}", exc.problem) from None
@@ -200,7 +211,8 @@ def _check_options(args: argparse.Namespace) -> None:
         near = f": did you mean {close[0]!r}?" if close else ""
         raise BldclabError("--control", f"invalid choice: {args.control!r}{near} (one of {', '.join(CONTROLS)}, or "
                            "the path of your controller's library, ./my.so)")
-    for option, given in (("--param", bool(args.param)), ("--ref", args.ref is not None),
+    for option, given in (("--param", bool(args.param)), ("--params", args.params is not None),
+                          ("--ref", args.ref is not None),
                           ("--in-process", args.in_process)):
         if given and not user:
             raise BldclabError(option, f"is a setting of your own controller: it needs --control ./my.so, got "
