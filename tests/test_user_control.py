@@ -469,3 +469,34 @@ def test_the_command_line_runs_the_example_as_the_builtin_from_its_params_file(l
     assert main(["simulate", "htm-48v", "--control", libs["sixstep_pi"], "--params", str(DATA / "faulty.c"),
                  *common]) == 2
     assert "--params: cannot read" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_library_uploaded_to_dask_workers_runs_there_without_the_path(tmp_path):
+    from conftest import require_module
+
+    require_module("distributed")
+    import distributed
+
+    from bldclab import sweep as sw
+    from bldclab.control.user import _cache_dir
+    from bldclab.sweep.executors import run_case
+
+    out = tmp_path / "travels.so"
+    src = tmp_path / "travels.c"
+    src.write_text((DATA / "faulty.c").read_text().replace('.name = "faulty"', '.name = "travels"'))
+    build([src], out)
+    s = sw.Sweep(base={"drive": "htm-48v", "controller": "UserControl", "control.library": str(out),
+                       "control.params": {"gain": 0.5}, "ref": 0.8, "speed_pu": 0.7, "settle_periods": 1,
+                       "measure_periods": 1, "settle_time": 0.0})
+    (case,) = list(s.resolve())
+    here = run_case(case.inputs)
+    sha = case.inputs["control"]["params"]["sha256"]
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        client.upload_file(str(out), load=False)
+        # the worker has neither the path nor this machine's copy: only the uploaded file
+        out.unlink()
+        (_cache_dir() / f"{sha[:32]}.so").unlink()
+        there = client.submit(run_case, case.inputs, pure=False).result()
+    assert there == here and here["tau_mean"] > 0

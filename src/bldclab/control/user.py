@@ -664,6 +664,24 @@ def _guard(c: Core, init: int, step: int, sizes: Sequence[int], watch: np.ndarra
 # the C user controller
 
 
+def _elsewhere(path: Path, sha: str) -> Path | None:
+    """Return a file with the content ``sha`` where ``path`` is missing.
+
+    This machine's private copy of it (loaded before), or a Dask worker's uploaded file of the same name
+    (``client.upload_file("my.so", load=False)``).
+    """
+    copy = _cache_dir() / f"{sha[:32]}{path.suffix or '.so'}"
+    found = [copy]
+    dist = sys.modules.get("distributed")
+    if dist is not None:
+        with contextlib.suppress(Exception):  # not in a worker
+            found.append(Path(dist.get_worker().local_directory) / path.name)
+    for f in found:
+        if f.is_file() and hashlib.sha256(f.read_bytes()).hexdigest() == sha:
+            return f
+    return None
+
+
 @dataclass(frozen=True, eq=False)
 class UserControl(Control):
     """A controller from a user's shared library (built by :func:`build`, ``bldclab controller build``).
@@ -690,7 +708,9 @@ class UserControl(Control):
     sha256 : str
         The library's content hash; default the file's now. Given (a sweep's case rebuilt in a worker), the file
         must still have it: a library rebuilt since is refused rather than run in its place. Where the path does not
-        exist, the private copy of that content this machine loaded before (a temporary directory, by hash) is used.
+        exist, a file of that content is used: the private copy this machine loaded before (a temporary directory,
+        by hash), or, on a Dask worker, the file of the same name uploaded with ``client.upload_file(path,
+        load=False)``.
     """
 
     library: str
@@ -713,10 +733,9 @@ class UserControl(Control):
                 math.isfinite(self.budget) and self.budget > 0):
             raise BldclabError("control.budget", f"must be a finite number of seconds > 0, got {self.budget!r}")
         source: str | Path = self.library
-        if self.sha256 and not Path(self.library).is_file():  # a worker without the file: this machine's copy
-            copy = _cache_dir() / f"{str(self.sha256)[:32]}{Path(self.library).suffix or '.so'}"
-            source = copy if copy.is_file() else source
-        lib = describe_library(source)
+        if self.sha256 and not Path(self.library).is_file() and str(self.sha256) not in _LIBS:
+            source = _elsewhere(Path(self.library), str(self.sha256)) or source  # a worker without the file
+        lib = _LIBS[str(self.sha256)] if str(self.sha256) in _LIBS else describe_library(source)
         object.__setattr__(self, "_lib", lib)
         if not self.sha256:
             object.__setattr__(self, "sha256", lib.sha)
