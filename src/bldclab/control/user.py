@@ -733,9 +733,11 @@ class UserControl(Control):
                 math.isfinite(self.budget) and self.budget > 0):
             raise BldclabError("control.budget", f"must be a finite number of seconds > 0, got {self.budget!r}")
         source: str | Path = self.library
-        if self.sha256 and not Path(self.library).is_file() and str(self.sha256) not in _LIBS:
-            source = _elsewhere(Path(self.library), str(self.sha256)) or source  # a worker without the file
-        lib = _LIBS[str(self.sha256)] if str(self.sha256) in _LIBS else describe_library(source)
+        sha = str(self.sha256)
+        if sha and not Path(self.library).is_file():  # a worker without the file: the same content elsewhere
+            lib = _LIBS[sha] if sha in _LIBS else describe_library(_elsewhere(Path(self.library), sha) or source)
+        else:
+            lib = describe_library(source)
         object.__setattr__(self, "_lib", lib)
         if not self.sha256:
             object.__setattr__(self, "sha256", lib.sha)
