@@ -61,11 +61,16 @@ def _same(a: bl.SimResult, b: bl.SimResult) -> list[str]:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("chopping", "inverter", "speed"), [("pwm-on-pwm", "switching", "0.5 pu"),
-                                                              ("high", "average", "0.8 pu")])
-def test_sixstep_rewritten_as_a_user_controller_gives_the_builtin_trace_bit_for_bit(libs, chopping, inverter, speed):
-    drive = HTM.replace(inverter__model=inverter)
-    builtin = bl.SixStep(regulation="pi", chopping=chopping)
+@pytest.mark.parametrize(("motor", "chopping", "inverter", "speed", "timing"), [
+    ("htm-48v", "pwm-on-pwm", "switching", "0.5 pu", None),
+    ("htm-48v", "high", "average", "0.8 pu", None),
+    # an ESC: commutation timer with 15 deg of advance on a drone motor at 1.5 PWM periods per commutation
+    ("f60prov-2550kv", "pwm-on-pwm", "switching", "30000 rpm", "15 deg")])
+def test_sixstep_rewritten_as_a_user_controller_gives_the_builtin_trace_bit_for_bit(libs, motor, chopping, inverter,
+                                                                                    speed, timing):
+    drive = bl.load(motor).replace(inverter__model=inverter)
+    builtin = bl.SixStep(regulation="pi", chopping=chopping) if timing is None else bl.SixStep(
+        regulation="pi", chopping=chopping, timed=True, timing=timing)
     params = _example("run_sixstep_pi").user_params(drive, builtin)
     # a step of the reference mid-run (saturation, then regulation) and a current at the trip limit's edge
     sc = bl.Scenario(duration=0.03, speed=speed, ref=lambda t: np.where(t < 0.015, 0.5, 1.5) * drive.motor.I_N,
@@ -77,6 +82,10 @@ def test_sixstep_rewritten_as_a_user_controller_gives_the_builtin_trace_bit_for_
         assert res.metrics == ref.metrics
         assert res.meta["controller_flags"] == ref.meta["controller_flags"]
     assert np.ptp(ref.signals["sector"]) == 5  # it did commutate through every sector
+    if timing is not None:  # the timer and the advance did something: without them the trace differs
+        plain = bl.simulate(drive, bl.UserControl(libs["sixstep_pi"], {**params, "timed": 0, "adv_angle": 0.0},
+                                                  isolate=False), sc)
+        assert "i_a" in _same(plain, ref)
 
 
 @pytest.mark.slow

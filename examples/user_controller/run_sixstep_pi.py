@@ -22,8 +22,8 @@ from bldclab._core import core
 from bldclab.control.user import build
 
 #: The members of sixstep_pi.c's ss_params, filled from the built-in's bc_sixstep_params of the same names.
-MEMBERS = ("chop", "delay", "advance", "emf_ff", "regen", "ref_torque", "p", "ts", "R", "L", "k_e", "kp", "ki",
-           "i_max", "v_max", "f_tick", "omega_min")
+MEMBERS = ("chop", "delay", "advance", "emf_ff", "regen", "ref_torque", "timed", "adv_angle", "adv_time", "p", "ts",
+           "R", "L", "k_e", "kp", "ki", "i_max", "v_max", "f_tick", "omega_min")
 
 
 def user_params(drive: bl.Drive, builtin: bl.SixStep) -> dict[str, float]:

@@ -2,7 +2,9 @@
  * sixstep_pi.c - the built-in six-step (bc_sixstep.c with regulation "pi", Hall commutation) rewritten as a user
  * controller: what a firmware's control step looks like when it is run in bldclab (docs/user-controller.md).
  *
- * Hall commutation with the outgoing phase left to freewheel, the current of the incoming phase regulated by a PI
+ * Hall commutation (at the sample nearest the predicted edge, or at the predicted instant itself through the
+ * output's commutation timer, with a timing advance) with the outgoing phase left to freewheel, the current of the
+ * incoming phase regulated by a PI
  * on the normalised pair voltage with back-EMF feed-forward, a chopping pattern from bc_pair_legs. It uses the
  * same controller blocks as the built-in (bc_hall, bc_guard, bc_pi, bc_commutation: linked by `bldclab controller
  * build`) and the same float operations in the same order, so its trace is the built-in's bit for bit
@@ -30,6 +32,9 @@ typedef struct {
     int32_t emf_ff;  /* 1: back-EMF and 2 R I feed-forward */
     int32_t regen;   /* 1: the unipolar patterns reach negative pair voltages by chopping both legs */
     int32_t ref_torque; /* 0: in->ref is the current amplitude I (A); 1: a torque (N m), I = ref / k_e */
+    int32_t timed;   /* 1: commutate at the predicted instant inside the PWM period (a commutation timer) */
+    float adv_angle; /* timing advance at any speed, electrical rad */
+    float adv_time;  /* timing advance per speed, s (the angle grows by |Omega_e| adv_time); total <= pi/6 */
     int32_t p;       /* pole pairs */
     float ts;        /* sampling period, half the PWM period, s */
     float R;         /* phase resistance with the switch, Ohm */
@@ -61,7 +66,9 @@ static int ss_init(const ss_params *p, ss_state *s)
 {
     if (p->chop < BC_CHOP_BIPOLAR || p->chop > BC_CHOP_SYNC || (p->delay != 0 && p->delay != 1) ||
         (p->advance != 0 && p->advance != 1) || (p->emf_ff != 0 && p->emf_ff != 1) ||
-        (p->regen != 0 && p->regen != 1) || (p->ref_torque != 0 && p->ref_torque != 1) || p->p < 1)
+        (p->regen != 0 && p->regen != 1) || (p->ref_torque != 0 && p->ref_torque != 1) || (p->timed != 0 && p->timed != 1) || p->p < 1)
+        return BC_ERR_PARAM;
+    if (!fin(p->adv_angle) || !fin(p->adv_time) || p->adv_angle < 0.0f || p->adv_time < 0.0f)
         return BC_ERR_PARAM;
     if (!(p->ts > 0.0f) || !(p->R >= 0.0f) || !(p->L > 0.0f) || !(p->k_e > 0.0f) || !(p->kp >= 0.0f) ||
         !(p->ki >= 0.0f) || !(p->i_max > 0.0f) || !(p->v_max > 0.0f) || !fin(p->ts) || !fin(p->R) || !fin(p->kp) ||
@@ -76,6 +83,13 @@ static int ss_init(const ss_params *p, ss_state *s)
     if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
     s->sector = s->seen = s->incoming = -1;
     return BC_OK;
+}
+
+/* The timing advance at electrical speed w (rad/s): adv_angle + w adv_time, at most pi/6. */
+static float timing_advance(const ss_params *p, float w)
+{
+    float a = p->adv_angle + w * p->adv_time;
+    return fin(a) ? bc_clampf(a, 0.0f, PI6_F) : 0.0f;
 }
 
 /* Ideal 120-degree trapezoid of unit flat top rising at th = 0: the back-EMF shape the feed-forward assumes. */
@@ -104,6 +118,15 @@ static void safe(ss_state *s, bc_ctrl_out *out, uint32_t why)
     out->diag[6] = -1.0f;
     bc_pi_reset(&s->pi_p, &s->pi, 0.0f);
     s->sector = s->seen = s->incoming = -1;
+}
+
+/* The chopping leg (3: both): PWM-on-PWM chops the incoming phase x in the first half of the sector, the other one
+ * in the second. */
+static int chop_leg_of(const ss_params *p, int pos, int neg, int x, float travel)
+{
+    if (p->chop == BC_CHOP_PWMPWM) return (travel < 0.0f || travel < PI6_F) ? x : (x == pos ? neg : pos);
+    if (p->chop == BC_CHOP_BIPOLAR) return 3;
+    return pos;
 }
 
 /* A new sector records the phase that entered the conducting pair. */
@@ -138,13 +161,26 @@ static void ss_step(const ss_params *p, ss_state *s, const bc_ctrl_in *in, bc_ct
         return;
     }
 
-    /* commutation: the sector seen, or the next one when its boundary is due by the middle of the output's
-     * interval */
+    /* commutation: the sector seen, or the next one when its (advanced) boundary is due by the middle of the
+     * output's interval; timed: the sector at the interval's start, and the next one at its instant */
     float ts = p->ts;
-    float lead = ((float)p->delay + 0.5f) * ts;
+    float lead = ((float)p->delay + (p->timed ? 0.0f : 0.5f)) * ts;
     float travel;
-    int sector = bc_hall_commutate(&s->hall_p, &h, in, lead, p->advance, 0.0f, s->sector, &s->seen, &travel);
+    float w_c = fabsf(h.omega_e);
+    float adv = h.speed_valid ? timing_advance(p, w_c) : 0.0f;
+    int sector = bc_hall_commutate(&s->hall_p, &h, in, lead, p->advance || p->timed, adv, s->sector, &s->seen,
+                                   &travel);
+    if (!h.speed_valid) w_c = 0.0f;
     set_sector(s, sector);
+    int next = -1; /* the next commutation inside the interval (timed): sector and instant */
+    float t_next = 0.0f;
+    if (p->timed && travel >= 0.0f && w_c > 0.0f && h.dir != 0) {
+        float dt = (PI3_F - travel) / w_c;
+        if (fin(dt) && dt < ts) {
+            next = (sector + (h.dir > 0 ? 1 : 5)) % 6;
+            t_next = bc_clampf(dt, 0.0f, ts);
+        }
+    }
     int pos, neg;
     (void)bc_sector_phases(sector, &pos, &neg);
     float ref = in->ref; /* current amplitude (A) or torque (N m); negative: reverse torque */
@@ -160,8 +196,7 @@ static void ss_step(const ss_params *p, ss_state *s, const bc_ctrl_in *in, bc_ct
     float i_ref = fabsf(ref);
     if (p->ref_torque) i_ref /= p->k_e;
     i_ref = bc_clampf(i_ref, 0.0f, p->i_max);
-    int chop_leg = p->chop == BC_CHOP_PWMPWM ? ((travel < 0.0f || travel < PI6_F) ? x : (x == pos ? neg : pos))
-                                             : (p->chop == BC_CHOP_BIPOLAR ? 3 : pos);
+    int chop_leg = chop_leg_of(p, pos, neg, x, travel);
 
     /* back-EMF over the interval the output applies to */
     float w_m = h.omega_e / (float)p->p;
@@ -182,8 +217,23 @@ static void ss_step(const ss_params *p, ss_state *s, const bc_ctrl_in *in, bc_ct
     m = fin(m) ? bc_clampf(m, m_lo, 1.0f) : 0.0f;
 
     bc_pair_legs((int)p->chop, pos, neg, chop_leg, m, out->leg);
+    if (next >= 0) { /* the commutation timer: the next sector's legs from t_next, the same pair voltage */
+        int pn, nn;
+        (void)bc_sector_phases(next, &pn, &nn);
+        if (ref < 0.0f) {
+            int t = pn;
+            pn = nn;
+            nn = t;
+        }
+        set_sector(s, next);
+        int xn = (s->incoming == pn || s->incoming == nn) ? s->incoming : pn;
+        bc_pair_legs((int)p->chop, pn, nn, chop_leg_of(p, pn, nn, xn, 0.0f), m, out->leg_at);
+        out->has_at = 1u;
+        out->t_at = t_next;
+    }
     for (int j = 0; j < 3; ++j) {
         if (!(out->leg[j].duty >= 0.0f && out->leg[j].duty <= 1.0f)) out->leg[j].duty = 0.0f;
+        if (!(out->leg_at[j].duty >= 0.0f && out->leg_at[j].duty <= 1.0f)) out->leg_at[j].duty = 0.0f;
     }
     if (sat) out->flags |= BC_FLAG_SATURATED;
     out->diag[0] = (float)sector;
@@ -200,7 +250,8 @@ static const bc_field_desc SS_FIELDS[] = {
     BC_BIND_FIELD(ss_params, chop, "i4"),   BC_BIND_FIELD(ss_params, delay, "i4"),
     BC_BIND_FIELD(ss_params, advance, "i4"), BC_BIND_FIELD(ss_params, emf_ff, "i4"),
     BC_BIND_FIELD(ss_params, regen, "i4"),  BC_BIND_FIELD(ss_params, ref_torque, "i4"),
-    BC_BIND_FIELD(ss_params, p, "i4"),
+    BC_BIND_FIELD(ss_params, timed, "i4"),  BC_BIND_FIELD(ss_params, adv_angle, "f4"),
+    BC_BIND_FIELD(ss_params, adv_time, "f4"), BC_BIND_FIELD(ss_params, p, "i4"),
     BC_BIND_FIELD(ss_params, ts, "f4"),     BC_BIND_FIELD(ss_params, R, "f4"),
     BC_BIND_FIELD(ss_params, L, "f4"),      BC_BIND_FIELD(ss_params, k_e, "f4"),
     BC_BIND_FIELD(ss_params, kp, "f4"),     BC_BIND_FIELD(ss_params, ki, "f4"),
