@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import importlib.util
 import pickle
+import subprocess
 import sys
 from pathlib import Path
 
@@ -171,10 +172,21 @@ def test_parameters_are_filled_by_name_and_bad_ones_refused(libs):
 
 @pytest.mark.slow
 def test_libraries_without_the_description_or_built_against_another_contract_are_refused(tmp_path):
-    nosym = build([DATA / "nosymbol.c"], tmp_path / "nosym.so")
+    with pytest.raises(BldclabError, match="built, but not usable: missing symbol bc_user_controller"):
+        build([DATA / "nosymbol.c"], tmp_path / "nosym.so")
+    assert not (tmp_path / "nosym.so").exists()
+    nosym = tmp_path / "by_hand.so"  # the same file built by hand: refused when loaded
+    subprocess.run(["cc", "-shared", "-fPIC", f"-I{ROOT / 'core' / 'ctrl' / 'include'}", str(DATA / "nosymbol.c"),
+                    str(ROOT / "core" / "ctrl" / "src" / "bc_types.c"), "-o", str(nosym)], check=True)
     with pytest.raises(BldclabError, match="missing symbol bc_user_controller"):
         bl.UserControl(str(nosym))
-    wrong = build([DATA / "faulty.c"], tmp_path / "wrong.so", defines=["WRONG_SIZE"])
+    with pytest.raises(BldclabError, match=r"wrong struct size or version, sizeof\(bc_ctrl_in\) \d+ \(this bldclab"):
+        build([DATA / "faulty.c"], tmp_path / "wrong.so", defines=["WRONG_SIZE"])
+    wrong = tmp_path / "wrong_by_hand.so"
+    subprocess.run(["cc", "-shared", "-fPIC", "-DWRONG_SIZE", f"-I{ROOT / 'core' / 'ctrl' / 'include'}",
+                    f"-I{ROOT / 'core' / 'host' / 'include'}", str(DATA / "faulty.c"), str(ROOT / "core" / "ctrl" /
+                    "src" / "bc_commutation.c"), str(ROOT / "core" / "ctrl" / "src" / "bc_types.c"), "-o", str(wrong)],
+                   check=True)
     with pytest.raises(BldclabError, match=r"wrong struct size or version, sizeof\(bc_ctrl_in\) \d+ \(this bldclab"):
         bl.UserControl(str(wrong))
     with pytest.raises(BldclabError, match="no such file"):
@@ -436,7 +448,6 @@ def test_an_efficiency_map_of_a_user_controller_on_processes_is_the_builtins(lib
 @pytest.mark.parametrize("script", ["run_sixstep_pi.py", "prototype.py"])
 def test_the_example_scripts_run_and_find_identical_traces(script, tmp_path):
     import os
-    import subprocess
 
     import bldclab
 

@@ -119,7 +119,8 @@ def build(sources: Sequence[str | Path], output: str | Path | None = None, inclu
     Raises
     ------
     BldclabError
-        For a missing source, a missing compiler, or the compiler's errors (its messages in the problem).
+        For a missing source, a missing compiler, the compiler's errors (its messages in the problem), or a library
+        that lacks the description (``BC_USER_CONTROLLER``); nothing is written then.
     """
     if not sources:
         raise BldclabError("sources", "give at least one .c file")
@@ -158,6 +159,10 @@ def build(sources: Sequence[str | Path], output: str | Path | None = None, inclu
         if done.returncode != 0:
             msg = (done.stderr or done.stdout).strip()
             raise BldclabError("sources", f"the build failed ({compiler}, the core's warnings as errors):\n{msg}")
+        try:  # a library bldclab cannot run is no result: it is not written
+            describe_library(tmp)
+        except BldclabError as exc:
+            raise BldclabError("sources", f"built, but not usable: {exc.problem}") from None
         os.replace(tmp, out)
     finally:
         for name in (tmp, *gen):
