@@ -66,7 +66,8 @@ _SLOTS = ("params", "state", "inputs (bc_ctrl_in)", "outputs (bc_ctrl_out)")
 def core_dir() -> Path:
     """Return the directory of bldclab's C sources (``core/``: the headers and the controller blocks to link).
 
-    ``$BLDCLAB_CORE`` if set, else the ``core/`` of the repository this package runs from.
+    ``$BLDCLAB_CORE`` if set, else the copy installed with the package (``bldclab/_csrc``, written by the wheel's
+    build), else the ``core/`` of the repository this package runs from (an editable install).
 
     Raises
     ------
@@ -74,7 +75,13 @@ def core_dir() -> Path:
         If neither holds ``ctrl/include/bldc/bc_types.h``.
     """
     env = os.environ.get("BLDCLAB_CORE")
-    where = Path(env) if env else Path(__file__).resolve().parents[3] / "core"
+    if env:
+        where = Path(env)
+    else:
+        here = Path(__file__).resolve()
+        installed = here.parents[1] / "_csrc"
+        where = installed if (installed / "ctrl" / "include" / "bldc" / "bc_types.h").is_file() else \
+            here.parents[3] / "core"
     if not (where / "ctrl" / "include" / "bldc" / "bc_types.h").is_file():
         raise BldclabError("BLDCLAB_CORE", f"bldclab's C sources are not at {where}: set BLDCLAB_CORE to the core/ "
                            "directory of a bldclab checkout (the headers and controller blocks the build links)")
