@@ -1,8 +1,7 @@
 """Build the C core into the package: one shared library, loaded with ctypes by ``bldclab._core``."""
 
-from pathlib import Path
-
 import shutil
+from pathlib import Path
 
 from setuptools import Extension, setup
 from setuptools.command.build_ext import build_ext
