@@ -1,0 +1,766 @@
+"""The desync map of a sensorless six-step drive: where a throttle step (or a start-up) keeps or loses synchronisation.
+
+Each point of a grid (two of :data:`AXES`: timing advance, throttle ramp rate, final throttle, propeller ``k_q``,
+inertia, blanking, PWM frequency, bus voltage, chopping pattern, initial rotor angle) runs
+:class:`~bldclab.control.SixStepSensorless` on the switching plant, with the drive's mechanics (its propeller load
+``k_q omega^2``) and its back-EMF sensing, through one :class:`ThrottleStep`:
+
+- ``start > 0``: the drive starts from rest at throttle ``start``, runs there until steady (``settle``), then the
+  throttle jumps to ``end`` (the controller's ``throttle_rate`` limits how fast its duty follows), and the run goes
+  on for ``observe``: long enough for a drive that lost synchronisation to restart and settle again.
+- ``start == 0``: a start-up from rest at throttle ``end`` (alignment or direct start, forced ramp, handover).
+
+Each point is classified (:func:`classify`, on a :class:`Observation` of the run) into one of :data:`OUTCOMES`:
+
+``sync``
+    no desync after the step, and the plant's truth agrees (every closed-loop commutation within ``bound`` of its
+    ideal angle).
+``recovered``
+    the controller flagged a desync after the step (its reason: :data:`REASONS`), restarted, and is back in
+    closed loop, in sync, at the end of the run.
+``desync``
+    a desync after the step, not back in sync at the end (restarts failing, or still restarting).
+``undetected``
+    the controller flagged nothing, but the plant's truth shows a commutation more than ``bound`` away from its
+    ideal angle: the controller's self-diagnosis missed a real loss of synchronisation.
+``no start``
+    the drive was not in closed loop, in sync, at the step (for ``start == 0``: it never reached it); the reason is
+    the controller's last (``START_FAIL``: the forced ramp saw no crossings for a handover).
+
+**The plant's truth.** The controller's flags are its own diagnosis; the map also measures the real loss of
+synchronisation. At every closed-loop commutation (a change of the driven pair in the applied leg modes) the true
+electrical angle of the rotor is compared with the angle where that commutation belongs: forward into sector ``s``
+at ``pi/6 + s pi/3 - adv`` (``docs/conventions.md``; ``adv`` the controller's advance), backward at
+``pi/2 + s pi/3 + adv``. The error is positive when the commutation came early, like the controller's
+``comm_error``. The trace shows the applied legs at every sample (half PWM period ``T_s``), so a commutation is
+located within one sample: its error is known within the angle the rotor travels in ``T_s``. A commutation is
+*out of sync* only when the whole of that interval is beyond ``bound`` (default 30 degrees electrical, half a
+sector: the drive then feeds the pair of the neighbouring sector for more than half of it); the estimate is the
+interval's middle.
+
+**The physics check.** The crossing is hidden when the demagnetisation (the outgoing phase's diode conduction after
+a commutation, paper 1's commutation interval) lasts past the expected crossing, ``30 deg - adv`` after the
+commutation. Each point reports the largest demagnetisation angle ``omega_e t_demag`` the controller measured after
+the step (``demag_deg``) beside ``window_deg = 30 - adv``: where ``demag_deg >= window_deg`` the map's ``ZC_HIDDEN``
+points should be.
+
+The points run on local processes or any :class:`concurrent.futures.Executor` (a Dask client's
+``get_executor()``), as :func:`bldclab.analysis.effmap.efficiency_map` does; each point is one deterministic
+simulation, so the map does not depend on where or in how many processes it ran.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+import warnings
+from collections.abc import Callable
+from concurrent.futures import Executor, ProcessPoolExecutor
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..control.sensorless import SixStepSensorless, throttle_rate
+from ..errors import BldclabError, PlausibilityError, PlausibilityWarning
+from ..model.motor import Drive
+from ..sim import Scenario, simulate
+from ..sim import plausibility as _plaus
+from .experiments import map_points
+
+__all__ = [
+    "AXES",
+    "DEFAULT_BOUND",
+    "OUTCOMES",
+    "REASONS",
+    "SHORT_REASONS",
+    "Axis",
+    "DesyncMapResult",
+    "Observation",
+    "ThrottleStep",
+    "classify",
+    "commutation_errors",
+    "desync_map",
+    "observe",
+]
+
+#: The outcomes of a point, in the order the map's legend lists them.
+OUTCOMES = ("sync", "recovered", "desync", "undetected", "no start")
+
+#: The controller's reasons for giving up (flag names of ``bc_types.h``), as the map names them.
+REASONS = {
+    "ZC_HIDDEN": "the floating phase never left the clamp: the demagnetisation hid the crossing (or it came before "
+                 "the window)",
+    "ZC_TIMEOUT": "no crossing within the timeout after the clamp ended: the rotor slowed or stopped",
+    "ZC_JUMP": "successive crossing intervals out of ratio: a false crossing",
+    "STALL": "speed from the crossings below the slowest closed-loop speed",
+    "START_FAIL": "the forced ramp ended without the crossings for a handover",
+    "OVERCURRENT": "a phase current above the controller's trip (all legs off, then a restart)",
+    "SAFE": "an invalid measurement: the safe state",
+}
+
+#: Default bound of the true commutation angle error beyond which a commutation is out of sync (rad, electrical).
+DEFAULT_BOUND = math.pi / 6.0
+
+_DEG = 180.0 / math.pi
+_RPM = 30.0 / math.pi
+_CLOSED = 3  # diag state of bc_bemf: 0 STOP, 1 ALIGN, 2 RAMP, 3 CLOSED
+# bc_types.h flag bits
+_FLAG_BITS = {"SAFE": 0x1, "OVERCURRENT": 0x4, "BAD_INPUT": 0x8, "DESYNC": 0x20, "ZC_TIMEOUT": 0x40,
+              "ZC_HIDDEN": 0x80, "ZC_JUMP": 0x100, "STALL": 0x200, "START_FAIL": 0x400, "COMM_LATE": 0x1000}
+_REASON_ORDER = ("ZC_HIDDEN", "ZC_TIMEOUT", "ZC_JUMP", "STALL", "START_FAIL")
+# leg modes of the trace: 0 off, 1 pwm, 2 high, 3 low, 4 hold; the (pos, neg) pair of each sector
+_PAIRS = {(0, 1): 0, (0, 2): 1, (1, 2): 2, (1, 0): 3, (2, 0): 4, (2, 1): 5}
+
+
+# ------------------------------------------------------------------------------------------------------------
+# the disturbance
+
+
+@dataclass(frozen=True)
+class ThrottleStep:
+    """The disturbance of every point: a throttle step from a steady point, or a start-up.
+
+    Parameters
+    ----------
+    start : float
+        Throttle (duty) before the step, in [0, 1); 0: a start-up from rest at ``end``.
+    end : float
+        Throttle after the step, in (0, 1].
+    settle : float, optional
+        Time at ``start`` before the step, s (after the start-up); default from the drive (:meth:`times`).
+    observe : float, optional
+        Time after the step, s; default from the drive (:meth:`times`): the throttle ramp, the mechanical
+        settling, and a restart with its settling.
+    theta0 : float
+        Initial rotor angle, electrical rad (the rotor starts at rest there).
+    """
+
+    start: float = 0.25
+    end: float = 0.8
+    settle: float | None = None
+    observe: float | None = None
+    theta0: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name, v in (("start", self.start), ("end", self.end), ("theta0", self.theta0)):
+            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+                raise BldclabError(f"step.{name}", f"must be a finite number, got {v!r}")
+        if not 0.0 <= self.start < 1.0:
+            raise BldclabError("step.start", f"must be in [0, 1) (0: a start-up), got {self.start!r}")
+        if not 0.0 < self.end <= 1.0:
+            raise BldclabError("step.end", f"must be in (0, 1], got {self.end!r}")
+        for name, t in (("settle", self.settle), ("observe", self.observe)):
+            if t is not None and (isinstance(t, bool) or not isinstance(t, int | float) or not math.isfinite(t)
+                                  or not 0.0 < t <= 10.0):
+                raise BldclabError(f"step.{name}", f"must be a time in (0, 10] s, got {t!r}")
+
+    @property
+    def is_start(self) -> bool:
+        """True for a start-up from rest (``start == 0``)."""
+        return self.start == 0.0
+
+    def times(self, drive: Drive, control: SixStepSensorless) -> tuple[float, float]:
+        """Return the time of the step and the duration of the run (s) for ``drive`` and ``control``.
+
+        The step comes after the start-up (alignment, forced ramp, 12 sectors at its end speed, the throttle ramp
+        to ``start``) and ``settle``; default ``settle``: five mechanical time constants at ``start``. The run then
+        lasts ``observe``; default: the throttle ramp to ``end``, five time constants at ``end``, and a restart
+        (the controller's wait, its start-up and five time constants) so that a recovered drive is seen settled.
+
+        The mechanical time constant at a throttle ``d`` is ``J / (k^2 / (2 R) + 2 k_q w + B)`` with
+        ``k = 2 k_phi`` and ``w = d Omega_0`` (the linearised balance of the six-step torque ``k (d V - k w) / (2 R)``
+        against the propeller's ``k_q w^2``).
+        """
+        if self.is_start:
+            return 0.0, self.observe if self.observe is not None else _restart_time(drive, control, self.end)
+        su = control.start_up(drive)
+        rate = control.throttle_rate
+        ramp = abs(self.start - su["ramp_duty"]) / float(rate) if rate else 0.0
+        t_start = su["align_time"] + su["ramp_time"] + 12.0 * math.pi / 3.0 / (drive.motor.p * su["ramp_end_speed"])
+        settle = self.settle if self.settle is not None else max(5.0 * _tau_mech(drive, self.start), 0.02)
+        t_step = t_start + ramp + settle
+        if self.observe is not None:
+            return t_step, t_step + self.observe
+        step = abs(self.end - self.start) / float(rate) if rate else 0.0
+        return t_step, t_step + step + max(5.0 * _tau_mech(drive, self.end), 0.02) + _restart_time(
+            drive, control, self.end)
+
+
+def _tau_mech(drive: Drive, duty: float) -> float:
+    m, mech = drive.motor, drive.mechanics
+    k = 2.0 * m.k_phi
+    w = max(duty, 0.05) * drive.Omega_0
+    return mech.J / (k * k / (2.0 * m.R) + 2.0 * mech.k_q * w + mech.B)
+
+
+def _restart_time(drive: Drive, control: SixStepSensorless, duty: float) -> float:
+    su = control.start_up(drive)
+    t_start = su["align_time"] + su["ramp_time"] + 12.0 * math.pi / 3.0 / (drive.motor.p * su["ramp_end_speed"])
+    rate = control.throttle_rate
+    ramp = abs(duty - su["ramp_duty"]) / float(rate) if rate else 0.0
+    return float(control.restart_wait) + t_start + ramp + max(5.0 * _tau_mech(drive, duty), 0.02)
+
+
+# ------------------------------------------------------------------------------------------------------------
+# the axes
+
+
+@dataclass(frozen=True)
+class _AxisKind:
+    unit: str  # the unit the values are given and shown in
+    label: str
+    apply: Callable[[Drive, SixStepSensorless, ThrottleStep, Any], tuple[Drive, SixStepSensorless, ThrottleStep]]
+    numeric: bool = True
+
+
+def _rate(v: float) -> float | None:
+    return None if math.isinf(v) else throttle_rate(v * 10.0, "rate")  # %/ms -> 1/s
+
+
+#: The parameters a map can vary: name -> (unit of the values, label, how a value changes the point).
+AXES: dict[str, _AxisKind] = {
+    "timing": _AxisKind("deg", "timing advance (deg electrical)",
+                        lambda d, c, s, v: (d, replace(c, timing=math.radians(v)), s)),
+    "rate": _AxisKind("%/ms", "throttle ramp limit (%/ms; inf: none)",
+                      lambda d, c, s, v: (d, replace(c, throttle_rate=_rate(v)), s)),
+    "end": _AxisKind("-", "throttle after the step", lambda d, c, s, v: (d, c, replace(s, end=v))),
+    "start": _AxisKind("-", "throttle before the step", lambda d, c, s, v: (d, c, replace(s, start=v))),
+    "k_q": _AxisKind("N m s^2/rad^2", "propeller k_q (N m s^2/rad^2)",
+                     lambda d, c, s, v: (d.replace(mechanics__k_q=v), c, s)),
+    "J": _AxisKind("kg m^2", "inertia J (kg m^2)", lambda d, c, s, v: (d.replace(mechanics__J=v), c, s)),
+    "blank": _AxisKind("deg", "fixed blanking (deg electrical)",
+                       lambda d, c, s, v: (d, replace(c, blank=math.radians(v)), s)),
+    "f_pwm": _AxisKind("kHz", "PWM frequency (kHz)", lambda d, c, s, v: (d.replace(inverter__f_pwm=1e3 * v), c, s)),
+    "v_dc": _AxisKind("V", "DC bus (V)", lambda d, c, s, v: (d.replace(inverter__V_dc=v), c, s)),
+    "chopping": _AxisKind("", "chopping pattern", lambda d, c, s, v: (d, replace(c, chopping=v), s), numeric=False),
+    "theta0": _AxisKind("deg", "initial rotor angle (deg electrical)",
+                        lambda d, c, s, v: (d, c, replace(s, theta0=math.radians(v)))),
+}
+_CHOPPINGS = ("sync", "high", "pwm-on-pwm", "bipolar")
+_LIMITS = {"timing": (0.0, 30.0), "end": (0.0, 1.0), "start": (0.0, 1.0), "blank": (0.0, 60.0),
+           "theta0": (-360.0, 360.0)}
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One axis of the map: a parameter of :data:`AXES` and its values, in that parameter's unit.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`AXES`: ``timing`` (deg), ``rate`` (throttle ramp limit, %/ms; ``inf``: none), ``end``,
+        ``start`` (throttle), ``k_q`` (N m s^2/rad^2), ``J`` (kg m^2), ``blank`` (deg), ``f_pwm`` (kHz), ``v_dc``
+        (V), ``chopping`` (``sync``, ``high``, ``pwm-on-pwm``, ``bipolar``), ``theta0`` (deg).
+    values : sequence
+        Distinct values (numbers in the unit above; names for ``chopping``).
+    """
+
+    name: str
+    values: tuple[Any, ...]
+
+    def __post_init__(self) -> None:
+        if self.name not in AXES:
+            raise BldclabError("axis", f"must be one of {', '.join(AXES)}, got {self.name!r}")
+        vals = tuple(self.values) if not isinstance(self.values, str) else (self.values,)
+        if not vals:
+            raise BldclabError(self.name, "needs at least one value")
+        if AXES[self.name].numeric:
+            try:
+                nums = tuple(float(v) for v in vals)
+            except (TypeError, ValueError):
+                raise BldclabError(self.name, f"values must be numbers ({AXES[self.name].unit}), got "
+                                   f"{list(vals)!r}") from None
+            for v in nums:
+                if math.isnan(v) or (math.isinf(v) and self.name != "rate"):
+                    raise BldclabError(self.name, f"values must be finite, got {v!r}")
+                lo, hi = _LIMITS.get(self.name, (0.0, math.inf))
+                closed_lo = self.name in ("timing", "blank", "theta0", "start")
+                if (v < lo or (v == lo and not closed_lo) or v > hi) and not (self.name == "rate" and math.isinf(v)):
+                    where = f"[{lo:g}, {hi:g}]" if closed_lo else f"({lo:g}, {hi:g}]"
+                    raise BldclabError(self.name, f"values must be in {where} {AXES[self.name].unit}, got {v:g}")
+            vals = nums
+        else:
+            bad = [v for v in vals if v not in _CHOPPINGS]
+            if bad:
+                raise BldclabError(self.name, f"must be from {', '.join(_CHOPPINGS)}, got {bad[0]!r}")
+        if len(set(vals)) != len(vals):
+            raise BldclabError(self.name, "values must be distinct")
+        object.__setattr__(self, "values", vals)
+
+    @property
+    def unit(self) -> str:
+        """The unit of the values."""
+        return AXES[self.name].unit
+
+    @property
+    def label(self) -> str:
+        """Axis label with its unit."""
+        return AXES[self.name].label
+
+
+# ------------------------------------------------------------------------------------------------------------
+# the truth: commutation angles from the plant's rotor angle
+
+
+def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd.DataFrame:
+    """Locate the closed-loop commutations in a trace and their true angle error.
+
+    Parameters
+    ----------
+    signals : dict of numpy.ndarray
+        ``SimResult.signals`` of a :class:`~bldclab.control.SixStepSensorless` run with one trace row per sample:
+        ``t``, ``theta_e``, ``mode_a`` .. ``mode_c``, ``state``, ``omega_e``, ``advance``.
+    direction : int
+        +1 or -1 for a known direction; 0: the sign of the controller's ``omega_e`` at each commutation.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per commutation between two rows both in closed loop: ``t`` (s, the row where the new pair shows;
+        the commutation happened in the sample before), ``sector`` (entered), ``direction``, ``err_lo``,
+        ``err_hi`` (rad: the true error at the start and the end of that sample, positive = early), ``err``
+        (their middle) and ``certain`` (the smallest ``|error|`` over the sample: 0 if it changes sign).
+    """
+    t = signals["t"]
+    modes = np.vstack([signals["mode_a"], signals["mode_b"], signals["mode_c"]]).astype(int)
+    n = t.size
+    sector = np.full(n, -1, dtype=int)
+    off = modes == 0
+    one_off = off.sum(axis=0) == 1
+    for j in np.flatnonzero(one_off):
+        m = modes[:, j]
+        pos = [x for x in range(3) if m[x] in (1, 2)]
+        neg = [x for x in range(3) if m[x] == 3]
+        if len(pos) == 1 and len(neg) == 1:
+            sector[j] = _PAIRS.get((pos[0], neg[0]), -1)
+    state = signals["state"]
+    closed = state == _CLOSED
+    k = np.flatnonzero((sector[:-1] >= 0) & (sector[1:] >= 0) & (sector[:-1] != sector[1:])
+                       & closed[:-1] & closed[1:])
+    rows = []
+    theta = signals["theta_e"]
+    for j in k:
+        dirn = direction if direction else int(np.sign(signals["omega_e"][j]))
+        if dirn == 0:
+            continue
+        pair = int(sector[j + 1])
+        s = pair if dirn > 0 else (pair + 3) % 6  # backward: the pair of sector s is swapped (docs/sensorless.md)
+        adv = float(signals["advance"][j])
+        ideal = math.pi / 3.0 + s * math.pi / 3.0 - dirn * (math.pi / 6.0 + adv)
+        e0 = _wrap(dirn * (ideal - theta[j]))
+        step = dirn * _wrap(theta[j + 1] - theta[j])  # travel over the sample (forward positive)
+        e1 = e0 - step
+        certain = 0.0 if e0 * e1 <= 0.0 else min(abs(e0), abs(e1))
+        rows.append((t[j + 1], s, dirn, e0, e1, 0.5 * (e0 + e1), certain))
+    return pd.DataFrame(rows, columns=["t", "sector", "direction", "err_lo", "err_hi", "err", "certain"])
+
+
+def _wrap(x: float) -> float:
+    return float((x + math.pi) % (2.0 * math.pi) - math.pi)
+
+
+# ------------------------------------------------------------------------------------------------------------
+# observation and classification
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What a run showed, in the terms :func:`classify` decides on (built by :func:`observe`, or by hand).
+
+    Parameters
+    ----------
+    t_step, t_end : float
+        Time of the step and end of the run (s); ``t_step = 0`` for a start-up.
+    desyncs : tuple of (float, str)
+        Every desync (or trip) the controller flagged: its time and reason (a key of :data:`REASONS`).
+    closed : tuple of (float, float)
+        The intervals (s) the controller spent in closed loop.
+    out_of_sync : tuple of float
+        Times of the closed-loop commutations the plant's truth puts certainly beyond the bound.
+    commutations : tuple of float
+        Times of every closed-loop commutation located.
+    settle : float
+        Length (s) before the step over which the drive must have been in closed loop, in sync, for the step to
+        count as taken from a steady point.
+    """
+
+    t_step: float
+    t_end: float
+    desyncs: tuple[tuple[float, str], ...] = ()
+    closed: tuple[tuple[float, float], ...] = ()
+    out_of_sync: tuple[float, ...] = ()
+    commutations: tuple[float, ...] = ()
+    settle: float = 0.0
+
+    @property
+    def start_up(self) -> bool:
+        """True for a start-up (``t_step == 0``)."""
+        return self.t_step == 0.0
+
+
+def _closed_over(obs: Observation, t0: float, t1: float) -> bool:
+    return any(a <= t0 and b >= t1 for a, b in obs.closed)
+
+
+def classify(obs: Observation, *, tail: int = 12) -> tuple[str, str]:
+    """Classify one run: its outcome (:data:`OUTCOMES`) and the reason (a key of :data:`REASONS`, or ``""``).
+
+    Parameters
+    ----------
+    obs : Observation
+    tail : int
+        Closed-loop commutations at the end of the run (two electrical turns by default) that must all be in sync,
+        with the drive in closed loop from the first of them to the end, for it to count as (back) in sync.
+
+    Returns
+    -------
+    tuple of str
+        ``(outcome, reason)``: for ``desync`` and ``recovered`` the reason of the first desync after the step; for
+        ``no start`` the controller's last reason before the step (``""`` if it flagged none); ``""`` for
+        ``sync`` and ``undetected``.
+    """
+    before = [(t, r) for t, r in obs.desyncs if t <= obs.t_step]
+    after = [(t, r) for t, r in obs.desyncs if t > obs.t_step]
+    if not obs.start_up:
+        t0 = obs.t_step - obs.settle
+        steady = (_closed_over(obs, t0, obs.t_step) and not any(t0 < t <= obs.t_step for t, _ in before)
+                  and not any(t0 < t <= obs.t_step for t in obs.out_of_sync))
+        if not steady:
+            return "no start", before[-1][1] if before else ""
+    t_flag, reason = after[0] if after else (math.inf, "")
+    if any(obs.t_step < t < t_flag for t in obs.out_of_sync):
+        return "undetected", ""
+    t_last = after[-1][0] if after else obs.t_step
+    tail_comms = [t for t in obs.commutations if t > t_last][-tail:]
+    back = (len(tail_comms) == tail and _closed_over(obs, tail_comms[0], obs.t_end)
+            and not any(t >= tail_comms[0] for t in obs.out_of_sync))
+    if not after:
+        return ("sync", "") if back or not obs.start_up else ("no start", "")
+    if obs.start_up and all(r == "START_FAIL" for _, r in after):
+        return ("recovered" if back else "no start"), reason
+    return ("recovered" if back else "desync"), reason
+
+
+def _reason(flags: int) -> str:
+    for name in _REASON_ORDER:
+        if flags & _FLAG_BITS[name]:
+            return name
+    if flags & _FLAG_BITS["OVERCURRENT"]:
+        return "OVERCURRENT"
+    return "SAFE"
+
+
+def observe(signals: dict[str, np.ndarray], t_step: float, *, settle: float = 0.0, bound: float = DEFAULT_BOUND,
+            direction: int = 0) -> tuple[Observation, pd.DataFrame]:
+    """Read a :class:`~bldclab.control.SixStepSensorless` run's trace into an :class:`Observation`.
+
+    Parameters
+    ----------
+    signals : dict of numpy.ndarray
+        ``SimResult.signals`` with one trace row per sample.
+    t_step : float
+        Time of the step (s; 0 for a start-up).
+    settle : float
+        The steady interval required before the step (s), :attr:`Observation.settle`.
+    bound : float
+        Largest true commutation angle error in sync (rad, electrical).
+    direction : int
+        Direction of rotation (+1, -1), or 0: from the controller's speed estimate.
+
+    Returns
+    -------
+    Observation
+    pandas.DataFrame
+        The commutations (:func:`commutation_errors`).
+    """
+    t = signals["t"]
+    t_half = float(t[1] - t[0]) if t.size > 1 else 0.0
+    flags = signals["ctrl_flags"].astype(np.int64)
+    gave_up = (flags & (_FLAG_BITS["DESYNC"] | _FLAG_BITS["SAFE"])) != 0
+    rise = np.flatnonzero(gave_up & ~np.concatenate(([False], gave_up[:-1])))
+    desyncs = tuple((float(t[j]), _reason(int(flags[j]))) for j in rise)
+    closed = signals["state"] == _CLOSED
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], closed.astype(np.int8), [0]))))
+    spans = tuple((float(t[a]), float(t[b - 1]) + t_half) for a, b in zip(edges[::2], edges[1::2], strict=True))
+    comms = commutation_errors(signals, direction)
+    out = tuple(float(x) for x in comms.t[comms.certain > bound])
+    return Observation(t_step=t_step, t_end=float(t[-1]) + t_half, desyncs=desyncs, closed=spans, out_of_sync=out,
+                       commutations=tuple(float(x) for x in comms.t), settle=settle), comms
+
+
+# ------------------------------------------------------------------------------------------------------------
+# one point
+
+
+#: One point: drive, controller, step, the two axes' (name, value) and the bound (rad).
+DesyncJob = tuple[Drive, SixStepSensorless, ThrottleStep, tuple[tuple[str, Any], ...], float]
+
+
+def _point(drive: Drive, control: SixStepSensorless, step: ThrottleStep,
+           values: tuple[tuple[str, Any], ...]) -> tuple[Drive, SixStepSensorless, ThrottleStep]:
+    for name, v in values:
+        drive, control, step = AXES[name].apply(drive, control, step, v)
+    return drive, control, step
+
+
+def _run_point(job: DesyncJob) -> dict[str, Any]:
+    drive, control, step, values, bound = job
+    row: dict[str, Any] = {name: v for name, v in values}
+    nan = math.nan
+    empty = {"outcome": "no start", "reason": "", "truth_lost": False, "t_desync_ms": nan, "restarts": 0,
+             "angle_mean_deg": nan, "angle_max_deg": nan, "demag_deg": nan, "window_deg": nan,
+             "speed_step_rpm": nan, "speed_end_rpm": nan, "i_peak": nan, "t_closed_ms": nan, "comm_late": 0,
+             "t_step": nan, "t_end": nan, "note": "", "_warnings": []}
+    row.update(empty)
+    try:
+        drive, control, step = _point(drive, control, step, values)
+        t_step, t_end = step.times(drive, control)
+        ref: Any = (step.end if step.is_start else
+                    (lambda tt, a=step.start, b=step.end, ts=t_step: np.where(tt < ts, a, b)))
+        with _plaus.collect() as caught:
+            res = simulate(drive, control, Scenario(duration=t_end, ref=ref, theta0=step.theta0), check="warn")
+    except (PlausibilityError, BldclabError) as exc:
+        row["note"] = f"refused: {exc}"
+        return row
+    sig = res.signals
+    settle = 0.0 if step.is_start else min(step.settle if step.settle is not None else
+                                          max(5.0 * _tau_mech(drive, step.start), 0.02), t_step) / 2.0
+    obs, comms = observe(sig, t_step, settle=settle, bound=bound, direction=1)
+    outcome, reason = classify(obs)
+    t = sig["t"]
+    after = t > t_step
+    flagged = [tf for tf, _ in obs.desyncs if tf > t_step]
+    t_flag = flagged[0] if flagged else math.inf
+    win = after & (t < t_flag) & (sig["state"] == _CLOSED)
+    cw = comms[(comms.t > t_step) & (comms.t < t_flag)]
+    demag = np.abs(sig["demag"] * sig["omega_e"])[win]
+    i_abs = np.max(np.abs(np.vstack([sig["i_a"], sig["i_b"], sig["i_c"]]))[:, after], axis=0) if after.any() else []
+    closed_t = t[sig["state"] == _CLOSED]
+    n_tail = max(1, t.size // 20)
+    row.update({
+        "outcome": outcome, "reason": reason,
+        "truth_lost": bool(any(t_step < x for x in obs.out_of_sync)),
+        "t_desync_ms": (t_flag - t_step) * 1e3 if flagged else nan,
+        "restarts": len(flagged),
+        "angle_mean_deg": float(cw.err.mean()) * _DEG if len(cw) else nan,
+        "angle_max_deg": float(cw.err.abs().max()) * _DEG if len(cw) else nan,
+        "demag_deg": float(demag.max()) * _DEG if demag.size else nan,
+        "window_deg": float(30.0 - np.max(sig["advance"][win]) * _DEG) if win.any() else nan,
+        "speed_step_rpm": float(np.interp(t_step, t, sig["omega_m"])) * _RPM,
+        "speed_end_rpm": float(np.mean(sig["omega_m"][-n_tail:])) * _RPM,
+        "i_peak": float(np.max(i_abs)) if len(i_abs) else nan,
+        "t_closed_ms": float(closed_t[0]) * 1e3 if closed_t.size else nan,
+        "comm_late": int(np.count_nonzero(sig["ctrl_flags"][after].astype(np.int64) & _FLAG_BITS["COMM_LATE"])),
+        "t_step": t_step, "t_end": t_end,
+        "_warnings": [f"{', '.join(f'{k}={v}' for k, v in values)}: {text}" for text in caught],
+    })
+    return row
+
+
+# ------------------------------------------------------------------------------------------------------------
+# the map
+
+#: Short cell texts of the table (:meth:`DesyncMapResult.table`).
+_SHORT = {"sync": "sync", "recovered": "rec", "desync": "LOST", "undetected": "UNDET", "no start": "nostart"}
+SHORT_REASONS = {"ZC_HIDDEN": "hidden", "ZC_TIMEOUT": "timeout", "ZC_JUMP": "jump", "STALL": "stall",
+                 "START_FAIL": "startfail", "OVERCURRENT": "trip", "SAFE": "safe"}
+
+
+@dataclass
+class DesyncMapResult:
+    """Outcome of :func:`desync_map`.
+
+    Attributes
+    ----------
+    drive : Drive
+        The drive as given (before the axes' changes).
+    control : SixStepSensorless
+        The controller as given.
+    step : ThrottleStep
+    x, y : Axis
+        The map's axes (``y`` None for a one-axis map).
+    bound : float
+        The true commutation angle error bound (rad).
+    points : pandas.DataFrame
+        One row per point: the axes' values (columns named after them, in their units), ``outcome``
+        (:data:`OUTCOMES`), ``reason`` (:data:`REASONS` key or ``""``), ``truth_lost`` (the plant's truth saw a
+        commutation out of sync after the step), ``t_desync_ms`` (first desync after the step), ``restarts``
+        (desyncs after the step), ``angle_mean_deg``, ``angle_max_deg`` (true commutation angle error after the
+        step, until a desync: mean and largest magnitude, deg electrical, positive = early), ``demag_deg`` (largest
+        demagnetisation angle the controller measured after the step, deg electrical) and ``window_deg`` (``30 -
+        advance``: the angle from a commutation to its expected crossing), ``speed_step_rpm``, ``speed_end_rpm``
+        (at the step; mean over the last 5 % of the run), ``i_peak`` (largest phase current after the step, A),
+        ``t_closed_ms`` (first closed loop: the start-up time), ``comm_late`` (late commutations after the step),
+        ``t_step``, ``t_end`` (s) and ``note`` (why a point did not run).
+    seconds : float
+        Wall time of the simulations.
+    warnings : list of str
+        Plausibility warnings of the runs, each prefixed by its point.
+    """
+
+    drive: Drive
+    control: SixStepSensorless
+    step: ThrottleStep
+    x: Axis
+    y: Axis | None
+    bound: float
+    points: pd.DataFrame
+    seconds: float = 0.0
+    warnings: list[str] = field(default_factory=list)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """Return the points (a copy)."""
+        return self.points.copy()
+
+    def grid(self, column: str) -> np.ndarray:
+        """Return a column as a ``(len(y), len(x))`` array (one row for a one-axis map)."""
+        if column not in self.points.columns:
+            raise BldclabError("column", f"{column!r} is not a column of the map")
+        ny = len(self.y.values) if self.y is not None else 1
+        return self.points[column].to_numpy().reshape(ny, len(self.x.values))
+
+    def cell(self, outcome: str, reason: str) -> str:
+        """Return the table's short text for an outcome and its reason (``"LOST:hidden"``, ``"sync"``)."""
+        short = _SHORT.get(outcome, outcome)
+        return f"{short}:{SHORT_REASONS.get(reason, reason)}" if reason else short
+
+    def table(self) -> str:
+        """Return the map as a text table: one row per ``y`` value, one column per ``x`` value."""
+        xs = [_fmt(v) for v in self.x.values]
+        cells = [[self.cell(o, r) for o, r in zip(row_o, row_r, strict=True)]
+                 for row_o, row_r in zip(self.grid("outcome"), self.grid("reason"), strict=True)]
+        ylab = [f"{self.y.name} {_fmt(v)}" for v in self.y.values] if self.y is not None else [""]
+        w0 = max(len(s) for s in [f"{self.x.name} ({self.x.unit})", *ylab])
+        widths = [max(len(h), *(len(r[k]) for r in cells)) for k, h in enumerate(xs)]
+        lines = [" ".join([f"{self.x.name} ({self.x.unit})".ljust(w0),
+                           *(h.rjust(w) for h, w in zip(xs, widths, strict=True))])]
+        for lab, r in zip(ylab, cells, strict=True):
+            lines.append(" ".join([lab.ljust(w0), *(c.rjust(w) for c, w in zip(r, widths, strict=True))]))
+        return "\n".join(lines)
+
+    def summary(self) -> list[str]:
+        """Return short lines: outcomes counted, reasons counted, the controller against the plant's truth."""
+        p = self.points
+        n = len(p)
+        lines = ["outcomes: " + ", ".join(f"{o} {int((p.outcome == o).sum())}" for o in OUTCOMES
+                                          if (p.outcome == o).any()) + f" (of {n} points)"]
+        lost = p[p.outcome.isin(["desync", "recovered"])]
+        if len(lost):
+            counts = lost.reason.value_counts()
+            lines.append("reasons of the desyncs after the step: " + ", ".join(
+                f"{r} {int(c)}" for r, c in counts.items()))
+        ran = p[p.outcome != "no start"]
+        if len(ran):
+            agree = int(((ran.outcome == "sync") & ~ran.truth_lost).sum())
+            flagged_true = int((ran.outcome.isin(["desync", "recovered"]) & ran.truth_lost).sum())
+            flagged_only = int((ran.outcome.isin(["desync", "recovered"]) & ~ran.truth_lost).sum())
+            undetected = int((ran.outcome == "undetected").sum())
+            lines.append(f"plant's truth (commutation angle error beyond {self.bound * _DEG:.0f} deg): in sync "
+                         f"{agree}; desync flagged and the angle out of sync before the flag {flagged_true}, the "
+                         f"controller gave up first {flagged_only}; out of sync without a flag (undetected) "
+                         f"{undetected}")
+        hid = p[p.reason == "ZC_HIDDEN"]
+        ok = p[p.outcome == "sync"]
+        if len(hid) or len(ok):
+            h = int((hid.demag_deg >= hid.window_deg).sum())
+            s = int((ok.demag_deg < ok.window_deg).sum())
+            lines.append(f"physics check (demagnetisation angle against the 30 deg - advance window): ZC_HIDDEN "
+                         f"points with demag >= window {h}/{len(hid)}, sync points with demag < window "
+                         f"{s}/{len(ok)}")
+        if self.y is not None:
+            bd = self.boundary()
+            if bd:
+                lines.append("boundary (first " + self.x.name + " without sync, per " + self.y.name + "): "
+                             + ", ".join(f"{_fmt(yv)}: {_fmt(xv) if xv is not None else 'none'}"
+                                         for yv, xv in bd))
+        return lines
+
+    def boundary(self) -> list[tuple[Any, Any]]:
+        """Return, per ``y`` value, the first ``x`` value (in axis order) whose point did not stay in sync."""
+        if self.y is None:
+            return []
+        g = self.grid("outcome")
+        out = []
+        for k, yv in enumerate(self.y.values):
+            bad = [self.x.values[j] for j in range(len(self.x.values)) if g[k, j] != "sync"]
+            out.append((yv, bad[0] if bad else None))
+        return out
+
+
+def _fmt(v: Any) -> str:
+    return f"{v:g}" if isinstance(v, float | int) else str(v)
+
+
+def desync_map(drive: Drive, x: Axis, y: Axis | None = None, *, step: ThrottleStep | None = None,
+               control: SixStepSensorless | None = None, bound: float = DEFAULT_BOUND, workers: int | None = None,
+               executor: Executor | None = None, summarise: bool = True) -> DesyncMapResult:
+    """Map where a sensorless six-step drive keeps or loses synchronisation through a throttle step or a start-up.
+
+    Parameters
+    ----------
+    drive : Drive
+        The drive with its mechanics (propeller ``k_q``, inertia); its back-EMF sensing is turned on if it is off.
+    x, y : Axis
+        The grid: ``x`` across, ``y`` (optional) down; each a parameter of :data:`AXES` with its values.
+    step : ThrottleStep, optional
+        The disturbance (default ``ThrottleStep()``: 0.25 to 0.8).
+    control : SixStepSensorless, optional
+        The controller the axes change (default ``SixStepSensorless()``).
+    bound : float
+        True commutation angle error beyond which a commutation is out of sync (rad, electrical; default 30 deg).
+    workers : int, optional
+        Local processes (default: all cores; 1: in this process).
+    executor : concurrent.futures.Executor, optional
+        Where the points run instead (a pool the caller keeps, a Dask client's ``get_executor()``).
+    summarise : bool
+        Issue one :class:`~bldclab.errors.PlausibilityWarning` summarising the points' warnings.
+
+    Returns
+    -------
+    DesyncMapResult
+        Its points are in the order ``y`` major, ``x`` minor, whatever ran them.
+    """
+    if not isinstance(drive, Drive):
+        raise BldclabError("drive", f"expected a Drive, got {type(drive).__name__}")
+    for name, ax in (("x", x), ("y", y)):
+        if ax is not None and not isinstance(ax, Axis):
+            raise BldclabError(name, f"expected an Axis, got {type(ax).__name__}")
+    if y is not None and y.name == x.name:
+        raise BldclabError("y", f"must vary another parameter than x ({x.name!r})")
+    step = ThrottleStep() if step is None else step
+    if not isinstance(step, ThrottleStep):
+        raise BldclabError("step", f"expected a ThrottleStep, got {type(step).__name__}")
+    control = SixStepSensorless() if control is None else control
+    if not isinstance(control, SixStepSensorless):
+        raise BldclabError("control", f"expected a SixStepSensorless, got {type(control).__name__}")
+    if isinstance(bound, bool) or not isinstance(bound, int | float) or not 0.0 < bound < math.pi:
+        raise BldclabError("bound", f"must be an angle in (0, pi) rad, got {bound!r}")
+    if isinstance(workers, bool) or (workers is not None and (not isinstance(workers, int) or workers < 1)):
+        raise BldclabError("workers", f"must be an integer >= 1, got {workers!r}")
+    base = drive if drive.sensors.bemf else drive.replace(sensors__bemf=True)
+    ys: tuple[Any, ...] = y.values if y is not None else (None,)
+    jobs: list[DesyncJob] = []
+    for yv in ys:
+        for xv in x.values:
+            vals = ((x.name, xv),) if y is None else ((x.name, xv), (y.name, yv))
+            _point(base, control, step, vals)  # a bad combination fails here, before any simulation
+            jobs.append((base, control, step, vals, float(bound)))
+    t0 = time.perf_counter()
+    n_workers = workers or os.cpu_count() or 1
+    if executor is not None:
+        rows = map_points(_run_point, jobs, executor)
+    elif n_workers <= 1 or len(jobs) <= 1:
+        rows = map_points(_run_point, jobs)
+    else:
+        with ProcessPoolExecutor(max_workers=min(n_workers, len(jobs))) as pool:
+            rows = map_points(_run_point, jobs, pool)
+    caught = [text for row in rows for text in row.pop("_warnings")]
+    res = DesyncMapResult(drive=drive, control=control, step=step, x=x, y=y, bound=float(bound),
+                          points=pd.DataFrame(rows), seconds=time.perf_counter() - t0, warnings=caught)
+    line = _plaus.summary(caught, len(jobs))
+    if line and summarise:
+        warnings.warn(line, PlausibilityWarning, stacklevel=2)
+    return res

@@ -1,0 +1,313 @@
+"""The desync map (bldclab.analysis.desync, bldclab sensorless): the plant's truth on commutation angles, the
+classification of a run, the map on a tiny grid (independent of the worker count) and the command's errors."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import bldclab as bl
+from bldclab.analysis import desync as ds
+from bldclab.analysis.desync import Axis, Observation, ThrottleStep, classify, commutation_errors, desync_map, observe
+from bldclab.cli import main
+from bldclab.errors import BldclabError
+
+DEG = math.pi / 180.0
+_POS_NEG = {0: (0, 1), 1: (0, 2), 2: (1, 2), 3: (1, 0), 4: (2, 0), 5: (2, 1)}  # docs/conventions.md
+
+
+def synthetic(direction: int = 1, adv_deg: float = 10.0, shift_deg: float = 0.0, t_shift: float = 1.0,
+              w_e: float = 2000.0, t_half: float = 10e-6, n: int = 3000, theta0: float = 0.3,
+              flags: dict[int, int] | None = None, stop: tuple[int, int] | None = None) -> dict[str, np.ndarray]:
+    """A trace of a six-step drive commutating a rotor turning at w_e (electrical rad/s) in direction, each
+    commutation at the first sample past its angle pi/6 + s pi/3 - adv (forward; backward at pi/2 + s pi/3 + adv),
+    from t_shift on shift_deg earlier; flags {row: bits}; stop (row0, row1): legs off and state 0 between them."""
+    t = np.arange(n) * t_half
+    theta = (theta0 + direction * w_e * t) % (2.0 * math.pi)
+    adv = adv_deg * DEG
+    shift = np.where(t >= t_shift, shift_deg * DEG, 0.0)
+    s = np.floor((theta + direction * (adv + shift) - math.pi / 6.0) / (math.pi / 3.0)).astype(int) % 6
+    pair = s if direction > 0 else (s + 3) % 6
+    modes = np.zeros((3, n))
+    for j in range(n):
+        p, q = _POS_NEG[int(pair[j])]
+        modes[p, j], modes[q, j] = 1, 3
+    state = np.full(n, 3.0)
+    if stop is not None:
+        modes[:, stop[0]:stop[1]] = 0
+        state[stop[0]:stop[1]] = 0
+    ctrl = np.zeros(n)
+    for j, bits in (flags or {}).items():
+        ctrl[j] = bits
+    return {"t": t, "theta_e": theta, "mode_a": modes[0], "mode_b": modes[1], "mode_c": modes[2], "state": state,
+            "omega_e": np.full(n, direction * w_e), "advance": np.full(n, adv), "ctrl_flags": ctrl,
+            "demag": np.zeros(n), "omega_m": np.zeros(n), "i_a": np.zeros(n), "i_b": np.zeros(n),
+            "i_c": np.zeros(n)}
+
+
+# ------------------------------------------------------------------------------------------------------------
+# the truth
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+@pytest.mark.parametrize("adv", [0.0, 10.0, 25.0])
+def test_commutations_at_their_angle_are_within_one_sample_of_zero_error(direction, adv):
+    sig = synthetic(direction, adv)
+    c = commutation_errors(sig)
+    travel = 2000.0 * 10e-6
+    turns = 2000.0 * sig["t"][-1] / (math.pi / 3.0)
+    assert len(c) >= math.floor(turns) - 1  # every commutation found
+    assert set(c.direction) == {direction}
+    assert (c.certain == 0.0).all()  # the sample holding each commutation brackets its ideal angle
+    assert (c.err_lo >= -1e-12).all() and (c.err_hi <= 1e-12).all() and (c.err_lo - c.err_hi <= travel + 1e-12).all()
+    assert sorted(set(c.sector)) == list(range(6))
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+def test_a_commutation_40_degrees_early_is_out_of_sync_and_20_degrees_is_not(direction):
+    c40 = commutation_errors(synthetic(direction, 5.0, shift_deg=40.0, t_shift=0.01))
+    after = c40[c40.t > 0.0101]
+    assert (after.err > 39.0 * DEG).all() and (after.err < 41.5 * DEG).all()
+    assert (after.certain > ds.DEFAULT_BOUND).all()
+    assert (c40[c40.t < 0.01].certain == 0.0).all()
+    c20 = commutation_errors(synthetic(direction, 5.0, shift_deg=20.0, t_shift=0.01))
+    assert (c20.certain < ds.DEFAULT_BOUND).all() and c20.err.max() > 19.0 * DEG
+    late = commutation_errors(synthetic(direction, 5.0, shift_deg=-40.0, t_shift=0.01))
+    assert (late[late.t > 0.0101].err < -38.0 * DEG).all()
+
+
+def test_hall_six_step_on_the_plant_commutates_within_a_sample_of_the_ideal_angle():
+    """Real plant, Hall commutation: every commutation's true angle within the sample that holds it (the truth
+    measure itself, against the drive that commutates at the exact sector boundaries)."""
+    drive = bl.load("htm-48v")
+    res = bl.simulate(drive, bl.SixStep(), bl.Scenario(duration=0.05, speed="0.5 pu", ref=drive.motor.I_N))
+    sig = dict(res.signals)
+    n = sig["t"].size
+    sig.update(state=np.full(n, 3.0), advance=np.zeros(n), omega_e=np.ones(n))
+    c = commutation_errors(sig)
+    travel = drive.motor.p * 0.5 * drive.Omega_0 * 0.5 / drive.inverter.f_pwm
+    assert len(c) >= 12
+    assert c.err.abs().max() < 1.5 * travel  # a few tenths of a degree at 14 kHz
+    assert (c.certain < 0.5 * travel).all()
+
+
+# ------------------------------------------------------------------------------------------------------------
+# classification
+
+
+def obs(**kw):
+    base = {"t_step": 0.2, "t_end": 0.6, "closed": ((0.1, 0.6),), "settle": 0.05,
+            "commutations": tuple(np.linspace(0.1, 0.6, 200))}
+    base.update(kw)
+    return Observation(**base)
+
+
+def test_classify_sync():
+    assert classify(obs()) == ("sync", "")
+
+
+def test_classify_desync_with_its_reason_and_not_back():
+    o = obs(desyncs=((0.25, "ZC_HIDDEN"), (0.45, "START_FAIL")), closed=((0.1, 0.25),),
+            commutations=tuple(np.linspace(0.1, 0.25, 60)))
+    assert classify(o) == ("desync", "ZC_HIDDEN")
+
+
+def test_classify_recovered_needs_the_tail_in_sync_and_closed_to_the_end():
+    comms = tuple(np.linspace(0.1, 0.25, 60)) + tuple(np.linspace(0.4, 0.6, 80))
+    o = obs(desyncs=((0.25, "ZC_JUMP"),), closed=((0.1, 0.25), (0.4, 0.6)), commutations=comms)
+    assert classify(o) == ("recovered", "ZC_JUMP")
+    # back in closed loop but a commutation of the tail out of sync: not recovered
+    assert classify(obs(desyncs=((0.25, "ZC_JUMP"),), closed=((0.1, 0.25), (0.4, 0.6)), commutations=comms,
+                        out_of_sync=(0.59,))) == ("desync", "ZC_JUMP")
+    # too few commutations since the restart
+    short = (*np.linspace(0.1, 0.25, 60), 0.59, 0.595)
+    assert classify(obs(desyncs=((0.25, "ZC_JUMP"),), closed=((0.1, 0.25), (0.58, 0.6)),
+                        commutations=short)) == ("desync", "ZC_JUMP")
+
+
+def test_classify_undetected_when_the_truth_leaves_sync_before_any_flag():
+    assert classify(obs(out_of_sync=(0.3,))) == ("undetected", "")
+    # out of sync before the flag came: flagged, the truth agrees (not undetected)
+    o = obs(out_of_sync=(0.3,), desyncs=((0.29, "ZC_TIMEOUT"),), closed=((0.1, 0.29),),
+            commutations=tuple(np.linspace(0.1, 0.29, 70)))
+    assert classify(o) == ("desync", "ZC_TIMEOUT")
+    o = obs(out_of_sync=(0.28,), desyncs=((0.29, "ZC_TIMEOUT"),), closed=((0.1, 0.29),),
+            commutations=tuple(np.linspace(0.1, 0.29, 70)))
+    assert classify(o) == ("undetected", "")
+
+
+def test_classify_no_start_when_not_steady_at_the_step():
+    assert classify(obs(closed=((0.17, 0.6),))) == ("no start", "")  # closed loop only 30 ms of the 50 required
+    assert classify(obs(closed=(), desyncs=((0.15, "START_FAIL"),))) == ("no start", "START_FAIL")
+    assert classify(obs(desyncs=((0.18, "STALL"),))) == ("no start", "STALL")
+    assert classify(obs(out_of_sync=(0.19,))) == ("no start", "")
+
+
+def test_classify_a_start_up():
+    comms = tuple(np.linspace(0.15, 0.6, 100))
+    assert classify(obs(t_step=0.0, closed=((0.15, 0.6),), commutations=comms)) == ("sync", "")
+    assert classify(obs(t_step=0.0, closed=(), commutations=(), desyncs=((0.1, "START_FAIL"),))) == (
+        "no start", "START_FAIL")
+    assert classify(obs(t_step=0.0, closed=((0.3, 0.6),), desyncs=((0.1, "START_FAIL"),),
+                        commutations=tuple(np.linspace(0.3, 0.6, 50)))) == ("recovered", "START_FAIL")
+    assert classify(obs(t_step=0.0, closed=(), commutations=())) == ("no start", "")
+
+
+def test_observe_reads_flags_states_and_the_truth_from_a_trace():
+    hidden = ds._FLAG_BITS["DESYNC"] | ds._FLAG_BITS["ZC_HIDDEN"]
+    sig = synthetic(1, 10.0, flags={1500: hidden, 1501: hidden}, stop=(1501, 2000), n=4000)
+    o, _ = observe(sig, t_step=0.01, settle=0.005)
+    assert o.desyncs == ((pytest.approx(0.015), "ZC_HIDDEN"),)  # one event for the two flagged samples
+    assert len(o.closed) == 2 and o.closed[1][0] == pytest.approx(0.02)
+    assert o.out_of_sync == ()
+    assert classify(o) == ("recovered", "ZC_HIDDEN")
+    trip = ds._FLAG_BITS["SAFE"] | ds._FLAG_BITS["OVERCURRENT"]
+    o2, _ = observe(synthetic(1, 10.0, flags={1500: trip}, stop=(1501, 4000), n=4000), t_step=0.01, settle=0.005)
+    assert classify(o2) == ("desync", "OVERCURRENT")
+    # the controller commutating 40 degrees early from 15 ms on without a flag: the truth catches it
+    o3, _ = observe(synthetic(1, 10.0, shift_deg=40.0, t_shift=0.015, n=4000), t_step=0.01, settle=0.005)
+    assert classify(o3) == ("undetected", "")
+
+
+# ------------------------------------------------------------------------------------------------------------
+# the inputs
+
+
+@pytest.mark.parametrize("kw, field", [
+    ({"start": 1.0}, "step.start"), ({"end": 0.0}, "step.end"), ({"end": math.nan}, "step.end"),
+    ({"settle": -1.0}, "step.settle"), ({"observe": 20.0}, "step.observe"), ({"theta0": math.inf}, "step.theta0"),
+])
+def test_throttle_step_errors_name_the_field(kw, field):
+    with pytest.raises(BldclabError) as e:
+        ThrottleStep(**kw)
+    assert e.value.field == field
+
+
+@pytest.mark.parametrize("name, values", [("nope", (1,)), ("timing", ()), ("timing", (40.0,)), ("timing", (1, 1)),
+                                          ("rate", (0.0,)), ("k_q", (-1e-8,)), ("chopping", ("fast",)),
+                                          ("f_pwm", (math.nan,)), ("end", ("x",))])
+def test_axis_errors(name, values):
+    with pytest.raises(BldclabError):
+        Axis(name, values)
+
+
+def test_step_times_follow_the_drive():
+    drive = bl.load("f60prov-2550kv")
+    ctl = bl.SixStepSensorless(align_time=0.0)
+    t_step, t_end = ThrottleStep(0.25, 0.8).times(drive, ctl)
+    su = ctl.start_up(drive)
+    assert su["ramp_time"] < t_step < 1.0 and t_step + float(ctl.restart_wait) < t_end < 2.0
+    t2, e2 = ThrottleStep(0.25, 0.8, settle=0.1, observe=0.2).times(drive, ctl)
+    assert e2 - t2 == pytest.approx(0.2)
+    assert ThrottleStep(0.0, 0.5).times(drive, ctl)[0] == 0.0
+
+
+# ------------------------------------------------------------------------------------------------------------
+# the map
+
+
+@pytest.fixture(scope="module")
+def f60():
+    return bl.load("f60prov-2550kv")
+
+
+def _tiny(drive, workers):
+    return desync_map(drive, Axis("timing", (0.0, 20.0)), Axis("rate", (20.0,)), step=ThrottleStep(0.3, 0.7),
+                      control=bl.SixStepSensorless(align_time=0.0), workers=workers)
+
+
+@pytest.mark.slow  # a process pool
+def test_the_map_does_not_depend_on_the_worker_count(f60):
+    one = _tiny(f60, 1)
+    two = _tiny(f60, 2)
+    pd.testing.assert_frame_equal(one.points, two.points)
+
+
+def test_the_map_on_a_tiny_grid(f60):
+    res = _tiny(f60, 1)
+    p = res.points
+    assert list(p.timing) == [0.0, 20.0] and list(p.rate) == [20.0, 20.0]
+    assert set(p.outcome) <= set(ds.OUTCOMES)
+    assert all(r == "" or r in ds.REASONS for r in p.reason)
+    assert res.grid("outcome").shape == (1, 2)
+    assert len(res.table().splitlines()) == 2
+    assert res.summary()[0].startswith("outcomes:")
+    assert (p.t_step < p.t_end).all()
+
+
+def test_bad_map_inputs(f60):
+    with pytest.raises(BldclabError, match="y"):
+        desync_map(f60, Axis("timing", (0.0,)), Axis("timing", (5.0,)))
+    with pytest.raises(BldclabError, match="bound"):
+        desync_map(f60, Axis("timing", (0.0,)), bound=4.0)
+    with pytest.raises(BldclabError, match="workers"):
+        desync_map(f60, Axis("timing", (0.0,)), workers=0)
+    with pytest.raises(BldclabError, match="control"):
+        desync_map(f60, Axis("timing", (0.0,)), control=bl.SixStep())  # type: ignore[arg-type]
+
+
+# ------------------------------------------------------------------------------------------------------------
+# the command
+
+
+@pytest.mark.slow  # matplotlib
+def test_cli_writes_the_table_csv_json_and_figures(tmp_path, capsys):
+    out = tmp_path / "m"
+    argv = ["sensorless", "f60prov-2550kv", "--timing", "0,20 deg", "--rate", "20", "--start", "0.3", "--end", "0.7",
+            "--direct-start", "--workers", "1", "--out", str(out)]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "desync map" in text and "timing (deg)" in text and "outcomes:" in text
+    assert sorted(p.name for p in out.iterdir()) == ["desync.csv", "desync.json", "desync.png", "desync.svg"]
+    summary = json.loads((out / "desync.json").read_text())
+    assert summary["x"] == {"name": "timing", "unit": "deg", "values": [0.0, 20.0]}
+    assert summary["y"] is None
+    assert pd.read_csv(out / "desync.csv").shape[0] == 2
+
+
+@pytest.mark.parametrize("args, option", [
+    (["--timing", "0,45"], "--timing"), (["--timing", "x"], "--timing"), (["--rate", "fast"], "--rate"),
+    (["--rate", "0,1"], "--rate"), (["--start", "1.2"], "--start"), (["--end", "0"], "--end"),
+    (["--end", "0.5,0.9", "--timing", "0,10", "--rate", "5,10"], "--end"),
+    (["--k-q", "1e-8,2e-8", "--timing", "0,10", "--rate", "5,10"], "--k-q"), (["--bound", "0"], "--bound"),
+    (["--bound", "x"], "--bound"), (["--chopping", "slow"], "--chopping"), (["--f-pwm", "-5"], "--f-pwm"),
+    (["--settle", "3 V"], "--settle"), (["--observe", "0 s"], "--observe"), (["--inertia", "2 kg"], "--inertia"),
+    (["--workers", "0"], "--workers"),
+])
+def test_cli_bad_input_exits_2_names_the_option_and_writes_nothing(tmp_path, capsys, args, option):
+    out = tmp_path / "m"
+    assert main(["sensorless", "f60prov-2550kv", *args, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and option in err, err
+    assert not out.exists()
+
+
+def test_cli_out_that_is_a_file_fails_before_running(tmp_path, capsys):
+    blocker = tmp_path / "f"
+    blocker.write_text("x")
+    assert main(["sensorless", "f60prov-2550kv", "--out", str(blocker)]) == 2
+    assert "--out" in capsys.readouterr().err
+
+
+@pytest.mark.slow  # the session's compare run, a map and a report
+def test_report_of_the_directory_shows_the_desync_section(compare_htm48v, tmp_path):
+    """bldclab sensorless written into a compare results directory adds the desync map section to the report; a
+    desync.json that is not a summary is refused with the file named."""
+    d = tmp_path / "res"
+    d.mkdir()
+    for p in compare_htm48v.iterdir():
+        (d / p.name).write_bytes(p.read_bytes())
+    assert main(["sensorless", "f60prov-2550kv", "--timing", "0,20", "--rate", "20", "--direct-start", "--workers",
+                 "1", "--out", str(d)]) == 0
+    out = tmp_path / "page.html"
+    assert main(["report", str(d), "--out", str(out)]) == 0
+    page = out.read_text()
+    assert 'id="desync"' in page and "the desync map" in page and "timing (deg)" in page
+    assert 'href="#desync"' in page
+    (d / "desync.json").write_text("[1, 2]")
+    assert main(["report", str(d), "--out", str(tmp_path / "bad.html")]) == 2
+    assert not (tmp_path / "bad.html").exists()
