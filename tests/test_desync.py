@@ -22,10 +22,12 @@ _POS_NEG = {0: (0, 1), 1: (0, 2), 2: (1, 2), 3: (1, 0), 4: (2, 0), 5: (2, 1)}  #
 
 def synthetic(direction: int = 1, adv_deg: float = 10.0, shift_deg: float = 0.0, t_shift: float = 1.0,
               w_e: float = 2000.0, t_half: float = 10e-6, n: int = 3000, theta0: float = 0.3,
-              flags: dict[int, int] | None = None, stop: tuple[int, int] | None = None) -> dict[str, np.ndarray]:
+              flags: dict[int, int] | None = None, stop: tuple[int, int] | None = None,
+              demag_deg: float = 20.0) -> dict[str, np.ndarray]:
     """A trace of a six-step drive commutating a rotor turning at w_e (electrical rad/s) in direction, each
     commutation at the first sample past its angle pi/6 + s pi/3 - adv (forward; backward at pi/2 + s pi/3 + adv),
-    from t_shift on shift_deg earlier; flags {row: bits}; stop (row0, row1): legs off and state 0 between them."""
+    from t_shift on shift_deg earlier; the floating phase's current falling linearly from 50 A at that angle to zero
+    demag_deg later; flags {row: bits}; stop (row0, row1): legs off and state 0 between them."""
     t = np.arange(n) * t_half
     theta = (theta0 + direction * w_e * t) % (2.0 * math.pi)
     adv = adv_deg * DEG
@@ -33,9 +35,13 @@ def synthetic(direction: int = 1, adv_deg: float = 10.0, shift_deg: float = 0.0,
     s = np.floor((theta + direction * (adv + shift) - math.pi / 6.0) / (math.pi / 3.0)).astype(int) % 6
     pair = s if direction > 0 else (s + 3) % 6
     modes = np.zeros((3, n))
+    cur = np.zeros((3, n))
     for j in range(n):
         p, q = _POS_NEG[int(pair[j])]
         modes[p, j], modes[q, j] = 1, 3
+        start = math.pi / 3.0 + s[j] * math.pi / 3.0 - direction * (math.pi / 6.0 + adv + shift[j])
+        phi = (direction * (theta[j] - start)) % (2.0 * math.pi)
+        cur[3 - p - q, j] = 50.0 * min(max(1.0 - phi / (demag_deg * DEG), 0.0), 1.0)
     state = np.full(n, 3.0)
     if stop is not None:
         modes[:, stop[0]:stop[1]] = 0
@@ -45,8 +51,7 @@ def synthetic(direction: int = 1, adv_deg: float = 10.0, shift_deg: float = 0.0,
         ctrl[j] = bits
     return {"t": t, "theta_e": theta, "mode_a": modes[0], "mode_b": modes[1], "mode_c": modes[2], "state": state,
             "omega_e": np.full(n, direction * w_e), "advance": np.full(n, adv), "ctrl_flags": ctrl,
-            "demag": np.zeros(n), "omega_m": np.zeros(n), "i_a": np.zeros(n), "i_b": np.zeros(n),
-            "i_c": np.zeros(n)}
+            "demag": np.zeros(n), "omega_m": np.zeros(n), "i_a": cur[0], "i_b": cur[1], "i_c": cur[2]}
 
 
 # ------------------------------------------------------------------------------------------------------------
@@ -78,6 +83,24 @@ def test_a_commutation_40_degrees_early_is_out_of_sync_and_20_degrees_is_not(dir
     assert (c20.certain < ds.DEFAULT_BOUND).all() and c20.err.max() > 19.0 * DEG
     late = commutation_errors(synthetic(direction, 5.0, shift_deg=-40.0, t_shift=0.01))
     assert (late[late.t > 0.0101].err < -38.0 * DEG).all()
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+@pytest.mark.parametrize("adv, demag", [(0.0, 20.0), (10.0, 25.0), (0.0, 35.0)])
+def test_the_demagnetisation_and_its_margin_to_the_crossing_from_the_currents(direction, adv, demag):
+    """The floating phase's current ends demag degrees after the ideal commutation angle: the margin to the
+    crossing (30 + adv degrees after it) is exact, the demagnetisation within half a sample, the time at the speed."""
+    c = commutation_errors(synthetic(direction, adv, demag_deg=demag))
+    c = c.iloc[1:-1]  # the first and last sectors are cut by the trace
+    assert c.ended.all()
+    assert np.allclose(c.margin, (30.0 + adv - demag) * DEG, atol=1e-9)
+    assert np.allclose(c.margin_time, c.margin / 2000.0, rtol=1e-9)
+    assert (np.abs(c.demag - demag * DEG) <= 0.5 * 2000.0 * 10e-6 + 1e-9).all()
+
+
+def test_a_demagnetisation_longer_than_the_sector_has_not_ended():
+    c = commutation_errors(synthetic(1, 0.0, demag_deg=80.0)).iloc[1:-1]
+    assert not c.ended.any() and (c.margin < -25.0 * DEG).all()
 
 
 def test_hall_six_step_on_the_plant_commutates_within_a_sample_of_the_ideal_angle():
@@ -216,7 +239,8 @@ def f60():
 
 
 def _tiny(drive, workers):
-    return desync_map(drive, Axis("timing", (0.0, 20.0)), Axis("rate", (20.0,)), step=ThrottleStep(0.3, 0.7),
+    return desync_map(drive, Axis("timing", (0.0, 20.0)), Axis("rate", (20.0,)),
+                      step=ThrottleStep(0.3, 0.7, settle=0.02, observe=0.05),
                       control=bl.SixStepSensorless(align_time=0.0), workers=workers)
 
 
@@ -258,7 +282,7 @@ def test_bad_map_inputs(f60):
 def test_cli_writes_the_table_csv_json_and_figures(tmp_path, capsys):
     out = tmp_path / "m"
     argv = ["sensorless", "f60prov-2550kv", "--timing", "0,20 deg", "--rate", "20", "--start", "0.3", "--end", "0.7",
-            "--direct-start", "--workers", "1", "--out", str(out)]
+            "--direct-start", "--settle", "20 ms", "--observe", "50 ms", "--workers", "1", "--out", str(out)]
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert "desync map" in text and "timing (deg)" in text and "outcomes:" in text

@@ -39,10 +39,14 @@ sector: the drive then feeds the pair of the neighbouring sector for more than h
 interval's middle.
 
 **The physics check.** The crossing is hidden when the demagnetisation (the outgoing phase's diode conduction after
-a commutation, paper 1's commutation interval) lasts past the expected crossing, ``30 deg - adv`` after the
-commutation. Each point reports the largest demagnetisation angle ``omega_e t_demag`` the controller measured after
-the step (``demag_deg``) beside ``window_deg = 30 - adv``: where ``demag_deg >= window_deg`` the map's ``ZC_HIDDEN``
-points should be.
+a commutation, paper 1's commutation interval) lasts past the expected crossing. The controller commutates
+``30 deg - adv`` after a crossing and the next crossing comes 60 degrees after that one, so it is expected
+``30 deg + adv`` after the commutation: an advance widens the window (which is why raising the timing is the usual
+cure of a desync on a throttle punch). Each point reports the largest demagnetisation angle ``omega_e t_demag`` the
+controller measured after the step (``demag_deg``) beside the narrowest window ``window_deg = 30 + adv``: where
+``demag_deg`` reaches ``window_deg`` the crossings are hidden. The controller measures a demagnetisation only when it
+ends inside the window, so on a point where it hid the crossing ``demag_deg`` is the last one it saw, a lower
+bound.
 
 The points run on local processes or any :class:`concurrent.futures.Executor` (a Dask client's
 ``get_executor()``), as :func:`bldclab.analysis.effmap.efficiency_map` does; each point is one deterministic
@@ -168,7 +172,8 @@ class ThrottleStep:
         The step comes after the start-up (alignment, forced ramp, 12 sectors at its end speed, the throttle ramp
         to ``start``) and ``settle``; default ``settle``: five mechanical time constants at ``start``. The run then
         lasts ``observe``; default: the throttle ramp to ``end``, five time constants at ``end``, and a restart
-        (the controller's wait, its start-up and five time constants) so that a recovered drive is seen settled.
+        (the controller's longest wait ``restart_max``, its start-up and five time constants) so that a recovered
+        drive is seen settled. A start-up (``start == 0``) lasts such a restart.
 
         The mechanical time constant at a throttle ``d`` is ``J / (k^2 / (2 R) + 2 k_q w + B)`` with
         ``k = 2 k_phi`` and ``w = d Omega_0`` (the linearised balance of the six-step torque ``k (d V - k w) / (2 R)``
@@ -201,7 +206,7 @@ def _restart_time(drive: Drive, control: SixStepSensorless, duty: float) -> floa
     t_start = su["align_time"] + su["ramp_time"] + 12.0 * math.pi / 3.0 / (drive.motor.p * su["ramp_end_speed"])
     rate = control.throttle_rate
     ramp = abs(duty - su["ramp_duty"]) / float(rate) if rate else 0.0
-    return float(control.restart_wait) + t_start + ramp + max(5.0 * _tau_mech(drive, duty), 0.02)
+    return float(control.restart_max) + t_start + ramp + max(5.0 * _tau_mech(drive, duty), 0.02)
 
 
 # ------------------------------------------------------------------------------------------------------------
@@ -305,57 +310,118 @@ class Axis:
 # the truth: commutation angles from the plant's rotor angle
 
 
+def _legs(modes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Floating leg and driven pair (sector index of the forward table) of each trace row; -1 where there is none.
+
+    The floating leg is the one leg OFF. Of the other two, the one chopping or held LOW is the negative one; with
+    none LOW (the continuing phase chopping complementary while the incoming one is held HIGH, as a drive that
+    speeds up the demagnetisation does) the HIGH one is the positive one.
+    """
+    off = modes == 0
+    one = off.sum(axis=0) == 1
+    f = np.where(one, np.argmax(off, axis=0), -1)
+    x, y = (f + 1) % 3, (f + 2) % 3
+    cols = np.arange(modes.shape[1])
+    mx, my = modes[x, cols], modes[y, cols]
+    neg = np.where((mx == 3) & (my != 3), x, np.where((my == 3) & (mx != 3), y,
+                   np.where((mx == 1) & (my == 2), x, np.where((my == 1) & (mx == 2), y, -1))))
+    neg = np.where(one, neg, -1)
+    table = np.full((3, 3), -1, dtype=int)
+    for (p, q), k in _PAIRS.items():
+        table[p, q] = k
+    pos = 3 - f - neg
+    pair = np.where(neg >= 0, table[np.clip(pos, 0, 2), np.clip(neg, 0, 2)], -1)
+    return f, pair
+
+
 def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd.DataFrame:
-    """Locate the closed-loop commutations in a trace and their true angle error.
+    """Locate the closed-loop commutations in a trace, their true angle error and the true demagnetisation.
 
     Parameters
     ----------
     signals : dict of numpy.ndarray
         ``SimResult.signals`` of a :class:`~bldclab.control.SixStepSensorless` run with one trace row per sample:
-        ``t``, ``theta_e``, ``mode_a`` .. ``mode_c``, ``state``, ``omega_e``, ``advance``.
+        ``t``, ``theta_e``, ``mode_a`` .. ``mode_c``, ``i_a`` .. ``i_c``, ``state``, ``omega_e``, ``advance``.
     direction : int
         +1 or -1 for a known direction; 0: the sign of the controller's ``omega_e`` at each commutation.
 
     Returns
     -------
     pandas.DataFrame
-        One row per commutation between two rows both in closed loop: ``t`` (s, the row where the new pair shows;
-        the commutation happened in the sample before), ``sector`` (entered), ``direction``, ``err_lo``,
-        ``err_hi`` (rad: the true error at the start and the end of that sample, positive = early), ``err``
-        (their middle) and ``certain`` (the smallest ``|error|`` over the sample: 0 if it changes sign).
+        One row per commutation (a change of the floating leg between two rows both in closed loop): ``t`` (s, the
+        row where the new legs show; the commutation happened in the sample before), ``sector`` (entered),
+        ``direction``, ``err_lo``, ``err_hi`` (rad: the true error at the start and the end of that sample,
+        positive = early), ``err`` (their middle), ``certain`` (the smallest ``|error|`` over the sample: 0 if it
+        changes sign); the demagnetisation of the phase switched off (now floating) from the plant's currents:
+        ``demag`` (rad: the rotor's travel from the commutation, ``err``'s instant, to the end of its current),
+        ``margin`` (rad: from the end of that current to the zero crossing of the floating phase's back-EMF at the
+        sector's middle, ``pi/3 + s pi/3``; negative: the demagnetisation hid the crossing), ``margin_time`` (s: the
+        same at the rotor's speed over the commutation's sample) and ``ended`` (False:
+        the current still flowed at the next commutation or the end of the closed loop, and ``margin`` is an upper
+        bound). The end is where the current has fallen below 2 % of its value after the commutation (a floating
+        phase clamped in the off-time carries a little), located on the straight line through the two rows before
+        it (or through that row and the one before, when a little current is left): the current falls at a nearly
+        constant rate (paper 1's commutation interval), so this is exact to the curvature over one sample.
     """
     t = signals["t"]
     modes = np.vstack([signals["mode_a"], signals["mode_b"], signals["mode_c"]]).astype(int)
-    n = t.size
-    sector = np.full(n, -1, dtype=int)
-    off = modes == 0
-    one_off = off.sum(axis=0) == 1
-    for j in np.flatnonzero(one_off):
-        m = modes[:, j]
-        pos = [x for x in range(3) if m[x] in (1, 2)]
-        neg = [x for x in range(3) if m[x] == 3]
-        if len(pos) == 1 and len(neg) == 1:
-            sector[j] = _PAIRS.get((pos[0], neg[0]), -1)
-    state = signals["state"]
-    closed = state == _CLOSED
-    k = np.flatnonzero((sector[:-1] >= 0) & (sector[1:] >= 0) & (sector[:-1] != sector[1:])
-                       & closed[:-1] & closed[1:])
-    rows = []
+    cur = np.vstack([signals["i_a"], signals["i_b"], signals["i_c"]])
+    f, pair = _legs(modes)
+    closed = signals["state"] == _CLOSED
+    k = np.flatnonzero((f[:-1] >= 0) & (f[1:] >= 0) & (f[:-1] != f[1:]) & closed[:-1] & closed[1:])
     theta = signals["theta_e"]
-    for j in k:
+    thu = np.unwrap(theta)
+    n = t.size
+    ends = np.append(k[1:] + 1, n) if k.size else k  # each sector's rows: from its commutation row to the next one's
+    rows = []
+    for j, stop in zip(k, ends, strict=True):
         dirn = direction if direction else int(np.sign(signals["omega_e"][j]))
         if dirn == 0:
             continue
-        pair = int(sector[j + 1])
-        s = pair if dirn > 0 else (pair + 3) % 6  # backward: the pair of sector s is swapped (docs/sensorless.md)
+        r = j + 1
+        last = r
+        while last + 1 < min(stop, n) and f[last + 1] == f[r] and closed[last + 1]:
+            last += 1
+        known = [q for q in range(r, last + 1) if pair[q] >= 0]
+        if not known:
+            continue
+        p = int(pair[known[0]])
+        s = p if dirn > 0 else (p + 3) % 6  # backward: the pair of sector s is swapped (docs/sensorless.md)
         adv = float(signals["advance"][j])
         ideal = math.pi / 3.0 + s * math.pi / 3.0 - dirn * (math.pi / 6.0 + adv)
         e0 = _wrap(dirn * (ideal - theta[j]))
-        step = dirn * _wrap(theta[j + 1] - theta[j])  # travel over the sample (forward positive)
-        e1 = e0 - step
+        travel = dirn * (thu[r] - thu[j])  # over the sample (forward positive)
+        e1 = e0 - travel
         certain = 0.0 if e0 * e1 <= 0.0 else min(abs(e0), abs(e1))
-        rows.append((t[j + 1], s, dirn, e0, e1, 0.5 * (e0 + e1), certain))
-    return pd.DataFrame(rows, columns=["t", "sector", "direction", "err_lo", "err_hi", "err", "certain"])
+        th_comm = thu[j] + 0.5 * (thu[r] - thu[j])
+        i_f = cur[f[r], r:last + 1]
+        demag = margin = math.nan
+        ended = False
+        i0 = float(i_f[0]) if i_f.size else 0.0
+        if abs(i0) > 0.0:
+            low = np.flatnonzero(np.sign(i0) * i_f <= 0.02 * abs(i0))
+            if low.size:
+                q = int(low[0])
+                ended = True
+                g = np.sign(i0) * i_f
+                if q >= 1 and g[q] > 0.0:  # still a little current: the zero of the line through q - 1, q, ahead
+                    frac = 1.0 + min(g[q] / (g[q - 1] - g[q]), 1.0) if g[q - 1] > g[q] else 1.0
+                elif q >= 2 and g[q - 2] > g[q - 1]:  # ended inside the sample: from the slope of the two before
+                    frac = min(g[q - 1] / (g[q - 2] - g[q - 1]), 1.0)
+                else:
+                    frac = 1.0
+                th_end = (thu[r + q - 1] + frac * (thu[r + q] - thu[r + q - 1])) if q >= 1 else thu[r]
+            else:
+                th_end = thu[last]
+            crossing = math.pi / 3.0 + s * math.pi / 3.0
+            demag = dirn * (th_end - th_comm)
+            margin = dirn * _wrap(crossing - th_end)
+        speed = abs(thu[r] - thu[j]) / (t[r] - t[j])
+        rows.append((t[r], s, dirn, e0, e1, 0.5 * (e0 + e1), certain, demag, margin,
+                     margin / speed if speed > 0.0 else math.nan, ended))
+    types = {"t": float, "sector": int, "direction": int, "err_lo": float, "err_hi": float, "err": float,
+             "certain": float, "demag": float, "margin": float, "margin_time": float, "ended": bool}
+    return pd.DataFrame(rows, columns=list(types)).astype(types)
 
 
 def _wrap(x: float) -> float:
@@ -512,6 +578,7 @@ def _run_point(job: DesyncJob) -> dict[str, Any]:
     nan = math.nan
     empty = {"outcome": "no start", "reason": "", "truth_lost": False, "t_desync_ms": nan, "restarts": 0,
              "angle_mean_deg": nan, "angle_max_deg": nan, "demag_deg": nan, "window_deg": nan,
+             "demag_true_deg": nan, "margin_deg": nan, "margin_us": nan,
              "speed_step_rpm": nan, "speed_end_rpm": nan, "i_peak": nan, "t_closed_ms": nan, "comm_late": 0,
              "t_step": nan, "t_end": nan, "note": "", "_warnings": []}
     row.update(empty)
@@ -536,6 +603,7 @@ def _run_point(job: DesyncJob) -> dict[str, Any]:
     t_flag = flagged[0] if flagged else math.inf
     win = after & (t < t_flag) & (sig["state"] == _CLOSED)
     cw = comms[(comms.t > t_step) & (comms.t < t_flag)]
+    cm = cw[np.isfinite(cw.margin)]
     demag = np.abs(sig["demag"] * sig["omega_e"])[win]
     i_abs = np.max(np.abs(np.vstack([sig["i_a"], sig["i_b"], sig["i_c"]]))[:, after], axis=0) if after.any() else []
     closed_t = t[sig["state"] == _CLOSED]
@@ -548,7 +616,10 @@ def _run_point(job: DesyncJob) -> dict[str, Any]:
         "angle_mean_deg": float(cw.err.mean()) * _DEG if len(cw) else nan,
         "angle_max_deg": float(cw.err.abs().max()) * _DEG if len(cw) else nan,
         "demag_deg": float(demag.max()) * _DEG if demag.size else nan,
-        "window_deg": float(30.0 - np.max(sig["advance"][win]) * _DEG) if win.any() else nan,
+        "window_deg": float(30.0 + np.min(sig["advance"][win]) * _DEG) if win.any() else nan,
+        "demag_true_deg": float(cm.demag.max()) * _DEG if len(cm) else nan,
+        "margin_deg": float(cm.margin.min()) * _DEG if len(cm) else nan,
+        "margin_us": float(cm.margin_time.min()) * 1e6 if len(cm) else nan,
         "speed_step_rpm": float(np.interp(t_step, t, sig["omega_m"])) * _RPM,
         "speed_end_rpm": float(np.mean(sig["omega_m"][-n_tail:])) * _RPM,
         "i_peak": float(np.max(i_abs)) if len(i_abs) else nan,
@@ -590,7 +661,13 @@ class DesyncMapResult:
         commutation out of sync after the step), ``t_desync_ms`` (first desync after the step), ``restarts``
         (desyncs after the step), ``angle_mean_deg``, ``angle_max_deg`` (true commutation angle error after the
         step, until a desync: mean and largest magnitude, deg electrical, positive = early), ``demag_deg`` (largest
-        demagnetisation angle the controller measured after the step, deg electrical) and ``window_deg`` (``30 -
+        demagnetisation angle the controller measured after the step, deg electrical), ``demag_true_deg`` and
+        ``margin_deg`` (the same from the plant's currents, :func:`commutation_errors`: the largest
+        demagnetisation angle and the smallest margin from its end to the back-EMF's zero crossing after the step,
+        until a desync, deg electrical; a negative margin: a crossing the demagnetisation hid), ``margin_us`` (the
+        smallest margin in time, us: what the comparator's filter and the detection had to see the crossing) and
+        ``window_deg``
+        (``30 +
         advance``: the angle from a commutation to its expected crossing), ``speed_step_rpm``, ``speed_end_rpm``
         (at the step; mean over the last 5 % of the run), ``i_peak`` (largest phase current after the step, A),
         ``t_closed_ms`` (first closed loop: the start-up time), ``comm_late`` (late commutations after the step),
@@ -662,14 +739,19 @@ class DesyncMapResult:
                          f"{agree}; desync flagged and the angle out of sync before the flag {flagged_true}, the "
                          f"controller gave up first {flagged_only}; out of sync without a flag (undetected) "
                          f"{undetected}")
-        hid = p[p.reason == "ZC_HIDDEN"]
+        hid = p[p.outcome.isin(["desync", "recovered"]) & (p.reason == "ZC_HIDDEN")]
         ok = p[p.outcome == "sync"]
         if len(hid) or len(ok):
-            h = int((hid.demag_deg >= hid.window_deg).sum())
-            s = int((ok.demag_deg < ok.window_deg).sum())
-            lines.append(f"physics check (demagnetisation angle against the 30 deg - advance window): ZC_HIDDEN "
-                         f"points with demag >= window {h}/{len(hid)}, sync points with demag < window "
-                         f"{s}/{len(ok)}")
+            def span(g: pd.DataFrame) -> str:
+                g = g[np.isfinite(g.margin_deg)]
+                if g.empty:
+                    return "none measured"
+                return (f"{g.margin_deg.min():.1f} to {g.margin_deg.max():.1f} deg ({g.margin_us.min():.1f} to "
+                        f"{g.margin_us.max():.1f} us)")
+
+            lines.append("physics check, the plant's margin from the end of the demagnetisation to the back-EMF's "
+                         f"zero crossing (smallest after the step, until a desync): ZC_HIDDEN points {span(hid)}, "
+                         f"sync points {span(ok)} (negative: the crossing was hidden)")
         if self.y is not None:
             bd = self.boundary()
             if bd:

@@ -1,10 +1,10 @@
 """The desync map's figure (:func:`bldclab.analysis.desync.desync_map`).
 
 As in :mod:`bldclab.report.plots`: :class:`matplotlib.figure.Figure` directly, never ``pyplot`` state; the function
-returns a new figure. Left: the outcome of each point (colour) with the controller's reason (text); right: the margin
-between the expected crossing and the end of the demagnetisation, ``window_deg - demag_deg`` (deg electrical; below
-zero the demagnetisation outlasts the window and hides the crossing), with the points where the plant's truth saw
-the commutation out of sync circled.
+returns a new figure. Left: the outcome of each point (colour) with the controller's reason (text); right: the
+plant's smallest margin from the end of the demagnetisation to the floating phase's back-EMF zero crossing after the
+step, ``margin_deg`` (deg electrical; below zero the demagnetisation outlasted the crossing and hid it), with the
+points where the plant's truth saw a commutation out of sync circled.
 """
 
 from __future__ import annotations
@@ -65,10 +65,10 @@ def plot_desync_map(res: DesyncMapResult) -> Figure:
     what = (f"start-up at throttle {st.end:g}" if st.is_start else f"throttle step {st.start:g} -> {st.end:g}")
     ax.set_title(f"{res.drive.name}: {what}\ncolour: outcome; text: the controller's reason", fontsize=9)
 
-    margin = np.asarray(res.grid("window_deg"), dtype=float) - np.asarray(res.grid("demag_deg"), dtype=float)
+    margin = np.asarray(res.grid("margin_deg"), dtype=float)
     span = float(np.nanmax(np.abs(margin))) if np.isfinite(margin).any() else 1.0
     im = ax2.imshow(np.ma.masked_invalid(margin), cmap="RdBu", vmin=-span, vmax=span, origin="lower", aspect="auto")
-    fig.colorbar(im, ax=ax2, label="30 deg - advance - demagnetisation angle (deg)")
+    fig.colorbar(im, ax=ax2, label="crossing - end of demagnetisation (deg)")
     lost = np.asarray(res.grid("truth_lost"), dtype=bool)
     kk, jj = np.nonzero(lost)
     if kk.size:
@@ -76,8 +76,8 @@ def plot_desync_map(res: DesyncMapResult) -> Figure:
                     label=f"truth: a commutation > {np.degrees(res.bound):.0f} deg off")
         ax2.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.18), frameon=False)
     _ticks(ax2, res)
-    ax2.set_title("margin of the crossing after the demagnetisation (blue: seen; red: hidden)\n"
-                  "largest after the step, as the controller measured it", fontsize=9)
+    ax2.set_title("plant: smallest margin from the end of the demagnetisation\nto the back-EMF zero crossing "
+                  "after the step (red: hidden)", fontsize=9)
     return fig
 
 
