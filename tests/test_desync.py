@@ -15,6 +15,7 @@ from bldclab.analysis import desync as ds
 from bldclab.analysis.desync import Axis, Observation, ThrottleStep, classify, commutation_errors, desync_map, observe
 from bldclab.cli import main
 from bldclab.errors import BldclabError
+from conftest import require_module
 
 DEG = math.pi / 180.0
 _POS_NEG = {0: (0, 1), 1: (0, 2), 2: (1, 2), 3: (1, 0), 4: (2, 0), 5: (2, 1)}  # docs/conventions.md
@@ -249,6 +250,19 @@ def test_the_map_does_not_depend_on_the_worker_count(f60):
     one = _tiny(f60, 1)
     two = _tiny(f60, 2)
     pd.testing.assert_frame_equal(one.points, two.points)
+
+
+@pytest.mark.slow  # a local Dask cluster
+def test_a_dask_cluster_gives_the_same_map(f60):
+    require_module("distributed")
+    import distributed  # optional dependency, imported only when present
+
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        res = desync_map(f60, Axis("timing", (0.0, 20.0)), Axis("rate", (20.0,)),
+                         step=ThrottleStep(0.3, 0.7, settle=0.02, observe=0.05),
+                         control=bl.SixStepSensorless(align_time=0.0), executor=client.get_executor())
+    pd.testing.assert_frame_equal(_tiny(f60, 1).points, res.points)
 
 
 def test_the_map_on_a_tiny_grid(f60):
