@@ -5,9 +5,11 @@ inertia, blanking, PWM frequency, bus voltage, chopping pattern, initial rotor a
 :class:`~bldclab.control.SixStepSensorless` on the switching plant, with the drive's mechanics (its propeller load
 ``k_q omega^2``) and its back-EMF sensing, through one :class:`ThrottleStep`:
 
-- ``start > 0``: the drive starts from rest at throttle ``start``, runs there until steady (``settle``), then the
-  throttle jumps to ``end`` (the controller's ``throttle_rate`` limits how fast its duty follows), and the run goes
-  on for ``observe``: long enough for a drive that lost synchronisation to restart and settle again.
+- ``start > 0``: the drive starts from rest at throttle ``start``; once it has run in closed loop there for
+  ``settle`` (found by a first run at ``start``, :func:`steady_since`; a drive that never gets there is
+  ``no start``), the throttle jumps to ``end`` (the controller's ``throttle_rate`` limits how fast its duty
+  follows), and the run goes on for ``observe``: long enough for a drive that lost synchronisation to restart and
+  settle again. The second run repeats the first up to the step bit for bit.
 - ``start == 0``: a start-up from rest at throttle ``end`` (alignment or direct start, forced ramp, handover).
 
 Each point is classified (:func:`classify`, on a :class:`Observation` of the run) into one of :data:`OUTCOMES`:
@@ -88,6 +90,7 @@ __all__ = [
     "commutation_errors",
     "desync_map",
     "observe",
+    "steady_since",
 ]
 
 #: The outcomes of a point, in the order the map's legend lists them.
@@ -166,32 +169,38 @@ class ThrottleStep:
         """True for a start-up from rest (``start == 0``)."""
         return self.start == 0.0
 
-    def times(self, drive: Drive, control: SixStepSensorless) -> tuple[float, float]:
-        """Return the time of the step and the duration of the run (s) for ``drive`` and ``control``.
+    def settle_time(self, drive: Drive) -> float:
+        """Return how long the drive must have run in closed loop at ``start`` before the step (s).
 
-        The step comes after the start-up (alignment, forced ramp, 12 sectors at its end speed, the throttle ramp
-        to ``start``) and ``settle``; default ``settle``: five mechanical time constants at ``start``. The run then
-        lasts ``observe``; default: the throttle ramp to ``end``, five time constants at ``end``, and a restart
-        (the controller's longest wait ``restart_max``, its start-up and five time constants) so that a recovered
-        drive is seen settled. A start-up (``start == 0``) lasts such a restart.
-
-        The mechanical time constant at a throttle ``d`` is ``J / (k^2 / (2 R) + 2 k_q w + B)`` with
-        ``k = 2 k_phi`` and ``w = d Omega_0`` (the linearised balance of the six-step torque ``k (d V - k w) / (2 R)``
-        against the propeller's ``k_q w^2``).
+        ``settle`` if given, else five mechanical time constants at ``start`` (at least 20 ms). The mechanical time
+        constant at a throttle ``d`` is ``J / (k^2 / (2 R) + 2 k_q w + B)`` with ``k = 2 k_phi`` and
+        ``w = d Omega_0`` (the linearised balance of the six-step torque ``k (d V - k w) / (2 R)`` against the
+        propeller's ``k_q w^2``).
         """
-        if self.is_start:
-            return 0.0, self.observe if self.observe is not None else _restart_time(drive, control, self.end)
-        su = control.start_up(drive)
-        rate = control.throttle_rate
-        ramp = abs(self.start - su["ramp_duty"]) / float(rate) if rate else 0.0
-        t_start = su["align_time"] + su["ramp_time"] + 12.0 * math.pi / 3.0 / (drive.motor.p * su["ramp_end_speed"])
-        settle = self.settle if self.settle is not None else max(5.0 * _tau_mech(drive, self.start), 0.02)
-        t_step = t_start + ramp + settle
+        return self.settle if self.settle is not None else max(5.0 * _tau_mech(drive, self.start), 0.02)
+
+    def start_time(self, drive: Drive, control: SixStepSensorless) -> float:
+        """Return the longest time the search for the step's instant runs at ``start`` (s).
+
+        Two start-ups (alignment, forced ramp, 12 sectors at its end speed, the throttle ramp to ``start``) with a
+        restart between them (the controller's longest wait ``restart_max``), then :meth:`settle_time`.
+        """
+        return 2.0 * _start_up_time(drive, control, self.start) + float(control.restart_max) + self.settle_time(drive)
+
+    def observe_time(self, drive: Drive, control: SixStepSensorless) -> float:
+        """Return how long the run goes on after the step (s).
+
+        ``observe`` if given, else the throttle ramp to ``end``, five mechanical time constants at ``end`` and a
+        restart (the controller's longest wait ``restart_max``: it restarts once the comparators are quiet, and a
+        propeller-loaded rotor coasts long; its start-up and five time constants), so that a recovered drive is
+        seen settled. A start-up (``start == 0``) lasts such a restart after its first start-up.
+        """
         if self.observe is not None:
-            return t_step, t_step + self.observe
-        step = abs(self.end - self.start) / float(rate) if rate else 0.0
-        return t_step, t_step + step + max(5.0 * _tau_mech(drive, self.end), 0.02) + _restart_time(
-            drive, control, self.end)
+            return self.observe
+        rate = control.throttle_rate
+        ramp = abs(self.end - self.start) / float(rate) if rate and not self.is_start else 0.0
+        return (ramp + max(5.0 * _tau_mech(drive, self.end), 0.02) + float(control.restart_max)
+                + _start_up_time(drive, control, self.end) + max(5.0 * _tau_mech(drive, self.end), 0.02))
 
 
 def _tau_mech(drive: Drive, duty: float) -> float:
@@ -201,12 +210,27 @@ def _tau_mech(drive: Drive, duty: float) -> float:
     return mech.J / (k * k / (2.0 * m.R) + 2.0 * mech.k_q * w + mech.B)
 
 
-def _restart_time(drive: Drive, control: SixStepSensorless, duty: float) -> float:
+def _start_up_time(drive: Drive, control: SixStepSensorless, duty: float) -> float:
     su = control.start_up(drive)
     t_start = su["align_time"] + su["ramp_time"] + 12.0 * math.pi / 3.0 / (drive.motor.p * su["ramp_end_speed"])
     rate = control.throttle_rate
-    ramp = abs(duty - su["ramp_duty"]) / float(rate) if rate else 0.0
-    return float(control.restart_max) + t_start + ramp + max(5.0 * _tau_mech(drive, duty), 0.02)
+    return t_start + (abs(duty - su["ramp_duty"]) / float(rate) if rate else 0.0)
+
+
+def steady_since(signals: dict[str, np.ndarray], settle: float) -> float | None:
+    """Return the first time the controller has been in closed loop, without a flagged desync, for ``settle`` (s).
+
+    None if it never was in the trace (``SimResult.signals`` of a :class:`~bldclab.control.SixStepSensorless`
+    run).
+    """
+    t = signals["t"]
+    closed = (signals["state"] == _CLOSED) & ((signals["ctrl_flags"].astype(np.int64) & (
+        _FLAG_BITS["DESYNC"] | _FLAG_BITS["SAFE"])) == 0)
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], closed.astype(np.int8), [0]))))
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        if t[b - 1] - t[a] >= settle:
+            return float(t[a] + settle)
+    return None
 
 
 # ------------------------------------------------------------------------------------------------------------
@@ -584,17 +608,29 @@ def _run_point(job: DesyncJob) -> dict[str, Any]:
     row.update(empty)
     try:
         drive, control, step = _point(drive, control, step, values)
-        t_step, t_end = step.times(drive, control)
-        ref: Any = (step.end if step.is_start else
-                    (lambda tt, a=step.start, b=step.end, ts=t_step: np.where(tt < ts, a, b)))
+        settle = 0.0 if step.is_start else step.settle_time(drive)
         with _plaus.collect() as caught:
+            t_step = 0.0
+            if not step.is_start:  # where the drive has been steady at `start` for `settle`: the step's instant
+                pre = simulate(drive, control, Scenario(duration=step.start_time(drive, control), ref=step.start,
+                                                        theta0=step.theta0), check="warn")
+                found = steady_since(pre.signals, settle)
+                if found is None:
+                    obs, _ = observe(pre.signals, float(pre.signals["t"][-1]), settle=settle, bound=bound,
+                                     direction=1)
+                    row["outcome"], row["reason"] = classify(obs)
+                    row["note"] = "never steady in closed loop at the throttle before the step"
+                    row["_warnings"] = _tagged(values, caught)
+                    return row
+                t_step = found
+            t_end = t_step + step.observe_time(drive, control)
+            ref: Any = (step.end if step.is_start else
+                        (lambda tt, a=step.start, b=step.end, ts=t_step: np.where(tt < ts, a, b)))
             res = simulate(drive, control, Scenario(duration=t_end, ref=ref, theta0=step.theta0), check="warn")
     except (PlausibilityError, BldclabError) as exc:
         row["note"] = f"refused: {exc}"
         return row
     sig = res.signals
-    settle = 0.0 if step.is_start else min(step.settle if step.settle is not None else
-                                          max(5.0 * _tau_mech(drive, step.start), 0.02), t_step) / 2.0
     obs, comms = observe(sig, t_step, settle=settle, bound=bound, direction=1)
     outcome, reason = classify(obs)
     t = sig["t"]
@@ -626,9 +662,13 @@ def _run_point(job: DesyncJob) -> dict[str, Any]:
         "t_closed_ms": float(closed_t[0]) * 1e3 if closed_t.size else nan,
         "comm_late": int(np.count_nonzero(sig["ctrl_flags"][after].astype(np.int64) & _FLAG_BITS["COMM_LATE"])),
         "t_step": t_step, "t_end": t_end,
-        "_warnings": [f"{', '.join(f'{k}={v}' for k, v in values)}: {text}" for text in caught],
+        "_warnings": _tagged(values, caught),
     })
     return row
+
+
+def _tagged(values: tuple[tuple[str, Any], ...], caught: list[str]) -> list[str]:
+    return [f"{', '.join(f'{k}={v}' for k, v in values)}: {text}" for text in caught]
 
 
 # ------------------------------------------------------------------------------------------------------------
