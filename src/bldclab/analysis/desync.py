@@ -492,7 +492,8 @@ class Observation:
 
 
 def _closed_over(obs: Observation, t0: float, t1: float) -> bool:
-    return any(a <= t0 and b >= t1 for a, b in obs.closed)
+    eps = 1e-9  # s: a step placed `settle` after the start of a closed-loop stretch, to rounding
+    return any(a <= t0 + eps and b >= t1 - eps for a, b in obs.closed)
 
 
 def classify(obs: Observation, *, tail: int = 12) -> tuple[str, str]:
