@@ -69,6 +69,10 @@ def plot_desync_map(res: DesyncMapResult) -> Figure:
     span = float(np.nanmax(np.abs(margin))) if np.isfinite(margin).any() else 1.0
     im = ax2.imshow(np.ma.masked_invalid(margin), cmap="RdBu", vmin=-span, vmax=span, origin="lower", aspect="auto")
     fig.colorbar(im, ax=ax2, label="crossing - end of demagnetisation (deg)")
+    for k in range(ny):
+        for j in range(nx):
+            if np.isfinite(margin[k, j]):
+                ax2.text(j, k, f"{margin[k, j]:.1f}", ha="center", va="center", fontsize=7)
     lost = np.asarray(res.grid("truth_lost"), dtype=bool)
     kk, jj = np.nonzero(lost)
     if kk.size:
