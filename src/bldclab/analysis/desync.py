@@ -729,6 +729,16 @@ class DesyncMapResult:
     seconds: float = 0.0
     warnings: list[str] = field(default_factory=list)
 
+    @property
+    def disturbance(self) -> str:
+        """The disturbance in words, ``"throttle step 0.25 -> 0.8"`` (an axis named where it varies the step)."""
+        names = {a.name for a in (self.x, self.y) if a is not None}
+        a = "each start" if "start" in names else f"{self.step.start:g}"
+        b = "each end" if "end" in names else f"{self.step.end:g}"
+        if self.step.is_start and "start" not in names:
+            return f"start-up from rest at throttle {b}"
+        return f"throttle step {a} -> {b}"
+
     def to_pandas(self) -> pd.DataFrame:
         """Return the points (a copy)."""
         return self.points.copy()

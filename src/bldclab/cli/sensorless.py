@@ -179,16 +179,10 @@ def run_command(args: argparse.Namespace) -> int:
     return 0
 
 
-def _what(res: DesyncMapResult) -> str:
-    st = res.step
-    return (f"start-up from rest at throttle {st.end:g}" if st.is_start else
-            f"throttle step {st.start:g} -> {st.end:g}")
-
-
 def _print(res: DesyncMapResult, workers: int) -> None:
     d = res.drive
     ny = len(res.y.values) if res.y is not None else 1
-    print(f"{d.name}: sensorless six-step desync map, {_what(res)}, {len(res.x.values)} x {ny} points "
+    print(f"{d.name}: sensorless six-step desync map, {res.disturbance}, {len(res.x.values)} x {ny} points "
           f"({res.x.name}{' x ' + res.y.name if res.y is not None else ''}) in {res.seconds:.1f} s on {workers} "
           f"process{'es' if workers > 1 else ''}; propeller k_q = {d.mechanics.k_q:.3g} N m s^2/rad^2, "
           f"J = {d.mechanics.J:.3g} kg m^2, f_pwm = {d.inverter.f_pwm / 1e3:g} kHz, V_dc = {d.inverter.V_dc:g} V")
@@ -212,7 +206,7 @@ def _summary(res: DesyncMapResult, args: argparse.Namespace) -> dict[str, Any]:
             v if isinstance(v, str) or math.isfinite(v) else "inf" for v in a.values]}
 
     counts = {o: int((res.points.outcome == o).sum()) for o in res.points.outcome.unique()}
-    return {"motor": res.drive.name, "disturbance": _what(res),
+    return {"motor": res.drive.name, "disturbance": res.disturbance,
             "step": {"start": res.step.start, "end": res.step.end, "settle": res.step.settle,
                      "observe": res.step.observe},
             "x": axis(res.x), "y": axis(res.y), "bound_deg": math.degrees(res.bound),

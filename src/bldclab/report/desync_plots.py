@@ -61,9 +61,7 @@ def plot_desync_map(res: DesyncMapResult) -> Figure:
     used = [o for o in OUTCOMES if (outcome == o).any()]
     ax.legend(handles=[Patch(color=OUTCOME_COLOURS[o], label=o) for o in used], fontsize=7, loc="upper left",
               bbox_to_anchor=(0.0, -0.18), ncol=len(used), frameon=False)
-    st = res.step
-    what = (f"start-up at throttle {st.end:g}" if st.is_start else f"throttle step {st.start:g} -> {st.end:g}")
-    ax.set_title(f"{res.drive.name}: {what}\ncolour: outcome; text: the controller's reason", fontsize=9)
+    ax.set_title(f"{res.drive.name}: {res.disturbance}\ncolour: outcome; text: the controller's reason", fontsize=9)
 
     margin = np.asarray(res.grid("margin_deg"), dtype=float)
     span = float(np.nanmax(np.abs(margin))) if np.isfinite(margin).any() else 1.0
