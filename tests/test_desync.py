@@ -286,6 +286,9 @@ def test_the_map_on_a_tiny_grid(f60):
     assert res.grid("outcome").shape == (1, 2)
     assert len(res.table().splitlines()) == 2
     assert res.summary()[0].startswith("outcomes:")
+    assert res.disturbance == "throttle step 0.3 -> 0.7"
+    res.x = Axis("end", (0.5, 0.9))
+    assert res.disturbance == "throttle step 0.3 -> each end"
     never = p.note == "never steady in closed loop at the throttle before the step"
     assert ((p.t_step < p.t_end) | (never & (p.outcome == "no start"))).all()
 
