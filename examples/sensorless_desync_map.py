@@ -2,13 +2,18 @@
 
 The T-Motor F60PRO V (KV2550, 4S) with its T5147 propeller runs sensorless six-step (`SixStepSensorless`:
 comparator on the floating phase against a virtual star point, synchronous chopping, rotor alignment and a forced
-ramp to start) on the switching plant. At every point of a timing advance x throttle ramp limit
-grid the drive settles at 25 % throttle and then gets a punch to 50, 70 or 90 %; `bldclab.analysis.desync.desync_map`
+ramp to start) on the switching plant, here without the controller's two protections against a hidden crossing
+(fast demagnetisation and the demagnetisation limiter). At every point of a timing advance x final throttle grid
+the drive settles at 25 % throttle and then gets a punch to 50, 70 or 90 %; `bldclab.analysis.desync.desync_map`
 classifies each run: in sync, desync with the controller's reason (`ZC_HIDDEN`: the demagnetisation hid the zero
 crossing), recovered after a restart, or not started; and checks the controller's own diagnosis against the
-plant's truth, the true commutation angle error. The right panel is the physics behind it: the margin between the
-expected crossing (30 degrees minus the advance after a commutation) and the end of the demagnetisation the
-controller measured. `bldclab sensorless f60prov-2550kv` writes the same map as CSV, JSON and figures.
+plant's truth, the true commutation angle error. The right panel is the physics behind it, from the plant's
+currents: the smallest margin from the end of the demagnetisation to the floating phase's back-EMF zero crossing
+after the punch (negative: hidden). More advance widens the window (the crossing comes 30 degrees plus the advance
+after a commutation); at 90 % the demagnetisation (over 50 degrees at 100 A) outgrows it, the late commutations of a
+large advance narrowing it further. With the controller's defaults
+(`fast_demag=True`, `demag_limit=0.6`) every point of this grid holds sync. `bldclab sensorless f60prov-2550kv
+--timing 0,10,20,30 --end 0.5,0.7,0.9 --fast-demag off --demag-limit 0` writes the same map as CSV, JSON and figures.
 """
 
 import sys
@@ -20,8 +25,9 @@ from bldclab.report.desync_plots import plot_desync_map
 # configure the drive: the catalog's 5-inch racing motor with its propeller load (k_q, inertia in the motor file)
 drive = bl.load("f60prov-2550kv")
 
-# configure the control: the controller's defaults; the map varies the timing advance and the throttle ramp limit
-control = bl.SixStepSensorless()
+# configure the control: no fast demagnetisation, no demagnetisation limiter; the map varies the timing advance
+# and the throttle after the punch
+control = bl.SixStepSensorless(fast_demag=False, demag_limit=0.0)
 timing = Axis("timing", (0.0, 10.0, 20.0, 30.0))  # deg electrical
 end = Axis("end", (0.5, 0.7, 0.9))  # throttle after the punch
 

@@ -222,7 +222,8 @@ def test_throttle_step_errors_name_the_field(kw, field):
 
 @pytest.mark.parametrize("name, values", [("nope", (1,)), ("timing", ()), ("timing", (40.0,)), ("timing", (1, 1)),
                                           ("rate", (0.0,)), ("k_q", (-1e-8,)), ("chopping", ("fast",)),
-                                          ("f_pwm", (math.nan,)), ("end", ("x",))])
+                                          ("f_pwm", (math.nan,)), ("end", ("x",)), ("fast_demag", ("maybe",)),
+                                          ("demag_limit", (1.0,))])
 def test_axis_errors(name, values):
     with pytest.raises(BldclabError):
         Axis(name, values)
@@ -330,7 +331,8 @@ def test_cli_writes_the_table_csv_json_and_figures(tmp_path, capsys):
     (["--k-q", "1e-8,2e-8", "--timing", "0,10", "--rate", "5,10"], "--k-q"), (["--bound", "0"], "--bound"),
     (["--bound", "x"], "--bound"), (["--chopping", "slow"], "--chopping"), (["--f-pwm", "-5"], "--f-pwm"),
     (["--settle", "3 V"], "--settle"), (["--observe", "0 s"], "--observe"), (["--inertia", "2 kg"], "--inertia"),
-    (["--workers", "0"], "--workers"),
+    (["--workers", "0"], "--workers"), (["--fast-demag", "yes"], "--fast-demag"),
+    (["--demag-limit", "-0.1"], "--demag-limit"),
 ])
 def test_cli_bad_input_exits_2_names_the_option_and_writes_nothing(tmp_path, capsys, args, option):
     out = tmp_path / "m"

@@ -267,10 +267,14 @@ AXES: dict[str, _AxisKind] = {
     "chopping": _AxisKind("", "chopping pattern", lambda d, c, s, v: (d, replace(c, chopping=v), s), numeric=False),
     "theta0": _AxisKind("deg", "initial rotor angle (deg electrical)",
                         lambda d, c, s, v: (d, c, replace(s, theta0=math.radians(v)))),
+    "fast_demag": _AxisKind("", "fast demagnetisation (on, off)",
+                            lambda d, c, s, v: (d, replace(c, fast_demag=v == "on"), s), numeric=False),
+    "demag_limit": _AxisKind("-", "demagnetisation limiter (share of the window; 0: off)",
+                             lambda d, c, s, v: (d, replace(c, demag_limit=v), s)),
 }
-_CHOPPINGS = ("sync", "high", "pwm-on-pwm", "bipolar")
+_CHOICES = {"chopping": ("sync", "high", "pwm-on-pwm", "bipolar"), "fast_demag": ("on", "off")}
 _LIMITS = {"timing": (0.0, 30.0), "end": (0.0, 1.0), "start": (0.0, 1.0), "blank": (0.0, 60.0),
-           "theta0": (-360.0, 360.0)}
+           "theta0": (-360.0, 360.0), "demag_limit": (0.0, 0.999)}
 
 
 @dataclass(frozen=True)
@@ -282,7 +286,8 @@ class Axis:
     name : str
         A key of :data:`AXES`: ``timing`` (deg), ``rate`` (throttle ramp limit, %/ms; ``inf``: none), ``end``,
         ``start`` (throttle), ``k_q`` (N m s^2/rad^2), ``J`` (kg m^2), ``blank`` (deg), ``f_pwm`` (kHz), ``v_dc``
-        (V), ``chopping`` (``sync``, ``high``, ``pwm-on-pwm``, ``bipolar``), ``theta0`` (deg).
+        (V), ``chopping`` (``sync``, ``high``, ``pwm-on-pwm``, ``bipolar``), ``theta0`` (deg), ``fast_demag``
+        (``on``, ``off``), ``demag_limit`` (share of the window in [0, 1); 0: the limiter off).
     values : sequence
         Distinct values (numbers in the unit above; names for ``chopping``).
     """
@@ -306,15 +311,15 @@ class Axis:
                 if math.isnan(v) or (math.isinf(v) and self.name != "rate"):
                     raise BldclabError(self.name, f"values must be finite, got {v!r}")
                 lo, hi = _LIMITS.get(self.name, (0.0, math.inf))
-                closed_lo = self.name in ("timing", "blank", "theta0", "start")
+                closed_lo = self.name in ("timing", "blank", "theta0", "start", "demag_limit")
                 if (v < lo or (v == lo and not closed_lo) or v > hi) and not (self.name == "rate" and math.isinf(v)):
                     where = f"[{lo:g}, {hi:g}]" if closed_lo else f"({lo:g}, {hi:g}]"
                     raise BldclabError(self.name, f"values must be in {where} {AXES[self.name].unit}, got {v:g}")
             vals = nums
         else:
-            bad = [v for v in vals if v not in _CHOPPINGS]
+            bad = [v for v in vals if v not in _CHOICES[self.name]]
             if bad:
-                raise BldclabError(self.name, f"must be from {', '.join(_CHOPPINGS)}, got {bad[0]!r}")
+                raise BldclabError(self.name, f"must be from {', '.join(_CHOICES[self.name])}, got {bad[0]!r}")
         if len(set(vals)) != len(vals):
             raise BldclabError(self.name, "values must be distinct")
         object.__setattr__(self, "values", vals)
@@ -835,7 +840,8 @@ def desync_map(drive: Drive, x: Axis, y: Axis | None = None, *, step: ThrottleSt
     Parameters
     ----------
     drive : Drive
-        The drive with its mechanics (propeller ``k_q``, inertia); its back-EMF sensing is turned on if it is off.
+        The drive with its mechanics (propeller ``k_q``, inertia) and its back-EMF sensing (``drive.sensors``: the
+        controller turns it on).
     x, y : Axis
         The grid: ``x`` across, ``y`` (optional) down; each a parameter of :data:`AXES` with its values.
     step : ThrottleStep, optional
@@ -873,7 +879,7 @@ def desync_map(drive: Drive, x: Axis, y: Axis | None = None, *, step: ThrottleSt
         raise BldclabError("bound", f"must be an angle in (0, pi) rad, got {bound!r}")
     if isinstance(workers, bool) or (workers is not None and (not isinstance(workers, int) or workers < 1)):
         raise BldclabError("workers", f"must be an integer >= 1, got {workers!r}")
-    base = drive if drive.sensors.bemf else drive.replace(sensors__bemf=True)
+    base = drive
     ys: tuple[Any, ...] = y.values if y is not None else (None,)
     jobs: list[DesyncJob] = []
     for yv in ys:

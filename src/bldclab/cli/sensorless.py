@@ -36,6 +36,10 @@ OPTIONS: dict[str, tuple[str, str, str | None, str]] = {
     "--v-dc": ("v_dc", "voltage", None, "DC bus, V (default the motor file's)"),
     "--chopping": ("chopping", "", None, "chopping pattern: sync, high, pwm-on-pwm, bipolar (default sync)"),
     "--theta0": ("theta0", "angle", None, "initial rotor angle, deg electrical (default 0)"),
+    "--fast-demag": ("fast_demag", "", None, "fast demagnetisation: on, off (default on)"),
+    "--demag-limit": ("demag_limit", "", None, "demagnetisation limiter, the share of the window from a commutation to "
+                                               "the expected crossing the clamp may take, in [0, 1) (0: off; default "
+                                               "0.6)"),
 }
 #: The unit a value without one is read in (the axis's), as the factor of that unit to SI.
 _TO_AXIS = {"angle": math.pi / 180.0, "frequency": 1e3, "voltage": 1.0, "inertia": 1.0, "propeller": 1.0}
@@ -70,7 +74,7 @@ def configure_command(p: argparse.ArgumentParser) -> None:
 def _one(text: str, name: str, dim: str, option: str) -> Any:
     """Read one value of an option in its axis's unit."""
     t = text.strip()
-    if name == "chopping":
+    if name in ("chopping", "fast_demag"):
         return t
     if name == "rate":
         if t.lower() in ("inf", "none"):
