@@ -252,16 +252,17 @@ def f60():
     return bl.load("f60prov-2550kv")
 
 
-def _tiny(drive, workers):
+def _tiny(drive, workers, control=None):
     return desync_map(drive, Axis("timing", (0.0, 20.0)), Axis("rate", (20.0,)),
                       step=ThrottleStep(0.3, 0.7, settle=0.02, observe=0.05),
-                      control=bl.SixStepSensorless(align_time=0.0), workers=workers)
+                      control=control or bl.SixStepSensorless(), workers=workers)
 
 
 @pytest.mark.slow  # a process pool
 def test_the_map_does_not_depend_on_the_worker_count(f60):
     one = _tiny(f60, 1)
     two = _tiny(f60, 2)
+    assert list(one.points.outcome) == ["sync", "sync"]  # points that ran through the step, not empty ones
     pd.testing.assert_frame_equal(one.points, two.points)
 
 
@@ -274,12 +275,28 @@ def test_a_dask_cluster_gives_the_same_map(f60):
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         res = desync_map(f60, Axis("timing", (0.0, 20.0)), Axis("rate", (20.0,)),
                          step=ThrottleStep(0.3, 0.7, settle=0.02, observe=0.05),
-                         control=bl.SixStepSensorless(align_time=0.0), executor=client.get_executor())
+                         control=bl.SixStepSensorless(), executor=client.get_executor())
     pd.testing.assert_frame_equal(_tiny(f60, 1).points, res.points)
 
 
+@pytest.mark.slow  # four steps on the plant
+def test_a_punch_on_the_5_inch_motor_holds_sync_with_the_protections_and_loses_it_without():
+    """f60prov-2550kv, 0.25 -> 0.9 at once, no advance: the controller's defaults keep every commutation within a
+    few degrees of its true angle and the crossing visible; without fast demagnetisation and the limiter the crossing
+    is hidden (ZC_HIDDEN), and the plant's demagnetisation ends within a few degrees of the crossing or after it."""
+    drive = bl.load("f60prov-2550kv")
+    step = ThrottleStep(0.25, 0.9, observe=0.15)
+    ok = desync_map(drive, Axis("timing", (0.0, 10.0)), step=step, workers=1).points
+    assert list(ok.outcome) == ["sync", "sync"] and not ok.truth_lost.any()
+    assert (ok.angle_max_deg < 15.0).all() and (ok.margin_deg > 1.0).all()
+    raw = desync_map(drive, Axis("timing", (0.0, 10.0)), step=step, workers=1,
+                     control=bl.SixStepSensorless(fast_demag=False, demag_limit=0.0)).points
+    assert list(raw.outcome) == ["desync", "desync"] and list(raw.reason) == ["ZC_HIDDEN", "ZC_HIDDEN"]
+    assert (raw.margin_deg < 3.0).all() and not raw.truth_lost.any()  # the controller gave up before any drift
+
+
 def test_the_map_on_a_tiny_grid(f60):
-    res = _tiny(f60, 1)
+    res = _tiny(f60, 1, bl.SixStepSensorless(align_time=0.0))
     p = res.points
     assert list(p.timing) == [0.0, 20.0] and list(p.rate) == [20.0, 20.0]
     assert set(p.outcome) <= set(ds.OUTCOMES)
