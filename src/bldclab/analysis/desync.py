@@ -34,11 +34,10 @@ synchronisation. At every closed-loop commutation (a change of the driven pair i
 electrical angle of the rotor is compared with the angle where that commutation belongs: forward into sector ``s``
 at ``pi/6 + s pi/3 - adv`` (``docs/conventions.md``; ``adv`` the controller's advance), backward at
 ``pi/2 + s pi/3 + adv``. The error is positive when the commutation came early, like the controller's
-``comm_error``. The trace shows the applied legs at every sample (half PWM period ``T_s``), so a commutation is
-located within one sample: its error is known within the angle the rotor travels in ``T_s``. A commutation is
-*out of sync* only when the whole of that interval is beyond ``bound`` (default 30 degrees electrical, half a
-sector: the drive then feeds the pair of the neighbouring sector for more than half of it); the estimate is the
-interval's middle.
+``comm_error``. The trace gives the applied legs at every sample (half PWM period ``T_s``) and the instant of
+the commutation timer's leg change (``t_at``), so each commutation's instant and true angle are exact. A commutation
+is *out of sync* when its error is beyond ``bound`` (default 30 degrees electrical, half a sector: the drive then
+feeds the pair of the neighbouring sector for more than half of it).
 
 **The physics check.** The crossing is hidden when the demagnetisation (the outgoing phase's diode conduction after
 a commutation, paper 1's commutation interval) lasts past the expected crossing. The controller commutates
@@ -370,7 +369,8 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
     ----------
     signals : dict of numpy.ndarray
         ``SimResult.signals`` of a :class:`~bldclab.control.SixStepSensorless` run with one trace row per sample:
-        ``t``, ``theta_e``, ``mode_a`` .. ``mode_c``, ``i_a`` .. ``i_c``, ``state``, ``omega_e``, ``advance``.
+        ``t``, ``theta_e``, ``mode_a`` .. ``mode_c``, ``i_a`` .. ``i_c``, ``state``, ``omega_e``, ``advance``, and
+        ``t_at`` if there is one (else a commutation is located within its sample only).
     direction : int
         +1 or -1 for a known direction; 0: the sign of the controller's ``omega_e`` at each commutation.
 
@@ -380,8 +380,10 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
         One row per commutation (a change of the floating leg between two rows both in closed loop): ``t`` (s, the
         row where the new legs show; the commutation happened in the sample before), ``sector`` (entered),
         ``direction``, ``err_lo``, ``err_hi`` (rad: the true error at the start and the end of that sample,
-        positive = early), ``err`` (their middle), ``certain`` (the smallest ``|error|`` over the sample: 0 if it
-        changes sign); the demagnetisation of the phase switched off (now floating) from the plant's currents:
+        positive = early; both the error at the commutation's instant when the trace has ``t_at``, the commutation
+        timer's instant, or the sample's start for a change applied there), ``err`` (their middle), ``certain``
+        (the smallest ``|error|`` over the sample: 0 if it changes sign); the demagnetisation of the phase switched
+        off (now floating) from the plant's currents:
         ``demag`` (rad: the rotor's travel from the commutation, ``err``'s instant, to the end of its current),
         ``margin`` (rad: from the end of that current to the zero crossing of the floating phase's back-EMF at the
         sector's middle, ``pi/3 + s pi/3``; negative: the demagnetisation hid the crossing), ``margin_time`` (s: the
@@ -400,6 +402,8 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
     k = np.flatnonzero((f[:-1] >= 0) & (f[1:] >= 0) & (f[:-1] != f[1:]) & closed[:-1] & closed[1:])
     theta = signals["theta_e"]
     thu = np.unwrap(theta)
+    t_at = signals.get("t_at")
+    at = 0.5
     n = t.size
     ends = np.append(k[1:] + 1, n) if k.size else k  # each sector's rows: from its commutation row to the next one's
     rows = []
@@ -421,8 +425,12 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
         e0 = _wrap(dirn * (ideal - theta[j]))
         travel = dirn * (thu[r] - thu[j])  # over the sample (forward positive)
         e1 = e0 - travel
+        if t_at is not None:  # the instant is known: the timer's, or the sample's where the change was applied
+            tc = float(t_at[j]) if t[j] <= t_at[j] < t[r] else float(t[r])
+            at = (tc - t[j]) / (t[r] - t[j])
+            e0 = e1 = e0 - at * travel
         certain = 0.0 if e0 * e1 <= 0.0 else min(abs(e0), abs(e1))
-        th_comm = thu[j] + 0.5 * (thu[r] - thu[j])
+        th_comm = thu[j] + (at if t_at is not None else 0.5) * (thu[r] - thu[j])
         i_f = cur[f[r], r:last + 1]
         demag = margin = math.nan
         ended = False

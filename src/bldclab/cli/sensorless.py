@@ -191,7 +191,8 @@ def _print(res: DesyncMapResult, workers: int) -> None:
     ny = len(res.y.values) if res.y is not None else 1
     print(f"{d.name}: sensorless six-step desync map, {res.disturbance}, {len(res.x.values)} x {ny} points "
           f"({res.x.name}{' x ' + res.y.name if res.y is not None else ''}) in {res.seconds:.1f} s on {workers} "
-          f"process{'es' if workers > 1 else ''}; the drive (where no axis changes it): propeller k_q = {d.mechanics.k_q:.3g} N m s^2/rad^2, "
+          f"process{'es' if workers > 1 else ''}; the drive (where no axis changes it): propeller k_q = "
+          f"{d.mechanics.k_q:.3g} N m s^2/rad^2, "
           f"J = {d.mechanics.J:.3g} kg m^2, f_pwm = {d.inverter.f_pwm / 1e3:g} kHz, V_dc = {d.inverter.V_dc:g} V")
     print("  sync: held; rec: desync then restarted, in sync at the end; LOST: desync, not back; UNDET: the plant's "
           "truth saw a commutation out of sync, the controller flagged nothing; nostart: not in closed loop at the "
