@@ -10,7 +10,7 @@ crossing), recovered after a restart, or not started; and checks the controller'
 plant's truth, the true commutation angle error. The right panel is the physics behind it, from the plant's
 currents: the smallest margin from the end of the demagnetisation to the floating phase's back-EMF zero crossing
 after the punch (negative: hidden). More advance widens the window (the crossing comes 30 degrees plus the advance
-after a commutation); at 90 % the demagnetisation (over 50 degrees at 100 A) outgrows it, the late commutations of a
+after a commutation); at 90 % the demagnetisation (near 50 degrees at 100 A) outgrows it, the late commutations of a
 large advance narrowing it further. With the controller's defaults
 (`fast_demag=True`, `demag_limit=0.6`) every point of this grid holds sync. `bldclab sensorless f60prov-2550kv
 --timing 0,10,20,30 --end 0.5,0.7,0.9 --fast-demag off --demag-limit 0` writes the same map as CSV, JSON and figures.
