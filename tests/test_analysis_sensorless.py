@@ -33,15 +33,14 @@ def test_commutation_measurement_against_exact_commutation():
 @pytest.mark.parametrize(("name", "speeds", "rms", "worst"), [
     ("htm-48v", (0.2, 0.5, 0.9), 0.5, 1.0),
     ("mn3110-780kv", (0.2, 0.5, 0.9), 2.0, 6.0),
-    ("f60prov-2550kv", (0.2, 0.5, 0.8), 4.0, 12.0),
+    ("f60prov-2550kv", (0.2, 0.5, 0.9), 4.0, 12.0),
 ])
 def test_angle_error_against_the_true_crossing(name, speeds, rms, worst):
     """The sensorless drive's commutations against the plant's true angle, 30 degrees after the floating phase's
     back-EMF zero crossing: rms and worst error (electrical degrees) at the speeds. htm-48v within half a degree;
-    the drone motors (2.6-8 samples per half sector at 0.2-0.8 Omega_0) within a few degrees: the floating phase's
-    terminal is clamped in the off-time near its crossing (docs/sensing.md), which moves the crossing the
-    comparator sees by up to an off-time. f60prov-2550kv's locked start does not hand over at 0.9 Omega_0 (1.8 PWM
-    periods per sector at 48 kHz)."""
+    the drone motors (f60prov-2550kv: 1.8 PWM periods per sector at 0.9 Omega_0) within a few degrees: the floating
+    phase's terminal is clamped in the off-time near its crossing (docs/sensing.md), which moves the crossing the
+    comparator sees by up to an off-time."""
     r = sl.angle_error(bl.load(name), speeds)
     df = r.to_pandas()
     assert df["in_sync"].all() and (df["count"] >= 100).all()

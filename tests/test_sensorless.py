@@ -11,6 +11,7 @@ angle against the Hall-exact instant, desync map) are added when it lands; ``Syn
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -235,6 +236,21 @@ def test_units_and_defaults_from_the_drive():
 def test_bad_settings_name_the_field(kw, field):
     with pytest.raises(BldclabError, match=field.replace(".", r"\.")):
         bl.SixStepSensorless(**kw)
+
+
+def test_comparator_needs_the_star_reference():
+    """The comparators' reference is hardware (``drive.sensors.bemf_reference``): against half the bus the comparator
+    method is refused by name (the comparator sees the PWM), the ADC methods run (they sample in the on-time) and
+    the integration threshold is computed against half the bus."""
+    d = bl.load("htm-48v")
+    half = d.replace(sensors=dataclasses.replace(d.sensors, bemf_reference="half"))
+    with pytest.raises(BldclabError, match=r"control\.method.*star"):
+        bl.SixStepSensorless().c_record(half, core(), 0)
+    rec = bl.SixStepSensorless(method="integration").c_record(half, core(), 0).record
+    assert float(rec["int_limit"][0]) == pytest.approx(integral_to_30(d, "half"), rel=1e-6)
+    res = bl.simulate(half, bl.SixStepSensorless(method="adc", throttle_rate="1 %/ms"),
+                      bl.Scenario(duration=1.0, ref=0.4, theta0=1.0), check="warn")
+    assert set(res.meta["flags"]) == {"OPEN_LOOP"} and res.signals["state"][-1] == STATE["closed"]
 
 
 def test_speeds_must_leave_room_for_the_handover():

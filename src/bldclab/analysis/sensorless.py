@@ -137,6 +137,9 @@ def run_locked(drive: Drive, speed_pu: float, duty: float, *, periods: float = 2
                trace_sub: int = 1, control: Control | None = None, **control_kw: Any) -> tuple[SimResult, float]:
     """Run the sensorless drive locked at an imposed speed; return the run and the time the measurement starts.
 
+    Above four PWM periods per sector the forced start locks at that speed and the imposed speed ramps up to
+    ``speed_pu`` over the first half of the settling time.
+
     Parameters
     ----------
     drive : Drive
@@ -165,14 +168,22 @@ def run_locked(drive: Drive, speed_pu: float, duty: float, *, periods: float = 2
     if not 0.0 < duty <= 1.0:
         raise BldclabError("duty", f"must be in (0, 1], got {duty!r}")
     w_m = speed_pu * drive.Omega_0
-    w_e = drive.motor.p * w_m
+    p = drive.motor.p
+    w_e = p * w_m
     period = 2.0 * math.pi / w_e
     ts = 0.5 / drive.inverter.f_pwm
-    ctl = control if control is not None else locked(drive, w_m, **control_kw)
+    # the forced start locks at most at four PWM periods per sector; faster, the imposed speed then ramps up to the
+    # speed over half the settling time (the closed loop follows, the locked start would not hand over)
+    w_lock = min(w_e, (math.pi / 3.0) / (8.0 * ts))
+    ctl = control if control is not None else locked(drive, w_lock / p, **control_kw)
     t0 = settle * period
     dur = (settle + periods) * period
-    th0 = 5.0 * math.pi / 6.0 - w_e * ts + 1e-3  # the rotor enters sector 2 when the first output applies
-    res = simulate(drive, ctl, Scenario(duration=dur, speed=w_m, ref=duty, theta0=th0, trace_sub=trace_sub,
+    th0 = 5.0 * math.pi / 6.0 - w_lock * ts + 1e-3  # the rotor enters sector 2 when the first output applies
+    speed: Any = w_m
+    if w_lock < w_e:
+        t_up = 0.5 * t0
+        speed = lambda t: (w_lock + (w_e - w_lock) * np.clip(t / t_up, 0.0, 1.0)) / p  # noqa: E731
+    res = simulate(drive, ctl, Scenario(duration=dur, speed=speed, ref=duty, theta0=th0, trace_sub=trace_sub,
                                         window=(t0, dur)), check="warn")
     return res, t0
 

@@ -143,7 +143,9 @@ class SixStepSensorless(Control):
         ``comparator``: the crossing is the comparator's edge (``bc_ctrl_in.zc_*``, time-stamped by the capture
         timer); ``adc``: from the ADC samples of the terminal voltage against the reference (once per PWM period),
         interpolated between the last sample before and the first after it; ``integration``: the ADC crossing, then
-        the commutation when the back-EMF integral from it reaches ``int_limit`` (VESC's BLDC mode).
+        the commutation when the back-EMF integral from it reaches ``int_limit`` (VESC's BLDC mode). The comparator
+        method needs the virtual star reference (``drive.sensors.bemf_reference = "star"``); against half the bus
+        it is refused (the comparator would see the PWM), the ADC methods sample in the on-time and run with both.
     chopping : {"sync", "high", "pwm-on-pwm", "bipolar"}
         ``sync``: the positive leg complementary (synchronous rectification, as AM32 and BLHeli_32), the negative
         leg's lower switch on; ``high``: the positive leg's upper switch chops; ``pwm-on-pwm``: the incoming phase
@@ -430,6 +432,11 @@ class SixStepSensorless(Control):
         p = m.p
         su = self.start_up(drive)
         stall, start, end = su["stall_speed"], su["ramp_start_speed"], su["ramp_end_speed"]
+        if self.method == "comparator" and drive.sensors.bemf_reference == "half":
+            raise BldclabError("control.method", "the comparator method needs the virtual star reference "
+                               "(sensors.bemf_reference = 'star'): against half the bus the comparator sees the PWM "
+                               "and toggles every off-time; use method='adc' or 'integration', which sample in the "
+                               "on-time")
         tau, t_comp = self.delays(drive)
         blank_time = 2.0 * tau + t_comp + 1e-6 if self.blank_time is None else float(self.blank_time)
         int_limit = (integral_to_30(drive) if self.int_limit is None and
