@@ -219,7 +219,10 @@ def _summary(res: DesyncMapResult, args: argparse.Namespace) -> dict[str, Any]:
                      "observe": res.step.observe},
             "x": axis(res.x), "y": axis(res.y), "bound_deg": math.degrees(res.bound),
             "control": {"method": res.control.method, "blanking": res.control.blanking,
-                        "chopping": res.control.chopping, "align_time": res.control.align_time},
+                        "chopping": res.control.chopping, "align_time": res.control.align_time,
+                        "timing_rad": res.control.timing, "throttle_rate_per_s": res.control.throttle_rate,
+                        "fast_demag": res.control.fast_demag, "demag_limit": res.control.demag_limit,
+                        "note": "the controller before the axes' changes"},
             "outcomes": counts, "summary": res.summary(), "table": res.table().splitlines(),
             "boundary": [[str(y), None if x is None else str(x)] for y, x in res.boundary()],
             "seconds": res.seconds, "command": "bldclab sensorless " + " ".join(_argv(args))}
