@@ -272,8 +272,10 @@ AXES: dict[str, _AxisKind] = {
                              lambda d, c, s, v: (d, replace(c, demag_limit=v), s)),
 }
 _CHOICES = {"chopping": ("sync", "high", "pwm-on-pwm", "bipolar"), "fast_demag": ("on", "off")}
-_LIMITS = {"timing": (0.0, 30.0), "end": (0.0, 1.0), "start": (0.0, 1.0), "blank": (0.0, 60.0),
-           "theta0": (-360.0, 360.0), "demag_limit": (0.0, 0.999)}
+#: Range of each numeric axis: (low, high, low included, high included); the others: positive.
+_LIMITS = {"timing": (0.0, 30.0, True, True), "end": (0.0, 1.0, False, True), "start": (0.0, 1.0, True, False),
+           "blank": (0.0, 60.0, True, True), "theta0": (-360.0, 360.0, True, True),
+           "demag_limit": (0.0, 1.0, True, False)}
 
 
 @dataclass(frozen=True)
@@ -309,11 +311,14 @@ class Axis:
             for v in nums:
                 if math.isnan(v) or (math.isinf(v) and self.name != "rate"):
                     raise BldclabError(self.name, f"values must be finite, got {v!r}")
-                lo, hi = _LIMITS.get(self.name, (0.0, math.inf))
-                closed_lo = self.name in ("timing", "blank", "theta0", "start", "demag_limit")
-                if (v < lo or (v == lo and not closed_lo) or v > hi) and not (self.name == "rate" and math.isinf(v)):
-                    where = f"[{lo:g}, {hi:g}]" if closed_lo else f"({lo:g}, {hi:g}]"
-                    raise BldclabError(self.name, f"values must be in {where} {AXES[self.name].unit}, got {v:g}")
+                lo, hi, lo_in, hi_in = _LIMITS.get(self.name, (0.0, math.inf, False, True))
+                inside = (lo < v or (lo_in and v == lo)) and (v < hi or (hi_in and v == hi))
+                if not inside and not (self.name == "rate" and math.isinf(v)):
+                    where = ("positive" if math.isinf(hi) else
+                             f"in {'[' if lo_in else '('}{lo:g}, {hi:g}{']' if hi_in else ')'}")
+                    unit = AXES[self.name].unit
+                    raise BldclabError(self.name, f"values must be {where}{'' if unit == '-' else f' ({unit})'}, "
+                                       f"got {v:g}")
             vals = nums
         else:
             bad = [v for v in vals if v not in _CHOICES[self.name]]

@@ -85,7 +85,10 @@ def _one(text: str, name: str, dim: str, option: str) -> Any:
         try:
             return float(t)
         except ValueError:
-            return throttle_rate(t, option) / 10.0  # '5 %/ms' -> 1/s -> %/ms
+            pass
+        if "%" not in t:
+            raise BldclabError(option, f"cannot read {text!r}: a number in %/ms, '<x> %/ms', '<x> %/s' or inf")
+        return throttle_rate(t, option) / 10.0  # '5 %/ms' -> 1/s -> %/ms
     try:
         return float(t)
     except ValueError:
