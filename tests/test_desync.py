@@ -355,7 +355,8 @@ def test_cli_writes_the_table_csv_json_and_figures(tmp_path, capsys):
     (["--bound", "x"], "--bound"), (["--chopping", "slow"], "--chopping"), (["--f-pwm", "-5"], "--f-pwm"),
     (["--settle", "3 V"], "--settle"), (["--observe", "0 s"], "--observe"), (["--inertia", "2 kg"], "--inertia"),
     (["--workers", "0"], "--workers"), (["--fast-demag", "yes"], "--fast-demag"),
-    (["--demag-limit", "-0.1"], "--demag-limit"),
+    (["--demag-limit", "-0.1"], "--demag-limit"), (["--duty-limit", "-3 A"], "--duty-limit"),
+    (["--duty-limit", "3 V"], "--duty-limit"),
 ])
 def test_cli_bad_input_exits_2_names_the_option_and_writes_nothing(tmp_path, capsys, args, option):
     out = tmp_path / "m"

@@ -270,12 +270,14 @@ AXES: dict[str, _AxisKind] = {
                             lambda d, c, s, v: (d, replace(c, fast_demag=v == "on"), s), numeric=False),
     "demag_limit": _AxisKind("-", "demagnetisation limiter (share of the window; 0: off)",
                              lambda d, c, s, v: (d, replace(c, demag_limit=v), s)),
+    "duty_limit": _AxisKind("A", "speed-dependent duty limit's current (A; 0: off)",
+                            lambda d, c, s, v: (d, replace(c, duty_limit_current=v), s)),
 }
 _CHOICES = {"chopping": ("sync", "high", "pwm-on-pwm", "bipolar"), "fast_demag": ("on", "off")}
 #: Range of each numeric axis: (low, high, low included, high included); the others: positive.
 _LIMITS = {"timing": (0.0, 30.0, True, True), "end": (0.0, 1.0, False, True), "start": (0.0, 1.0, True, False),
            "blank": (0.0, 60.0, True, True), "theta0": (-360.0, 360.0, True, True),
-           "demag_limit": (0.0, 1.0, True, False)}
+           "demag_limit": (0.0, 1.0, True, False), "duty_limit": (0.0, math.inf, True, False)}
 
 
 @dataclass(frozen=True)
@@ -288,7 +290,8 @@ class Axis:
         A key of :data:`AXES`: ``timing`` (deg), ``rate`` (throttle ramp limit, %/ms; ``inf``: none), ``end``,
         ``start`` (throttle), ``k_q`` (N m s^2/rad^2), ``J`` (kg m^2), ``blank`` (deg), ``f_pwm`` (kHz), ``v_dc``
         (V), ``chopping`` (``sync``, ``high``, ``pwm-on-pwm``, ``bipolar``), ``theta0`` (deg), ``fast_demag``
-        (``on``, ``off``), ``demag_limit`` (share of the window in [0, 1); 0: the limiter off).
+        (``on``, ``off``), ``demag_limit`` (share of the window in [0, 1); 0: the limiter off), ``duty_limit``
+        (the current of the controller's speed-dependent duty limit, A; 0: off).
     values : sequence
         Distinct values (numbers in the unit above; names for ``chopping``).
     """
@@ -314,7 +317,7 @@ class Axis:
                 lo, hi, lo_in, hi_in = _LIMITS.get(self.name, (0.0, math.inf, False, True))
                 inside = (lo < v or (lo_in and v == lo)) and (v < hi or (hi_in and v == hi))
                 if not inside and not (self.name == "rate" and math.isinf(v)):
-                    where = ("positive" if math.isinf(hi) else
+                    where = (("at least 0" if lo_in else "positive") if math.isinf(hi) else
                              f"in {'[' if lo_in else '('}{lo:g}, {hi:g}{']' if hi_in else ')'}")
                     unit = AXES[self.name].unit
                     raise BldclabError(self.name, f"values must be {where}{'' if unit == '-' else f' ({unit})'}, "

@@ -40,9 +40,12 @@ OPTIONS: dict[str, tuple[str, str, str | None, str]] = {
     "--demag-limit": ("demag_limit", "", None, "demagnetisation limiter, the share of the window from a commutation to "
                                                "the expected crossing the clamp may take, in [0, 1) (0: off; default "
                                                "0.6)"),
+    "--duty-limit": ("duty_limit", "current", None, "current of the speed-dependent duty limit, A (or '30 A'; 0: off; "
+                                                    "default I_N)"),
 }
 #: The unit a value without one is read in (the axis's), as the factor of that unit to SI.
-_TO_AXIS = {"angle": math.pi / 180.0, "frequency": 1e3, "voltage": 1.0, "inertia": 1.0, "propeller": 1.0}
+_TO_AXIS = {"angle": math.pi / 180.0, "frequency": 1e3, "voltage": 1.0, "inertia": 1.0, "propeller": 1.0,
+            "current": 1.0}
 
 
 def configure_command(p: argparse.ArgumentParser) -> None:
