@@ -523,9 +523,73 @@ static void lanes_select(const bc_plant_params *p, bc_plant_state *s, int level)
     s->lanes_on = m != 0u;
 }
 
+/* The coefficients of switching leg x in conduction state s->cond[x] (topology_set). */
+static inline void switch_leg_set(const bc_plant_params *p, bc_plant_state *s, int x)
+{
+    double up = 0.0, u0 = 0.0, r = 0.0, conn = 1.0, rsw = 0.0, dio = 0.0;
+    switch (s->cond[x]) {
+    case BC_COND_SW_U: up = 1.0; r = s->r_on; rsw = s->r_on; break;
+    case BC_COND_SW_L: r = s->r_on; rsw = s->r_on; break;
+    case BC_COND_D_U: up = 1.0; u0 = p->V_f; r = p->r_d; dio = 1.0; break;
+    case BC_COND_D_L: u0 = -p->V_f; r = p->r_d; dio = 1.0; break;
+    default: conn = 0.0; break;
+    }
+    s->tc_cond[x] = s->cond[x];
+    s->tc_lo_a[x] = 0.0; /* the diode window [-V_f, v_bus + V_f] */
+    s->tc_lo_b[x] = -p->V_f;
+    s->tc_hi_a[x] = 1.0;
+    s->tc_hi_b[x] = p->V_f;
+    s->tc_up[x] = up;
+    s->tc_u0[x] = u0;
+    s->tc_r[x] = r;
+    s->tc_conn[x] = conn;
+    s->tc_rsw[x] = rsw;
+    s->tc_dio[x] = dio;
+    s->tc_swk[x] = 0.0;
+    s->tc_rrk[x] = 0.0;
+}
+
+/* P up and P U0 from the legs' sources and the connection weights (topology_set). */
+static inline void pu_set(bc_plant_state *s)
+{
+    const double *cn = s->tc_cn, *pc = s->tc_pc;
+    const double ub = cn[0] * s->tc_up[0] + cn[1] * s->tc_up[1] + cn[2] * s->tc_up[2];
+    const double u0b = cn[0] * s->tc_u0[0] + cn[1] * s->tc_u0[1] + cn[2] * s->tc_u0[2];
+    for (int x = 0; x < 3; ++x) {
+        s->tc_pup[x] = pc[x] * (s->tc_up[x] - ub);
+        s->tc_pu0[x] = pc[x] * (s->tc_u0[x] - u0b);
+    }
+}
+
+static void b_set(const bc_plant_params *p, bc_plant_state *s);
+
+/* topology_set where only switching legs changed state and every phase stays connected or open (a gate edge: a leg
+ * between its switches or between a switch and the opposite diode): the connection weights n, c, P's diagonal and,
+ * unless a device resistance (or, with R_src, a + rail tie) changed, B stay; the changed legs' sources and P up,
+ * P U0 are recomputed by the same expressions as in the full path. Returns 0 where it does not apply. */
+static int topology_edge(const bc_plant_params *p, bc_plant_state *s)
+{
+    if (!s->tc_b_ok || s->tc_msrc || s->hold_on || (s->avg[0] | s->avg[1] | s->avg[2])) return 0;
+    for (int x = 0; x < 3; ++x) {
+        const int32_t c = s->tc_cond[x];
+        if (c != s->cond[x] && (c < 0 || (c == BC_COND_OPEN) != (s->cond[x] == BC_COND_OPEN))) return 0;
+    }
+    int b_stale = 0;
+    for (int x = 0; x < 3; ++x) {
+        if (s->tc_cond[x] == s->cond[x]) continue;
+        const double r0 = s->tc_r[x], up0 = s->tc_up[x];
+        switch_leg_set(p, s, x);
+        b_stale |= s->tc_r[x] != r0 || (p->R_src != 0.0 && s->tc_up[x] != up0);
+    }
+    pu_set(s);
+    if (b_stale) b_set(p, s);
+    return 1;
+}
+
 /* Circuit coefficients of the present conduction states (bc_plant.h, tc_*). Call after any change of cond[]. */
 static void topology_set(const bc_plant_params *p, bc_plant_state *s)
 {
+    if (topology_edge(p, s)) return;
     /* B depends on the connected phases, the device resistances and, with R_src, on the + rail ties: a PWM leg
      * moving between its switches changes none of these (R_src = 0), so B is kept */
     double key[10];
@@ -565,17 +629,9 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
             s->tc_hi_a[x] = fu + fo;
             s->tc_hi_b[x] = fo * p->V_f;
         } else {
-            switch (s->cond[x]) {
-            case BC_COND_SW_U: up = 1.0; r = s->r_on; rsw = s->r_on; break;
-            case BC_COND_SW_L: r = s->r_on; rsw = s->r_on; break;
-            case BC_COND_D_U: up = 1.0; u0 = p->V_f; r = p->r_d; dio = 1.0; break;
-            case BC_COND_D_L: u0 = -p->V_f; r = p->r_d; dio = 1.0; break;
-            default: conn = 0.0; break;
-            }
-            s->tc_lo_a[x] = 0.0; /* the diode window [-V_f, v_bus + V_f] */
-            s->tc_lo_b[x] = -p->V_f;
-            s->tc_hi_a[x] = 1.0;
-            s->tc_hi_b[x] = p->V_f;
+            switch_leg_set(p, s, x);
+            n += s->tc_conn[x] != 0.0;
+            continue;
         }
         s->tc_up[x] = up;
         s->tc_u0[x] = u0;
@@ -625,18 +681,18 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
     if (s->hold_on) { /* d(di/dt)/dd = v_src P e_x: column x of P, (P e_x)_j = pc_j (delta_jx - cn_x) */
         for (int j = 0; j < 3; ++j) s->tc_hcol[j] = s->tc_pc[j] * ((j == s->hold_x ? 1.0 : 0.0) - s->tc_cn[s->hold_x]);
     }
-    const double *cn = s->tc_cn, *pc = s->tc_pc;
-    const double ub = cn[0] * s->tc_up[0] + cn[1] * s->tc_up[1] + cn[2] * s->tc_up[2];
-    const double u0b = cn[0] * s->tc_u0[0] + cn[1] * s->tc_u0[1] + cn[2] * s->tc_u0[2];
-    for (int x = 0; x < 3; ++x) {
-        s->tc_pup[x] = pc[x] * (s->tc_up[x] - ub);
-        s->tc_pu0[x] = pc[x] * (s->tc_u0[x] - u0b);
-    }
+    pu_set(s);
     int same = s->tc_b_ok && key[9] == (double)s->tc_msrc && !s->tc_msrc;
     for (int x = 0; x < 3 && same; ++x) {
         same = key[x] == s->tc_conn[x] && key[3 + x] == s->tc_r[x] && (p->R_src == 0.0 || key[6 + x] == s->tc_up[x]);
     }
-    if (same) return;
+    if (!same) b_set(p, s);
+}
+
+/* B = P (M + R I) (topology_set). */
+static void b_set(const bc_plant_params *p, bc_plant_state *s)
+{
+    const double *cn = s->tc_cn, *pc = s->tc_pc;
     s->tc_b_ok = 1;
     for (int y = 0; y < 3; ++y) {
         const double d = s->tc_r[y] + s->r_ph; /* diagonal of M + R I */
