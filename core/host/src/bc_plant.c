@@ -325,8 +325,9 @@ static double cogging_rate(const bc_plant_params *p, const bc_plant_state *s, do
  * rates of the energy balance add up to dW_L/dt identically, so do their derivatives to d^2W_L/dt^2. Only the lanes
  * of s->acc_lane[] are computed: those the parameters can make nonzero, and the trace's (terminal voltages, star
  * point, DC current) only when acc_on asks for them. */
-static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
-                  const double *restrict dy, const aux_t *restrict a, double *restrict f, double *restrict fd)
+static inline void lanes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s,
+                            const double *restrict y, const double *restrict dy, const aux_t *restrict a,
+                            double *restrict f, double *restrict fd, const int edge)
 {
     const double i[3] = {y[Y_I], y[Y_I + 1], y[Y_I + 2]};
     const double di[3] = {dy[Y_I], dy[Y_I + 1], dy[Y_I + 2]};
@@ -356,28 +357,32 @@ static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restr
 
     f[BC_ACC_SRC] = s->v_src * a->idc;
     fd[BC_ACC_SRC] = s->v_src * didc;
-    f[BC_ACC_CU] = R * (sq[0] + sq[1] + sq[2]);
+    if (!edge) f[BC_ACC_CU] = R * (sq[0] + sq[1] + sq[2]);
     fd[BC_ACC_CU] = 2.0 * R * (i[0] * di[0] + i[1] * di[1] + i[2] * di[2]);
-    f[BC_ACC_EMF] = a->e[0] * i[0] + a->e[1] * i[1] + a->e[2] * i[2];
+    if (!edge) f[BC_ACC_EMF] = a->e[0] * i[0] + a->e[1] * i[1] + a->e[2] * i[2];
     fd[BC_ACC_EMF] = de[0] * i[0] + de[1] * i[1] + de[2] * i[2] + a->e[0] * di[0] + a->e[1] * di[1] + a->e[2] * di[2];
-    f[BC_ACC_LOAD] = (s->tau_load + a->t_prop) * om;
-    fd[BC_ACC_LOAD] = (s->tau_load + 3.0 * a->t_prop) * dom; /* d(k_q omega^2 |omega|)/dt = 3 k_q omega |omega| */
+    if (!edge) {
+        f[BC_ACC_LOAD] = (s->tau_load + a->t_prop) * om;
+        fd[BC_ACC_LOAD] = (s->tau_load + 3.0 * a->t_prop) * dom; /* d(k_q omega^2 |omega|)/dt = 3 k_q omega |omega| */
+    }
     /* dtau/dt = sum_x (k_x di_x/dt + p omega dk_x/dtheta i_x) + dtau_cog/dt */
     double dtau = 0.0;
     for (int x = 0; x < 3; ++x) dtau += a->k[x] * di[x] + (double)p->p * om * a->dk[x] * i[x];
     if (on & (1u << BC_ACC_COG)) {
         double dcog = cogging_rate(p, s, y[Y_TH], om);
         dtau += dcog;
-        f[BC_ACC_COG] = a->tau_cog * om;
-        fd[BC_ACC_COG] = dcog * om + a->tau_cog * dom;
+        if (!edge) {
+            f[BC_ACC_COG] = a->tau_cog * om;
+            fd[BC_ACC_COG] = dcog * om + a->tau_cog * dom;
+        }
     }
-    f[BC_ACC_TAU] = a->tau;
     fd[BC_ACC_TAU] = dtau;
-    f[BC_ACC_TAU2] = a->tau * a->tau;
     fd[BC_ACC_TAU2] = 2.0 * a->tau * dtau;
-    for (int x = 0; x < 3; ++x) {
-        f[BC_ACC_I2A + x] = sq[x];
-        fd[BC_ACC_I2A + x] = 2.0 * i[x] * di[x];
+    for (int x = 0; x < 3; ++x) fd[BC_ACC_I2A + x] = 2.0 * i[x] * di[x];
+    if (!edge) {
+        f[BC_ACC_TAU] = a->tau;
+        f[BC_ACC_TAU2] = a->tau * a->tau;
+        for (int x = 0; x < 3; ++x) f[BC_ACC_I2A + x] = sq[x];
     }
     if (on & (1u << BC_ACC_RSRC)) {
         double dw = 0.0;
@@ -416,7 +421,7 @@ static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restr
         f[BC_ACC_DIODE] = fdi;
         fd[BC_ACC_DIODE] = fdd;
     }
-    if (on & (1u << BC_ACC_FRIC)) {
+    if (!edge && (on & (1u << BC_ACC_FRIC))) {
         f[BC_ACC_FRIC] = a->t_fric * om;
         fd[BC_ACC_FRIC] = a->sgn != 0.0 ? (2.0 * p->B * om + p->tau_c * a->sgn) * dom : 0.0;
     }
@@ -477,6 +482,22 @@ static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restr
         }
         fd[BC_ACC_FE] = d;
     }
+}
+
+static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+                  const double *restrict dy, const aux_t *restrict a, double *restrict f, double *restrict fd)
+{
+    lanes_at(p, s, y, dy, a, f, fd, 0);
+}
+
+/* The lanes after a gate edge that changed only the conduction coefficients (switch_update): the state, the back-EMFs,
+ * the torque and the rotor's rates are those of the same instant, so the rates that depend on nothing else (copper,
+ * EMF, torque, torque^2 and i^2 values, load, friction, cogging) are already in f, fd; those that depend on di/dt
+ * or on the conduction coefficients are recomputed by the same expressions (bit for bit what lanes() gives). */
+static void lanes_edge(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+                       const double *restrict dy, const aux_t *restrict a, double *restrict f, double *restrict fd)
+{
+    lanes_at(p, s, y, dy, a, f, fd, 1);
 }
 
 /* acc[] over a step of length h from (f0, fd0) to (f1, fd1): the corrected trapezoid rule (bc_plant.h). Every lane in
@@ -1317,7 +1338,7 @@ static int switch_update(const bc_plant_params *p, bc_plant_state *s, const int3
               (s->cond[x] == BC_COND_SW_U || s->cond[x] == BC_COND_SW_L);
     }
     if (!sw) (void)watch_eval(p, s, y, a, s->work.wdir, s->work.w[s->work.cur]);
-    if (s->lanes_on) lanes(p, s, y, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
+    if (s->lanes_on) lanes_edge(p, s, y, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
     return 1;
 }
 
