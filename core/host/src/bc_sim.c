@@ -360,11 +360,11 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         /* 3. apply; gate edges at t_k book their energies (E_on, E_off, E_rr) here, and belong to a row or metric
          * window that starts at t_k: [t0, t1) holds the edges at t0, not those at t1 (each edge once per period) */
         double pre_swloss = ps->acc[BC_ACC_SWLOSS], pre_rr = ps->acc[BC_ACC_RR];
-        const bc_ctrl_out applied = cfg->delay ? s->pending : co;
-        s->pending = co;
-        bc_plant_set_hold(pp, ps, (double)applied.i_hold, (double)applied.i_hold_at);
-        bc_plant_set_half(pp, ps, applied.leg, (k % 2) == 0);
-        if (applied.has_at) bc_plant_schedule(pp, ps, applied.leg_at, (double)applied.t_at);
+        const bc_ctrl_out *applied = cfg->delay ? &s->pending : &co;
+        bc_plant_set_hold(pp, ps, (double)applied->i_hold, (double)applied->i_hold_at);
+        bc_plant_set_half(pp, ps, applied->leg, (k % 2) == 0);
+        if (applied->has_at) bc_plant_schedule(pp, ps, applied->leg_at, (double)applied->t_at);
+        s->pending = co; /* after: applied may point to it */
 
         /* torque at the sample instant, inside the metric window */
         if (s->m.state == 1) {
