@@ -172,45 +172,50 @@ static void sim_on_step(void *ctx, double t, const double *acc, double tau)
     bc_sim_state *s = (bc_sim_state *)ctx;
     angle_track(s);
     if (!s->plant.acc_on) return; /* outside the metric window, no trace: nothing reads the history */
-    double A = acc[BC_ACC_TAU];
-    if (s->h_n > 0) {
-        int jl = (int)((s->h_n - 1) & (BC_SIM_HIST - 1));
+    const double A = acc[BC_ACC_TAU];
+    int64_t n = s->h_n;
+    if (n > 0) {
+        int jl = (int)((n - 1) & (BC_SIM_HIST - 1));
         if (!(t > s->h_t[jl])) { /* a zero-length step (an event at this instant): same node */
             s->h_a[jl] = A;
             s->h_tau[jl] = tau;
             return;
         }
     }
-    int jn = (int)(s->h_n & (BC_SIM_HIST - 1));
+    int jn = (int)(n & (BC_SIM_HIST - 1));
     s->h_t[jn] = t;
     s->h_a[jn] = A;
     s->h_tau[jn] = tau;
-    s->h_n += 1;
-    int64_t oldest = s->h_n - BC_SIM_HIST;
-    int in = s->m.state == 1;
-    double T = s->t_pwm;
-    double eps = 1e-9 * T;
-    if (s->h_lag < oldest) {
-        if (in && s->h_t[(int)(oldest & (BC_SIM_HIST - 1))] - T > s->m.t0 - eps) s->m.ma_lost += 1;
-        s->h_lag = oldest;
+    s->h_n = ++n;
+    const int64_t oldest = n - BC_SIM_HIST;
+    const int in = s->m.state == 1;
+    const double T = s->t_pwm;
+    const double eps = 1e-9 * T;
+    const double t0e = s->m.t0 - eps; /* the window's start, less rounding */
+    int64_t lag = s->h_lag;           /* kept in a local: ma_fold writes through s */
+    if (lag < oldest) {
+        if (in && s->h_t[(int)(oldest & (BC_SIM_HIST - 1))] - T > t0e) s->m.ma_lost += 1;
+        lag = oldest;
     }
-    if (s->h_n < 2) return;
-    int64_t prev = s->h_n - 2;
-    double t_prev = s->h_t[(int)(prev & (BC_SIM_HIST - 1))];
+    if (n < 2) {
+        s->h_lag = lag;
+        return;
+    }
+    const int64_t prev = n - 2;
+    const double t_prev = s->h_t[(int)(prev & (BC_SIM_HIST - 1))];
     /* older nodes j whose t_j + T lies in (t_prev, t]: A(t_j + T) from the step just ended, A(t_j) exact */
-    while (s->h_lag + 1 < s->h_n - 1) {
-        int j = (int)((s->h_lag + 1) & (BC_SIM_HIST - 1));
-        double ts = s->h_t[j] + T;
+    while (lag + 1 < n - 1) {
+        const int j = (int)((lag + 1) & (BC_SIM_HIST - 1));
+        const double ts = s->h_t[j] + T;
         if (ts > t) break;
-        if (in && ts > t_prev && s->h_t[j] >= s->m.t0 - eps) {
-            ma_fold(s, (hist_interp(s, prev, ts) - s->h_a[j]) / T);
-        }
-        s->h_lag += 1;
+        if (in && ts > t_prev && s->h_t[j] >= t0e) ma_fold(s, (hist_interp(s, prev, ts) - s->h_a[j]) / T);
+        lag += 1;
     }
+    s->h_lag = lag;
     /* the new node: A(t - T) from the history segment holding t - T */
-    double tq = t - T;
-    if (in && tq >= s->m.t0 - eps && s->h_t[(int)(s->h_lag & (BC_SIM_HIST - 1))] <= tq + eps) {
-        ma_fold(s, (A - hist_interp(s, s->h_lag, tq)) / T);
+    const double tq = t - T;
+    if (in && tq >= t0e && s->h_t[(int)(lag & (BC_SIM_HIST - 1))] <= tq + eps) {
+        ma_fold(s, (A - hist_interp(s, lag, tq)) / T);
     }
 }
 
