@@ -859,6 +859,7 @@ static void hall_locate(const bc_plant_params *p, bc_plant_state *s, int keep)
         }
         s->hseg[x].lo = lo;
         s->hseg[x].hi = lo + BC_PI;
+        s->work.th_ok = 0;
         code |= bit << x;
     }
     if (keep < 0) {
@@ -873,6 +874,7 @@ static void hall_locate(const bc_plant_params *p, bc_plant_state *s, int keep)
 
 static void pieces_locate(const bc_plant_params *p, bc_plant_state *s)
 {
+    s->work.th_ok = 0; /* the angle bound ahead moves */
     for (int x = 0; x < 3; ++x) {
         bc_emf_piece_at(&p->emf[x], s->theta - PHI[x], s->dir, &s->piece[x]);
         if (p->emf[x].kind == BC_EMF_TABLE) {
@@ -1013,6 +1015,7 @@ static int angles_cross(const bc_plant_params *p, bc_plant_state *s, double th_r
             }
         }
     }
+    if (any) s->work.th_ok = 0;
     return any;
 }
 
@@ -1045,28 +1048,33 @@ static void wrap_angle(const bc_plant_params *p, bc_plant_state *s)
         s->hseg[x].lo += shift;
         s->hseg[x].hi += shift;
     }
+    s->work.th_ok = 0;
 }
 
 /* Time to the next angle bound, or HUGE_VAL. *th_ev receives the bound. */
-static double angle_event(const bc_plant_params *p, const bc_plant_state *s, double *th_ev)
+static double angle_event(const bc_plant_params *p, bc_plant_state *s, double *th_ev)
 {
     double om = s->omega;
     if (s->stuck || (p->mech == BC_MECH_IMPOSED && om == 0.0)) {
         return HUGE_VAL;
     }
-    double target;
-    if (s->dir > 0) {
-        target = HUGE_VAL;
-        for (int x = 0; x < 3; ++x) {
-            if (s->piece[x].hi < target) target = s->piece[x].hi;
-            if (s->hseg[x].hi < target) target = s->hseg[x].hi;
+    double target = s->work.th_next;
+    if (!s->work.th_ok) { /* the pieces or intervals changed (or the direction: pieces_locate) */
+        if (s->dir > 0) {
+            target = HUGE_VAL;
+            for (int x = 0; x < 3; ++x) {
+                if (s->piece[x].hi < target) target = s->piece[x].hi;
+                if (s->hseg[x].hi < target) target = s->hseg[x].hi;
+            }
+        } else {
+            target = -HUGE_VAL;
+            for (int x = 0; x < 3; ++x) {
+                if (s->piece[x].lo > target) target = s->piece[x].lo;
+                if (s->hseg[x].lo > target) target = s->hseg[x].lo;
+            }
         }
-    } else {
-        target = -HUGE_VAL;
-        for (int x = 0; x < 3; ++x) {
-            if (s->piece[x].lo > target) target = s->piece[x].lo;
-            if (s->hseg[x].lo > target) target = s->hseg[x].lo;
-        }
+        s->work.th_next = target;
+        s->work.th_ok = 1;
     }
     *th_ev = target;
     double delta = (target - s->theta) * (double)s->dir / (double)p->p; /* mechanical angle to go, >= 0 */

@@ -348,28 +348,27 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
                             input_at(in->v_src, in->v_src_c, j));
 
         /* 2. measure, control */
-        bc_ctrl_in ci;
-        memset(&ci, 0, sizeof ci);
-        bc_sensor_measure(cfg->sensors, &s->sensors, ps, bc_plant_vbus(pp, ps), &ci);
-        if (sense_on(cfg)) bc_sense_fill(cfg->sense, &s->sense, t_k, &ci);
-        ci.ref = (float)input_at(in->ref, in->ref_c, j);
-        ci.omega_ref = (float)input_at(in->omega_ref, in->omega_ref_c, j);
-        bc_ctrl_out co;
-        memset(&co, 0, sizeof co);
-        cfg->ctrl.step(cfg->ctrl.params, cfg->ctrl.state, &ci, &co);
-        s->last = co;
-        s->flags_seen |= co.flags;
-        flags_count(s, co.flags, t_k, has_window && t_k >= cfg->metric_t0 && t_k < cfg->metric_t1);
-        s->last_in = ci;
+        /* the measurements and the output are made in place: last_in, last (no copies per sample) */
+        bc_ctrl_in *ci = &s->last_in;
+        memset(ci, 0, sizeof *ci);
+        bc_sensor_measure(cfg->sensors, &s->sensors, ps, bc_plant_vbus(pp, ps), ci);
+        if (sense_on(cfg)) bc_sense_fill(cfg->sense, &s->sense, t_k, ci);
+        ci->ref = (float)input_at(in->ref, in->ref_c, j);
+        ci->omega_ref = (float)input_at(in->omega_ref, in->omega_ref_c, j);
+        bc_ctrl_out *co = &s->last;
+        memset(co, 0, sizeof *co);
+        cfg->ctrl.step(cfg->ctrl.params, cfg->ctrl.state, ci, co);
+        s->flags_seen |= co->flags;
+        flags_count(s, co->flags, t_k, has_window && t_k >= cfg->metric_t0 && t_k < cfg->metric_t1);
 
         /* 3. apply; gate edges at t_k book their energies (E_on, E_off, E_rr) here, and belong to a row or metric
          * window that starts at t_k: [t0, t1) holds the edges at t0, not those at t1 (each edge once per period) */
         double pre_swloss = ps->acc[BC_ACC_SWLOSS], pre_rr = ps->acc[BC_ACC_RR];
-        const bc_ctrl_out *applied = cfg->delay ? &s->pending : &co;
+        const bc_ctrl_out *applied = cfg->delay ? &s->pending : co;
         bc_plant_set_hold(pp, ps, (double)applied->i_hold, (double)applied->i_hold_at);
         bc_plant_set_half(pp, ps, applied->leg, (k % 2) == 0);
         if (applied->has_at) bc_plant_schedule(pp, ps, applied->leg_at, (double)applied->t_at);
-        s->pending = co; /* after: applied may point to it */
+        s->pending = *co; /* after: applied may point to it */
 
         /* torque at the sample instant, inside the metric window */
         if (s->m.state == 1) {

@@ -329,6 +329,9 @@ typedef struct {
                                    updates the derivative and the power flows from them) */
     bc_plant_aux a[2];
     int32_t cur;                /* which of the double buffers w, f, fd, a is current; the other takes a step's end */
+    int32_t th_ok;              /* 1: th_next holds the next angle bound in the direction of motion */
+    double th_next;             /* the nearest bound of the back-EMF pieces and Hall intervals ahead, rad (kept
+                                   while the pieces and intervals are; an angle event recomputes it) */
 } bc_plant_work;
 
 typedef struct {
