@@ -22,6 +22,13 @@ static const double SIN_PHI[3] = {0.0, 0.86602540378443864676, -0.86602540378443
 #define MAX_ZERO_LENGTH_EVENTS 64
 #define ROOT_MAX_ITER 80
 
+/* Force inlining where a function's constant arguments select its branches (GCC and Clang; elsewhere a hint). */
+#if defined(__GNUC__)
+#define BC_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define BC_ALWAYS_INLINE inline
+#endif
+
 typedef bc_plant_aux aux_t; /* the circuit quantities computed with a derivative (bc_plant.h) */
 
 static int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
@@ -325,7 +332,7 @@ static double cogging_rate(const bc_plant_params *p, const bc_plant_state *s, do
  * rates of the energy balance add up to dW_L/dt identically, so do their derivatives to d^2W_L/dt^2. Only the lanes
  * of s->acc_lane[] are computed: those the parameters can make nonzero, and the trace's (terminal voltages, star
  * point, DC current) only when acc_on asks for them. */
-static inline void lanes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s,
+static BC_ALWAYS_INLINE void lanes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s,
                             const double *restrict y, const double *restrict dy, const aux_t *restrict a,
                             double *restrict f, double *restrict fd, const int edge)
 {
