@@ -31,7 +31,7 @@ static const double SIN_PHI[3] = {0.0, 0.86602540378443864676, -0.86602540378443
 
 typedef bc_plant_aux aux_t; /* the circuit quantities computed with a derivative (bc_plant.h) */
 
-static int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
+static BC_ALWAYS_INLINE int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
                       int dir_om, double *g);
 static int faults_apply(const bc_plant_params *p, bc_plant_state *s);
 
@@ -174,7 +174,7 @@ static double sign_of(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0);
  * phases, L di_x/dt = c_x (u_x - v_n), i.e. di/dt = P u with P = g (C - c c^T / n), g = 1/L (0 with fewer than
  * two connected phases). topology_set precomputes P (M + R I), P up and P U0, so that a derivative costs a 3 x 3
  * product: di/dt = v_src P up + P U0 - P (M + R I) i - g c_x (e_x - c.e / n). */
-static void aux_terminals(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+static BC_ALWAYS_INLINE void aux_terminals(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
                           aux_t *restrict a);
 
 #define WANT_DK 1 /* core(): dk/dtheta in the aux (the power flows need it) */
@@ -281,7 +281,7 @@ static void core(const bc_plant_params *restrict p, const bc_plant_state *restri
 
 /* The terminals v_x = up v_bus + U0 - r i (averaged legs with R_src: up v_src - R_src w_x + U0 - r i), the open
  * terminals floating at e + v_n, and v_n, into a (whose e, w, vbus are set). */
-static void aux_terminals(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+static BC_ALWAYS_INLINE void aux_terminals(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
                           aux_t *restrict a)
 {
     const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
@@ -509,7 +509,7 @@ static void lanes_edge(const bc_plant_params *restrict p, const bc_plant_state *
 
 /* acc[] over a step of length h from (f0, fd0) to (f1, fd1): the corrected trapezoid rule (bc_plant.h). Every lane in
  * one loop over lanes 0 .. n - 1: the rates of the lanes not integrated are held at zero (lanes_select). */
-static void acc_step(double *restrict acc, int n, double h, const double *restrict f0, const double *restrict fd0,
+static BC_ALWAYS_INLINE void acc_step(double *restrict acc, int n, double h, const double *restrict f0, const double *restrict fd0,
                      const double *restrict f1, const double *restrict fd1)
 {
     const double a = 0.5 * h, b = h * h / 12.0;
@@ -804,7 +804,7 @@ static int linear_step_ok(const bc_plant_params *p, const bc_plant_state *s)
     return s->emf_tables && (p->mech == BC_MECH_IMPOSED || s->stuck) && !s->hold_on;
 }
 
-static void taylor4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
+static BC_ALWAYS_INLINE void taylor4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
                     double *y1)
 {
     const double *B = s->tc_b;
@@ -827,7 +827,7 @@ static void taylor4(const bc_plant_params *p, const bc_plant_state *s, const dou
 }
 
 /* One step of the five states: taylor4 where the circuit is linear (identical to RK4 there), else rk4. */
-static void state_step(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
+static BC_ALWAYS_INLINE void state_step(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
                        double *y1)
 {
     if (linear_step_ok(p, s)) {
@@ -1381,7 +1381,7 @@ static void resolve(const bc_plant_params *p, bc_plant_state *s)
 #define W_REACH 17   /* free: the held current not yet reached (i_ref - i_x, signed by the drive's direction) */
 #define NW BC_PLANT_NW
 
-static int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
+static BC_ALWAYS_INLINE int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
                       int dir_om, double *g)
 {
     for (int j = 0; j < NW; ++j) g[j] = HUGE_VAL;
@@ -2051,7 +2051,7 @@ static void ensure_k1(const bc_plant_params *p, bc_plant_state *s)
 
 /* Fold the turning points of the cubic Hermite interpolant through (0, f0, d0) and (h, f1, d1) into [*lo, *hi]:
  *     q(u) = f0 + m0 u + (3 D - 2 m0 - m1) u^2 + (m0 + m1 - 2 D) u^3,  u in (0, 1),  m = h d,  D = f1 - f0. */
-static void hermite_extremes(double h, double f0, double f1, double d0, double d1, double *lo, double *hi)
+static BC_ALWAYS_INLINE void hermite_extremes(double h, double f0, double f1, double d0, double d1, double *lo, double *hi)
 {
     double m0 = h * d0, m1 = h * d1, D = f1 - f0;
     double c2 = 3.0 * D - 2.0 * m0 - m1, c3 = m0 + m1 - 2.0 * D;
@@ -2087,7 +2087,7 @@ static void hermite_extremes(double h, double f0, double f1, double d0, double d
 /* A step of length h has ended at the current state (y1, dy1 = f(y1), aux a1; the work cache still holds its start):
  * integrate acc[] over it and update the extremes, including the torque's turning points inside the step (from the
  * torque and its rate at both ends), while acc_on; then tell the observer. */
-static void step_done(const bc_plant_params *p, bc_plant_state *s, double h, const double *y1, const double *dy1,
+static BC_ALWAYS_INLINE void step_done(const bc_plant_params *p, bc_plant_state *s, double h, const double *y1, const double *dy1,
                       const aux_t *a1, double *f1, double *fd1)
 {
     if (s->lanes_on) lanes(p, s, y1, dy1, a1, f1, fd1);
