@@ -133,7 +133,13 @@ static void row_close(bc_sim_state *s, bc_trace_row *rows, int64_t cap, int64_t 
 
 /* A at tq inside history segment [a, a+1] (absolute indices): cubic Hermite through the node values of A and their
  * derivatives tau_e. */
-static double hist_interp(const bc_sim_state *s, int64_t a, double tq)
+#if defined(__GNUC__)
+#define BC_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define BC_ALWAYS_INLINE inline
+#endif
+
+static BC_ALWAYS_INLINE double hist_interp(const bc_sim_state *s, int64_t a, double tq)
 {
     int ja = (int)(a & (BC_SIM_HIST - 1)), jb = (int)((a + 1) & (BC_SIM_HIST - 1));
     double h = s->h_t[jb] - s->h_t[ja];
