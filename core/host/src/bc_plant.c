@@ -180,8 +180,9 @@ static BC_ALWAYS_INLINE void aux_terminals(const bc_plant_params *restrict p, co
 #define WANT_DK 1 /* core(): dk/dtheta in the aux (the power flows need it) */
 #define WANT_V 2  /* core(): the terminal voltages and the star point in the aux even if no phase is open */
 
-static void core(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
-                 double *restrict dy, aux_t *restrict a, int want, const double *ref)
+static BC_ALWAYS_INLINE void core_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s,
+                                     const double *restrict y, double *restrict dy, aux_t *restrict a, int want,
+                                     const double *ref)
 {
     const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
     const double th = y[Y_TH], om = y[Y_OM];
@@ -312,6 +313,13 @@ static BC_ALWAYS_INLINE void aux_terminals(const bc_plant_params *restrict p, co
     a->v[1] = c1 != 0.0 ? v1 : e1 + vn;
     a->v[2] = c2 != 0.0 ? v2 : e2 + vn;
     a->vn = vn;
+}
+
+/* core() out of line (the integrator's step end inlines core_at) */
+static void core(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+                 double *restrict dy, aux_t *restrict a, int want, const double *ref)
+{
+    core_at(p, s, y, dy, a, want, ref);
 }
 
 /* d tau_cog/dt = omega_m sum_j amp_j order_j cos(order_j theta_m + phase_j). */
@@ -2173,7 +2181,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             }
         }
         state_step(p, s, y0, s->work.k1, h, y1);
-        core(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, 0);
+        core_at(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, 0);
         /* watched functions: the first that goes negative inside the step is an event */
         int dir_om = s->work.wdir;
         int any_neg = watch_eval(p, s, y1, a1, dir_om, g1);
