@@ -31,8 +31,8 @@ static const double SIN_PHI[3] = {0.0, 0.86602540378443864676, -0.86602540378443
 
 typedef bc_plant_aux aux_t; /* the circuit quantities computed with a derivative (bc_plant.h) */
 
-static BC_ALWAYS_INLINE int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
-                      int dir_om, double *g);
+static BC_ALWAYS_INLINE uint32_t watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y,
+                                            const aux_t *a, int dir_om, double *g);
 static int faults_apply(const bc_plant_params *p, bc_plant_state *s);
 
 double bc_plant_t_half(const bc_plant_params *p) { return 0.5 / p->f_pwm; }
@@ -1389,22 +1389,32 @@ static void resolve(const bc_plant_params *p, bc_plant_state *s)
 #define W_REACH 17   /* free: the held current not yet reached (i_ref - i_x, signed by the drive's direction) */
 #define NW BC_PLANT_NW
 
-static BC_ALWAYS_INLINE int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
-                      int dir_om, double *g)
+/* The watches active at the present conduction states, mechanics and limiter into g, and the mask of those negative
+ * (bit w: watch w). Only the active entries are written: which watches are active depends on nothing that changes
+ * inside a step (conduction states, connected phases, faults, trip, limiter, sticking, the speed's sign at the step
+ * start), so a step's two ends have the same active set and the integrator reads g only at the bits of this mask. The
+ * one exception, the all-open pair's (it needs e_hi > e_lo on the switching inverter), is written always. */
+static BC_ALWAYS_INLINE uint32_t watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y,
+                                            const aux_t *a, int dir_om, double *g)
 {
-    for (int j = 0; j < NW; ++j) g[j] = HUGE_VAL;
-    int neg = 0; /* any watch negative */
+    uint32_t neg = 0u;
     for (int x = 0; x < 3; ++x) {
         switch (s->cond[x]) {
-        case BC_COND_D_L: g[W_DIODE + x] = y[Y_I + x]; neg |= y[Y_I + x] < 0.0; break;
-        case BC_COND_D_U: g[W_DIODE + x] = -y[Y_I + x]; neg |= y[Y_I + x] > 0.0; break;
+        case BC_COND_D_L:
+            g[W_DIODE + x] = y[Y_I + x];
+            neg |= (uint32_t)(y[Y_I + x] < 0.0) << (W_DIODE + x);
+            break;
+        case BC_COND_D_U:
+            g[W_DIODE + x] = -y[Y_I + x];
+            neg |= (uint32_t)(y[Y_I + x] > 0.0) << (W_DIODE + x);
+            break;
         case BC_COND_OPEN:
             if (a->n_conn > 0 && !(s->open_fault & (1 << x))) {
                 double lo = a->v[x] - (s->tc_lo_a[x] * a->vbus + s->tc_lo_b[x]);
                 double hi = (s->tc_hi_a[x] * a->vbus + s->tc_hi_b[x]) - a->v[x];
                 g[W_OPEN_LO + x] = lo;
                 g[W_OPEN_HI + x] = hi;
-                neg |= (lo < 0.0) | (hi < 0.0);
+                neg |= ((uint32_t)(lo < 0.0) << (W_OPEN_LO + x)) | ((uint32_t)(hi < 0.0) << (W_OPEN_HI + x));
             }
             break;
         default: break;
@@ -1413,35 +1423,36 @@ static BC_ALWAYS_INLINE int watch_eval(const bc_plant_params *p, const bc_plant_
     if (a->n_conn == 0) {
         int hi, lo;
         double m = pair_margin(p, s, a, &hi, &lo);
+        g[W_PAIR] = HUGE_VAL;
         if (hi >= 0 && lo >= 0 && hi != lo && (s->avg[0] | s->avg[1] | s->avg[2] || a->e[hi] > a->e[lo])) {
             g[W_PAIR] = m;
-            neg |= m < 0.0;
+            neg |= (uint32_t)(m < 0.0) << W_PAIR;
         }
     }
     if (p->i_trip > 0.0 && !s->tripped) {
         for (int x = 0; x < 3; ++x) {
             g[W_TRIP + x] = p->i_trip - fabs(y[Y_I + x]);
-            neg |= g[W_TRIP + x] < 0.0;
+            neg |= (uint32_t)(g[W_TRIP + x] < 0.0) << (W_TRIP + x);
         }
     }
     if (s->hold_x >= 0) {
         if (s->hold_on) {
             g[W_HOLD_LO] = a->dh;
             g[W_HOLD_HI] = 1.0 - a->dh;
-            neg |= (a->dh < 0.0) | (a->dh > 1.0);
+            neg |= ((uint32_t)(a->dh < 0.0) << W_HOLD_LO) | ((uint32_t)(a->dh > 1.0) << W_HOLD_HI);
         } else {
             double gr = s->hold_d > 0.5 ? s->hold_i - y[Y_I + s->hold_x] : y[Y_I + s->hold_x] - s->hold_i;
             g[W_REACH] = gr;
-            neg |= gr < 0.0;
+            neg |= (uint32_t)(gr < 0.0) << W_REACH;
         }
     }
     if (p->mech == BC_MECH_DYNAMIC) {
         if (s->stuck) {
             g[W_STICK] = p->tau_c + s->fe_tc - fabs(a->tau_net);
-            neg |= g[W_STICK] < 0.0;
+            neg |= (uint32_t)(g[W_STICK] < 0.0) << W_STICK;
         } else if (dir_om != 0) {
             g[W_OMEGA] = y[Y_OM] * (double)dir_om;
-            neg |= g[W_OMEGA] < 0.0;
+            neg |= (uint32_t)(g[W_OMEGA] < 0.0) << W_OMEGA;
         }
     }
     return neg;
@@ -2184,13 +2195,13 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
         core_at(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, 0);
         /* watched functions: the first that goes negative inside the step is an event */
         int dir_om = s->work.wdir;
-        int any_neg = watch_eval(p, s, y1, a1, dir_om, g1);
+        const uint32_t neg = watch_eval(p, s, y1, a1, dir_om, g1);
         int w_hit = -1;
         double h_hit = h;
-        if (any_neg && zero_len <= MAX_ZERO_LENGTH_EVENTS) {
-            const double *g0 = s->work.w[s->work.cur]; /* the watches at the step start */
+        if (neg && zero_len <= MAX_ZERO_LENGTH_EVENTS) {
+            const double *g0 = s->work.w[s->work.cur]; /* the watches at the step start (the same active set) */
             for (int w = 0; w < NW; ++w) {
-                if (g1[w] < 0.0) {
+                if (neg & (1u << w)) {
                     double guess = -1.0;
                     if (w < W_OPEN_LO && g0[w] > 0.0) { /* a diode current: its derivative is known at both ends */
                         int x = w - W_DIODE;
