@@ -790,11 +790,11 @@ static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double 
 {
     double k2[NY], k3[NY], k4[NY], yt[NY];
     for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
-    core(p, s, yt, k2, 0, 0, s->work.cs);
+    core_at(p, s, yt, k2, 0, 0, s->work.cs);
     for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
-    core(p, s, yt, k3, 0, 0, s->work.cs);
+    core_at(p, s, yt, k3, 0, 0, s->work.cs);
     for (int j = 0; j < NY; ++j) yt[j] = y0[j] + h * k3[j];
-    core(p, s, yt, k4, 0, 0, s->work.cs);
+    core_at(p, s, yt, k4, 0, 0, s->work.cs);
     for (int j = 0; j < NY; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
     if (p->mech == BC_MECH_IMPOSED) {
         y1[Y_OM] = y0[Y_OM]; /* exactly constant */
