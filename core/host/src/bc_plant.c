@@ -1112,15 +1112,14 @@ static double angle_event(const bc_plant_params *p, bc_plant_state *s, double *t
 /* ---------------------------------------------------------------------------------------------------------- */
 /* inverter gates                                                                                             */
 
-static int32_t mode_gate(int32_t mode, int active)
-{
-    switch (mode) {
-    case BC_LEG_PWM: return active ? BC_GATE_U : BC_GATE_L;
-    case BC_LEG_HIGH: return active ? BC_GATE_U : BC_GATE_O;
-    case BC_LEG_LOW: return active ? BC_GATE_L : BC_GATE_O;
-    default: return BC_GATE_O;
-    }
-}
+/* The gate state of a leg in mode OFF, PWM, HIGH, LOW (checked by the caller) while its carrier is active / idle. */
+static const int32_t MODE_GATE[2][4] = {
+    {BC_GATE_O, BC_GATE_L, BC_GATE_O, BC_GATE_O}, /* idle */
+    {BC_GATE_O, BC_GATE_U, BC_GATE_U, BC_GATE_L}, /* active */
+};
+typedef char bc_leg_mode_order[(BC_LEG_OFF == 0 && BC_LEG_PWM == 1 && BC_LEG_HIGH == 2 && BC_LEG_LOW == 3) ? 1 : -1];
+
+static int32_t mode_gate(int32_t mode, int active) { return MODE_GATE[active != 0][mode]; }
 
 /* Switching losses of the switch `sw` (BC_GATE_U / BC_GATE_L) of leg x turning on (on = 1) or off at the present
  * state (bc_plant.h): hard if the current flows the switch's forward way (upper: i > 0, lower: i < 0). */
