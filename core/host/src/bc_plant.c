@@ -890,6 +890,7 @@ static void hall_locate(const bc_plant_params *p, bc_plant_state *s, int keep)
 static void pieces_locate(const bc_plant_params *p, bc_plant_state *s)
 {
     s->work.th_ok = 0; /* the angle bound ahead moves */
+    s->work.out_ok = 0; /* the shapes' pieces change */
     for (int x = 0; x < 3; ++x) {
         bc_emf_piece_at(&p->emf[x], s->theta - PHI[x], s->dir, &s->piece[x]);
         if (p->emf[x].kind == BC_EMF_TABLE) {
@@ -1064,6 +1065,7 @@ static void wrap_angle(const bc_plant_params *p, bc_plant_state *s)
         s->hseg[x].hi += shift;
     }
     s->work.th_ok = 0;
+    s->work.out_ok = 0; /* the cached circuit quantities were computed at the unwrapped angle */
 }
 
 /* Time to the next angle bound, or HUGE_VAL. *th_ev receives the bound. */
@@ -1257,6 +1259,7 @@ static void work_fill(const bc_plant_params *p, bc_plant_state *s, const double 
     memcpy(s->work.cs, a->cs, sizeof s->work.cs);
     if (a != &s->work.a[s->work.cur]) s->work.a[s->work.cur] = *a;
     s->work.a_ok = 1;
+    s->work.out_ok = 1;
     s->work.tau = a->tau;
     s->work.wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
     (void)watch_eval(p, s, y, a, s->work.wdir, s->work.w[s->work.cur]);
@@ -2231,6 +2234,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             }
             unpack(s, y1);
             s->work.a_ok = 0; /* the cache holds the step's start */
+            s->work.out_ok = 0;
             s->t = (h_hit < h) ? s->t + h_hit : t_stop;
             if (p->mech == BC_MECH_IMPOSED) s->omega = y0[Y_OM];
             step_done(p, s, h_hit < h ? h_hit : h, y1, k1n, a1, f1, fd1);
@@ -2262,6 +2266,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
         memcpy(s->work.k1, k1n, sizeof k1n);
         memcpy(s->work.cs, a1->cs, sizeof a1->cs);
         s->work.a_ok = 1;
+        s->work.out_ok = 1;
         s->work.cur = nx; /* the step's end (f1, fd1, g1, a1) starts the next step */
         s->work.valid = 1;
         s->n_steps += 1;
@@ -2299,6 +2304,12 @@ void bc_plant_output(const bc_plant_params *p, const bc_plant_state *s, bc_plant
     double y[NY], dy[NY];
     aux_t a;
     pack(s, y);
+    /* the circuit quantities of the current state are cached where the integrator computed them at it with the
+     * terminals (the trace's lanes on: every step end, gate edge and refill computes them by the same expressions) */
+    if (s->work.valid && s->work.a_ok && s->work.out_ok && s->lanes_on && (s->acc_mask & (1u << BC_ACC_VA))) {
+        aux_to_out(p, s, y, &s->work.a[s->work.cur], out);
+        return;
+    }
     core(p, s, y, dy, &a, WANT_V, 0);
     aux_to_out(p, s, y, &a, out);
 }
@@ -2322,6 +2333,7 @@ static void lanes_change(const bc_plant_params *p, bc_plant_state *s, int level)
         pack(s, y);
         core(p, s, y, dy, a, WANT_DK, 0);
         s->work.a_ok = 1;
+        s->work.out_ok = 1;
         lanes(p, s, y, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
     }
 }
