@@ -17,7 +17,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from collections.abc import Sequence
+from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -31,10 +33,12 @@ from ..errors import BldclabError
 from ..model.analytic import r_total
 from ..model.motor import Drive
 from ..sim import Scenario, SimResult, simulate
+from .experiments import map_points
 
-__all__ = ["AngleErrorResult", "DemagResult", "MinSpeedResult", "VersusHallResult", "angle_error", "commutations",
-           "demag_closed_form", "demag_times", "demag_voltage", "locked", "min_sensorless_speed", "offset_limit_speed",
-           "run_locked", "versus_hall"]
+__all__ = ["START_FAILURES", "AngleErrorResult", "DemagResult", "MinSpeedResult", "StartupGridResult",
+           "VersusHallResult", "angle_error", "commutations", "demag_closed_form", "demag_times", "demag_voltage",
+           "fixed_start", "locked", "min_sensorless_speed", "offset_limit_speed", "pair_torque_constant", "run_locked",
+           "startup_grid", "startup_load_bound", "versus_hall"]
 
 _POS = (0, 0, 1, 1, 2, 2)  # phase driven positive in sector s (bc_commutation.h)
 _NEG = (1, 2, 2, 0, 0, 1)
@@ -684,3 +688,220 @@ def demag_times(res: SimResult, drive: Drive, *, chopping: str, fast_demag: bool
     table = pd.DataFrame(rows, columns=["t", "outgoing", "i_out", "sign", "duty", "measured", "simple", "closed",
                                         "tau_ratio"])
     return DemagResult(table)
+
+
+# ------------------------------------------------------------------------------------------------------------
+# start-up over load torque x inertia x initial rotor angle
+
+#: The controller's flags that name a failed start (bc_types.h), in the order a tie is named.
+START_FAILURES = ("START_FAIL", "STALL", "DESYNC", "ZC_TIMEOUT", "ZC_JUMP", "ZC_HIDDEN", "OVERCURRENT", "SAFE")
+_START_KEYS = ("align_current", "align_duty", "align_time", "ramp_duty", "ramp_vf", "ramp_time", "stall_speed",
+               "ramp_start_speed", "ramp_end_speed")
+
+
+def fixed_start(drive: Drive, control: SixStepSensorless | None = None) -> SixStepSensorless:
+    """Return ``control`` with its start-up settings fixed to those it derives for ``drive``.
+
+    An ESC's start-up is set once for its motor; a heavier load or propeller does not change it. Fixed, the settings
+    stay those of ``drive`` when a study changes the plant's inertia or load.
+    """
+    ctl = SixStepSensorless() if control is None else control
+    su = ctl.start_up(drive)
+    return dataclasses.replace(ctl, **{k: su[k] for k in _START_KEYS})
+
+
+def pair_torque_constant(drive: Drive, n: int = 721) -> float:
+    """Return the largest sector-mean torque per ampere of a six-step pair (N m/A), from the back-EMF's shapes.
+
+    Forced commutation holds the current ``I`` in the pair ``p``, ``n`` for 60 electrical degrees; the rotor takes
+    the lag at which the pair's torque ``(k_p - k_n) I`` balances the load. The largest torque it can find is the
+    maximum over the commutation angle of the sector-mean of ``k_p - k_n`` (``2 k_phi`` for the ideal trapezoid
+    with a flat top of 120 degrees or more; ``3 sqrt(3) / pi k_phi``-like values for a sinusoid).
+    """
+    m = drive.motor
+    best = 0.0
+    for c in np.linspace(0.0, math.pi / 3.0, 61):
+        th = np.linspace(c, c + math.pi / 3.0, n)
+        k = m.emf.k_abc(th)
+        best = max(best, float(np.mean(k[_POS[0]] - k[_NEG[0]])))
+    return best
+
+
+def startup_load_bound(drive: Drive, control: SixStepSensorless, inertia: float | None = None) -> float:
+    """Return the largest added load torque (N m) the forced start-up can carry (a closed-form estimate).
+
+    In step with the forced commutation at the ramp's end speed ``Omega_end``, the ramp's duty holds
+    ``I = d_ramp V_dc / (2 (R + R_on))`` in the pair (its V/f term cancels the back-EMF at the forced speed), whose
+    best torque is ``k_pair I`` (:func:`pair_torque_constant`; ``2 k_phi I`` for the ideal trapezoid). The rotor
+    must reach ``Omega_end`` from rest within the ramp and the hold at the end speed (``ramp_hold`` sectors) before
+    the controller gives up, a mean acceleration ``a = (Omega_end - Omega_start) / (t_ramp + t_hold)`` that takes
+    ``J a``; the drive's friction and propeller take ``tau_c + B Omega_end + k_q Omega_end^2``. What is left is the
+    bound. While the rotor lags, the V/f term drives more than ``I`` (up to ``d_end V_dc / (2 (R + R_on))`` at
+    rest), so the estimate is a little conservative for heavy rotors; beyond it by more than that margin the start
+    fails.
+
+    Parameters
+    ----------
+    drive : Drive
+        The drive (its friction and propeller; its inertia unless ``inertia`` is given).
+    control : SixStepSensorless
+        The controller (its start-up settings, :meth:`~bldclab.control.sensorless.SixStepSensorless.start_up`).
+    inertia : float, optional
+        The plant's inertia (kg m^2), if not the drive's.
+
+    Returns
+    -------
+    float
+        The bound (N m); negative: the ramp cannot be followed even unloaded.
+    """
+    su = control.start_up(drive)
+    mech = drive.mechanics
+    j = mech.J if inertia is None else float(inertia)
+    i_ramp = su["ramp_duty"] * drive.inverter.V_dc / (2.0 * r_total(drive))
+    w_end = su["ramp_end_speed"]
+    t_hold = control.ramp_hold * (math.pi / 3.0) / (drive.motor.p * w_end)
+    accel = (w_end - su["ramp_start_speed"]) / (su["ramp_time"] + t_hold)
+    return (pair_torque_constant(drive) * i_ramp - j * accel - mech.tau_c - mech.B * w_end
+            - mech.k_q * w_end * w_end)
+
+
+@dataclass(frozen=True)
+class StartupGridResult:
+    """Start-up attempts over load torque x inertia x initial rotor angle (:func:`startup_grid`).
+
+    Attributes
+    ----------
+    points : pandas.DataFrame
+        One row per attempt: ``load`` (added load torque, N m, Coulomb: against the motion, none at rest),
+        ``inertia`` (kg m^2), ``angle`` (initial electrical angle, rad), ``bound`` (:func:`startup_load_bound` at
+        that inertia, N m), ``success`` (closed loop reached and held to the end with no failure flag),
+        ``failure`` (the first failure flag the controller raised, a name of :data:`START_FAILURES`, ``"NO_HANDOVER"``
+        if it raised none and never reached closed loop, ``""`` on success), ``t_closed`` (time from the start to
+        the first closed-loop sample, s; nan if never), ``speed_end`` (the rotor's mean mechanical speed over the
+        last 5 % of the run, rad/s: a failed start with the rotor turning is the controller's miss, not the load's),
+        ``duration`` (s, the run).
+    """
+
+    points: pd.DataFrame
+
+    def to_pandas(self) -> pd.DataFrame:
+        """Return the attempts."""
+        return self.points.copy()
+
+    @property
+    def successes(self) -> int:
+        """Number of successful starts."""
+        return int(self.points["success"].sum())
+
+    @property
+    def attempts(self) -> int:
+        """Number of attempts."""
+        return len(self.points)
+
+    def median_time(self) -> float:
+        """Median time to closed loop over the successes (s; nan if none)."""
+        ok = self.points[self.points["success"]]
+        return float(np.median(ok["t_closed"])) if len(ok) else math.nan
+
+    def within_bound(self) -> tuple[int, int]:
+        """Successes and attempts among the points whose load is within their bound."""
+        p = self.points[self.points["load"] <= self.points["bound"]]
+        return int(p["success"].sum()), len(p)
+
+
+#: One start-up attempt: drive (load and inertia applied), controller, throttle, angle, duration.
+_StartJob = tuple[Drive, SixStepSensorless, float, float, float]
+
+
+def _run_start(job: _StartJob) -> dict[str, Any]:
+    drive, ctl, throttle, angle, duration = job
+    res = simulate(drive, ctl, Scenario(duration=duration, ref=throttle, theta0=angle, trace_every=4), check="warn")
+    st = np.asarray(res.signals["state"])
+    t = np.asarray(res.t)
+    closed = st == 3
+    t_closed = float(t[int(np.argmax(closed))]) if closed.any() else math.nan
+    flags = res.meta["flags"]
+    raised = sorted((float(flags[k]["run"]["first"]), START_FAILURES.index(k), k) for k in START_FAILURES
+                    if k in flags)
+    success = bool(not raised and closed.any() and closed[-1])
+    failure = "" if success else (raised[0][2] if raised else "NO_HANDOVER")
+    w = np.asarray(res.signals["omega_m"])
+    return {"success": success, "failure": failure, "t_closed": t_closed,
+            "speed_end": float(np.mean(w[-max(1, len(w) // 20):]))}
+
+
+def startup_grid(drive: Drive, load_torques: Sequence[float], inertias: Sequence[float], angles: Sequence[float],
+                 control: SixStepSensorless | None = None, *, throttle: float | None = None,
+                 workers: int | None = 1, executor: Executor | None = None) -> StartupGridResult:
+    """Start the sensorless drive over a grid of load torque x inertia x initial rotor angle.
+
+    The controller's start-up settings are fixed to those it derives for ``drive`` (:func:`fixed_start`), as an
+    ESC's are; each point changes the plant only: its inertia ``J`` and an added Coulomb load (the mechanics'
+    ``tau_c``: a torque against the motion that does not turn the rotor at rest). The run lasts the alignment, the
+    ramp and ``ramp_hold + 24`` sectors at the ramp's end speed; a start succeeds when the controller reaches closed
+    loop, is in it at the end, and raised no failure flag (:data:`START_FAILURES`). The points are independent runs
+    and come back in grid order: the result does not depend on ``workers``.
+
+    Parameters
+    ----------
+    drive : Drive
+    load_torques : sequence of float
+        Added load torques (N m), >= 0.
+    inertias : sequence of float
+        Plant inertias (kg m^2), > 0.
+    angles : sequence of float
+        Initial electrical rotor angles (rad).
+    control : SixStepSensorless, optional
+        The controller (default settings if omitted).
+    throttle : float, optional
+        The duty reference in (0, 1]; default the ramp's duty at its end speed, so the closed loop goes on with the
+        current the ramp had.
+    workers : int, optional
+        Local processes (``None``: one per CPU; 1: in this process).
+    executor : concurrent.futures.Executor, optional
+        Where the points run instead (a pool the caller keeps, a Dask client's ``get_executor()``).
+
+    Returns
+    -------
+    StartupGridResult
+    """
+    if isinstance(workers, bool) or (workers is not None and (not isinstance(workers, int) or workers < 1)):
+        raise BldclabError("workers", f"must be an integer >= 1, got {workers!r}")
+    if control is not None and not isinstance(control, SixStepSensorless):
+        raise BldclabError("control", f"expected a SixStepSensorless, got {type(control).__name__}")
+    for name, vals, lo_open in (("load_torques", load_torques, False), ("inertias", inertias, True),
+                                ("angles", angles, None)):
+        if len(vals) == 0:
+            raise BldclabError(name, "needs at least one value")
+        for v in vals:
+            if not math.isfinite(float(v)) or (lo_open is False and v < 0.0) or (lo_open is True and v <= 0.0):
+                raise BldclabError(name, f"must be finite and {'> 0' if lo_open else '>= 0'}, got {v!r}")
+    ctl = fixed_start(drive, control)
+    su = ctl.start_up(drive)
+    if throttle is None:
+        throttle = min(1.0, su["ramp_duty"] + su["ramp_vf"] * drive.motor.p * su["ramp_end_speed"])
+    if not 0.0 < throttle <= 1.0:
+        raise BldclabError("throttle", f"must be in (0, 1], got {throttle!r}")
+    sector = (math.pi / 3.0) / (drive.motor.p * su["ramp_end_speed"])
+    duration = su["align_time"] + su["ramp_time"] + (ctl.ramp_hold + 24) * sector
+    jobs: list[_StartJob] = []
+    keys: list[tuple[float, float, float, float]] = []
+    for load in load_torques:
+        for j in inertias:
+            mech = dataclasses.replace(drive.mechanics, J=float(j), tau_c=drive.mechanics.tau_c + float(load))
+            d = dataclasses.replace(drive, mechanics=mech)
+            bound = startup_load_bound(drive, ctl, inertia=float(j))
+            for a in angles:
+                jobs.append((d, ctl, float(throttle), float(a), duration))
+                keys.append((float(load), float(j), float(a), bound))
+    n_workers = workers or os.cpu_count() or 1
+    if executor is not None:
+        rows = map_points(_run_start, jobs, executor)
+    elif n_workers <= 1 or len(jobs) <= 1:
+        rows = map_points(_run_start, jobs)
+    else:
+        with ProcessPoolExecutor(max_workers=min(n_workers, len(jobs))) as pool:
+            rows = map_points(_run_start, jobs, pool)
+    df = pd.DataFrame([{"load": k[0], "inertia": k[1], "angle": k[2], "bound": k[3], **r, "duration": duration}
+                       for k, r in zip(keys, rows, strict=True)])
+    return StartupGridResult(df)
