@@ -7,6 +7,7 @@ bound every start succeeds, above the static torque the ramp's current can give 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -14,8 +15,7 @@ import pandas as pd
 import pytest
 
 import bldclab as bl
-from bldclab.analysis.sensorless import (START_FAILURES, fixed_start, pair_torque_constant, startup_grid,
-                                         startup_load_bound)
+from bldclab.analysis.sensorless import START_FAILURES, fixed_start, pair_torque_constant, startup_grid, startup_load_bound
 from bldclab.errors import BldclabError
 from bldclab.model.analytic import r_total
 
@@ -80,7 +80,6 @@ def test_fixed_start_keeps_the_settings_of_the_base_drive():
     d = bl.load("htm-48v")
     ctl = fixed_start(d)
     heavy = bl.load("htm-48v")
-    import dataclasses
     heavy = dataclasses.replace(heavy, mechanics=dataclasses.replace(heavy.mechanics, J=4 * d.mechanics.J))
     assert ctl.start_up(heavy) == pytest.approx(ctl.start_up(d))
     assert bl.SixStepSensorless().start_up(heavy)["ramp_time"] > ctl.start_up(heavy)["ramp_time"]
