@@ -15,7 +15,13 @@ import pandas as pd
 import pytest
 
 import bldclab as bl
-from bldclab.analysis.sensorless import START_FAILURES, fixed_start, pair_torque_constant, startup_grid, startup_load_bound
+from bldclab.analysis.sensorless import (
+    START_FAILURES,
+    fixed_start,
+    pair_torque_constant,
+    startup_grid,
+    startup_load_bound,
+)
 from bldclab.errors import BldclabError
 from bldclab.model.analytic import r_total
 
