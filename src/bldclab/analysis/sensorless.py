@@ -707,7 +707,8 @@ def fixed_start(drive: Drive, control: SixStepSensorless | None = None) -> SixSt
     """
     ctl = SixStepSensorless() if control is None else control
     su = ctl.start_up(drive)
-    return dataclasses.replace(ctl, **{k: su[k] for k in _START_KEYS})
+    fixed: dict[str, Any] = {k: su[k] for k in _START_KEYS}
+    return dataclasses.replace(ctl, **fixed)
 
 
 def pair_torque_constant(drive: Drive, n: int = 721) -> float:
