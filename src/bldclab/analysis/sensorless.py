@@ -728,18 +728,21 @@ def pair_torque_constant(drive: Drive, n: int = 721) -> float:
     return best
 
 
-def startup_load_bound(drive: Drive, control: SixStepSensorless, inertia: float | None = None) -> float:
+def startup_load_bound(drive: Drive, control: SixStepSensorless, inertia: float | None = None,
+                       lag: float = math.pi / 3.0) -> float:
     """Return the largest added load torque (N m) the forced start-up can carry (a closed-form estimate).
 
     In step with the forced commutation at the ramp's end speed ``Omega_end``, the ramp's duty holds
     ``I = d_ramp V_dc / (2 (R + R_on))`` in the pair (its V/f term cancels the back-EMF at the forced speed), whose
     best torque is ``k_pair I`` (:func:`pair_torque_constant`; ``2 k_phi I`` for the ideal trapezoid). The rotor
-    must reach ``Omega_end`` from rest within the ramp and the hold at the end speed (``ramp_hold`` sectors) before
-    the controller gives up, a mean acceleration ``a = (Omega_end - Omega_start) / (t_ramp + t_hold)`` that takes
-    ``J a``; the drive's friction and propeller take ``tau_c + B Omega_end + k_q Omega_end^2``. What is left is the
-    bound. While the rotor lags, the V/f term drives more than ``I`` (up to ``d_end V_dc / (2 (R + R_on))`` at
-    rest), so the estimate is a little conservative for heavy rotors; beyond it by more than that margin the start
-    fails.
+    must reach ``Omega_end`` from rest without falling more than ``lag`` (electrical) behind the forced angle, and
+    before the hold at the end speed (``ramp_hold`` sectors, ``t_hold``) ends. Accelerating uniformly at ``a`` it
+    lags most where its speed reaches ``Omega_end``, by ``p Omega_end (Omega_end / a - t_ramp) / 2`` (forced ramp
+    from rest), so it needs ``a >= Omega_end / (t_ramp + min(t_hold, 2 lag / (p Omega_end)))``, which takes ``J a``;
+    the drive's friction and propeller take ``tau_c + B Omega_end + k_q Omega_end^2``. What is left is the bound.
+    It is an estimate: while the rotor lags the V/f term drives more than ``I`` (up to ``d_end V_dc / (2 (R +
+    R_on))`` at rest), and the rotor swings about the forced angle once it has caught up (a swing the friction does
+    not damp may slip a pole); docs/sensorless.md shows where it holds.
 
     Parameters
     ----------
@@ -749,6 +752,9 @@ def startup_load_bound(drive: Drive, control: SixStepSensorless, inertia: float 
         The controller (its start-up settings, :meth:`~bldclab.control.sensorless.SixStepSensorless.start_up`).
     inertia : float, optional
         The plant's inertia (kg m^2), if not the drive's.
+    lag : float
+        The largest lag behind the forced angle (electrical rad) at which the pair still gives its best torque:
+        60 degrees, the width of a sector.
 
     Returns
     -------
@@ -760,8 +766,9 @@ def startup_load_bound(drive: Drive, control: SixStepSensorless, inertia: float 
     j = mech.J if inertia is None else float(inertia)
     i_ramp = su["ramp_duty"] * drive.inverter.V_dc / (2.0 * r_total(drive))
     w_end = su["ramp_end_speed"]
-    t_hold = control.ramp_hold * (math.pi / 3.0) / (drive.motor.p * w_end)
-    accel = (w_end - su["ramp_start_speed"]) / (su["ramp_time"] + t_hold)
+    w_e = drive.motor.p * w_end
+    t_hold = control.ramp_hold * (math.pi / 3.0) / w_e
+    accel = (w_end - su["ramp_start_speed"]) / (su["ramp_time"] + min(t_hold, 2.0 * lag / w_e))
     return (pair_torque_constant(drive) * i_ramp - j * accel - mech.tau_c - mech.B * w_end
             - mech.k_q * w_end * w_end)
 
