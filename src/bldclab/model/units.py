@@ -11,7 +11,7 @@ import re
 
 from ..errors import BldclabError
 
-__all__ = ["ALIASES", "DIMENSIONS", "to_si"]
+__all__ = ["ALIASES", "DIMENSIONS", "KELVIN", "to_si"]
 
 _RPM = 2.0 * math.pi / 60.0
 
@@ -39,8 +39,18 @@ DIMENSIONS: dict[str, dict[str, float]] = {
     "density": {"kg/m^3": 1.0, "kg/dm^3": 1e3, "g/cm^3": 1e3},
     "resistivity": {"Ohm m": 1.0, "uOhm m": 1e-6, "uOhm cm": 1e-8, "Ohm mm^2/m": 1e-6},
     "specific_power": {"W/kg": 1.0},
+    # thermal (docs/thermal.md): absolute temperatures in degC (the datasheets' unit; kelvin through KELVIN below),
+    # differences in K, so a thermal resistance in K/W and in degC/W is the same number
+    "temperature": {"degC": 1.0, "\u00b0C": 1.0},
+    "thermal_resistance": {"K/W": 1.0, "degC/W": 1.0, "\u00b0C/W": 1.0, "mK/W": 1e-3},
+    "heat_capacity": {"J/K": 1.0, "kJ/K": 1e3, "J/degC": 1.0, "W s/K": 1.0, "Ws/K": 1.0},
+    "temperature_coefficient": {"1/K": 1.0, "%/K": 1e-2, "ppm/K": 1e-6, "1/degC": 1.0, "%/degC": 1e-2},
     "dimensionless": {"": 1.0},
 }
+
+#: Absolute temperature in kelvin, the one unit with an offset: ``"298.15 K"`` is 25 degC. Temperatures are held in
+#: degC (the canonical unit of the ``temperature`` dimension: a plain number is degC), so to_si subtracts this.
+KELVIN = 273.15
 
 #: Spellings accepted inside a unit and what they stand for ("75 µH", "50 mΩ", "0.32 V·s/rad", "kg·m²").
 ALIASES: dict[str, str] = {"\u00b5": "u", "\u03bc": "u", "\u2126": "Ohm", "\u03a9": "Ohm", "\u00b7": " ",
@@ -66,7 +76,8 @@ def to_si(value: object, dimension: str, field: str, source: str | None = None) 
     Returns
     -------
     float
-        The value in SI units (may be non-finite only if the input was; callers check ranges).
+        The value in SI units, temperatures in degC (may be non-finite only if the input was; callers check
+        ranges).
 
     Raises
     ------
@@ -89,8 +100,10 @@ def to_si(value: object, dimension: str, field: str, source: str | None = None) 
         unit = " ".join(unit.split())
         if unit == "" and dimension != "dimensionless":
             return number
+        if dimension == "temperature" and unit == "K":
+            return number - KELVIN
         if unit not in units:
-            known = ", ".join(repr(u) for u in units if u)
+            known = ", ".join(repr(u) for u in [*units, *(["K"] if dimension == "temperature" else [])] if u)
             raise BldclabError(field, f"unit {unit!r} is not a unit of {dimension.replace('_', ' ')} "
                                f"(use one of {known} or a plain SI number)", source)
         return number * units[unit]
