@@ -72,6 +72,12 @@ static const bc_lu_params P = LU4KW_LU_PARAMS;
 static bc_lu_state S;
 #define INIT() bc_lu_init(&P, &S)
 #define STEP(in, out) bc_lu_step(&P, &S, in, out)
+#elif defined(BC_FW_BEMF)
+#include "params.h"
+static const bc_bemf_params P = HTM_BEMF_PARAMS;
+static bc_bemf_state S;
+#define INIT() bc_bemf_init(&P, &S)
+#define STEP(in, out) bc_bemf_step(&P, &S, in, out)
 #elif defined(BC_FW_NONE)
 #define INIT() 0
 #define STEP(in, out) ((out)->diag[0] = (in)->ref)

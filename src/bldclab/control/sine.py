@@ -233,6 +233,15 @@ class Sine(Control):
             return float(self.bandwidth_hz)
         return min(PAPER1_BANDWIDTH_HZ, drive.inverter.f_pwm / 10.0)
 
+    def torque_limit(self, drive: Drive) -> float:
+        """Return the speed loop's torque limit (N m): ``tau_max``, default ``T_s,N = 1.5 k_1 I_s,N`` (paper 1 (12)).
+
+        Parameters
+        ----------
+        drive : Drive
+        """
+        return 1.5 * fundamental_k1(drive) * i_sN(drive) if self.tau_max is None else float(self.tau_max)
+
     def _r_design(self, drive: Drive, scale: float) -> float:
         """Design resistance of a loop of ``scale`` phases in series (Ohm)."""
         if self.R_design is not None:
@@ -294,6 +303,6 @@ class Sine(Control):
             speed_loop=int(self.speed_loop),
             kp_w=kp_w,
             ki_w=kp_w * wb / 4.0 if self.speed_ki is None else self.speed_ki,
-            tau_max=1.5 * k1 * i_sN(drive) if self.tau_max is None else self.tau_max,
+            tau_max=self.torque_limit(drive),
         )
         return CParams(rec, [*tabs, six])
