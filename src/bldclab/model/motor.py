@@ -753,7 +753,6 @@ class Drive:
             if not isinstance(self.thermal, Thermal):
                 raise BldclabError("thermal", "must be a bldclab.model.thermal.Thermal, got "
                                    f"{type(self.thermal).__name__}")
-            self.thermal.check_sources(self.loss_sources)
         half = 0.5 / self.inverter.f_pwm
         if not -half <= self.sensors.bemf_adc_at < half:
             raise BldclabError("sensors.bemf_adc_at", f"must be within [-T/2, T/2) = [{-half * 1e6:.4g}, "
@@ -1026,8 +1025,11 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
     if ths is not None:
         thermal = read_thermal(ths)
     top.finish()
-    return Drive(motor=motor, inverter=inverter, mechanics=mech, sensors=sensors, name=name,
-                 description=description, thermal=thermal)
+    drive = Drive(motor=motor, inverter=inverter, mechanics=mech, sensors=sensors, name=name,
+                  description=description, thermal=thermal)
+    if thermal is not None:  # a file routes every loss its drive has (a drive changed in Python: when run)
+        thermal.check_sources(drive.loss_sources)
+    return drive
 
 
 #: ``[motor.iron]`` keys of a steel grade given by its data instead of a built-in name (:class:`.iron.SteelGrade`).

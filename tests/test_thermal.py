@@ -1,0 +1,211 @@
+"""The thermal network (issue 27): closed forms, steady state, energy, Foster to Cauer, [thermal] in motor files."""
+
+from __future__ import annotations
+
+import math
+import tomllib
+
+import numpy as np
+import pytest
+
+from bldclab.errors import BldclabError
+from bldclab.model import catalog
+from bldclab.model.motor import Drive
+from bldclab.model.thermal import (
+    Thermal,
+    ThermalLink,
+    ThermalNode,
+    copper_alpha,
+    foster_to_cauer,
+)
+
+
+def _single(C: float = 40.0, R: float = 2.5, T_amb: float = 20.0, T0: float | None = None) -> Thermal:
+    return Thermal(nodes=(ThermalNode("winding", C=C, T=T0), ThermalNode("ambient", T=T_amb)),
+                   links=(ThermalLink("winding", "ambient", R),), losses={"cu": "winding"}, magnets=None)
+
+
+def test_single_node_step_response_closed_form() -> None:
+    """One node: T(t) = T_a + P R (1 - exp(-t / RC)) + (T0 - T_a) exp(-t / RC), for any step length."""
+    C, R, Ta, T0, P = 40.0, 2.5, 20.0, 35.0, 12.0
+    net = _single(C, R, Ta, T0).network()
+    tau = R * C
+    assert net.time_constants == pytest.approx([tau], rel=1e-14)
+    for h in (1e-3, 0.37, 10.0, 3 * tau):
+        T = net.initial()
+        t = 0.0
+        for _ in range(25):
+            T, _q = net.step(T, [P], h)
+            t += h
+        exact = Ta + P * R * (1 - math.exp(-t / tau)) + (T0 - Ta) * math.exp(-t / tau)
+        assert T[0] == pytest.approx(exact, rel=1e-12, abs=1e-12)
+
+
+def test_steady_temperatures_are_loss_times_resistance() -> None:
+    """A chain winding - stator - housing - ambient with losses at two nodes: the rises are sums of P R."""
+    th = Thermal(nodes=(ThermalNode("winding", C=300.0), ThermalNode("stator", C=900.0),
+                        ThermalNode("housing", C=1200.0), ThermalNode("ambient", T=30.0)),
+                 links=(ThermalLink("winding", "stator", 0.1), ThermalLink("stator", "housing", 0.5),
+                        ThermalLink("housing", "ambient", 0.3)),
+                 losses={"cu": "winding", "fe": "stator"}, magnets=None)
+    net = th.network()
+    Pcu, Pfe = 120.0, 40.0
+    P, direct = net.heat({"cu": Pcu, "fe": Pfe})
+    assert direct == 0.0
+    T = net.steady(P)
+    T_h = 30.0 + (Pcu + Pfe) * 0.3
+    T_s = T_h + (Pcu + Pfe) * 0.5
+    T_w = T_s + Pcu * 0.1
+    assert T == pytest.approx([T_w, T_s, T_h], rel=1e-13)
+    # a long exact step lands there too
+    T_end, _ = net.step(net.initial(), P, 50 * max(net.time_constants))
+    assert T_end == pytest.approx(T, rel=1e-12)
+
+
+def _random_network(rng: np.random.Generator, n: int) -> Thermal:
+    nodes = [ThermalNode(f"n{j}", C=float(rng.uniform(0.05, 2000.0))) for j in range(n)]
+    nodes += [ThermalNode("ambient", T=25.0), ThermalNode("coolant", T=float(rng.uniform(-10, 60)))]
+    links = [ThermalLink(f"n{j}", f"n{j + 1}", float(rng.uniform(0.01, 3.0))) for j in range(n - 1)]
+    links += [ThermalLink("n0", "ambient", float(rng.uniform(0.1, 2.0))),
+              ThermalLink(f"n{n - 1}", "coolant", float(rng.uniform(0.1, 2.0)))]
+    for _ in range(n):
+        a, b = rng.choice(n, size=2, replace=False)
+        links.append(ThermalLink(f"n{a}", f"n{b}", float(rng.uniform(0.05, 5.0))))
+    return Thermal(nodes=tuple(nodes), links=tuple(links),
+                   losses={"cu": {"n0": 0.6, f"n{n - 1}": 0.4}, "sw": "n1", "Rsrc": "ambient"}, magnets=None,
+                   winding=("n0",))
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_energy_stored_plus_to_boundary_equals_losses(seed: int) -> None:
+    """Heat stored + heat to the boundary = losses, to 1e-6 relative over 200 steps of random length and power."""
+    rng = np.random.default_rng(seed)
+    net = _random_network(rng, 6).network()
+    T = net.initial()
+    E_in = E_out = 0.0
+    for _ in range(200):
+        h = float(10 ** rng.uniform(-4, 3))
+        P, direct = net.heat({"cu": float(rng.uniform(0, 500)), "sw": float(rng.uniform(0, 50)),
+                              "Rsrc": float(rng.uniform(0, 10))})
+        T, q = net.step(T, P, h)
+        E_in += float(np.sum(P)) * h
+        E_out += q
+        assert direct > 0.0
+    stored = net.stored(T)
+    assert abs(stored + E_out - E_in) <= 1e-6 * E_in
+    assert stored > 0.0 and E_out > 0.0
+
+
+def test_time_constants_and_exactness_against_fine_steps() -> None:
+    """The exact step over h equals the product of 1000 steps of h/1000 (the semigroup property, to rounding)."""
+    net = catalog.load("htm-48v-losses").thermal.network()  # type: ignore[union-attr]
+    P, _ = net.heat({"cu": 200.0, "fe": 30.0, "sw": 15.0, "fric": 5.0})
+    T1, q1 = net.step(net.initial(), P, 60.0)
+    T2 = net.initial()
+    q2 = 0.0
+    for _ in range(1000):
+        T2, q = net.step(T2, P, 0.06)
+        q2 += q
+    assert T1 == pytest.approx(T2, rel=1e-11)
+    assert q1 == pytest.approx(q2, rel=1e-9)
+    tc = net.time_constants
+    assert tc[0] > 600.0 and tc[-1] < 0.1  # hub motor's tens of minutes, a die's tens of ms
+
+
+def test_foster_to_cauer_same_impedance_and_step() -> None:
+    """The Cauer ladder has the Foster network's impedance at every frequency and its step response."""
+    R = [0.05, 0.2, 0.28]
+    tau = [1e-3, 2e-2, 0.3]
+    ladder = foster_to_cauer(R, tau)
+    assert sum(r for _, r in ladder) == pytest.approx(sum(R), rel=1e-12)
+    for w in (0.1, 3.0, 100.0, 1e4):
+        s = 1j * w
+        zf = sum(r / (1 + s * t) for r, t in zip(R, tau, strict=True))
+        y: complex = 0.0
+        for c, r in reversed(ladder):  # from the reference end: Z_k = R_k + 1 / (s C_{k+1} + Y_{k+1})
+            y = 1.0 / (r + (1.0 / y if y != 0 else 0.0)) if y != 0 else 1.0 / r
+            y = s * c + y
+        assert 1.0 / y == pytest.approx(zf, rel=1e-9)
+    # step response of the ladder as a network: junction node fed, last R to an ambient at 0
+    nodes = [ThermalNode(f"k{j}", C=c) for j, (c, _) in enumerate(ladder)] + [ThermalNode("amb", T=0.0)]
+    names = [n.name for n in nodes]
+    links = [ThermalLink(names[j], names[j + 1], r) for j, (_, r) in enumerate(ladder)]
+    net = Thermal(nodes=tuple(nodes), links=tuple(links), losses={"sw": "k0"}, magnets=None, winding=("k0",)).network()
+    for t in (1e-3, 0.05, 1.0):
+        T, _ = net.step(net.initial(), [1.0] + [0.0] * (len(ladder) - 1), t)
+        zth = sum(r * (1 - math.exp(-t / tt)) for r, tt in zip(R, tau, strict=True))
+        assert T[0] == pytest.approx(zth, rel=1e-9)
+
+
+def test_copper_alpha() -> None:
+    assert copper_alpha(20.0) == pytest.approx(0.003930, abs=2e-6)
+    assert copper_alpha(25.0) == pytest.approx(1 / 259.5)
+
+
+def test_at_temperature_scales_R_emf_Ron() -> None:
+    d = catalog.load("htm-48v-losses")
+    th = d.thermal
+    assert th is not None
+    hot = d.at_temperature(winding=125.0, magnets=85.0, switches=100.0)
+    assert hot.motor.R == pytest.approx(d.motor.R * (1 + 100.0 / 259.5), rel=1e-14)
+    assert hot.inverter.R_on == pytest.approx(d.inverter.R_on * (1 + 0.006 * 75.0), rel=1e-14)
+    assert hot.motor.k_phi == pytest.approx(d.motor.k_phi * (1 - 0.0012 * 60.0), rel=1e-12)
+    with pytest.raises(BldclabError, match="thermal"):
+        catalog.load("lu-4kw").at_temperature(winding=100.0)
+
+
+def test_motor_file_roundtrip_and_units() -> None:
+    for name in ("htm-48v", "htm-48v-losses"):
+        d = catalog.load(name)
+        back = Drive.from_dict(tomllib.loads(d.to_toml()))
+        assert back.thermal == d.thermal
+
+
+def _file(**changes: object) -> dict[str, object]:
+    d = tomllib.loads(catalog.load("htm-48v").to_toml())
+    th = d["thermal"]
+    assert isinstance(th, dict)
+    for path, value in changes.items():
+        keys = path.split("__")
+        node = th
+        for k in keys[:-1]:
+            node = node[int(k)] if isinstance(node, list) else node[k]
+        if value is None:
+            del node[keys[-1]]
+        elif isinstance(node, list):
+            node[int(keys[-1])] = value
+        else:
+            node[keys[-1]] = value
+    return d
+
+
+@pytest.mark.parametrize(("changes", "field", "words"), [
+    ({"nodes__stator__C": "-3 J/K"}, "thermal.nodes.stator.C", "> 0"),
+    ({"nodes__stator__C": "3 K/W"}, "thermal.nodes.stator.C", "heat capacity"),
+    ({"nodes__ambient": {}}, "thermal.nodes.ambient.T", "boundary"),
+    ({"links__0__R": 0.0}, "thermal.links[0].R", "> 0"),
+    ({"links__0__between": ["winding", "rotorr"]}, "thermal.links[0].between", "rotorr"),
+    ({"links__0__between": ["winding", "winding"]}, "thermal.links[0].between", "itself"),
+    ({"losses__fric": {"rotor": 0.5, "housing": 0.4}}, "thermal.losses.fric", "add up to 1"),
+    ({"losses__cu": None}, "thermal.losses.cu", "missing"),
+    ({"losses__copper": "winding"}, "thermal.losses.copper", "not a loss source"),
+    ({"alpha_k": "-12 %/K"}, "thermal.alpha_k", ">= -0.1"),
+    ({"magnets": "axle"}, "thermal.magnets", "axle"),
+    ({"T_ref": "25 K/W"}, "thermal.T_ref", "temperature"),
+])
+def test_thermal_field_errors(changes: dict[str, object], field: str, words: str) -> None:
+    with pytest.raises(BldclabError) as exc:
+        Drive.from_dict(_file(**changes))
+    assert exc.value.field == field
+    assert words in str(exc.value)
+
+
+def test_unreachable_node_refused() -> None:
+    with pytest.raises(BldclabError, match="no path of links to a boundary"):
+        Thermal(nodes=(ThermalNode("winding", C=1.0), ThermalNode("island", C=1.0), ThermalNode("ambient", T=20.0)),
+                links=(ThermalLink("winding", "ambient", 1.0),), losses={"cu": "winding"}, magnets=None)
+
+
+def test_kelvin_and_celsius() -> None:
+    d = _file(nodes__ambient={"T": "313.15 K"})
+    assert Drive.from_dict(d).thermal.node("ambient").T == pytest.approx(40.0)  # type: ignore[union-attr]
