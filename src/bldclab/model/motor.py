@@ -1025,11 +1025,8 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
     if ths is not None:
         thermal = read_thermal(ths)
     top.finish()
-    drive = Drive(motor=motor, inverter=inverter, mechanics=mech, sensors=sensors, name=name,
-                  description=description, thermal=thermal)
-    if thermal is not None:  # a file routes every loss its drive has (a drive changed in Python: when run)
-        thermal.check_sources(drive.loss_sources)
-    return drive
+    return Drive(motor=motor, inverter=inverter, mechanics=mech, sensors=sensors, name=name,
+                 description=description, thermal=thermal)
 
 
 #: ``[motor.iron]`` keys of a steel grade given by its data instead of a built-in name (:class:`.iron.SteelGrade`).

@@ -41,7 +41,7 @@ DIMENSIONS: dict[str, dict[str, float]] = {
     "angle": {"rad": 1.0, "mrad": 1e-3, "deg": math.pi / 180.0},
     "speed": {"rad/s": 1.0, "rpm": _RPM, "r/min": _RPM, "krpm": 1e3 * _RPM},
     "frequency": {"Hz": 1.0, "kHz": 1e3, "MHz": 1e6},
-    "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9},
+    "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9, "min": 60.0, "h": 3600.0},
     "torque": {"N m": 1.0, "Nm": 1.0, "N*m": 1.0, "mN m": 1e-3},
     "inertia": {"kg m^2": 1.0, "kg m2": 1.0, "kg*m^2": 1.0, "g cm^2": 1e-7},
     "emf_constant": {"V s/rad": 1.0, "Vs/rad": 1.0, "mV s/rad": 1e-3, "N m/A": 1.0, "Nm/A": 1.0},
