@@ -367,3 +367,27 @@ def test_unrouted_loss_refused_when_run() -> None:
     with pytest.raises(BldclabError) as exc:
         run_profile(d, LoadProfile(times=(0.0, 1.0), speed=(40.0, 40.0), torque=(5.0, 5.0)))
     assert exc.value.field == "thermal.losses.cu"
+
+
+def test_cli_thermal(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    from bldclab.cli import main
+
+    prof = tmp_path / "p.toml"
+    prof.write_text('name = "short"\ntime = [0, "20 s"]\nspeed = ["300 rpm", "300 rpm"]\n'
+                    'torque = ["20 N m", "20 N m"]\n')
+    out = tmp_path / "t.csv"
+    rc = main(["thermal", "htm-48v", "--profile", str(prof), "--step", "5 s", "--ambient", "40 degC",
+               "--out", str(out)])
+    text = capsys.readouterr().out
+    assert rc == 0
+    assert "winding" in text and "balance" in text and out.is_file()
+    import pandas as pd
+
+    df = pd.read_csv(out)
+    assert list(df["t"]) == [0.0, 5.0, 10.0, 15.0, 20.0]
+    assert df["T_ambient"].iloc[0] == 40.0 and df["T_winding"].iloc[-1] > 40.0
+    rc = main(["thermal", "lu-4kw", "--profile", str(prof)])
+    err = capsys.readouterr().err
+    assert rc == 2 and "no thermal model" in err
+    rc = main(["thermal", "htm-48v", "--profile", str(prof), "--derate", "winding:130"])
+    assert rc == 2 and "--derate" in capsys.readouterr().err

@@ -431,10 +431,11 @@ class Envelope:
     speeds : ndarray
         Mechanical speeds (rad/s).
     torque : ndarray
-        The highest torque (N m) at each speed; nan where even the lightest load overheats a node.
+        The highest torque (N m) at each speed (0 where even the lightest load overheats a node).
     limiting : list of str
-        The node that sets it at each speed (``"voltage"`` where the drive cannot deliver more torque, ``"T_peak"``
-        at the search's top).
+        What sets it at each speed: a node's name; ``"delivery"`` where the drive under its controller does not
+        deliver more (the bus voltage, or the controller's current limit: :class:`~bldclab.control.Sine` holds its
+        current to ``I_s,N``); ``"T_peak"`` at the search's top.
     duration : float or None
         ``None``: continuous (the steady state); else the time (s) from ``T0`` the torque is held.
     supply : str
@@ -460,10 +461,11 @@ def envelope(drive: Drive, speeds: Sequence[float], *, supply: str = "sine", dur
     """Return the continuous (``duration=None``) or time-limited torque-speed envelope at an ambient.
 
     For each speed the torque is bisected (to ``tol`` of ``T_N``) between 0 and the motor's ``T_peak``: a torque is
-    allowed when the drive delivers it (its steady mean torque within :data:`bldclab.analysis.effmap.FEASIBLE_TOL_PU`
-    of ``T_N``) and no node with a ``T_max`` exceeds it: in the steady state (continuous: the fixed point
-    ``T = T_ss(P(T))`` of the losses at temperature, iterated to 0.01 K) or during ``duration`` seconds from the
-    ambient (exact steps of ``h`` s, the losses at each step's starting temperatures).
+    allowed when the drive delivers it (its steady mean torque not below it by more than
+    :data:`bldclab.analysis.effmap.FEASIBLE_TOL_PU` of ``T_N``) and no node with a ``T_max`` exceeds it: in the
+    steady state (continuous: the fixed point ``T = T_ss(P(T))`` of the losses at temperature, iterated to 0.01 K)
+    or during ``duration`` seconds from the ambient (exact steps of ``h`` s, the losses at each step's starting
+    temperatures).
 
     Parameters
     ----------
@@ -513,8 +515,8 @@ def envelope(drive: Drive, speeds: Sequence[float], *, supply: str = "sine", dur
         if duration is None:
             for _ in range(60):
                 loss = pts.losses(w, q, scales(T), sources)
-                if abs(loss["tau"] - q) > FEASIBLE_TOL_PU * drive.T_N:
-                    return "voltage"
+                if loss["tau"] < q - FEASIBLE_TOL_PU * drive.T_N:
+                    return "delivery"
                 T_new = net.steady(net.heat({b: loss[b] for b in sources})[0])
                 if any(T_new[i] > lim + 50.0 for n, i in idx.items() for lim in (limits[n],)):
                     T = T_new
@@ -530,8 +532,8 @@ def envelope(drive: Drive, speeds: Sequence[float], *, supply: str = "sine", dur
             while t < duration - 1e-9:
                 hh = min(h, duration - t)
                 loss = pts.losses(w, q, scales(T), sources)
-                if abs(loss["tau"] - q) > FEASIBLE_TOL_PU * drive.T_N:
-                    return "voltage"
+                if loss["tau"] < q - FEASIBLE_TOL_PU * drive.T_N:
+                    return "delivery"
                 T, _ = net.step(T, net.heat({b: loss[b] for b in sources})[0], hh)
                 t += hh
                 for n, i in idx.items():
@@ -544,15 +546,12 @@ def envelope(drive: Drive, speeds: Sequence[float], *, supply: str = "sine", dur
     torque = np.full(len(ws), math.nan)
     limiting: list[str] = []
     for j, w in enumerate(ws):
-        if verdict(w, tol * drive.T_N) is not None:
-            limiting.append(str(verdict(w, tol * drive.T_N)))
-            continue
         why_top = verdict(w, top)
         if why_top is None:
             torque[j] = top
             limiting.append("T_peak")
             continue
-        lo, hi, why = tol * drive.T_N, top, why_top
+        lo, hi, why = 0.0, top, why_top
         while hi - lo > tol * drive.T_N:
             mid = 0.5 * (lo + hi)
             v = verdict(w, mid)
