@@ -391,3 +391,30 @@ def test_cli_thermal(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
     assert rc == 2 and "no thermal model" in err
     rc = main(["thermal", "htm-48v", "--profile", str(prof), "--derate", "winding:130"])
     assert rc == 2 and "--derate" in capsys.readouterr().err
+
+
+def test_derating_factor_is_the_firmwares_band() -> None:
+    """Derating.factor runs bc_derate_step: 1, linear, f_min, never outside [0, 1]."""
+    from bldclab.analysis.thermal import Derating
+
+    d = Derating("winding", 100.0, 150.0, f_min=0.2)
+    for T, f in ((25.0, 1.0), (100.0, 1.0), (125.0, 0.6), (140.0, 0.36), (150.0, 0.2), (400.0, 0.2)):
+        assert d.factor(T) == pytest.approx(f, abs=1e-6)
+    assert Derating("winding", 100.0, 150.0).factor(151.0) == 0.0
+    with pytest.raises(BldclabError) as exc:
+        Derating("winding", 100.0, 90.0)
+    assert exc.value.field == "derating.T_end"
+
+
+def test_winding_temperature_from_measured_resistance() -> None:
+    """The firmware's resistance method inverts the model's R(T) (copper, 234.5 degC) to float precision."""
+    from bldclab.analysis.thermal import temperature_from_resistance
+
+    d = catalog.load("htm-48v")
+    for T in (-20.0, 25.0, 80.0, 155.0):
+        R = d.at_temperature(winding=T).motor.R
+        assert temperature_from_resistance(R, d.motor.R, 25.0) == pytest.approx(T, abs=1e-4 * (234.5 + T))
+    with pytest.raises(BldclabError):
+        temperature_from_resistance(0.0, d.motor.R)
+    with pytest.raises(BldclabError):
+        temperature_from_resistance(float("nan"), d.motor.R)

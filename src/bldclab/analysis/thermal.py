@@ -22,6 +22,7 @@ measures its difference from the switching run on a short profile.
 
 from __future__ import annotations
 
+import ctypes
 import dataclasses
 import math
 import time
@@ -33,6 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._core import core
 from .._files import read_toml
 from ..control import Control
 from ..errors import BldclabError, PlausibilityError
@@ -46,7 +48,7 @@ from .effmap import FEASIBLE_TOL_PU, map_controls
 from .experiments import steady_state
 
 __all__ = ["GRID_PU", "GRID_SCALE", "Derating", "Envelope", "LoadProfile", "ProfileResult", "envelope",
-           "hot_drive", "read_profile", "run_profile"]
+           "hot_drive", "read_profile", "run_profile", "temperature_from_resistance"]
 
 #: Grid of the fast mode's operating points: speed and torque rounded to this share of ``Omega_0`` and ``T_N``.
 GRID_PU = 0.002
@@ -176,7 +178,8 @@ def read_profile(path: str | Path) -> LoadProfile:
 class Derating:
     """A current (torque) limit that falls with a node's temperature, as drive firmware derates.
 
-    The torque reference is multiplied by ``clip((T_end - T) / (T_end - T_start), 0, 1)``, ``T`` the node's
+    The torque reference is multiplied by the factor of the firmware's own derating (``bc_derate.h``, one channel,
+    no filter): 1 up to ``T_start``, falling linearly to ``f_min`` at ``T_end`` and held there; ``T`` the node's
     temperature at the start of each thermal step (a sensor read at the thermal rate).
 
     Parameters
@@ -184,20 +187,63 @@ class Derating:
     node : str
         The node read (``"winding"``, ``"junction"``, the sensor's node).
     T_start, T_end : float
-        Full torque up to ``T_start``, none from ``T_end`` (degC).
+        Full torque up to ``T_start``, ``f_min`` of it from ``T_end`` (degC).
+    f_min : float
+        Factor at and above ``T_end``, in [0, 1) (0: the drive stops; a small value: limp home).
     """
 
     node: str
     T_start: float
     T_end: float
+    f_min: float = 0.0
 
     def __post_init__(self) -> None:
         check_number("derating.T_start", self.T_start, lo=-273.15, lo_open=True)
         check_number("derating.T_end", self.T_end, lo=self.T_start, lo_open=True)
+        check_number("derating.f_min", self.f_min, lo=0.0, hi=1.0, hi_open=True)
 
     def factor(self, T: float) -> float:
-        """Return the torque factor at temperature ``T`` (degC), in [0, 1]."""
-        return float(min(1.0, max(0.0, (self.T_end - T) / (self.T_end - self.T_start))))
+        """Return the torque factor at temperature ``T`` (degC), in [0, 1]: ``bc_derate_step``'s."""
+        c = core()
+        p = c.filled("bc_derate_params", enabled=[1, 0], T_start=[self.T_start, 0.0], T_end=[self.T_end, 0.0],
+                     f_min=self.f_min, f_fault=self.f_min, T_lo=-273.15, T_hi=1e4, tau=0.0, ts=1.0)
+        st = c.opaque("bc_derate_state")
+        if c.lib.bc_derate_init(p.ctypes.data, st.ctypes.data) != 0:
+            raise BldclabError("derating", f"bc_derate_init refused {self}")
+        temps = np.array([T, 0.0], dtype=np.float32)
+        return float(c.lib.bc_derate_step(p.ctypes.data, st.ctypes.data, temps.ctypes.data))
+
+
+def temperature_from_resistance(R: float, R_ref: float, T_ref: float = 25.0, k: float = 234.5) -> float:
+    """Return the winding temperature (degC) from its measured resistance: the firmware's estimate without a sensor.
+
+    IEC 60034-1's resistance method, ``T = (R / R_ref) (k + T_ref) - k`` (``k`` = 234.5 degC for copper), computed
+    by the controllers' C (``bc_derate_r_to_temp``, single precision as on the MCU).
+
+    Parameters
+    ----------
+    R : float
+        Measured resistance (Ohm), e.g. a commissioning test's or one identified during operation.
+    R_ref : float
+        The resistance at ``T_ref`` (Ohm).
+    T_ref : float
+        Its temperature (degC).
+    k : float
+        The conductor's inferred zero-resistance temperature below 0 degC, as a positive number (degC): 234.5 for
+        copper, 225 for aluminium.
+
+    Raises
+    ------
+    BldclabError
+        For a resistance that is not positive and finite, or ``k + T_ref <= 0``.
+    """
+    out = ctypes.c_float(0.0)
+    rc = core().lib.bc_derate_r_to_temp(ctypes.c_float(R), ctypes.c_float(R_ref), ctypes.c_float(T_ref),
+                                        ctypes.c_float(k), ctypes.byref(out))
+    if rc != 0:
+        raise BldclabError("R", f"no temperature from R = {R!r} Ohm, R_ref = {R_ref!r} Ohm, T_ref = {T_ref!r} degC, "
+                           f"k = {k!r} (positive, finite resistances and k + T_ref > 0)")
+    return float(out.value)
 
 
 def hot_drive(drive: Drive, r: float, k: float, ron: float) -> Drive:
