@@ -1,11 +1,13 @@
 """The one-hour hill climb: fast mode against the switching plant over its first seconds; hot vs cold characteristic.
 
-Prints tables (docs/thermal.md quotes them). Run: PYTHONPATH=src python benchmarks/thermal_profile.py
+Prints tables (docs/thermal.md quotes them). Run: PYTHONPATH=src python benchmarks/thermal_profile.py; with
+``--hour`` also the whole hour in both modes and both supplies (the switching runs take minutes).
 """
 
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 
@@ -61,6 +63,22 @@ def hot_and_cold() -> None:
         print(f"{rpm:5d} " + " ".join(f"{v:8.2f}" for v in row))
 
 
+def whole_hour() -> None:
+    """The whole hill climb in both modes: peaks and losses."""
+    d = catalog.load("htm-48v-losses")
+    prof = read_profile("examples/profiles/hill-climb.toml")
+    print("\nwhole hour on htm-48v-losses, h = 1 s")
+    print(f"{'supply':>7} {'mode':>10} {'wall':>7} {'peak w':>7} {'end w':>7} {'peak j':>7} {'losses Wh':>9}")
+    for s in ("square", "sine"):
+        for mode in ("switching", "fast"):
+            r = run_profile(d, prof, supply=s, mode=mode, h=1.0)
+            T = r.trace.T
+            print(f"{s:>7} {mode:>10} {r.wall:7.1f} {T['winding'].max():7.2f} {T['winding'][-1]:7.2f} "
+                  f"{T['junction'].max():7.2f} {r.trace.E_loss / 3600:9.2f}")
+
+
 if __name__ == "__main__":
     first_seconds()
     hot_and_cold()
+    if "--hour" in sys.argv:
+        whole_hour()
