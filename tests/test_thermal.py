@@ -418,3 +418,51 @@ def test_winding_temperature_from_measured_resistance() -> None:
         temperature_from_resistance(0.0, d.motor.R)
     with pytest.raises(BldclabError):
         temperature_from_resistance(float("nan"), d.motor.R)
+
+
+# ----------------------------------------------------------------------------------------------------------
+# the controllers' own derating (bc_derate in bc_sixstep and bc_sine, fed by the network's sensor nodes)
+
+@pytest.mark.parametrize("supply", ["square", "sine"])
+def test_controller_derating_holds_the_winding_in_a_coupled_run(supply: str) -> None:
+    """The firmware derates its current limit from the winding sensor: the winding settles in the band."""
+    import bldclab as bl
+    from bldclab.control import Sine, SixStep, TemperatureDerating
+    from bldclab.sim.thermal import ThermalCoupling
+
+    d = _fast_network("htm-48v", 100.0)
+    der = TemperatureDerating(winding=(60.0, 80.0))
+    ctl = SixStep(reference="torque", derate=der) if supply == "square" else Sine(handoff_speed=10.0, derate=der)
+    free = SixStep(reference="torque") if supply == "square" else Sine(handoff_speed=10.0)
+    sc = bl.Scenario(duration=30.0, speed=40.0, ref=40.0, trace=False)
+    hot = bl.simulate(d, free, sc, thermal=ThermalCoupling(h=0.1))
+    held = bl.simulate(d, ctl, sc, thermal=ThermalCoupling(h=0.1))
+    assert hot.thermal.T["winding"][-1] > 100.0
+    Tw = held.thermal.T["winding"]
+    assert 60.0 < Tw[-1] < 80.0 and Tw.max() < 81.0
+    tau = held.thermal.extra["tau"]
+    assert tau[-1] < 0.8 * tau[5]  # the torque fell as the winding warmed
+
+
+def test_controller_derating_without_a_sensor_reads_a_fault() -> None:
+    """No temperature sensor (NaN inputs): the derating's f_fault limits the current, as firmware must."""
+    import bldclab as bl
+    from bldclab.control import SixStep, TemperatureDerating
+
+    d = catalog.load("htm-48v")
+    sc = bl.Scenario(duration=0.1, speed=40.0, ref=20.0, window=(0.05, 0.1))
+    full = bl.simulate(d, SixStep(reference="torque"), sc).metrics
+    faulted = bl.simulate(d, SixStep(reference="torque", derate=TemperatureDerating(winding=(100.0, 150.0),
+                                                                                     f_fault=0.5)), sc).metrics
+    assert full is not None and faulted is not None
+    i_max = 2 * d.motor.I_N
+    # 20 N m needs 31 A, below the faulted limit 0.5 i_max = 50 A: no change; 60 N m (94 A) is capped at 50 A
+    assert faulted.tau_mean == pytest.approx(full.tau_mean, rel=2e-3)
+    sc2 = bl.Scenario(duration=0.1, speed=40.0, ref=60.0, window=(0.05, 0.1))
+    capped = bl.simulate(d, SixStep(reference="torque", derate=TemperatureDerating(winding=(100.0, 150.0),
+                                                                                    f_fault=0.5)), sc2).metrics
+    assert capped is not None
+    assert capped.tau_mean == pytest.approx(0.5 * i_max * 2 * d.motor.k_phi, rel=0.05)
+    with pytest.raises(BldclabError) as exc:
+        TemperatureDerating()
+    assert exc.value.field == "derate"

@@ -458,6 +458,9 @@ def run_profile(drive: Drive, profile: LoadProfile, *, supply: str = "sine", con
         tr.extra.update({"speed": profile.speed_at(mid), "torque_ref": profile.torque_at(mid),
                          "derate": np.ones(t.size)})
         return ProfileResult(tr, mode, time.perf_counter() - t_start, 0, limits)
+    if getattr(control, "derate", None) is not None:
+        raise BldclabError("control.derate", "the fast mode's steady points have no temperature inputs: derate "
+                           "with derate=Derating(...) here, or run the controller's own derating in mode='switching'")
     net = th.network()
     tr, runs = _fast(drive, th, net, coupling.initial(net), profile, control, coupling.h, compensated, inverter,
                      derate, follow)

@@ -4,8 +4,11 @@ The plant runs in chunks of ``h`` seconds (whole controller samples). After each
 lanes (``bc_plant.h``'s ``acc[]``: the exact integrals of every loss over the chunk) give each loss source's mean
 power over it; the network (:class:`~bldclab.model.thermal.ThermalNetwork`) advances exactly over the chunk with
 those powers held constant; the new temperatures set the plant's ``R``, back-EMF and ``R_on`` for the next chunk
-(``bc_sim_set_thermal``). The heat the network receives is the heat the plant dissipated, to rounding, so the
-coupled run's energy balance closes: heat stored + heat to the boundary = losses.
+(``bc_sim_set_thermal``), and the network's sensor nodes (``sensor_winding``, ``sensor_switch``) what the
+controller's temperature inputs read (``bc_sim_set_temperatures``, ``bc_ctrl_in.temp``: a controller with a
+:class:`~bldclab.control.TemperatureDerating` derates its current limit with them). The heat the network receives
+is the heat the plant dissipated, to rounding, so the coupled run's energy balance closes: heat stored + heat to
+the boundary = losses.
 
 The error of the coupling is that of holding the parameters over a chunk: the temperatures move by
 ``dT/dt h`` within it, so a chunk much shorter than the network's fastest time constant of interest (the winding's
@@ -175,6 +178,10 @@ class Coupler:
         if rc != 0:
             raise BldclabError("thermal", f"the plant refused the temperature scales R x {r:.4g}, k x {k:.4g}, "
                                f"R_on x {ron:.4g}")
+        temps = self.net.temps(self.T)
+        sensed = [temps[n] if n is not None else float("nan") for n in (self.th.sensor_winding, self.th.sensor_switch)]
+        lib.bc_sim_set_temperatures(cfg.ctypes.data, state.ctypes.data, ctypes.c_double(sensed[0]),
+                                    ctypes.c_double(sensed[1]))
 
     def start(self, acc: NDArray[np.float64]) -> None:
         """Record the loss lanes at the start of the run."""
