@@ -6,18 +6,18 @@
 
 #include "bldc/bc_types.h"
 
-static int finite(float v) { return isfinite(v) ? 1 : 0; }
+static int fin(float v) { return isfinite(v) ? 1 : 0; }
 
 int bc_derate_init(const bc_derate_params *p, bc_derate_state *s)
 {
     if (p == 0 || s == 0) return BC_ERR_PARAM;
-    if (!finite(p->f_min) || p->f_min < 0.0f || p->f_min >= 1.0f) return BC_ERR_PARAM;
-    if (!finite(p->f_fault) || p->f_fault < 0.0f || p->f_fault > 1.0f) return BC_ERR_PARAM;
-    if (!finite(p->T_lo) || !finite(p->T_hi) || !(p->T_hi > p->T_lo)) return BC_ERR_PARAM;
-    if (!finite(p->tau) || p->tau < 0.0f || !finite(p->ts) || !(p->ts > 0.0f)) return BC_ERR_PARAM;
+    if (!fin(p->f_min) || p->f_min < 0.0f || p->f_min >= 1.0f) return BC_ERR_PARAM;
+    if (!fin(p->f_fault) || p->f_fault < 0.0f || p->f_fault > 1.0f) return BC_ERR_PARAM;
+    if (!fin(p->T_lo) || !fin(p->T_hi) || !(p->T_hi > p->T_lo)) return BC_ERR_PARAM;
+    if (!fin(p->tau) || p->tau < 0.0f || !fin(p->ts) || !(p->ts > 0.0f)) return BC_ERR_PARAM;
     for (int c = 0; c < BC_DERATE_CH; ++c) {
         if (p->enabled[c] != 0 && p->enabled[c] != 1) return BC_ERR_PARAM;
-        if (p->enabled[c] && (!finite(p->T_start[c]) || !finite(p->T_end[c]) || !(p->T_end[c] > p->T_start[c])))
+        if (p->enabled[c] && (!fin(p->T_start[c]) || !fin(p->T_end[c]) || !(p->T_end[c] > p->T_start[c])))
             return BC_ERR_PARAM;
         s->T_f[c] = 0.0f;
         s->primed[c] = 0;
@@ -44,7 +44,7 @@ float bc_derate_step(const bc_derate_params *p, bc_derate_state *s, const float 
         if (!p->enabled[c]) continue;
         const float T = T_meas[c];
         float f;
-        if (!finite(T) || T < p->T_lo || T > p->T_hi) {
+        if (!fin(T) || T < p->T_lo || T > p->T_hi) {
             s->fault[c] = 1;
             f = p->f_fault;
         } else {
@@ -65,10 +65,10 @@ float bc_derate_step(const bc_derate_params *p, bc_derate_state *s, const float 
 
 int bc_derate_r_to_temp(float R, float R_ref, float T_ref, float k, float *T)
 {
-    if (T == 0 || !finite(R) || !finite(R_ref) || !finite(T_ref) || !finite(k)) return BC_ERR_INPUT;
+    if (T == 0 || !fin(R) || !fin(R_ref) || !fin(T_ref) || !fin(k)) return BC_ERR_INPUT;
     if (!(R > 0.0f) || !(R_ref > 0.0f) || !(k + T_ref > 0.0f)) return BC_ERR_INPUT;
     const float t = R / R_ref * (k + T_ref) - k;
-    if (!finite(t)) return BC_ERR_INPUT;
+    if (!fin(t)) return BC_ERR_INPUT;
     *T = t;
     return BC_OK;
 }
