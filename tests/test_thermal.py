@@ -391,6 +391,14 @@ def test_cli_thermal(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
     assert rc == 2 and "no thermal model" in err
     rc = main(["thermal", "htm-48v", "--profile", str(prof), "--derate", "winding:130"])
     assert rc == 2 and "--derate" in capsys.readouterr().err
+    env = tmp_path / "env.csv"
+    rc = main(["thermal", "htm-48v", "--envelope", "--speeds", "200 rpm", "--durations", "60 s", "--out", str(env)])
+    text = capsys.readouterr().out
+    assert rc == 0 and "sine cont" in text and "winding" in text
+    table = pd.read_csv(env)
+    assert table["square cont limit"][0] == "winding" and 0.5 < table["sine cont"][0] / table["square cont"][0] < 2
+    rc = main(["thermal", "htm-48v", "--envelope", "--speeds", "-3 rpm"])
+    assert rc == 2 and "--speeds" in capsys.readouterr().err
 
 
 def test_derating_factor_is_the_firmwares_band() -> None:

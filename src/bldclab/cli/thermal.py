@@ -2,6 +2,7 @@
 
 Prints the peak temperature of every node against its limit, the energies and the wall time; ``--out FILE.csv``
 writes the trace at the thermal time scale (temperatures, losses, factors, speed, torque, derating).
+``bldclab thermal MOTOR --envelope``: the continuous and time-limited torque-speed envelopes of both supplies.
 """
 
 from __future__ import annotations
@@ -12,10 +13,10 @@ from pathlib import Path
 import numpy as np
 
 from .._files import write_atomic
-from ..analysis.thermal import Derating, read_profile, run_profile
+from ..analysis.thermal import Derating, envelope, read_profile, run_profile
 from ..errors import BldclabError
 from ..model.catalog import load
-from ..model.units import to_si
+from ..model.units import per_unit, to_si
 from .paths import check_out_file
 
 __all__ = ["configure_command", "run_command"]
@@ -24,8 +25,15 @@ __all__ = ["configure_command", "run_command"]
 def configure_command(p: argparse.ArgumentParser) -> None:
     """Declare the arguments of ``bldclab thermal``."""
     p.add_argument("motor", metavar="MOTOR", help="built-in drive (bldclab drives) or motor file with [thermal]")
-    p.add_argument("--profile", required=True, type=Path, metavar="FILE.toml",
-                   help="load profile: time, speed, torque arrays (docs/thermal.md, 'Profile files')")
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument("--profile", type=Path, metavar="FILE.toml",
+                      help="load profile: time, speed, torque arrays (docs/thermal.md, 'Long runs')")
+    what.add_argument("--envelope", action="store_true",
+                      help="continuous and time-limited torque-speed envelopes of both supplies instead")
+    p.add_argument("--speeds", metavar="LIST", default="0.15 pu,0.3 pu,0.45 pu,0.6 pu,0.75 pu",
+                   help="envelope speeds, comma-separated ('300 rpm' or per unit of Omega_0; default 0.15-0.75 pu)")
+    p.add_argument("--durations", metavar="LIST", default="10 s,60 s",
+                   help="time-limited envelopes from the ambient, comma-separated (default '10 s,60 s')")
     p.add_argument("--supply", choices=("sine", "square"), default="sine", help="the controller (default: sine)")
     p.add_argument("--mode", choices=("fast", "switching"), default="fast",
                    help="fast: cycle-averaged steady points per thermal step (default); switching: every PWM period")
@@ -33,7 +41,7 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ambient", metavar="TEMP", help="ambient temperature (default: the motor file's)")
     p.add_argument("--derate", metavar="NODE:T_START:T_END",
                    help="torque derating with a node's temperature, e.g. winding:130:155 (fast mode)")
-    p.add_argument("--out", type=Path, metavar="FILE.csv", help="write the thermal trace here")
+    p.add_argument("--out", type=Path, metavar="FILE.csv", help="write the thermal trace (or the envelopes) here")
 
 
 def _derating(text: str) -> Derating:
@@ -43,9 +51,53 @@ def _derating(text: str) -> Derating:
     return Derating(parts[0], to_si(parts[1], "temperature", "--derate"), to_si(parts[2], "temperature", "--derate"))
 
 
+def _speeds(text: str, omega_0: float) -> list[float]:
+    out = []
+    for j, v in enumerate(text.split(",")):
+        pu = per_unit(v)
+        w = pu * omega_0 if pu is not None else to_si(v, "speed", f"--speeds (value {j + 1})")
+        if not w > 0.0:
+            raise BldclabError("--speeds", f"speeds must be > 0, got {v.strip()!r}")
+        out.append(w)
+    return out
+
+
+def _envelopes(args: argparse.Namespace) -> int:
+    drive = load(args.motor)
+    ambient = None if args.ambient is None else to_si(args.ambient, "temperature", "--ambient")
+    speeds = _speeds(args.speeds, drive.Omega_0)
+    durations: list[float | None] = [None]
+    for j, v in enumerate(args.durations.split(",")):
+        d = to_si(v, "time", f"--durations (value {j + 1})")
+        if not d > 0.0:
+            raise BldclabError("--durations", f"durations must be > 0, got {v.strip()!r}")
+        durations.append(d)
+    cols = [(s, d) for d in durations for s in ("square", "sine")]
+    env = {c: envelope(drive, speeds, supply=c[0], duration=c[1], ambient=ambient) for c in cols}
+    print(f"{drive.name}: torque (N m) that keeps every node below its T_max"
+          + (f", ambient {ambient:g} degC" if ambient is not None else ""))
+    print("after each: what limits it (a node; delivery: the bus voltage or the controller's current limit)")
+    head = [f"{s} {'cont' if d is None else f'{d:g} s'}" for s, d in cols]
+    print(f"{'rpm':>7} " + " ".join(f"{h:>22}" for h in head))
+    rows = []
+    for j, w in enumerate(speeds):
+        cells = [f"{env[c].torque[j]:8.2f} {env[c].limiting[j]:<13}" for c in cols]
+        print(f"{w * 30 / 3.141592653589793:7.0f} " + " ".join(f"{x:>22}" for x in cells))
+        rows.append({"speed": w, **{f"{h}": float(env[c].torque[j]) for h, c in zip(head, cols, strict=True)},
+                     **{f"{h} limit": env[c].limiting[j] for h, c in zip(head, cols, strict=True)}})
+    if args.out is not None:
+        import pandas as pd
+
+        write_atomic(args.out, pd.DataFrame(rows).to_csv(index=False).encode(), "--out")
+        print(f"wrote {args.out}")
+    return 0
+
+
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab thermal``."""
     check_out_file(args.out)
+    if args.envelope:
+        return _envelopes(args)
     drive = load(args.motor)
     profile = read_profile(args.profile)
     h = None if args.step is None else to_si(args.step, "time", "--step")
