@@ -1,9 +1,11 @@
 """Build the C core into the package: one shared library, loaded with ctypes by ``bldclab._core``."""
 
+import shutil
 from pathlib import Path
 
 from setuptools import Extension, setup
 from setuptools.command.build_ext import build_ext
+from setuptools.command.build_py import build_py
 
 HERE = Path(__file__).parent
 # core/ctrl: the controllers (what runs on an MCU); core/host: plant, sensors, runner, binding (docs/design.md)
@@ -19,6 +21,25 @@ class BuildCoreLib(build_ext):
         return []
 
 
+#: What a user controller is built with (``bldclab controller build``): the headers of both halves and the controller
+#: blocks it links, copied into the package as ``bldclab/_csrc`` (an installed package has no repository beside it).
+CSRC = (("ctrl", "include"), ("ctrl", "src"), ("host", "include"))
+
+
+class BuildPyWithCore(build_py):
+    """Copy the C sources a user controller needs into the built package (``bldclab/_csrc/...``)."""
+
+    def run(self):  # noqa: D102 - setuptools hook
+        super().run()
+        dest = Path(self.build_lib) / "bldclab" / "_csrc"
+        for half, kind in CSRC:
+            src = HERE / "core" / half / kind
+            target = dest / half / kind
+            if target.exists():
+                shutil.rmtree(target)
+            shutil.copytree(src, target, ignore=shutil.ignore_patterns("*.o", "*.so"))
+
+
 setup(
     ext_modules=[
         Extension(
@@ -30,5 +51,5 @@ setup(
             py_limited_api=False,
         )
     ],
-    cmdclass={"build_ext": BuildCoreLib},
+    cmdclass={"build_ext": BuildCoreLib, "build_py": BuildPyWithCore},
 )

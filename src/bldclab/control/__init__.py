@@ -15,6 +15,7 @@ from .openloop import OpenLoop, SixStepVoltage
 from .sensorless import SixStepSensorless
 from .sine import Sine
 from .sixstep import SixStep
+from .user import UserControl
 
 __all__ = ["Control", "HallCal", "HallCalibration", "Lu", "OpenLoop", "Sine", "SixStep", "SixStepSensorless",
-           "SixStepVoltage", "TemperatureDerating"]
+           "SixStepVoltage", "TemperatureDerating", "UserControl"]

@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._core import core
 from .._version import __version__
 from ..control import Control
+from ..control.user import run_isolated
 from ..errors import BldclabError, PlausibilityError
 from ..model.motor import Drive
 from ..model.units import per_unit, to_si
@@ -641,7 +642,6 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     if not isinstance(scenario, Scenario):
         raise BldclabError("scenario", f"expected a bldclab.Scenario, got {type(scenario).__name__}")
     scenario = scenario.resolved(drive)
-    coupler = None
     if thermal is not None:
         if not isinstance(thermal, ThermalCoupling):
             raise BldclabError("thermal", f"expected a bldclab.sim.thermal.ThermalCoupling, got "
@@ -654,6 +654,20 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         raise BldclabError("scenario.trace", f"a run of {scenario.duration:.4g} s keeps {trace_rows(drive, scenario)} "
                            f"trace rows, {need / 1e9:.3g} GB (max_trace_bytes {max_trace_bytes / 1e9:.3g} GB): thin "
                            "it with trace_every=N, drop it with trace=False, or raise max_trace_bytes")
+    if control.isolated:  # user code: in a watched child process (bldclab.control.user)
+        result: SimResult = run_isolated(
+            control, lambda watch: _run(drive, control, scenario, check, estimate, None, watch, thermal),
+            0.5 / drive.inverter.f_pwm, progress, samples_of(drive, scenario.duration))
+        return result
+    return _run(drive, control, scenario, check, estimate, progress, None, thermal)
+
+
+def _run(drive: Drive, control: Control, scenario: Scenario, check: str, estimate: Drive | None,
+         progress: Callable[[int, int], None] | None, watch: Any, thermal: ThermalCoupling | None = None) -> SimResult:
+    """Run the simulation of :func:`simulate` after its checks.
+
+    ``watch``: the progress record of an isolated run; ``thermal``: the coupling with the thermal network.
+    """
     c = core()
     control = control.with_delay(scenario.delay)
     keep: list[object] = []
@@ -676,14 +690,9 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         rec["fault"]["t_on"][0, j] = f.t_on
         rec["fault"]["t_off"][0, j] = f.t_off
         rec["fault"]["value"][0, j] = f.value
-    info = c.controllers[control.c_name]
-    cp = control.c_record(drive if estimate is None else estimate, c, n)
-    keep.append(cp)
-    cparams = cp.record
-    cstate = c.opaque(info.state)
-    rc = c.controller_init(info, cparams, cstate)
-    if rc != 0:
-        raise BldclabError(f"control ({type(control).__name__})", "the C controller rejected its parameters")
+    slot = control.c_slot(drive if estimate is None else estimate, c, n, watch=watch)
+    keep.append(slot)
+    cparams = slot.record.record
 
     inputs = c.record("bc_sim_inputs")
     v_dc = drive.inverter.V_dc if scenario.v_dc is None else scenario.v_dc
@@ -705,9 +714,9 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     cfg["plant"] = plant.ctypes.data
     cfg["sensors"] = sensors.ctypes.data
     cfg["sense"] = sense.ctypes.data
-    cfg["ctrl"]["step"] = info.step_ptr
-    cfg["ctrl"]["params"] = cparams.ctypes.data
-    cfg["ctrl"]["state"] = cstate.ctypes.data
+    cfg["ctrl"]["step"] = slot.step
+    cfg["ctrl"]["params"] = slot.params
+    cfg["ctrl"]["state"] = slot.state
     cfg["delay"] = scenario.delay
     cfg["trace_every"] = scenario.trace_every
     cfg["trace_sub"] = scenario.trace_sub
@@ -726,6 +735,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     rows = np.zeros(n_rows, dtype=c.trace_dtype)
     n_written = 0
     chunks = _chunks(n)
+    coupler = None
     if thermal is not None:
         coupler = Coupler(thermal, drive, c.acc_names)
         m = max(1, round(thermal.h / t_half))
@@ -740,8 +750,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
             inputs[field] = 0 if a is None else a.ctypes.data
         written = ctypes.c_int64(0)
         ptr = rows.ctypes.data + n_written * rows.itemsize if n_rows else None
-        rc = c.lib.bc_sim_run(cfg.ctypes.data, state.ctypes.data, inputs.ctypes.data, j1 - j0, ptr,
-                              n_rows - n_written, ctypes.byref(written))
+        rc = slot.run(c, cfg, state, inputs, j1 - j0, ptr, n_rows - n_written, written)
         if rc != 0:
             raise RuntimeError(f"bc_sim_run failed with code {rc}")  # a bug, not bad input: inputs were validated
         n_written += written.value
@@ -764,11 +773,11 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     for name, unit, doc in zip(c.trace_names, c.trace_units, c.trace_docs, strict=True):
         out_name = _RENAMED.get(name, name)
         if name.startswith("d") and name[1:].isdigit():
-            label = info.diag[int(name[1:])]
+            label = slot.diag[int(name[1:])]
             if not label:
                 continue
             out_name = label
-            unit = _DIAG_UNITS.get(label, "-")
+            unit = slot.units[int(name[1:])] or _DIAG_UNITS.get(label, "-")
         signals[out_name] = rows[name]  # a strided view of the record array: no copy
         units[out_name] = unit
         docs[out_name] = doc
@@ -862,7 +871,7 @@ def _guards_before(drive: Drive, control: Control, cparams: np.ndarray, imposed:
     names = cparams.dtype.names or ()
     i_limit = float(np.ravel(cparams["i_max"])[0]) if "i_max" in names else None
     findings += _plaus.check_reference(drive, control, peak["ref"], i_limit)
-    return _plaus.apply(findings, check, stacklevel=4)
+    return _plaus.apply(findings, check, stacklevel=5)
 
 
 def _guards_after(drive: Drive, res: SimResult, imposed: bool, check: str) -> list[str]:
@@ -877,7 +886,7 @@ def _guards_after(drive: Drive, res: SimResult, imposed: bool, check: str) -> li
         findings += _plaus.check_pwm(drive, max(w), time_constant=False)
         if res.metrics is not None:
             findings += _plaus.check_steady(drive, res)
-    return _plaus.apply(findings, check, stacklevel=4)
+    return _plaus.apply(findings, check, stacklevel=5)
 
 
 def _omega_integral(st: np.void, scenario: Scenario, imposed: bool, p: int) -> float:
