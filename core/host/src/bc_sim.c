@@ -102,6 +102,7 @@ static void row_open(const bc_sim_config *cfg, bc_sim_state *s)
     r->d7 = (double)s->last.diag[7];
     r->flags = (double)s->last.flags;
     r->hw_trip = (double)ps->tripped;
+    r->t_at = -1.0;
     memcpy(s->row_acc0, ps->acc, sizeof s->row_acc0);
     s->row_tmin = po.tau_e;
     s->row_tmax = po.tau_e;
@@ -377,6 +378,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         bc_plant_set_hold(pp, ps, (double)applied.i_hold, (double)applied.i_hold_at);
         bc_plant_set_half(pp, ps, applied.leg, (k % 2) == 0);
         if (applied.has_at) bc_plant_schedule(pp, ps, applied.leg_at, (double)applied.t_at);
+        s->at_time = applied.has_at ? t_k + (double)applied.t_at : -1.0;
 
         /* torque at the sample instant, inside the metric window */
         if (s->m.state == 1) {
@@ -407,6 +409,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
                 }
             }
             double t_seg = (q + 1 == sub) ? t_next : t_k + th * (double)(q + 1) / (double)sub;
+            if (rows != 0 && s->row_open && s->at_time >= t_row && s->at_time < t_seg) s->row.t_at = s->at_time;
             /* metric bounds inside this segment */
             if (has_window && s->m.state == 0 && cfg->metric_t0 >= ps->t && cfg->metric_t0 < t_seg) {
                 if (cfg->metric_t0 > ps->t) advance_chunk(cfg, s, cfg->metric_t0);

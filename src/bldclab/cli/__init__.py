@@ -115,6 +115,8 @@ COMMANDS: tuple[Command, ...] = (
             "effmap"),
     Command("hall", "mean torque, ripple and efficiency of each supply against the Hall sensors' placement error",
             "hall"),
+    Command("sensorless", "desync map of a sensorless six-step drive: throttle step or start-up over two parameters, "
+            "each point in sync, desynced (with the reason), recovered or not started", "sensorless"),
     Command("torque-control", "paper 2's torque control vs its baselines over a load x speed grid",
             "torque_control"),
     Command("thermal", "a load profile (hill climb, duty cycle) through the drive and its thermal network",

@@ -76,7 +76,8 @@
     X(d6, "-", "controller diagnostic 6")                                                           \
     X(d7, "-", "controller diagnostic 7")                                                           \
     X(flags, "-", "controller flags")                                                               \
-    X(hw_trip, "-", "1 once the inverter's hardware over-current trip has switched it off")
+    X(hw_trip, "-", "1 once the inverter's hardware over-current trip has switched it off")          \
+    X(t_at, "s", "instant of the commutation timer's leg change in the row (bc_ctrl_out.has_at); -1: none")
 
 typedef struct {
 #define BC_TRACE_MEMBER(name, unit, doc) double name;
@@ -179,6 +180,7 @@ typedef struct {
     int32_t half_in;           /* current half period started inside the window */
     int32_t row_open;          /* a trace row is being accumulated */
     bc_trace_row row;          /* the row being accumulated */
+    double at_time;            /* instant of the timed leg change applied in the current sample, s (-1: none) */
     double row_acc0[BC_ACC_N];
     double row_tmin, row_tmax;
     float temp[2];             /* what the temperature sensors read (bc_ctrl_in.temp), degC; NaN: none */
