@@ -66,6 +66,7 @@ def test_versus_hall_equal_duty():
     r = sl.versus_hall(bl.load("htm-48v"), (0.2, 0.5), fast_demag=False)
     df = r.to_pandas()
     assert df["in_sync"].all()
+    assert np.allclose(df["duty_applied"], df["duties"], atol=1e-6)  # equal duty indeed: no limit acted
     assert (df["torque_rel"].abs() < 0.01).all(), df
     assert (np.abs(df["efficiency_sl"] - df["efficiency_hall"]) < 0.005).all(), df
     assert (np.abs(df["ripple_sl"] - df["ripple_hall"]) < 0.1 * df["ripple_hall"] + 0.01).all(), df
@@ -81,6 +82,24 @@ def test_min_speed_search_with_ideal_sensing():
     assert [h for _, h in r.tried] == [True, True]
     with pytest.raises(BldclabError, match="lo"):
         sl.min_sensorless_speed(d, lo=0.2, hi=0.1)
+
+
+def test_min_speed_against_the_comparator_offset_closed_form():
+    """A comparator offset V_off moves the rising and the falling crossings the other way by V_off / (du/dtheta)
+    (``u`` the comparator's input, its slope proportional to the speed); the crossing intervals alternate, and below
+    the speed where their ratio reaches ``jump`` (2: a 10-degree shift) the controller declares a false crossing.
+    The bisection finds the slowest speed that holds within 5 % of that closed form (htm-48v, ideal trapezoid:
+    ``omega_m = 4.5 V_off / k_phi``; measured 0.0573 against 0.0563 p.u. for 0.3 V)."""
+    d = bl.load("htm-48v")
+    off = 0.3
+    d = d.replace(sensors=dataclasses.replace(d.sensors, bemf_offset=off))
+    w_cf = sl.offset_limit_speed(d, off)
+    assert w_cf * d.Omega_0 == pytest.approx(4.5 * off / d.motor.k_phi, rel=1e-3)
+    r = sl.min_sensorless_speed(d, lo=0.3 * w_cf, hi=3.0 * w_cf, rel_tol=0.05)
+    assert r.speed == pytest.approx(w_cf, rel=0.05), (r.speed, w_cf, r.tried)
+    assert r.lost < r.speed
+    held = dict(r.tried)
+    assert held[3.0 * w_cf] and not held[0.3 * w_cf]
 
 
 @pytest.mark.parametrize(("chop", "fast"), [("sync", False), ("sync", True), ("high", False), ("pwm-on-pwm", False),

@@ -60,7 +60,8 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
         return BC_ERR_PARAM;
     if (!(fin(p->i_max) && p->i_max > 0.0f) || !nonneg(p->i_limit) || !nonneg(p->k_limit) ||
         !(fin(p->v_max) && p->v_max > 0.0f) || (p->fast_demag != 0 && p->fast_demag != 1) || !in01(p->dlim_d0) ||
-        !nonneg(p->dlim_vf) || !nonneg(p->dlim_tau) || !(fin(p->demag_max) && p->demag_max >= 0.0f && p->demag_max < 1.0f))
+        !nonneg(p->dlim_vf) || !nonneg(p->dlim_tau) || !(fin(p->demag_max) && p->demag_max >= 0.0f && p->demag_max < 1.0f) ||
+        (p->cmp_gate != 0 && p->cmp_gate != 1))
         return BC_ERR_PARAM;
     *s = (bc_bemf_state){0};
     s->ts_tick = p->ts * p->f_tick;
@@ -70,6 +71,7 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
     s->fresh = 1;
     s->sector = -1;
     s->incoming = -1;
+    s->outgoing = -1;
     s->d_lim = 1.0f;
     s->d_dm = 1.0f;
     s->guard_p = (bc_guard_params){.i_max = p->i_max, .v_max = p->v_max};
@@ -139,7 +141,7 @@ static float sector_time(float w, float a, float w1) { return angle_time(w, a, w
 /* A new sector: the phase that entered the pair (the incoming phase), the detector reset for the commutation at tc. */
 static void enter_sector(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, int sector, uint32_t tc)
 {
-    int inc = -1;
+    int inc = -1, outp = -1;
     int pn, nn;
     (void)bc_sector_phases(sector, &pn, &nn);
     if (s->sector >= 0) {
@@ -147,10 +149,22 @@ static void enter_sector(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctr
         (void)bc_sector_phases(s->sector, &po, &no);
         if (pn != po && pn != no) inc = pn;
         else if (nn != po && nn != no) inc = nn;
+        if (po != pn && po != nn) outp = po;
+        else if (no != pn && no != nn) outp = no;
     } else {
         inc = s->dir > 0 ? pn : nn;
     }
     s->incoming = inc;
+    s->outgoing = outp;
+    {
+        int pp = pn, qq = nn;
+        if (s->dir < 0) {
+            pp = nn;
+            qq = pn;
+        }
+        int cont = inc == pp ? qq : pp;
+        s->fd_neg = p->fast_demag && outp >= 0 && p->chop != BC_CHOP_BIPOLAR && inc >= 0 && cont == qq;
+    }
     s->sector = sector;
     s->t_c = tc;
     float w = omega_of(p, s);
@@ -178,6 +192,7 @@ static void stop(bc_bemf_state *s, int reason)
     s->pending = 0;
     s->sector = -1;
     s->incoming = -1;
+    s->outgoing = -1;
     s->d_cmd = 0.0f;
     if (reason != BC_BEMF_REASON_NONE) s->reason = reason;
 }
@@ -261,6 +276,9 @@ static int detect_comparator(const bc_bemf_params *p, bc_bemf_state *s, const bc
     uint32_t cnt = in->zc_count[f];
     uint32_t te = in->zc_tick[f];
     int lvl = (int)((in->zc_state >> f) & 1u);
+    /* fast demagnetisation on the negative leg: the comparator only in the pair's on-time, centred at the carrier
+     * peak (odd samples) when the leg chops with its lower switch, at the valley when it is complementary (sync) */
+    if (p->cmp_gate && s->fd_neg && (s->k_samp & 1u) == (p->chop == BC_CHOP_SYNC ? 1u : 0u)) return 0;
     if (tdiff(n->tk, s->t_c) < 0.0f) s->cnt_c = cnt;
     int opening = 0;
     if (s->det == 0) {
@@ -469,14 +487,14 @@ static void legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector,
     int cont = inc == pos ? neg : pos;
     int chop_leg = pos;
     if (p->chop == BC_CHOP_PWMPWM) chop_leg = travel < PI6_F ? inc : cont;
-    if (demag && p->fast_demag && p->chop != BC_CHOP_BIPOLAR && s->incoming >= 0) {
+    if (demag && p->fast_demag && p->chop != BC_CHOP_BIPOLAR && s->incoming >= 0 && s->outgoing >= 0) {
         if (p->chop == BC_CHOP_SYNC && cont == neg) { /* neg complementary at the average (1 - m) V, pos on */
             bc_pair_legs(BC_CHOP_PWMPWM, pos, neg, neg, m, c);
             c[neg].mode = BC_LEG_PWM;
             c[neg].duty = bc_clampf(1.0f - m, 0.0f, 1.0f);
             return;
         }
-        if (p->chop != BC_CHOP_SYNC) {
+        if (p->chop != BC_CHOP_SYNC) { /* the continuing leg chops with its own switch */
             bc_pair_legs(BC_CHOP_PWMPWM, pos, neg, cont, m, c);
             return;
         }
@@ -539,6 +557,7 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
     n.tk = in->tick_now;
     n.ta = tadd(n.tk, (float)p->delay * s->ts_tick);
     n.flags = 0u;
+    if (s->started) s->k_samp += 1u;
     n.adc_new = s->started && in->n_adc != s->n_adc_seen;
     s->n_adc_seen = in->n_adc;
     if (!s->started) {

@@ -62,7 +62,7 @@ int bc_sixstep_init(const bc_sixstep_params *p, bc_sixstep_state *s)
  * k(th) = 6 th/pi on [0, pi/6], 1 on [pi/6, 5 pi/6], 6 (pi - th)/pi on [5 pi/6, pi], odd. */
 static float trapezoid(float th)
 {
-    if (!fin(th) || fabsf(th) > 64.0f) return 0.0f;
+    if (!(fabsf(th) <= 64.0f)) return 0.0f; /* NaN and infinities too */
     while (th < 0.0f) th += BC_TWO_PI_F; /* a few turns at most */
     while (th >= BC_TWO_PI_F) th -= BC_TWO_PI_F;
     float sgn = 1.0f;

@@ -286,6 +286,10 @@ class VersusHallResult:
         Current ripple: the rms deviation of the largest phase current magnitude from its mean, over its mean.
     in_sync : tuple of bool
         The sensorless drive stayed in closed loop over the measured periods.
+    duty_applied : tuple of float
+        The sensorless drive's mean applied duty over the measured periods: below ``duties`` where its limits
+        (the speed-dependent duty limit, the demagnetisation limiter) acted, and the comparison is then not at equal
+        duty.
     """
 
     speeds: tuple[float, ...]
@@ -297,6 +301,7 @@ class VersusHallResult:
     ripple_sl: tuple[float, ...]
     ripple_hall: tuple[float, ...]
     in_sync: tuple[bool, ...]
+    duty_applied: tuple[float, ...]
 
     def to_pandas(self) -> pd.DataFrame:
         """Return one row per speed, with the relative torque difference (sensorless over Hall, minus one)."""
@@ -343,7 +348,8 @@ def versus_hall(drive: Drive, speeds: Sequence[float], *, duty: float | None = N
     if chopping not in _PATTERNS:
         raise BldclabError("chopping", f"must be one of {', '.join(_PATTERNS)}, got {chopping!r}")
     out: dict[str, list[Any]] = {k: [] for k in ("duties", "torque_sl", "torque_hall", "efficiency_sl",
-                                                 "efficiency_hall", "ripple_sl", "ripple_hall", "in_sync")}
+                                                 "efficiency_hall", "ripple_sl", "ripple_hall", "in_sync",
+                                                 "duty_applied")}
     for sp in speeds:
         d = _duty(drive, float(sp), duty)
         res, t0 = run_locked(drive, float(sp), d, periods=periods, chopping=chopping, **control_kw)
@@ -360,9 +366,10 @@ def versus_hall(drive: Drive, speeds: Sequence[float], *, duty: float | None = N
         out["ripple_sl"].append(_ripple(res, t0))
         out["ripple_hall"].append(_ripple(hall, t0))
         out["in_sync"].append(_in_sync(res, t0))
+        out["duty_applied"].append(float(np.mean(res.signals["duty"][res.t >= t0])))
     return VersusHallResult(tuple(float(x) for x in speeds), *(tuple(out[k]) for k in (
         "duties", "torque_sl", "torque_hall", "efficiency_sl", "efficiency_hall", "ripple_sl", "ripple_hall",
-        "in_sync")))
+        "in_sync", "duty_applied")))
 
 
 @dataclass(frozen=True)

@@ -155,7 +155,9 @@ class SixStepSensorless(Control):
         pair (the continuing one) chops instead of the incoming one (default True; ``sync``, ``high``,
         ``pwm-on-pwm``): the outgoing current then falls with about ``(2 - d) V_dc / 3`` instead of ``d V_dc / 3``,
         which keeps the crossing visible at low duty and high current (a throttle step). The closed forms are in
-        docs/sensorless.md.
+        docs/sensorless.md. When it chops the negative leg and the drive's comparators have an offset
+        (``drive.sensors.bemf_offset``), the comparator is read in the pair's on-time only until the crossing: the
+        floating phase can clamp to the bus in the off-time, which a comparator with an offset reads as a crossing.
     blanking : {"demag", "fixed"}
         ``demag``: after the fixed blanking the window for the crossing opens at the measured end of the
         demagnetisation (the floating phase shows the pre-crossing level, held at least ``min_pulse``); ``fixed``:
@@ -493,4 +495,5 @@ class SixStepSensorless(Control):
             dlim_vf=2.0 * m.k_phi / (p * inv.V_dc) if i_dlim > 0.0 else 0.0,
             dlim_tau=m.L / r_total(drive),
             demag_max=self.demag_limit,
+            cmp_gate=int(drive.sensors.bemf_offset != 0.0 and self.fast_demag),
         ))

@@ -168,12 +168,20 @@
  *     voltage m, pos and neg swapped backward. BC_CHOP_PWMPWM chops the incoming phase (the one that entered the
  *     pair at the last commutation) during the first half of the sector (Omega (t_a - t_c) < pi/6) and the
  *     continuing one after; the other patterns chop pos.
- *     Fast demagnetisation (fast_demag = 1; BC_CHOP_SYNC, _HIGH, _PWMPWM): from a commutation until the detector
+ *     Fast demagnetisation (fast_demag = 1; BC_CHOP_SYNC, _HIGH, _PWMPWM; not in a start's first sector, which
+ *     has no outgoing phase): from a commutation until the detector
  *     has seen the demagnetisation over (the pre level, 6) or a crossing, the continuing phase (in both pairs) chops
  *     instead: as BC_LEG_PWM with its average at the same pair voltage m (sync), else its own switch at m. The
  *     outgoing phase's current, averaged over the PWM, then falls with (2 - m) V_dc / 3 plus the back-EMF term
  *     instead of m V_dc / 3 when the pattern would chop the incoming phase (docs/sensorless.md, the closed forms):
  *     at low duty and high current the difference between a visible crossing and a hidden one.
+ *     When it chops the negative leg, the pair's off-time holds both its terminals at V_dc, and between the clamp's
+ *     end and the sample that sees it the floating phase (still on its pre side, e_F > 0) can clamp to V_dc in the
+ *     off-times, where a comparator with an offset reads the post level: in such a sector (cmp_gate = 1; with a
+ *     comparator of no offset the clamp reads exactly the reference and changes nothing) the comparator is read
+ *     only at the samples in the pair's on-time (an active switch state is centred at the carrier peak: the
+ *     valleys for the complementary negative leg of BC_CHOP_SYNC, the peaks for a lower switch chopping; the
+ *     first sample is taken to be at a valley) until the crossing.
  *
  *  9. Timeout (CLOSED). No crossing accepted by t_zc,prev + zc_timeout T60 (zc_timeout = 1.5: when the next
  *     commutation would be due without advance): with fewer than miss_max misses in a row, a blind commutation at
@@ -274,6 +282,7 @@ typedef struct {
     float dlim_vf;       /* its slope, 1/(rad/s) electrical (>= 0) */
     float dlim_tau;      /* the inductive part: dlim_d0 sqrt(1 + (Omega dlim_tau)^2), s (>= 0) */
     float demag_max;     /* demagnetisation limiter (2): largest demagnetisation angle / (pi/6 + adv), [0, 1); 0: off */
+    int32_t cmp_gate;    /* 1: in a fast-demagnetisation sector on the negative leg, the comparator in the on-time only */
 } bc_bemf_params;
 
 typedef struct {
@@ -291,6 +300,9 @@ typedef struct {
     /* commutation */
     int32_t sector;        /* sector in force at the end of the last output's interval, -1 none */
     int32_t incoming;      /* phase that entered the pair at the last commutation, -1 none */
+    int32_t outgoing;      /* phase that left the pair at the last commutation, -1 none (a start's first sector) */
+    int32_t fd_neg;        /* fast demagnetisation chops the negative leg in this sector (its off-time at V_dc) */
+    uint32_t k_samp;       /* samples since init (even: carrier valley, odd: carrier peak) */
     uint32_t t_c;          /* tick of the commutation that began the sector */
     int32_t pending;       /* a commutation is scheduled at t_next */
     uint32_t t_next;       /* tick of the scheduled commutation */
