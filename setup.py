@@ -53,7 +53,7 @@ setup(
             "bldclab._bccore",
             sources=SOURCES,
             include_dirs=["core/ctrl/include", "core/host/include"],
-            extra_compile_args=FLAGS + ["-flto"],
+            extra_compile_args=[*FLAGS, "-flto"],
             extra_link_args=["-flto", "-O3"],
             libraries=["m"],
             py_limited_api=False,
