@@ -333,6 +333,9 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
     s->six_run = !p->flying_start;
     s->n_quiet = 0;
+    s->derate_on = p->derate.enabled[0] != 0 || p->derate.enabled[1] != 0;
+    s->derate_f = 1.0f;
+    if (s->derate_on && bc_derate_init(&p->derate, &s->derate) != BC_OK) return BC_ERR_PARAM;
     s->lim_shape = 0;
     if (p->speed_limit && p->emf_k[0] != 0 && p->emf_k[1] != 0 && p->emf_k[2] != 0) {
         if (p->emf_n < 3 || p->emf_n > BC_SINE_EMF_N_MAX) return BC_ERR_PARAM;
@@ -491,6 +494,7 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     /* 1. safety: the input guard (bc_guard.h), the Hall code, the reference and the encoder angle if used */
     bc_hall_out h;
     bc_hall_step(&s->hall_p, &s->hall, in, &h); /* keeps the edge bookkeeping even when the output is safe */
+    if (s->derate_on) s->derate_f = bc_derate_step(&p->derate, &s->derate, in->temp); /* in [0, 1] */
     float i3[3];
     uint32_t why = bc_guard_step(&s->guard_p, &s->guard, in, i3);
     if (!h.valid) why |= BC_FLAG_HALL_INVALID;
@@ -555,7 +559,7 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     if (s->mode == BC_SINE_MODE_START) return;
 
     /* 5. current references (45), (8), I_s,sat from the table or (23) with R */
-    float i_lim = bc_sine_i_limit(p, s, v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f);
+    float i_lim = s->derate_f * bc_sine_i_limit(p, s, v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f);
     float iq_ref = bc_clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
     float id_ref = 0.0f;
     if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, 1.5f * p->k_1 * iq_ref);

@@ -49,6 +49,9 @@ int bc_sixstep_init(const bc_sixstep_params *p, bc_sixstep_state *s)
     s->hyst_on = 0;
     s->guard_p = (bc_guard_params){.i_max = p->i_max, .v_max = p->v_max};
     if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
+    s->derate_on = p->derate.enabled[0] != 0 || p->derate.enabled[1] != 0;
+    s->derate_f = 1.0f;
+    if (s->derate_on && bc_derate_init(&p->derate, &s->derate) != BC_OK) return BC_ERR_PARAM;
     return BC_OK;
 }
 
@@ -312,6 +315,7 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
     bc_hall_out h;
     bc_hall_step(&s->hall_p, &s->hall, in, &h);
     out->diag[4] = h.omega_e;
+    if (s->derate_on) s->derate_f = bc_derate_step(&p->derate, &s->derate, in->temp); /* in [0, 1] */
 
     /* measurements, DC bus, hardware and software over-current trips: the input guard (bc_guard.h) */
     float i[3];
@@ -373,7 +377,7 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
     float i_reg = sgn * i[x];
     float i_ref = fabsf(ref);
     if (p->ref_torque) i_ref /= p->k_e;
-    i_ref = bc_clampf(i_ref, 0.0f, p->i_max);
+    i_ref = bc_clampf(i_ref, 0.0f, s->derate_f * p->i_max);
 
     /* PWM-on-PWM: the incoming phase chops in the first half of the sector, the other one in the second */
     int chop_leg = chop_leg_of(p, pos, neg, x, travel);

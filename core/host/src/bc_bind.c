@@ -4,6 +4,7 @@
 #include <stddef.h>
 
 #include "bldc/bc_commutation.h"
+#include "bldc/bc_derate.h"
 #include "bldc/bc_emf.h"
 #include "bldc/bc_plant.h"
 #include "bldc/bc_sensors.h"
@@ -197,6 +198,8 @@ static const bc_field_desc FIELDS[] = {
     F(bc_ctrl_in, n_adc, "u4"),
     F(bc_ctrl_in, tick_adc, "u4"),
 
+    F(bc_ctrl_in, temp, "f4"),
+
     F(bc_ctrl_out, leg, "bc_leg_cmd"),
     F(bc_ctrl_out, diag, "f4"),
     F(bc_ctrl_out, flags, "u4"),
@@ -257,6 +260,16 @@ static const bc_field_desc FIELDS[] = {
     F(bc_user_guard, pad, "i4"),
     F(bc_user_guard, k, "i8"),
     F(bc_user_guard, jump, "ptr"),
+
+    F(bc_derate_params, enabled, "i4"),
+    F(bc_derate_params, T_start, "f4"),
+    F(bc_derate_params, T_end, "f4"),
+    F(bc_derate_params, f_min, "f4"),
+    F(bc_derate_params, f_fault, "f4"),
+    F(bc_derate_params, T_lo, "f4"),
+    F(bc_derate_params, T_hi, "f4"),
+    F(bc_derate_params, tau, "f4"),
+    F(bc_derate_params, ts, "f4"),
 };
 
 #define S BC_BIND_STRUCT
@@ -266,6 +279,7 @@ static const bc_struct_desc STRUCTS[] = {
     S(bc_sensor_state), S(bc_ctrl),         S(bc_sim_config),   S(bc_sim_inputs),  S(bc_sim_metrics),
     S(bc_sim_state),    S(bc_trace_row),    S(bc_ctrl_in),      S(bc_ctrl_out),     S(bc_sense_params), S(bc_sense_state),
     S(bc_user_desc),    S(bc_user_entry),   S(bc_user_watch),   S(bc_user_guard),
+    S(bc_derate_params), S(bc_derate_state),
 };
 
 #define K BC_BIND_CONST

@@ -39,6 +39,7 @@ static const bc_field_desc SINE_FIELDS[] = {
     F(bc_sine_params, kp_w, "f4"),
     F(bc_sine_params, ki_w, "f4"),
     F(bc_sine_params, tau_max, "f4"),
+    F(bc_sine_params, derate, "bc_derate_params"),
 };
 static const bc_struct_desc SINE_STRUCTS[] = {BC_BIND_STRUCT(bc_sine_params), BC_BIND_STRUCT(bc_sine_state)};
 static int sine_init(const void *p, void *s) { return bc_sine_init(p, s); }

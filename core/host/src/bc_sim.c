@@ -43,6 +43,16 @@ int bc_sim_init(const bc_sim_config *cfg, bc_sim_state *s, double theta0, double
     /* s->pending, cleared above: all legs off (BC_LEG_OFF = 0), no timed change */
     s->t_pwm = 2.0 * bc_plant_t_half(cfg->plant);
     sim_on_step(s, s->plant.t, s->plant.acc, s->plant.tau_min); /* the first history node (tau_min: tau_e now) */
+    s->temp[0] = NAN; /* no temperature sensor until a thermal model says what it reads */
+    s->temp[1] = NAN;
+    return BC_OK;
+}
+
+int bc_sim_set_temperatures(const bc_sim_config *cfg, bc_sim_state *s, double T_winding, double T_switches)
+{
+    if (!config_ok(cfg) || s == 0) return BC_ERR_PARAM;
+    s->temp[0] = (float)T_winding;
+    s->temp[1] = (float)T_switches;
     return BC_OK;
 }
 
@@ -363,6 +373,8 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         if (sense_on(cfg)) bc_sense_fill(cfg->sense, &s->sense, t_k, ci);
         ci->ref = (float)input_at(in->ref, in->ref_c, j);
         ci->omega_ref = (float)input_at(in->omega_ref, in->omega_ref_c, j);
+        ci->temp[0] = s->temp[0];
+        ci->temp[1] = s->temp[1];
         bc_ctrl_out *co = &s->last;
         memset(co, 0, sizeof *co);
         cfg->ctrl.step(cfg->ctrl.params, cfg->ctrl.state, ci, co);

@@ -8,6 +8,7 @@ controller family; adding one: a module here with a :class:`Control` subclass, a
 from __future__ import annotations
 
 from .base import Control
+from .derate import TemperatureDerating
 from .hallcal import HallCal, HallCalibration
 from .lu import Lu
 from .openloop import OpenLoop, SixStepVoltage
@@ -17,4 +18,4 @@ from .sixstep import SixStep
 from .user import UserControl
 
 __all__ = ["Control", "HallCal", "HallCalibration", "Lu", "OpenLoop", "Sine", "SixStep", "SixStepSensorless",
-           "SixStepVoltage", "UserControl"]
+           "SixStepVoltage", "TemperatureDerating", "UserControl"]

@@ -26,6 +26,7 @@ from ..model.motor import Drive
 from ..model.units import per_unit, to_si
 from . import plausibility as _plaus
 from .results import Metrics, SimResult
+from .thermal import Coupler, ThermalCoupling
 
 __all__ = ["TRACE_LIMIT", "Fault", "PerUnit", "Piecewise", "Scenario", "parse_profile", "simulate", "trace_bytes",
            "trace_rows"]
@@ -578,7 +579,7 @@ def samples_of(drive: Drive, duration: float) -> int:
 
 def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str = "error",
              estimate: Drive | None = None, progress: Callable[[int, int], None] | None = None,
-             max_trace_bytes: int | None = TRACE_LIMIT) -> SimResult:
+             max_trace_bytes: int | None = TRACE_LIMIT, thermal: ThermalCoupling | None = None) -> SimResult:
     """Simulate the drive in closed loop with a C controller.
 
     Plausibility guards (:mod:`bldclab.sim.plausibility`) run before the run (PWM frequency against ``L/R`` and the
@@ -610,6 +611,13 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     max_trace_bytes : int or None
         Refuse (before running) a scenario whose trace would take more memory than this (bytes; default
         :data:`TRACE_LIMIT`, 2 GB; ``None``: no bound). Everything but the trace is bounded whatever the duration.
+    thermal : ThermalCoupling, optional
+        Couple the plant with the drive's thermal network (``[thermal]`` of its motor file): the plant runs in
+        chunks of ``thermal.h`` seconds, each chunk's losses heat the network, the temperatures set ``R``, the
+        back-EMF and ``R_on`` for the next (:mod:`bldclab.sim.thermal`). The result's ``thermal`` attribute holds
+        the :class:`~bldclab.sim.thermal.ThermalTrace`; ``meta["thermal"]`` its summary. The controller is
+        configured from the drive at ``T_ref`` (``estimate`` if given), as a firmware that does not know the
+        temperature.
 
     Returns
     -------
@@ -634,6 +642,13 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     if not isinstance(scenario, Scenario):
         raise BldclabError("scenario", f"expected a bldclab.Scenario, got {type(scenario).__name__}")
     scenario = scenario.resolved(drive)
+    if thermal is not None:
+        if not isinstance(thermal, ThermalCoupling):
+            raise BldclabError("thermal", f"expected a bldclab.sim.thermal.ThermalCoupling, got "
+                               f"{type(thermal).__name__}")
+        if scenario.window is not None and not scenario.trace:
+            raise BldclabError("scenario.window", "a thermal run reads the losses of every chunk, which a run "
+                               "without a trace integrates only inside its metric window: leave window unset")
     need = trace_bytes(drive, scenario)
     if max_trace_bytes is not None and need > max_trace_bytes:
         raise BldclabError("scenario.trace", f"a run of {scenario.duration:.4g} s keeps {trace_rows(drive, scenario)} "
@@ -641,15 +656,18 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
                            "it with trace_every=N, drop it with trace=False, or raise max_trace_bytes")
     if control.isolated:  # user code: in a watched child process (bldclab.control.user)
         result: SimResult = run_isolated(
-            control, lambda watch: _run(drive, control, scenario, check, estimate, None, watch),
+            control, lambda watch: _run(drive, control, scenario, check, estimate, None, watch, thermal),
             0.5 / drive.inverter.f_pwm, progress, samples_of(drive, scenario.duration))
         return result
-    return _run(drive, control, scenario, check, estimate, progress, None)
+    return _run(drive, control, scenario, check, estimate, progress, None, thermal)
 
 
 def _run(drive: Drive, control: Control, scenario: Scenario, check: str, estimate: Drive | None,
-         progress: Callable[[int, int], None] | None, watch: Any) -> SimResult:
-    """Run the simulation of :func:`simulate` after its checks (``watch``: the progress record of an isolated run)."""
+         progress: Callable[[int, int], None] | None, watch: Any, thermal: ThermalCoupling | None = None) -> SimResult:
+    """Run the simulation of :func:`simulate` after its checks.
+
+    ``watch``: the progress record of an isolated run; ``thermal``: the coupling with the thermal network.
+    """
     c = core()
     control = control.with_delay(scenario.delay)
     keep: list[object] = []
@@ -716,7 +734,15 @@ def _run(drive: Drive, control: Control, scenario: Scenario, check: str, estimat
     n_rows = trace_rows(drive, scenario)
     rows = np.zeros(n_rows, dtype=c.trace_dtype)
     n_written = 0
-    for j0, j1 in _chunks(n):
+    chunks = _chunks(n)
+    coupler = None
+    if thermal is not None:
+        coupler = Coupler(thermal, drive, c.acc_names)
+        m = max(1, round(thermal.h / t_half))
+        chunks = [(j0, min(n, j0 + m)) for j0 in range(0, n, m)]
+        coupler.start(c.view(state, "bc_sim_state")[0]["plant"]["acc"])
+        coupler.apply(c.lib, cfg, state)
+    for j0, j1 in chunks:
         pieces = []
         for field, prof in profiles.items():
             a = prof.piece(j0, j1)
@@ -728,7 +754,11 @@ def _run(drive: Drive, control: Control, scenario: Scenario, check: str, estimat
         if rc != 0:
             raise RuntimeError(f"bc_sim_run failed with code {rc}")  # a bug, not bad input: inputs were validated
         n_written += written.value
-        if progress is not None:
+        if coupler is not None:
+            pst = c.view(state, "bc_sim_state")[0]["plant"]
+            coupler.chunk(float(pst["t"]), pst["acc"])
+            coupler.apply(c.lib, cfg, state)
+        if progress is not None and (coupler is None or j1 == n or j1 % CHUNK < j1 - j0):
             progress(j1, n)
     rows = rows[:n_written]
 
@@ -776,6 +806,9 @@ def _run(drive: Drive, control: Control, scenario: Scenario, check: str, estimat
     except PlausibilityError as exc:  # the inputs' warnings are its cause: they lead the message
         raise _plaus.cause_first(exc, issued) from None
     res.metrics = metrics
+    if coupler is not None:
+        res.thermal = coupler.trace()
+        meta["thermal"] = res.thermal.summary()
     return res
 
 
