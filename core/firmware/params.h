@@ -6,9 +6,11 @@
 #ifndef BC_FW_PARAMS_H
 #define BC_FW_PARAMS_H
 
+#include "bldc/bc_fluxobs.h"
 #include "bldc/bc_hall.h"
 #include "bldc/bc_hallcal.h"
 #include "bldc/bc_lu.h"
+#include "bldc/bc_redobs.h"
 #include "bldc/bc_sine.h"
 #include "bldc/bc_sixstep.h"
 
@@ -57,5 +59,15 @@ static const float LU_F_12[12] = {0.0f, 0.4f, 0.4f, 0.4f, 0.4f, 0.4f, 0.0f, -0.4
     {.method = BC_HALLCAL_SPEED, .n_rev = 2, .f_tick = 10e6f, .ts = HTM_TS, .t_max = 1.0f, .speed_tol = 0.02f,    \
      .v_align = 0.0f, .v_emf = 0.0f, .omega_ol = 0.0f, .t_align = 0.0f, .lag_max = 0.0f, .i_max = 0.0f,           \
      .v_max = 0.0f}
+
+/* The rotor-angle observers on htm-48v (psi_f = k_1 / p = 0.389 / 8 V s), with bldclab.control.observer's defaults
+ * for the drive: lambda = 2 omega_on (omega_on = 0.1 Omega_0 p = 60 rad/s), omega_p = alpha_o = sqrt(p T_s,N / (J
+ * 1 deg)) = 556 rad/s; sigma_0 = R / (2 L), zeta_inf = 0.2. */
+#define HTM_FLUXOBS_PARAMS                                                                                        \
+    {.R = 0.05f, .L = 75e-6f, .psi = 0.0486f, .ts = HTM_TS, .gain = 120.0f, .pll_bw = 556.0f, .i_max = 100.0f,   \
+     .v_max = 96.0f}
+#define HTM_REDOBS_PARAMS                                                                                         \
+    {.R = 0.05f, .L = 75e-6f, .psi = 0.0486f, .ts = HTM_TS, .alpha_o = 556.0f, .sigma0 = 333.3f, .zeta_inf = 0.2f, \
+     .i_max = 100.0f, .v_max = 96.0f}
 
 #endif /* BC_FW_PARAMS_H */

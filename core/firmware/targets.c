@@ -3,10 +3,12 @@
 
 #include <math.h>
 
+#include "bldc/bc_fluxobs.h"
 #include "bldc/bc_hall.h"
 #include "bldc/bc_hallcal.h"
 #include "bldc/bc_openloop.h"
 #include "bldc/bc_pi.h"
+#include "bldc/bc_redobs.h"
 #include "params.h"
 
 /* The host tools call each target through a pointer: keep the steps out of line so they are measurable. */
@@ -87,6 +89,47 @@ static bc_lu_state lu_s;
 static int lu_init(void) { return bc_lu_init(&lu_p, &lu_s); }
 STEP_FN lu_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_lu_step(&lu_p, &lu_s, in, out); }
 
+/* The observers as blocks: the phase currents (Clarke of i_abc, the two measured phases of i_mask when only two are)
+ * and a stator voltage carried in (ref, omega_ref) as (u_alpha, u_beta); diag: angle, speed, flux, error signal,
+ * valid. */
+static bc_obs_in obs_input(const bc_ctrl_in *in)
+{
+    bc_abc i = {in->i_abc[0], in->i_abc[1], -(in->i_abc[0] + in->i_abc[1])};
+    bc_obs_in o = {{in->ref, in->omega_ref}, bc_clarke(i)};
+    return o;
+}
+
+static void obs_diag(const bc_obs_out *o, bc_ctrl_out *out)
+{
+    out->diag[0] = o->theta;
+    out->diag[1] = o->omega_e;
+    out->diag[2] = o->flux;
+    out->diag[3] = o->err;
+    out->diag[4] = (float)o->valid;
+}
+
+static const bc_fluxobs_params fluxobs_p = HTM_FLUXOBS_PARAMS;
+static bc_fluxobs_state fluxobs_s;
+static int fluxobs_init(void) { return bc_fluxobs_init(&fluxobs_p, &fluxobs_s); }
+STEP_FN fluxobs_step(const bc_ctrl_in *in, bc_ctrl_out *out)
+{
+    bc_obs_in oi = obs_input(in);
+    bc_obs_out oo;
+    bc_fluxobs_step(&fluxobs_p, &fluxobs_s, &oi, &oo);
+    obs_diag(&oo, out);
+}
+
+static const bc_redobs_params redobs_p = HTM_REDOBS_PARAMS;
+static bc_redobs_state redobs_s;
+static int redobs_init(void) { return bc_redobs_init(&redobs_p, &redobs_s); }
+STEP_FN redobs_step(const bc_ctrl_in *in, bc_ctrl_out *out)
+{
+    bc_obs_in oi = obs_input(in);
+    bc_obs_out oo;
+    bc_redobs_step(&redobs_p, &redobs_s, &oi, &oo);
+    obs_diag(&oo, out);
+}
+
 #ifdef BC_FUZZ_CANARY
 /* A deliberately wrong controller (built only by the test that proves the fuzz checks can fail): on a NaN bus it
  * emits a duty above 1 instead of the safe state. */
@@ -112,5 +155,7 @@ const bc_fw_target bc_fw_targets[] = {
     {"hallcal", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, hallcal_init, hallcal_step, 48.0f, 50.0f, 0.0f, 357.0f},
     {"hallcal_speed", BC_USES_HALL, hallcal_speed_init, hallcal_speed_step, 48.0f, 50.0f, 0.0f, 357.0f},
     {"pi", BC_IS_BLOCK, pi_init, pi_step, 48.0f, 50.0f, 10.0f, 357.0f},
+    {"fluxobs", BC_IS_BLOCK, fluxobs_init, fluxobs_step, 48.0f, 50.0f, 10.0f, 357.0f},
+    {"redobs", BC_IS_BLOCK, redobs_init, redobs_step, 48.0f, 50.0f, 10.0f, 357.0f},
 };
 const int bc_fw_n_targets = (int)(sizeof bc_fw_targets / sizeof bc_fw_targets[0]);
