@@ -206,6 +206,16 @@ def _hallcal_speed_runs(scale: float) -> list[tuple[str, Any, Any, Any]]:
     return out
 
 
+def _bemf_runs(scale: float) -> list[tuple[str, Any, Any, Any]]:
+    """The sensorless start-up from standstill (rotor free): alignment, then the forced ramp. Until the plant's back-EMF
+    sensing exists (issue 24) the controller sees no crossing, so this measures the start-up path only (alignment, the
+    forced ramp, its desync and the wait); the closed-loop runs come with the sensing."""
+    import bldclab as bl
+
+    d = bl.load("htm-48v")
+    return [(START, d, bl.SixStepSensorless(), bl.Scenario(duration=scale * T_START, ref=0.5, trace=False))]
+
+
 def _sine_ref(d: Any) -> float:
     return 18.0 / (math.sqrt(3.0) * math.pi**2) * d.T_N  # T_s,N, paper 1 (12)
 
@@ -235,6 +245,7 @@ CLOSED_LOOP: dict[str, ClosedLoop] = {c.name: c for c in (
     ClosedLoop("sixv", "sixv", "bc_sixv_step", _sixv_runs),
     ClosedLoop("hallcal", "hallcal", "bc_hallcal_step", _hallcal_runs),
     ClosedLoop("hallcal_speed", "hallcal", "bc_hallcal_step", _hallcal_speed_runs),
+    ClosedLoop("bemf", "bemf", "bc_bemf_step", _bemf_runs),
 )}
 
 

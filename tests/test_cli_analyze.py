@@ -331,6 +331,6 @@ def test_a_figure_is_laid_out_once_for_all_its_formats() -> None:
     from bldclab.report import plots
 
     drive = bldclab.load("htm-48v")
-    files, data = plots.render_figure(plots.FigureJob(_fig7_with_data, (drive,), formats=("png", "svg", "png")))
+    files, data, caught = plots.render_figure(plots.FigureJob(_fig7_with_data, (drive,), formats=("png", "svg", "png")))
     fig, _ = _fig7_with_data(drive)
-    assert data == 42 and files["png"] == plots.figure_bytes(fig, "png")
+    assert data == 42 and caught == [] and files["png"] == plots.figure_bytes(fig, "png")

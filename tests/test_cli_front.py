@@ -292,3 +292,216 @@ def test_analyze_gives_the_speeds_in_rpm(capsys: pytest.CaptureFixture[str]) -> 
                                            "71.64 rad/s = 684.1 rpm")
     rc, out, _ = run_main(capsys, "analyze", "htm-48v", "--format", "json")
     assert rc == 0 and "rpm" not in out.splitlines()[-1]
+
+
+DRONE = Path(__file__).resolve().parent / "data" / "drone-2207.toml"
+
+
+def test_check_prints_both_forms_of_the_ratings(capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 23, item 3: pole pairs and poles, phase and line-to-line R and L, KV and k_phi/k_1."""
+    rc, out, err = run_main(capsys, "check", str(DRONE))
+    assert rc == 0 and "motor.p" not in err
+    assert "7 pole pairs = 14 poles" in out
+    assert "40 mOhm per phase = 80 mOhm line to line" in out and "7.5 uH per phase = 15 uH line to line" in out
+    assert "1950 rpm/V (KV_rms 2757.72 rpm/V)" in out
+    assert "0.00244854 V s/rad" in out and "0.00282733 V s/rad" in out  # k_phi, k_1
+
+
+def test_check_warns_when_pole_pairs_look_like_a_pole_count(tmp_path: Path, capsys: pytest.CaptureFixture[str]
+                                                            ) -> None:
+    f = tmp_path / "p14.toml"
+    f.write_text(DRONE.read_text().replace("poles = 14", "p = 14"))
+    rc, out, err = run_main(capsys, "check", str(f))
+    assert rc == 0 and "14 pole pairs = 28 poles" in out
+    first = err.splitlines()[0]  # then what compare would warn about (a 28-pole reading is slow to PWM)
+    assert first.startswith("bldclab: warning: ") and all(line.startswith("bldclab: warning: ")
+                                                          for line in err.splitlines())
+    assert "motor.p: p = 14 pole pairs (28 poles)" in first and "if 14 is the pole count (7 pole pairs" in first
+
+
+@pytest.mark.parametrize("name", names())
+def test_template_examples_are_the_drives_own_and_load_uncommented(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                                   name: str) -> None:
+    """Issue 23, item 10: no float noise, no example value of another drive, no comment naming another unit.
+
+    Every commented-out example line, uncommented, still gives a loadable file: its units are those of the field.
+    """
+    rc, out, _ = run_main(capsys, "template", "--from", name)
+    assert rc == 0
+    for noise in ("99999999", "00000001"):
+        assert noise not in out.replace(bl.load(name).description, "")
+    assert "# Omega_N = 67.0" not in out  # htm-48v's rated speed, once shown for every drive
+    lines = out.splitlines()
+    for line in lines:
+        if line.startswith("# ") and " = \"" in line and "rpm\"" in line:
+            assert "# rad/s" not in line, line
+    uncommented = []
+    for line in lines:
+        body = line[2:].split("  #")[0] if line.startswith("# ") else line
+        if line.startswith("# ") and (re_key(body) or body.startswith("[motor.cogging]")):
+            uncommented.append(body)
+        else:
+            uncommented.append(line)
+    f = tmp_path / "all.toml"
+    f.write_text("\n".join(uncommented) + "\n")
+    d, base = bl.load(f), bl.load(name)
+    if base.motor.Omega_N is None:  # the example is this drive's own default rated speed, to 4 digits
+        assert d.motor.Omega_N == pytest.approx(base.motor.Omega_nominal, rel=1e-3)
+    if base.inverter.E_on == 0:  # the energies' test point is this drive's bus and rated current
+        assert (d.inverter.V_test, d.inverter.I_test) == (base.inverter.V_dc, pytest.approx(base.motor.I_N, rel=1e-5))
+
+
+def re_key(text: str) -> bool:
+    """Whether ``text`` is a ``key = value`` line."""
+    key = text.split("=")[0].strip()
+    return "=" in text and key.isidentifier()
+
+
+def test_check_warns_about_the_premises_compare_warns_about_in_its_words(capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 23, item 11: 1.465 PWM periods per commutation at Omega_0 (8.97 per electrical period at compare's top
+    speed, 0.98 Omega_0): check warns with the finding compare's runs give there, word for word."""
+    from bldclab.analysis.compare import compare
+    from bldclab.errors import PlausibilityWarning
+
+    rc, out, err = run_main(capsys, "check", str(DRONE))
+    assert rc == 0
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("bldclab: warning: at 0.98 Omega_0 (bldclab compare's top speed): ")
+    finding = lines[0].split("top speed): ", 1)[1]
+    assert finding.startswith("inverter.f_pwm: f_pwm = 4.8e+04 Hz gives 8.97 PWM periods per electrical period")
+    with pytest.warns(PlausibilityWarning):
+        res = compare(bl.load(DRONE), [0.98], workers=1, base_speeds=False)
+    assert any(w.endswith(finding) for w in res.warnings), res.warnings
+    assert "sinusoidal back-EMF" in out  # paper 1's premises: the lines compare prints under its table
+    rc, _, err = run_main(capsys, "check", "htm-48v")
+    assert rc == 0 and err == ""  # 24 PWM periods per commutation: nothing to warn about
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# compare's bottom line and figures, the comparison each command makes (issue 23, items 8 and 9)
+
+def _pair(t_sine: float, t_square: float, eta_sine: float, eta_square: float) -> pd.DataFrame:
+    rows = []
+    for w in (0.2, 0.5, 0.8, 0.95):  # htm-48v: Omega_N = 640 rpm = 0.894 p.u.: three speeds in the rated range
+        rows.append({"supply": "sine", "Omega_pu": w, "T_pu": t_sine if w < 0.9 else 0.1, "eta": eta_sine})
+        rows.append({"supply": "square", "Omega_pu": w, "T_pu": t_square if w < 0.9 else 0.5, "eta": eta_square})
+    return pd.DataFrame(rows)
+
+
+@pytest.mark.parametrize(("numbers", "line"), [
+    ((1.05, 1.0, 0.90, 0.88), "5.0 % more torque with sinusoidal supply at equal rms current, at 2.0 percentage "
+                              "points better efficiency"),
+    ((1.0, 1.1, 0.90, 0.88), "10.0 % more torque with square-wave supply at equal rms current, at 2.0 percentage "
+                             "points worse efficiency"),
+    ((1.0, 1.002, 0.90, 0.903), "the same torque with either supply (within 0.005 p.u.) at equal rms current, and "
+                                "the same efficiency (within 0.5 percentage points)"),
+])
+def test_compare_bottom_line_is_computed_over_the_rated_range(numbers: tuple[float, ...], line: str) -> None:
+    from bldclab.analysis.compare import bottom_line
+
+    text = bottom_line(bl.load("htm-48v"), _pair(*numbers))
+    assert text == f"bottom line: in its rated range (up to 0.89 p.u., 640 rpm: 3 speeds) this drive gives {line}"
+
+
+def test_compare_prints_its_comparison_and_bottom_line_first(compare_htm48v: Path) -> None:
+    from bldclab.analysis.compare import COMPARISON
+
+    verdict = (compare_htm48v / "verdict.txt").read_text().splitlines()
+    assert verdict[0].startswith("bottom line: in its rated range (up to 0.89 p.u., 640 rpm")
+    assert "% more torque with sinusoidal supply at equal rms current" in verdict[0]
+    assert all("rpm" in v for v in verdict if v.startswith("mean torque"))  # the detail names the speeds in rpm too
+    page = (compare_htm48v / "report.html").read_text()
+    assert "Comparison at equal current" in COMPARISON and COMPARISON in page and f"<b>{verdict[0]}</b>" in page
+
+
+def test_compare_figures_are_in_rpm_and_n_m_with_closed_forms_named_or_left_out() -> None:
+    """rpm and N m, per unit on the opposite axes; paper 1's curves labelled as closed forms, and not drawn for a
+    sinusoidal back-EMF (outside their premises), with a note."""
+    import warnings
+
+    from bldclab.analysis.compare import compare
+    from bldclab.report.bundle import torque_figure
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for name, closed in (("htm-48v", True), (str(DRONE), False)):
+            drive = bl.load(name)
+            fig = torque_figure(compare(drive, [0.3, 0.6], workers=1, base_speeds=False))
+            ax = fig.axes[0]
+            assert ax.get_xlabel() == "speed (rpm)" and ax.get_ylabel() == "torque (N m)"
+            assert ax.get_xlim()[1] == pytest.approx(drive.Omega_0 * 30 / np.pi)
+            labels = [ln.get_label() for ln in ax.get_lines()]
+            points = [ln for ln in ax.get_lines() if ln.get_label().startswith("simulated, sinusoidal")]
+            assert points[0].get_xdata()[0] == pytest.approx(0.3 * drive.Omega_0 * 30 / np.pi)
+            secondary = ax.child_axes  # matplotlib's secondary axes: speed and torque in per unit
+            assert any("per unit of" in a.get_xlabel() for a in secondary)
+            assert any("per unit of" in a.get_ylabel() for a in secondary)
+            closed_forms = [lab for lab in labels if lab.startswith("paper 1 closed form, ")]
+            assert bool(closed_forms) == closed, labels
+            notes = [t.get_text() for t in ax.texts]
+            assert closed or any("closed forms not drawn" in t for t in notes)
+
+
+def test_effmap_says_it_compares_at_equal_torque(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from bldclab.analysis.effmap import COMPARISON
+
+    rc, out, _ = run_main(capsys, "effmap", "htm-48v", "--torques", "2", "--speeds", "2", "--workers", "1",
+                          "--no-store", "--out", str(tmp_path / "m"))
+    assert rc == 0 and out.splitlines()[1] == f"  {COMPARISON}"
+    assert COMPARISON.startswith("Comparison at equal torque")
+
+
+def test_compare_bottom_line_above_the_rated_speed_uses_every_speed() -> None:
+    from bldclab.analysis.compare import bottom_line
+
+    sim = _pair(1.05, 1.0, 0.90, 0.88)
+    text = bottom_line(bl.load("htm-48v"), sim[sim.Omega_pu > 0.9])
+    assert text.startswith("bottom line: over the speeds compared (all above the rated speed 0.89 p.u.) this drive "
+                           "gives 400.0 % more torque with square-wave supply")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# did you mean; the cause first in composed errors (issue 23, item 13)
+
+@pytest.mark.parametrize(("argv", "hint"), [
+    (["simulate", "htm-48v", "--contrl", "sine"], "unrecognized arguments: --contrl sine: did you mean --control?"),
+    (["simulate", "htm-48v", "--contrl=sine"], "did you mean --control?"),
+    (["compare", "htm-48v", "--min-sped", "0.1", "--workrs", "2"],
+     "did you mean --min-speed (for --min-sped), --workers (for --workrs)?"),
+    (["simulat", "htm-48v"], "invalid choice: 'simulat': did you mean 'simulate'? (choose from"),
+    (["torque-contrl", "lu-4kw"], "did you mean 'torque-control'?"),
+    (["simulate", "htm-48v", "--control", "sinus"], "invalid choice: 'sinus': did you mean 'sine'?"),
+    (["--vesion"], "did you mean --version?"),
+])
+def test_mistyped_options_and_commands_get_the_nearest_spelling(capsys: pytest.CaptureFixture[str], argv: list[str],
+                                                                hint: str) -> None:
+    rc, out, err = run_main(capsys, *argv)
+    assert rc == 2 and out == "" and err.count("\n") == 1 and err.startswith("bldclab: error: ")
+    assert hint in err, err
+
+
+def test_no_suggestion_without_a_near_spelling(capsys: pytest.CaptureFixture[str]) -> None:
+    rc, _, err = run_main(capsys, "simulate", "htm-48v", "--xyzzy", "1")
+    assert rc == 2 and err == "bldclab: error: unrecognized arguments: --xyzzy 1\n"
+
+
+def test_a_failed_run_names_its_cause_first(capsys: pytest.CaptureFixture[str]) -> None:
+    """--speed 300 (rad/s) on htm-48v is 4 times Omega_0: the back-EMF drives the currents past the hardware trip.
+    One line, the speed first, not a warning then an error about currents."""
+    rc, out, err = run_main(capsys, "simulate", "htm-48v", "--speed", "300")
+    assert rc == 2 and out == ""
+    assert err.count("\n") == 1, err
+    assert err.startswith("bldclab: error: scenario.speed: 300 rad/s (2865 rpm) is 4 times the no-load speed")
+    assert "; the run then failed: result.currents: a phase current reached" in err
+    with pytest.warns(bl.errors.PlausibilityWarning), pytest.raises(bl.errors.PlausibilityError) as info:  # the API
+        bl.simulate(bl.load("htm-48v"), bl.SixStep(), bl.Scenario(duration=0.01, speed=300.0, ref=50.0))
+    assert info.value.field == "scenario.speed" and "result.currents" in info.value.problem
+
+
+def test_torque_control_warns_like_the_other_commands(capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 23, item 12: rect misses its torque on lu-4kw at 3000 rpm (96.5 %): the line starts bldclab: warning:."""
+    rc, _, err = run_main(capsys, "torque-control", "lu-4kw", "--torques", "100%", "--speeds", "3000 rpm",
+                          "--methods", "rect")
+    assert rc == 0 and err
+    assert all(line.startswith("bldclab: warning: ") for line in err.splitlines()), err
+    assert "rect at 100 % of T_N, 3000 rpm: mean torque 96.5 % of the reference" in err

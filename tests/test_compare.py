@@ -6,6 +6,7 @@ import json
 import subprocess
 import sys
 from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -185,3 +186,38 @@ def test_torque_control_cli_bad_torque(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "bldclab.cli", "torque-control", "lu-4kw", "--torques", "x%"],
                           capture_output=True, text=True)
     assert proc.returncode == 2 and "--torques" in proc.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_compare_folds_every_runs_warnings_into_one_line(tmp_path, capsys, workers):
+    """Issue 23, item 1: the points', the waveforms' and paper 1's figures' warnings in one summary line (identical
+    ones once), also from worker processes; --verbose lists each distinct one; the manifest lists them all."""
+    drone = str(Path(__file__).resolve().parent / "data" / "drone-2207.toml")
+    out = tmp_path / "o"
+    assert main(["compare", drone, "--speeds", "4", "--workers", workers, "--no-report", "--out", str(out)]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1, err
+    line = err[0]
+    assert line.startswith("bldclab: warning: ") and "plausibility warnings in 8 points, 4 waveforms and paper 1's " \
+        "Figs 9, 11 and 12" in line and "repeats counted once" in line and "causes: inverter.f_pwm" in line
+    listed = json.loads((out / "manifest.json").read_text())["warnings"]
+    assert len(listed) == len(set(listed)) and int(line.split()[2]) == len(listed)
+    assert any(w.startswith("paper 1 Fig 12 (dynamometer): ") for w in listed)
+    assert main(["compare", drone, "--speeds", "4", "--workers", workers, "--no-report", "--out", str(out),
+                 "--verbose"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert [e.removeprefix("bldclab: warning: ") for e in err[:-1]] == listed and err[-1] == line
+
+
+@pytest.mark.slow
+def test_effmap_folds_its_warnings_into_one_line(tmp_path, capsys):
+    drone = str(Path(__file__).resolve().parent / "data" / "drone-2207.toml")
+    argv = ["effmap", drone, "--torques", "2", "--speeds", "3", "--workers", "1", "--no-store", "--out",
+            str(tmp_path / "m")]
+    assert main(argv) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and "plausibility warnings in 12 runs" in err[0] and "cause: inverter.f_pwm" in err[0]
+    assert main([*argv, "--verbose"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 + int(err[-1].split()[2])

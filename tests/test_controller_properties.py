@@ -25,9 +25,15 @@ CONTROLS = {"sixv": bl.SixStepVoltage(), "sixstep": bl.SixStep(), "sine": bl.Sin
             "lu-pll": bl.Lu(hall_angle="pll", pll_edges=20.0, hall_table=TABLE),
             "hallcal-ol": bl.HallCal(method="open-loop", align_time=0.0), "hallcal-speed": bl.HallCal(),
             "sixstep-timed": bl.SixStep(timed=True, timing="20 deg", timing_time="30 us"),
-            "sixstep-enc": bl.SixStep(regulation="duty", timed=True, commutation="encoder", timing="10 deg")}
+            "sixstep-enc": bl.SixStep(regulation="duty", timed=True, commutation="encoder", timing="10 deg"),
+            "bemf": bl.SixStepSensorless(), "bemf-adc": bl.SixStepSensorless(method="adc", blanking="fixed"),
+            "bemf-int": bl.SixStepSensorless(method="integration", chopping="pwm-on-pwm", timing="10 deg",
+                                             timing_demag=0.5, misses=2, align_time=0.0, throttle_rate="5 %/ms"),
+            "bemf-nocur": bl.SixStepSensorless(current_sensing=False, current_limit="10 A")}
 USES_CURRENT = {"sixstep", "sine", "lu", "rect", "sixstep-pi", "sine-pll", "sixstep-cal", "lu-pll", "hallcal-ol",
-                "sixstep-timed", "sixstep-enc"}
+                "sixstep-timed", "sixstep-enc", "bemf", "bemf-adc", "bemf-int"}
+NO_HALL = {"bemf", "bemf-adc", "bemf-int", "bemf-nocur"}  # sensorless: the Hall code is not read
+USES_BUS = {"bemf-nocur"}  # the bus is checked without current sensing too
 
 floats = st.one_of(st.floats(allow_nan=True, allow_infinity=True, width=32),
                    st.sampled_from([0.0, -0.0, 1e30, -1e30, 50.0, -50.0, 48.0, 300.0, 1e-30]))
@@ -35,7 +41,11 @@ ticks = st.integers(min_value=0, max_value=2**32 - 1)
 record = st.fixed_dictionaries({
     "i": st.lists(floats, min_size=3, max_size=3), "v_dc": floats, "hall": st.integers(0, 9),
     "n_edges": ticks, "tick_edge": ticks, "tick_now": ticks, "theta": floats, "omega": floats, "ref": floats,
-    "omega_ref": floats, "mask": st.sampled_from([3, 5, 6, 7])})
+    "omega_ref": floats, "mask": st.sampled_from([3, 5, 6, 7]),
+    # back-EMF sensing (read by the sensorless controllers only)
+    "zc_state": st.integers(0, 2**32 - 1), "zc_count": st.lists(ticks, min_size=3, max_size=3),
+    "zc_tick": st.lists(ticks, min_size=3, max_size=3), "v_term": st.lists(floats, min_size=3, max_size=3),
+    "v_neutral": floats, "n_adc": ticks, "tick_adc": ticks})
 
 
 def _setup(name: str, drive: bl.Drive):
@@ -85,6 +95,13 @@ def check_outputs(name: str, motor: str, steps: list[dict]) -> None:
         inp["omega_enc"] = r["omega"]
         inp["ref"] = r["ref"]
         inp["omega_ref"] = r["omega_ref"]
+        inp["zc_state"] = r["zc_state"]
+        inp["zc_count"] = r["zc_count"]
+        inp["zc_tick"] = r["zc_tick"]
+        inp["v_term"] = r["v_term"]
+        inp["v_neutral"] = r["v_neutral"]
+        inp["n_adc"] = r["n_adc"]
+        inp["tick_adc"] = r["tick_adc"]
         out[...] = 0
         c.controller_step(info, params, state, inp, out)
         modes = out["leg"]["mode"][0]
@@ -103,7 +120,8 @@ def check_outputs(name: str, motor: str, steps: list[dict]) -> None:
         hall_bad = r["hall"] in (0, 7, 8, 9)
         bus_bad = not (math.isfinite(r["v_dc"]) and r["v_dc"] > 0)
         cur_bad = any(not math.isfinite(r["i"][x]) for x in range(3) if r["mask"] & (1 << x))
-        must_stop = hall_bad or (name in USES_CURRENT and (bus_bad or cur_bad))
+        must_stop = ((hall_bad and name not in NO_HALL) or (name in USES_CURRENT and (bus_bad or cur_bad))
+                     or (name in USES_BUS and bus_bad))
         if must_stop:
             assert int(out["flags"][0]) & FLAG_SAFE, (name, r)
             assert np.all(modes == 0) and has_at == 0, (name, r)

@@ -25,6 +25,9 @@ CONTROLS = {
     "sine": [bl.Sine(), bl.Sine(angle="encoder", limit="circle"), bl.Sine(angle="pll")],
     "lu": [bl.Lu(method=m) for m in ("lu", "lu-no-do", "rect")] + [bl.Lu(hall_angle="pll")],
     "hallcal": [bl.HallCal(), bl.HallCal(method="open-loop")],
+    "bemf": [bl.SixStepSensorless(method=m, chopping=c, blanking=b)
+             for m, c, b in (("comparator", "sync", "demag"), ("adc", "high", "fixed"),
+                             ("integration", "pwm-on-pwm", "demag"), ("comparator", "bipolar", "fixed"))],
 }
 
 

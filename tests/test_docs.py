@@ -219,3 +219,44 @@ def test_user_facing_text_cites_papers_by_reference_not_by_workspace_path() -> N
                  for n, line in enumerate(f.read_text(encoding="utf-8").splitlines(), 1)
                  if "shared/papers" in line or "/work/shared" in line or "../shared" in line]
     assert offenders == []
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# a newcomer's path (issue 23, item 12): no site build needed
+
+def test_readme_sends_a_newcomer_to_the_landing_page_first() -> None:
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert readme.index("docs/index.md") < readme.index("docs/conventions.md")
+    start = readme[readme.index("Start with:"):]
+    assert start.splitlines()[2].startswith("- `docs/index.md`")
+
+
+def test_the_landing_pages_quick_start_names_the_report() -> None:
+    index = (DOCS / "index.md").read_text(encoding="utf-8")
+    quick = index[index.index("## Quick start"):index.index("## Where to go next")]
+    assert "report.html" in quick
+
+
+def test_the_cli_page_names_every_built_in_drive() -> None:
+    from bldclab.model.catalog import names
+
+    cli = (DOCS / "user-guide" / "cli.md").read_text(encoding="utf-8")
+    intro = cli[:cli.index("Shared behaviour")]
+    for name in names():
+        assert f"`{name}`" in intro, name
+
+
+def test_readme_synopsis_of_compare_and_effmap_lists_every_option() -> None:
+    from bldclab.cli import build_parser
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    parser = build_parser(["compare", "effmap"])
+    sub = next(a for a in parser._actions if hasattr(a, "choices") and isinstance(a.choices, dict))
+    for command in ("compare", "effmap"):
+        start = readme.index(f"bldclab {command} MOTOR")
+        synopsis = readme[start:readme.index("\nbldclab ", start + 1)]
+        for action in sub.choices[command]._actions:
+            for option in action.option_strings:
+                if option.startswith("--") and option != "--help" and (command == "compare" or option in (
+                        "--chopping", "--verbose", "--generating", "--store", "--no-store", "--workers")):
+                    assert option in synopsis, (command, option)

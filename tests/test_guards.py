@@ -169,6 +169,12 @@ def test_collect_and_summary():
     assert caught == ["a", "b"]
     assert plausibility.summary(caught, 7) == "2 plausibility warnings in 7 runs; first: a"
     assert plausibility.summary([], 7) is None
+    # identical messages count once, the causes are named (issue 23, item 1)
+    same = "square at 0.8 p.u.: inverter.f_pwm: f_pwm = 48 kHz gives 11 PWM periods"
+    msgs = [same, "sine at 0.9 p.u., averaged inverter: result.energy_balance: residue 2e-4", same, same]
+    assert plausibility.summary(msgs, "4 points") == (
+        "2 plausibility warnings in 4 points (2 repeats counted once); causes: inverter.f_pwm, result.energy_balance; "
+        f"first: {same}")
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -196,7 +202,8 @@ def test_compare_and_torque_control_raise_no_plausibility_warning(drive):
 
 
 def test_compare_collects_warnings_into_one():
-    with pytest.warns(PlausibilityWarning, match=r"^2 plausibility warnings in 4 runs; first: square at 1\.2 p\.u\."):
+    with pytest.warns(PlausibilityWarning, match=r"^2 plausibility warnings in 4 runs; cause: scenario\.speed; first: "
+                      r"square at 1\.2 p\.u\."):
         res = compare(HTM, [0.5, 1.2], workers=1)
     assert len(res.warnings) == 2 and all("no-load speed" in t for t in res.warnings)
 
@@ -216,7 +223,7 @@ def slow_pwm_file(tmp_path_factory):
 
 @pytest.mark.parametrize(("args", "cause"), [
     (["{slow}"], "inverter.f_pwm"),
-    (["htm-48v", "--speed", "300"], "result.currents"),
+    (["htm-48v", "--speed", "300"], "scenario.speed"),  # 4 Omega_0 leads: "...; the run then failed: result.currents"
     (["htm-48v", "--speed", "1e9 rpm"], "scenario.speed"),
     (["htm-48v", "--current", "5000 A"], "scenario.ref"),
 ])

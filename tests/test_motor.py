@@ -755,7 +755,8 @@ def test_every_unit_converts_and_every_foreign_unit_fails(dim: str) -> None:
             to_si(f"1 {unit}", dim, "motor.x", "file.toml")
         assert info.value.field == "motor.x"
         assert info.value.source == "file.toml"
-        assert f"not a unit of {dim.replace('_', ' ')}" in info.value.problem
+        problem = info.value.problem
+        assert f"not a unit of {dim.replace('_', ' ')}" in problem or (" as written, not " in problem), problem
 
 
 @pytest.mark.parametrize(
@@ -977,14 +978,21 @@ def _toml_blocks() -> list[str]:
 
 def test_doc_examples_load(tmp_path: Path) -> None:
     blocks = _toml_blocks()
-    complete = [b for b in blocks if "[motor]" in b]
+    complete = [b for b in blocks if "[motor]" in b and "[inverter]" in b]
     assert len(complete) == 2
+    # the catalogue-ratings example ([motor] and [motor.emf] only): the numbers its comments give
+    ratings = [b for b in blocks if "poles =" in b]
+    assert len(ratings) == 1
+    m = Drive.from_toml(write(tmp_path, ratings[0] + BASE[BASE.index("[inverter]"):], "kv.toml")).motor
+    assert (m.p, m.R, m.L) == (7, 0.04, 7.5e-6)
+    assert round(m.emf.shapes[0].k_1 * 1e3, 3) == 2.827 and round(m.k_phi * 1e3, 3) == 2.449  # type: ignore[attr-defined]
     trapezoid, table = (Drive.from_toml(write(tmp_path, b, f"ex{j}.toml")) for j, b in enumerate(complete))
     assert isinstance(trapezoid.motor.emf.shapes[0], Trapezoid)
     assert trapezoid.sensors.hall_error[1] == pytest.approx(1.5 * math.pi / 180)
     assert all(isinstance(s, Table) and len(s.theta) == 24 for s in table.motor.emf.shapes)
     assert not table.motor.emf.is_symmetric
-    snippets = [b for b in blocks if "[motor]" not in b and "[inverter]" not in b and "[motor.iron]" not in b]
+    snippets = [b for b in blocks if "[motor]" not in b and "[inverter]" not in b and "[motor.iron]" not in b
+                and "poles =" not in b]
     assert len(snippets) == 1
     # the [motor.iron] example: a built-in grade, core mass and flux density give with_iron_from_grade's powers
     irons = [b for b in blocks if "[motor.iron]" in b]
@@ -1010,3 +1018,152 @@ def test_doc_lists_every_unit() -> None:
         for unit in units:
             if unit:
                 assert f"`{unit}`" in text, unit
+
+
+# ----------------------------------------------------------------------------------------------------------
+# units: case, plurals, SI prefixes, ambiguous spellings (issue 23, item 4)
+
+@pytest.mark.parametrize(("text", "dim", "si"), [
+    ("50 mohm", "resistance", 0.05), ("0.08 ohm", "resistance", 0.08), ("0.08 ohms", "resistance", 0.08),
+    ("80 mOhms", "resistance", 0.08), ("0.08 OHM", "resistance", 0.08), ("48 khz", "frequency", 48e3),
+    ("48 KHZ", "frequency", 48e3), ("48 KHz", "frequency", 48e3), ("15 uh", "inductance", 15e-6),
+    ("15 UH", "inductance", 15e-6), ("2.4 mV s/rad", "emf_constant", 2.4e-3), ("2.4 mv s/rad", "emf_constant", 2.4e-3),
+    ("2.4 uV s/rad", "emf_constant", 2.4e-6), ("1 kV s/rad", "emf_constant", 1e3), ("3 MV s/rad", "emf_constant", 3e6),
+    ("90 degrees", "angle", math.pi / 2), ("90 degs", "angle", math.pi / 2), ("1 radians", "angle", 1.0),
+    ("3000 RPM", "speed", 3000 * TWO_PI / 60), ("1950 rpm/V", "speed_constant", 1950 * TWO_PI / 60),
+    ("2 GHz", "frequency", 2e9), ("5 kN m", "torque", 5e3), ("3 pH", "inductance", 3e-12), ("1 mw", "power", 1e-3),
+    ("1 Ms", "time", 1e6), ("20 ms", "time", 0.02),
+])
+def test_units_case_plurals_and_prefixes(text: str, dim: str, si: float) -> None:
+    """Case is free where it does not change the meaning; plurals; any SI prefix on an SI symbol."""
+    assert to_si(text, dim, "x") == pytest.approx(si, rel=1e-15)
+
+
+@pytest.mark.parametrize(("text", "dim", "both"), [
+    ("20 mS", "time", ("millisiemens", "'ms'")),  # S is the siemens: millisiemens as typed, not milliseconds
+    ("1 S", "time", ("siemens", "'s'")),
+    ("1 MW", "power", ("'MW' (mega)", "'mW' (milli)")),  # in capitals: the prefix's case is lost
+    ("50 MOHM", "resistance", ("'MOhm' (mega)", "'mOhm' (milli)")),
+    ("48 MHZ", "frequency", ("'MHz' (mega)", "'mHz' (milli)")),
+    ("5 nm", "torque", ("a unit of length", "'Nm'")),  # nanometre as typed
+])
+def test_ambiguous_spellings_are_refused_naming_both_readings(text: str, dim: str, both: tuple[str, str]) -> None:
+    with pytest.raises(BldclabError) as info:
+        to_si(text, dim, "motor.x")
+    assert info.value.field == "motor.x"
+    for reading in both:
+        assert reading in info.value.problem, info.value.problem
+
+
+def test_a_unit_scales_the_number_by_its_power_of_ten_exactly() -> None:
+    """"30 uH" is the double of 3e-05 (30 * 1e-6 is 2.9999999999999997e-05): a file written back shows 3e-05."""
+    assert 30 * 1e-6 != 3e-05
+    assert to_si("30 uH", "inductance", "x") == 3e-05
+    assert repr(to_si("0.1 mOhm", "resistance", "x")) == "0.0001"
+    assert repr(to_si("7 ms", "time", "x")) == "0.007"
+    assert to_si("3000 rpm", "speed", "x") == 3000 * (2 * math.pi / 60)  # non-decimal: times the factor
+
+
+# ----------------------------------------------------------------------------------------------------------
+# catalogue ratings: KV, poles, line-to-line R and L (issue 23, item 3)
+
+DRONE = Path(__file__).resolve().parent / "data" / "drone-2207.toml"
+DRONE_TEXT = DRONE.read_text(encoding="utf-8")
+
+
+def test_a_catalogue_motor_file_converts_on_load() -> None:
+    """poles, R_ll, L_ll and KV = 1950 rpm/V: p = 7, 40 mOhm, 7.5 uH per phase, k_phi = 15 / (pi KV)."""
+    d = Drive.from_toml(DRONE)
+    m = d.motor
+    assert (m.p, m.R, m.L) == (7, 0.04, 7.5e-6)
+    assert m.k_phi == pytest.approx(15 / (math.pi * 1950), rel=1e-12)
+    assert isinstance(m.emf.shapes[0], Sinusoid)
+    assert m.emf.shapes[0].k_1 == pytest.approx(2 * 15 / (math.pi * 1950) / math.sqrt(3), rel=1e-12)
+    assert d.Omega_0 * 60 / TWO_PI == pytest.approx(1950 * 24, rel=1e-12)  # KV is Omega_0 / V_dc
+    assert (m.poles, m.R_ll, m.L_ll) == (14, 0.08, 1.5e-5)
+    assert m.KV == pytest.approx(1950, rel=1e-12) and m.KV_rms == pytest.approx(1950 * math.sqrt(2), rel=1e-6)
+
+
+def test_the_written_file_is_canonical_with_the_ratings_in_comments(tmp_path: Path) -> None:
+    d = Drive.from_toml(DRONE)
+    text = d.to_toml()
+    motor = tomllib.loads(text)["motor"]
+    assert {"p", "R", "L"} <= set(motor) and not {"poles", "R_ll", "L_ll", "KV"} & set(motor)
+    assert "p = 7  # pole pairs (14 poles)" in text and "R_ll = 0.08" in text and "L_ll = 1.5e-05" in text
+    assert "KV = 1950 rpm/V" in text
+    assert Drive.from_toml(write(tmp_path, text)) == d
+
+
+@pytest.mark.parametrize(("form", "crest"), [("sinusoid", math.sqrt(2)), ("trapezoid", 3 / math.sqrt(5))])
+def test_kv_rms_uses_the_shapes_line_to_line_crest_factor(tmp_path: Path, form: str, crest: float) -> None:
+    """KV_rms: per volt of rms line-to-line back-EMF; peak / rms of the line shape is sqrt(2) or 3/sqrt(5)."""
+    text = DRONE_TEXT.replace('KV = "1950 rpm/V"', 'KV_rms = "2000 rpm/V"').replace('"sinusoid"', f'"{form}"')
+    m = Drive.from_toml(write(tmp_path, text)).motor
+    assert m.k_phi == pytest.approx(crest / (2 * 2000 * TWO_PI / 60), rel=1e-6)
+    assert m.KV_rms == pytest.approx(2000, rel=1e-9)
+
+
+def test_kv_as_a_plain_number_is_rpm_per_volt(tmp_path: Path) -> None:
+    text = DRONE_TEXT.replace('KV = "1950 rpm/V"', "KV = 1950")
+    assert Drive.from_toml(write(tmp_path, text)) == Drive.from_toml(DRONE)
+    text = DRONE_TEXT.replace('KV = "1950 rpm/V"', 'KV = "204.2035 rad/s/V"')
+    assert Drive.from_toml(write(tmp_path, text)).motor.KV == pytest.approx(1950, rel=1e-6)
+
+
+@pytest.mark.parametrize(("old", "new", "field", "words"), [
+    ("poles = 14", "poles = 13", "motor.poles", "for 13 pole pairs write p = 13"),
+    ("poles = 14", "poles = 14\np = 7", "motor.poles", "not both"),
+    ('R_ll = "0.08 Ohm"', 'R_ll = "0.08 Ohm"\nR = 0.04', "motor.R_ll", "not both"),
+    ('R_ll = "0.08 Ohm"', 'R = "0.08 Ohm line-to-line"', "motor.R", 'R_ll = "0.08 Ohm"'),
+    ('L_ll = "15 uH"', "", "motor.L", "is missing"),
+    ('KV = "1950 rpm/V"', 'KV = "1950 rpm/V"\nKV_rms = 2700', "motor.KV_rms", "cannot be given with KV"),
+    ('kind = "sinusoid"', 'kind = "sinusoid"\nk_1 = 0.0028', "motor.emf.k_1", "cannot be given with motor.KV"),
+    ('KV = "1950 rpm/V"', "", "motor.emf.k_1", "is missing"),
+    ('kind = "sinusoid"', 'kind = "fourier"\na = [0.0, 0.0]\nb = [0.0, 1.0]', "motor.emf.kind", "drop motor.KV"),
+    ('KV = "1950 rpm/V"', "KV = -5", "motor.KV", "must be > 0"),
+])
+def test_catalogue_forms_are_refused_naming_the_field(tmp_path: Path, old: str, new: str, field: str,
+                                                      words: str) -> None:
+    with pytest.raises(BldclabError) as info:
+        Drive.from_toml(write(tmp_path, DRONE_TEXT.replace(old, new)))
+    assert info.value.field == field and words in info.value.problem, str(info.value)
+
+
+def test_a_kv_typed_as_an_emf_constant_is_refused_with_the_fix(tmp_path: Path) -> None:
+    text = DRONE_TEXT.replace('KV = "1950 rpm/V"\n', "").replace('kind = "sinusoid"',
+                                                                 'kind = "sinusoid"\nk_1 = "1950 rpm/V"')
+    with pytest.raises(BldclabError) as info:
+        Drive.from_toml(write(tmp_path, text))
+    assert info.value.field == "motor.emf.k_1"
+    assert 'write KV = "1950 rpm/V" in [motor]' in info.value.problem
+
+
+def test_pole_pairs_that_look_like_a_pole_count_warn_naming_both_readings(tmp_path: Path) -> None:
+    """p = 14 at 1950 KV: 10.9 kHz electrical at the no-load speed; 7 pole pairs would be 5.46 kHz."""
+    from bldclab.errors import PlausibilityWarning
+
+    with pytest.warns(PlausibilityWarning) as rec:
+        d = Drive.from_toml(write(tmp_path, DRONE_TEXT.replace("poles = 14", "p = 14")))
+    assert d.motor.p == 14  # valid: a warning, not a refusal
+    text = str(rec[0].message)
+    assert "motor.p: p = 14 pole pairs (28 poles)" in text and "if 14 is the pole count (7 pole pairs" in text
+    assert "write poles = 14" in text
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Drive.from_toml(DRONE)  # 7 pole pairs: no warning
+        for name in catalog.names():
+            catalog.load(name)
+
+
+def test_motor_from_ratings_is_the_api_of_the_same_conversion() -> None:
+    m = Motor.from_ratings(poles=14, R_ll="0.08 Ohm", L_ll="15 uH", KV="1950 rpm/V", shape="sinusoid",
+                           V_N=24.0, I_N="30 A")
+    assert m == Drive.from_toml(DRONE).motor
+    t = Motor.from_ratings(p=7, R=0.04, L=7.5e-6, KV=1950, shape="trapezoid", V_N=24.0, I_N=30.0)
+    assert isinstance(t.emf.shapes[0], Trapezoid)
+    assert t.emf.shapes[0].k_phi == pytest.approx(15 / (math.pi * 1950), rel=1e-12)
+    with pytest.raises(BldclabError) as info:
+        Motor.from_ratings(p=7, R=0.04, L=7.5e-6, V_N=24.0, I_N=30.0)
+    assert info.value.field == "emf"

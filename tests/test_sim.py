@@ -236,3 +236,18 @@ def test_faults_reach_plant_and_sensors():
         bl.Fault("melt", "a", 0.0)
     with pytest.raises(BldclabError, match=r"fault\.t_off"):
         bl.Fault("hall_glitch", "a", 0.1, t_off=0.05)
+
+
+def test_scenario_takes_speeds_in_per_unit_as_the_cli_does() -> None:
+    """Scenario(speed="0.5 pu") (issue 23, item 4): per unit of the drive's Omega_0, resolved by simulate."""
+    sc = bl.Scenario(duration=0.04, speed="0.5 pu", ref=30.0, window=(0.02, 0.04))
+    assert isinstance(sc.speed, bl.sim.PerUnit) and str(sc.speed) == "0.5 pu"
+    assert sc.resolved(HTM).speed == pytest.approx(0.5 * HTM.Omega_0)
+    res = bl.simulate(HTM, bl.SixStep(), sc)
+    assert res.metrics.omega_mean == pytest.approx(0.5 * HTM.Omega_0, rel=1e-9)
+    prof = bl.Scenario(duration=0.04, speed="0 s: 100 rpm, 0.01 s: 0.25 pu").resolved(LU).speed
+    assert prof.times == (0.0, 0.01)
+    assert prof.values == pytest.approx((100 * math.pi / 30, 0.25 * LU.Omega_0), rel=1e-15)
+    with pytest.raises(BldclabError) as info:
+        bl.Scenario(duration=0.04, speed="0.5 pp")
+    assert info.value.field == "scenario.speed"

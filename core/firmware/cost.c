@@ -1,7 +1,8 @@
 /*
  * cost.c - host harness for instruction counts per controller step (benchmarks/firmware.py runs it under
  * valgrind --tool=callgrind). Usage: cost CONTROLLER SCENARIO N. Each scenario feeds a class of inputs:
- *   run      a motor turning: Hall edges every few samples, currents near the reference
+ *   run      a motor turning: Hall edges every few samples, currents near the reference, and the back-EMF sensing
+ *            (comparator edges at mid-sector, ADC samples) of the same rotor
  *   edge     a Hall edge at every sample (commutation every step)
  *   invalid  invalid Hall codes (safe-state path)
  *   nan      non-finite measurements (input-validation path)
@@ -36,6 +37,31 @@ static void make_input(const bc_fw_target *tg, const char *scenario, long k, bc_
     in->omega_ref = 30.0f;
     in->theta_enc = fmodf(th, 6.2831853f);
     in->omega_enc = 30.0f;
+    /* the back-EMF sensing of a motor turning at the same speed (the sensorless controllers; the others ignore it),
+     * two sectors ahead of the Hall codes' (a sensorless start commands sector 2 first, bc_bemf.h 4): it enters a
+     * sector at theta_e = pi/6 + e pi/3, phase x's back-EMF ~ sin(theta_e - x 2 pi/3) crosses zero at x 2 pi/3 + n pi
+     * (mid-sector); the comparators show its sign, time-stamped at the crossings; an ADC conversion at every other
+     * sample, of V/2 plus a quarter of the bus times that sine */
+    const double ahead = 2.0 * 3.14159265358979 / 3.0;
+    double te = ahead + 3.14159265358979 / 6.0 + (double)k / (double)per_edge * (3.14159265358979 / 3.0);
+    for (int x = 0; x < 3; ++x) {
+        double ph = te - (double)x * (2.0 * 3.14159265358979 / 3.0);
+        double n = floor(ph / 3.14159265358979);
+        double s = sin(ph);
+        if (s > 0.0) in->zc_state |= 1u << x;
+        in->zc_count[x] = (uint32_t)(int64_t)(n + 4.0);
+        double k_cross = (n * 3.14159265358979 + (double)x * (2.0 * 3.14159265358979 / 3.0) - 3.14159265358979 / 6.0 -
+                          ahead) /
+                         (3.14159265358979 / 3.0) * (double)per_edge;
+        in->zc_tick[x] = (uint32_t)(int64_t)(k_cross * (double)tg->tick_per_ts);
+        double ka = (double)(k - 1 - (k - 1) % 2);
+        double pa = ahead + 3.14159265358979 / 6.0 + ka / (double)per_edge * (3.14159265358979 / 3.0) -
+                    (double)x * (2.0 * 3.14159265358979 / 3.0);
+        in->v_term[x] = (float)(0.5 * (double)tg->v_dc + 0.25 * (double)tg->v_dc * sin(pa));
+    }
+    in->v_neutral = 0.5f * tg->v_dc;
+    in->n_adc = (uint32_t)((k + 1) / 2);
+    in->tick_adc = (uint32_t)(int64_t)((double)(k - 1 - (k - 1) % 2) * (double)tg->tick_per_ts);
     if (strcmp(scenario, "invalid") == 0) in->hall = (k % 2) ? 7u : 0u;
     if (strcmp(scenario, "nan") == 0) {
         in->i_abc[0] = NAN;

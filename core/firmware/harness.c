@@ -94,6 +94,12 @@ static bc_obs_out OO;
 #define STEP(in, out)                                                                                             \
     (OI.u = (bc_ab){(in)->ref, (in)->omega_ref}, OI.i = (bc_ab){(in)->i_abc[0], (in)->i_abc[1]},                 \
      bc_redobs_step(&P, &S, &OI, &OO), (out)->diag[0] = OO.theta)
+#elif defined(BC_FW_BEMF)
+#include "params.h"
+static const bc_bemf_params P = HTM_BEMF_PARAMS;
+static bc_bemf_state S;
+#define INIT() bc_bemf_init(&P, &S)
+#define STEP(in, out) bc_bemf_step(&P, &S, in, out)
 #elif defined(BC_FW_NONE)
 #define INIT() 0
 #define STEP(in, out) ((out)->diag[0] = (in)->ref)

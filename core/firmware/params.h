@@ -6,6 +6,8 @@
 #ifndef BC_FW_PARAMS_H
 #define BC_FW_PARAMS_H
 
+#include "bldc/bc_bemf.h"
+#include "bldc/bc_commutation.h"
 #include "bldc/bc_fluxobs.h"
 #include "bldc/bc_hall.h"
 #include "bldc/bc_hallcal.h"
@@ -69,5 +71,19 @@ static const float LU_F_12[12] = {0.0f, 0.4f, 0.4f, 0.4f, 0.4f, 0.4f, 0.0f, -0.4
 #define HTM_REDOBS_PARAMS                                                                                         \
     {.R = 0.05f, .L = 75e-6f, .psi = 0.0486f, .ts = HTM_TS, .alpha_o = 556.0f, .sigma0 = 333.3f, .zeta_inf = 0.2f, \
      .i_max = 100.0f, .v_max = 96.0f}
+/* bc_bemf (sensorless six-step) on htm-48v: the record bldclab.SixStepSensorless() builds for the drive (comparator,
+ * synchronous chopping, demagnetisation blanking 5 deg / 1 us; alignment at 0.5 I_N through R for three periods of
+ * the rotor's oscillation with J = 0.05 kg m^2, 0.38 s; V/f ramp 0.01 to 0.1 Omega_0 at half the alignment torque's
+ * acceleration; stall 0.03 Omega_0; speeds electrical), with the integration threshold of
+ * SixStepSensorless(method="integration") and the firmware's 10 MHz capture timer. */
+#define HTM_BEMF_PARAMS                                                                                           \
+    {.method = BC_BEMF_COMPARATOR, .chop = BC_CHOP_SYNC, .delay = 1, .blanking = BC_BEMF_BLANK_DEMAG, .ts = HTM_TS,  \
+     .f_tick = 10e6f, .blank_angle = 0.08726646f, .blank_time = 1e-6f, .min_pulse = 1e-6f, .n_samples = 2,         \
+     .tau_filter = 0.0f, .t_comp = 0.0f, .adv_angle = 0.0f, .adv_time = 0.0f, .adv_demag = 0.0f,                  \
+     .adv_max = 0.5235982f, .t60_gain = 0.5f, .int_limit = 0.006981317f, .zc_timeout = 1.5f, .jump_max = 2.0f,    \
+     .miss_max = 0, .omega_stall = 18.0f, .align_time = 0.3812374f, .align_duty = 0.05208333f, .ramp_w0 = 6.0f,   \
+     .ramp_w1 = 60.0f, .ramp_accel = 1280.0f, .ramp_duty = 0.05208333f, .ramp_vf = 0.001666667f, .ramp_hold = 12, \
+     .n_handover = 6, .duty_min = 0.0f, .duty_rate = 0.0f, .ref_stop = 0.0f, .restart_wait = 0.05f,              \
+     .restart_max = 1.0f, .use_current = 1, .i_max = 100.0f, .i_limit = 0.0f, .k_limit = 2.083333f, .v_max = 96.0f}
 
 #endif /* BC_FW_PARAMS_H */

@@ -20,6 +20,7 @@
 #include <string.h>
 #include <valgrind/callgrind.h>
 
+#include "bldc/bc_bemf.h"
 #include "bldc/bc_hallcal.h"
 #include "bldc/bc_lu.h"
 #include "bldc/bc_openloop.h"
@@ -47,9 +48,11 @@ TARGET(sine, sine)
 TARGET(lu, lu)
 TARGET(sixv, sixv)
 TARGET(hallcal, hallcal)
+TARGET(bemf, bemf)
 
 #define ENTRY(NAME) {#NAME, init_##NAME, step_##NAME, sizeof(bc_##NAME##_params), sizeof(bc_##NAME##_state)}
-static const replay_target TARGETS[] = {ENTRY(sixstep), ENTRY(sine), ENTRY(lu), ENTRY(sixv), ENTRY(hallcal)};
+static const replay_target TARGETS[] = {ENTRY(sixstep), ENTRY(sine), ENTRY(lu), ENTRY(sixv), ENTRY(hallcal),
+                                        ENTRY(bemf)};
 
 static const replay_target *find(const char *name)
 {

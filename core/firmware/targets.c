@@ -129,6 +129,30 @@ STEP_FN redobs_step(const bc_ctrl_in *in, bc_ctrl_out *out)
     bc_redobs_step(&redobs_p, &redobs_s, &oi, &oo);
     obs_diag(&oo, out);
 }
+/* the sensorless controller: as configured for htm-48v (its start-up from standstill), and locked to the cost
+ * harness's turning motor (a direct start at its speed, 40 samples per sector: closed loop within a few sectors),
+ * with the back-EMF integration method and a timing advance */
+static const bc_bemf_params bemf_p = HTM_BEMF_PARAMS;
+static bc_bemf_state bemf_s;
+static int bemf_init(void) { return bc_bemf_init(&bemf_p, &bemf_s); }
+STEP_FN bemf_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_bemf_step(&bemf_p, &bemf_s, in, out); }
+
+static bc_bemf_params bemf_int_p = HTM_BEMF_PARAMS;
+static bc_bemf_state bemf_int_s;
+static int bemf_int_init(void)
+{
+    const float w = 3.14159265f / 3.0f / (40.0f * HTM_TS); /* cost.c: a sector every 40 samples */
+    bemf_int_p.method = BC_BEMF_INTEGRATE;
+    bemf_int_p.align_time = 0.0f;
+    bemf_int_p.ramp_w0 = w;
+    bemf_int_p.ramp_w1 = w;
+    bemf_int_p.ramp_accel = 0.0f;
+    bemf_int_p.omega_stall = 0.2f * w;
+    bemf_int_p.adv_angle = 0.1745f;
+    bemf_int_p.adv_demag = 0.5f;
+    return bc_bemf_init(&bemf_int_p, &bemf_int_s);
+}
+STEP_FN bemf_int_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_bemf_step(&bemf_int_p, &bemf_int_s, in, out); }
 
 #ifdef BC_FUZZ_CANARY
 /* A deliberately wrong controller (built only by the test that proves the fuzz checks can fail): on a NaN bus it
@@ -157,5 +181,7 @@ const bc_fw_target bc_fw_targets[] = {
     {"pi", BC_IS_BLOCK, pi_init, pi_step, 48.0f, 50.0f, 10.0f, 357.0f},
     {"fluxobs", BC_IS_BLOCK, fluxobs_init, fluxobs_step, 48.0f, 50.0f, 10.0f, 357.0f},
     {"redobs", BC_IS_BLOCK, redobs_init, redobs_step, 48.0f, 50.0f, 10.0f, 357.0f},
+    {"bemf", BC_USES_CURRENT | BC_USES_VDC, bemf_init, bemf_step, 48.0f, 50.0f, 0.5f, 357.0f},
+    {"bemf_int", BC_USES_CURRENT | BC_USES_VDC, bemf_int_init, bemf_int_step, 48.0f, 50.0f, 0.5f, 357.0f},
 };
 const int bc_fw_n_targets = (int)(sizeof bc_fw_targets / sizeof bc_fw_targets[0]);

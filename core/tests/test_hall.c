@@ -208,8 +208,57 @@ static void test_table_and_pll(void)
     CHECK(mxp < 2e-3, "PLL with the true table: max error %.3g rad", mxp);
 }
 
+/* The decoder's angle wrap (without fmodf within a turn of the range) gives fmodf's wrap bit for bit: the
+ * standstill angle is wrap(middle of the sector + theta_offset), so theta_offset sweeps the wrap's input over every
+ * 1021st float in [-20, 20] (about 3 turns each way) and every float near the turn boundaries. */
+static float wrap_fmodf(float th)
+{
+    th = fmodf(th, BC_TWO_PI_F);
+    if (th < 0.0f) th += BC_TWO_PI_F;
+    if (th >= BC_TWO_PI_F) th = 0.0f;
+    return th;
+}
+
+static int wrap_differs(unsigned code, int sector, float offset)
+{
+    bc_hall_params hp = {10e6f, 5.0f, offset, BC_HALL_INTERP, 1.0f, {0, {0}, {0}}};
+    bc_hall_state hs;
+    if (bc_hall_init(&hp, &hs) != BC_OK) return 1;
+    bc_ctrl_in in;
+    memset(&in, 0, sizeof in);
+    in.hall = code;
+    bc_hall_out ho;
+    bc_hall_step(&hp, &hs, &in, &ho);
+    float ref = wrap_fmodf(bc_sector_angle(sector) + BC_PI_F / 6.0f + offset); /* the decoder's own expression */
+    return memcmp(&ho.theta, &ref, sizeof ref) != 0 || ho.speed_valid != 0;
+}
+
+static void test_wrap_matches_fmodf(void)
+{
+    unsigned code = 1u;
+    while (bc_hall_sector(code) != 2) ++code;
+    float mid = bc_sector_angle(2) + BC_PI_F / 6.0f;
+    long differ = 0, n = 0;
+    uint32_t top;
+    float twenty = 20.0f;
+    memcpy(&top, &twenty, sizeof top);
+    for (uint32_t b = 0; b <= top; b += 2039u) { /* |offset| over every 2039th float up to 20, both signs */
+        float off;
+        memcpy(&off, &b, sizeof off);
+        for (int sgn = 0; sgn < 2; ++sgn, ++n, off = -off) differ += wrap_differs(code, 2, off);
+    }
+    const float bounds[] = {0.0f, BC_TWO_PI_F, -BC_TWO_PI_F, 2.0f * BC_TWO_PI_F, -2.0f * BC_TWO_PI_F};
+    for (unsigned b = 0; b < sizeof bounds / sizeof bounds[0]; ++b) {
+        float off = bounds[b] - mid;
+        for (int j = 0; j < 2000; ++j) off = nextafterf(off, -INFINITY);
+        for (int j = 0; j < 4001; ++j, ++n, off = nextafterf(off, INFINITY)) differ += wrap_differs(code, 2, off);
+    }
+    CHECK(differ == 0 && n > 100000, "angle wrap equals fmodf's: %ld of %ld differ", differ, n);
+}
+
 int main(void)
 {
+    test_wrap_matches_fmodf();
     double e_th, e_om;
     int edges, from;
     /* 0.5 Omega_0 forward: 10 MHz capture, intervals of ~2 ms: speed to 1e-4, angle to a few 1e-4 rad */

@@ -49,6 +49,23 @@ static void make_params(bc_lu_params *p, int method, int delay)
 
 /* ---- interpolation -------------------------------------------------------------------------------------- */
 
+/* bc_lu_shape as it was with fmodf on every call: the reference of its wrap without fmodf */
+static float shape_fmodf(const float *table, int32_t n, float theta)
+{
+    float nf = (float)n;
+    if (!isfinite(theta)) theta = 0.0f;
+    float u = fmodf(theta * (nf / BC_TWO_PI_F), nf);
+    if (u < 0.0f) u += nf;
+    if (!(u >= 0.0f && u < nf)) u = 0.0f;
+    int32_t j = (int32_t)u;
+    if (j > n - 1) j = n - 1;
+    float fr = u - (float)j;
+    int32_t j1 = j + 1 < n ? j + 1 : 0;
+    return table[j] + fr * (table[j1] - table[j]);
+}
+
+static int same_bits(float a, float b) { return memcmp(&a, &b, sizeof a) == 0; }
+
 static void test_shape(void)
 {
     static const float t6[6] = {0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f};
@@ -63,6 +80,34 @@ static void test_shape(void)
     float just_below = nextafterf(BC_TWO_PI_F, 0.0f);
     float v = bc_lu_shape(t6, 6, just_below);
     CHECK(v >= 0.0f && v <= 5.0f, "just below 2 pi: %g", (double)v);
+    {
+        /* the wrap without fmodf within a turn of the range gives the fmodf wrap's value bit for bit: every 211th
+         * float in [-20, 20] (about 3 turns each way), the turn boundaries, and far outside */
+        static const float t7[7] = {0.5f, -1.0f, 2.0f, -0.0f, 4.0f, 0.25f, -3.0f};
+        long differ = 0, n = 0;
+        uint32_t top;
+        float twenty = 20.0f;
+        memcpy(&top, &twenty, sizeof top);
+        for (uint32_t b = 0; b <= top; b += 211u) { /* |theta| over every 211th float up to 20, both signs */
+            float th;
+            memcpy(&th, &b, sizeof th);
+            for (int sgn = 0; sgn < 2; ++sgn, ++n, th = -th) {
+                differ += !same_bits(bc_lu_shape(t6, 6, th), shape_fmodf(t6, 6, th));
+                differ += !same_bits(bc_lu_shape(t7, 7, th), shape_fmodf(t7, 7, th));
+            }
+        }
+        const float edges[] = {0.0f, -0.0f, BC_TWO_PI_F, -BC_TWO_PI_F, 2.0f * BC_TWO_PI_F, -2.0f * BC_TWO_PI_F,
+                               3.0f * BC_TWO_PI_F, 1e6f, -1e6f, 1e30f, -1e30f};
+        for (unsigned e = 0; e < sizeof edges / sizeof edges[0]; ++e) {
+            float th = edges[e];
+            for (int j = 0; j < 8; ++j) th = nextafterf(th, -INFINITY);
+            for (int j = 0; j < 17; ++j, ++n, th = nextafterf(th, INFINITY)) {
+                differ += !same_bits(bc_lu_shape(t6, 6, th), shape_fmodf(t6, 6, th));
+                differ += !same_bits(bc_lu_shape(t7, 7, th), shape_fmodf(t7, 7, th));
+            }
+        }
+        CHECK(differ == 0 && n > 1000000, "shape equals its fmodf reference: %ld of %ld angles differ", differ, 2 * n);
+    }
 
     make_table();
     bc_lu_params p;

@@ -674,8 +674,35 @@ static void test_propeller_coast(void)
     CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, om0, I0, 48.0) == BC_ERR_PARAM, "negative k_q refused");
 }
 
+/* Temperature (bc_plant_set_thermal): at standstill a DC current settles at V / (2 R r_scale); spinning with the legs
+ * off, the open-circuit line voltage is k_scale times the shape's. Refused: a zero or NaN scale. */
+static void test_thermal_scales(void)
+{
+    fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    bc_plant_state s;
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, 0.0, I0, 48.0) == BC_OK, "init");
+    CHECK(bc_plant_set_thermal(&f.p, &s, 1.25, 0.9, 1.5) == BC_OK, "set");
+    bc_leg_cmd c[3];
+    legs(c, BC_LEG_PWM, 0.55f, BC_LEG_PWM, 0.45f, BC_LEG_OFF, 0.0f);
+    long k = 0;
+    run_halves(&f.p, &s, c, 2000, &k); /* 71 ms: many L / (2 R) */
+    double want = 0.1 * 48.0 / (2.0 * 0.05 * 1.25);
+    CHECK(fabs(s.i[0] - want) < 2e-3 * want, "DC current %.6g vs %.6g A at 1.25 R", s.i[0], want);
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    CHECK(bc_plant_init(&f.p, &s, 0.0, 0.3, 20.0, I0, 48.0) == BC_OK, "init spinning");
+    bc_plant_out o1, o2;
+    bc_plant_output(&f.p, &s, &o1);
+    CHECK(bc_plant_set_thermal(&f.p, &s, 1.0, 0.9, 1.0) == BC_OK, "set k");
+    bc_plant_output(&f.p, &s, &o2);
+    for (int x = 0; x < 3; ++x) CHECK(fabs(o2.e[x] - 0.9 * o1.e[x]) < 1e-12, "back-EMF scaled");
+    CHECK(bc_plant_set_thermal(&f.p, &s, 0.0, 1.0, 1.0) == BC_ERR_PARAM && bc_plant_set_thermal(&f.p, &s, 1.0, NAN,
+          1.0) == BC_ERR_PARAM && s.k_scale == 0.9, "bad scales refused, nothing changed");
+}
+
 int main(void)
 {
+    test_thermal_scales();
     test_propeller_coast();
     test_hold();
     test_standstill_dc();

@@ -17,7 +17,17 @@ from .errors import BldclabError
 if TYPE_CHECKING:  # the same names, for type checkers and readers; at run time they are imported on first use
     from ._core import decode_flags, flag
     from .analysis import experiments
-    from .control import Control, HallCal, HallCalibration, Lu, OpenLoop, Sine, SixStep, SixStepVoltage
+    from .control import (
+        Control,
+        HallCal,
+        HallCalibration,
+        Lu,
+        OpenLoop,
+        Sine,
+        SixStep,
+        SixStepSensorless,
+        SixStepVoltage,
+    )
     from .model import catalog
     from .model.catalog import load
     from .model.emf import BackEmf, Cogging, Fourier, Sinusoid, Table, Trapezoid
@@ -34,7 +44,7 @@ LAZY: Lazy = {
     "flag": ("bldclab._core", "flag"),
     "experiments": ("bldclab.analysis.experiments", None),
     **{name: ("bldclab.control", name) for name in ("Control", "HallCal", "HallCalibration", "Lu", "OpenLoop",
-                                                    "Sine", "SixStep", "SixStepVoltage")},
+                                                    "Sine", "SixStep", "SixStepSensorless", "SixStepVoltage")},
     "catalog": ("bldclab.model.catalog", None),
     "load": ("bldclab.model.catalog", "load"),
     **{name: ("bldclab.model.emf", name) for name in ("BackEmf", "Cogging", "Fourier", "Sinusoid", "Table",
@@ -71,6 +81,7 @@ __all__ = [
     "Sine",
     "Sinusoid",
     "SixStep",
+    "SixStepSensorless",
     "SixStepVoltage",
     "Table",
     "Trapezoid",

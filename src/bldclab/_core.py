@@ -142,6 +142,9 @@ class Core:
         lib.bc_sim_init.restype = ctypes.c_int
         lib.bc_sim_init.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_double,
                                     ctypes.c_void_p, ctypes.c_double)
+        lib.bc_sim_set_thermal.restype = ctypes.c_int
+        lib.bc_sim_set_thermal.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_double,
+                                           ctypes.c_double)
         lib.bc_sim_run.restype = ctypes.c_int
         lib.bc_sim_run.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int64,
                                    ctypes.c_void_p, ctypes.c_int64, ctypes.POINTER(ctypes.c_int64))

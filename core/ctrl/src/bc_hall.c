@@ -11,7 +11,11 @@
 
 static float wrap_2pi(float th)
 {
-    th = fmodf(th, BC_TWO_PI_F);
+    /* within one turn of the range (the angles of a running decoder) no fmodf: its remainder is th itself, or
+     * th - 2 pi exactly (Sterbenz: 2 pi <= th < 4 pi); -2 pi (fmodf: -0) and anything else (NaN stays NaN) take
+     * fmodf */
+    if (th >= BC_TWO_PI_F && th < 2.0f * BC_TWO_PI_F) th -= BC_TWO_PI_F;
+    else if (!(th > -BC_TWO_PI_F && th < BC_TWO_PI_F)) th = fmodf(th, BC_TWO_PI_F);
     if (th < 0.0f) th += BC_TWO_PI_F;
     if (th >= BC_TWO_PI_F) th = 0.0f;
     return th;

@@ -21,9 +21,17 @@ float bc_lu_shape(const float *table, int32_t n, float theta)
 {
     float nf = (float)n;
     if (!isfinite(theta)) theta = 0.0f;
-    /* u = theta n / (2 pi) wrapped to [0, n); f = table[j] + (u - j) (table[j+1] - table[j]), table[n] = table[0] */
-    float u = fmodf(theta * (nf / BC_TWO_PI_F), nf);
-    if (u < 0.0f) u += nf;
+    /* u = theta n / (2 pi) wrapped to [0, n); f = table[j] + (u - j) (table[j+1] - table[j]), table[n] = table[0].
+     * Within one turn of the range (every angle a running step asks for: theta - x 2 pi/3, theta + Omega_e T_s) no
+     * fmodf: its remainder is y itself, or y - n exactly (Sterbenz: n <= y < 2 n), so the same u. */
+    float y = theta * (nf / BC_TWO_PI_F), u;
+    if (y >= 0.0f && y < nf) u = y;
+    else if (y >= nf && y < 2.0f * nf) u = y - nf;
+    else if (y < 0.0f && y > -nf) u = y + nf;
+    else {
+        u = fmodf(y, nf);
+        if (u < 0.0f) u += nf;
+    }
     if (!(u >= 0.0f && u < nf)) u = 0.0f;
     int32_t j = (int32_t)u;
     if (j > n - 1) j = n - 1;
@@ -128,19 +136,18 @@ void bc_lu_predict(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan
 /* Advance the currents over tau seconds with the legs in fixed states: the connected phases C (switched, or off
  * with current through a diode) obey L di_x/dt = u_x - w f_x - R i_x(0) - v_n, v_n = mean_C (u_x - w f_x - R i_x(0)),
  * a diode-only phase opens when its current reaches zero (the part is split there), open phases keep i = 0.
- * r_drop[x] = R i_x at the start of the step (as in the averaged models). */
-static void segment(const bc_lu_params *p, const bc_lu_point *x, const float r_drop[3], const int leg[3], float tau,
-                    float i[3], float *area, int *dry)
+ * wf[x] = w f_x and r_drop[x] = R i_x at the start of the step (as in the averaged models); eps: a current within
+ * it is zero. */
+static void segment(const bc_lu_params *p, const bc_lu_point *x, const float wf[3], const float r_drop[3],
+                    const int leg[3], float tau, float eps, float i[3], float *area, int *dry)
 {
-    float v = x->v_dc, w = x->omega_m;
-    float eps = 1e-6f * p->i_max;
+    float v = x->v_dc;
     for (int ev = 0; ev < 4 && tau > 0.0f; ++ev) {
-        float u[3], wf[3], slope[3];
+        float u[3], slope[3];
         int conn[3], diode[3];
         for (int k = 0; k < 3; ++k) {
             diode[k] = 0;
             conn[k] = 1;
-            wf[k] = w * x->f[k];
             if (leg[k] == SEG_HI) {
                 u[k] = v;
             } else if (leg[k] == SEG_LO) {
@@ -184,11 +191,13 @@ static void segment(const bc_lu_params *p, const bc_lu_point *x, const float r_d
 static void ordered(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_plan *plan, int rising, float i_next[3],
                     float *area, int *dry)
 {
-    float r_drop[3];
+    float r_drop[3], wf[3];
     for (int k = 0; k < 3; ++k) {
         i_next[k] = x->i[k];
         r_drop[k] = p->R * x->i[k];
+        wf[k] = x->omega_m * x->f[k];
     }
+    float eps = 1e-6f * p->i_max;
     int on[3] = {SEG_OFF, SEG_OFF, SEG_OFF}, off[3] = {SEG_OFF, SEG_OFF, SEG_OFF};
     float d = 0.0f;
     if (plan->kind == BC_LU_PAIR || plan->kind == BC_LU_DO) {
@@ -204,11 +213,11 @@ static void ordered(const bc_lu_params *p, const bc_lu_point *x, const bc_lu_pla
     /* centre-aligned PWM: the on part is next to the carrier peak, so a rising half period starts off */
     float t_on = d * p->ts, t_off = p->ts - t_on;
     if (rising) {
-        segment(p, x, r_drop, off, t_off, i_next, area, dry);
-        segment(p, x, r_drop, on, t_on, i_next, area, dry);
+        segment(p, x, wf, r_drop, off, t_off, eps, i_next, area, dry);
+        segment(p, x, wf, r_drop, on, t_on, eps, i_next, area, dry);
     } else {
-        segment(p, x, r_drop, on, t_on, i_next, area, dry);
-        segment(p, x, r_drop, off, t_off, i_next, area, dry);
+        segment(p, x, wf, r_drop, on, t_on, eps, i_next, area, dry);
+        segment(p, x, wf, r_drop, off, t_off, eps, i_next, area, dry);
     }
 }
 
@@ -228,29 +237,124 @@ float bc_lu_mean_ordered(const bc_lu_params *p, const bc_lu_point *x, const bc_l
     return area / p->ts;
 }
 
+/* ---- the evaluations of one step, kept ------------------------------------------------------------------ */
+
+/* The solves and the period test of one step evaluate the ordered model from one point (x1) and for one pair, and
+ * they meet the same duties again: the bracket solve's first estimate is the guess it has just evaluated, the mean
+ * law starts from the end-value duty the period test has just evaluated (and brackets with the end value's d = 1 or
+ * 0), and the test of the mean law's duty repeats the solve's last evaluation. Each half period is therefore kept
+ * (a few, most recent first overwritten) and taken again for the same duty: the same inputs through the same
+ * arithmetic, so the same numbers, without the second evaluation. Keyed by the duty clamped to [0, 1] (all the
+ * model uses of it) and the half's direction; a memo belongs to one point and pair (checked: another one clears
+ * it). */
+#define MEMO_HALVES 4
+#define MEMO_SECONDS 2
+
+typedef struct {
+    float d;          /* duty clamped to [0, 1] */
+    int32_t rising;   /* direction of the half period (the second half of a period: of the first one) */
+    int32_t has_mean; /* mean and dry computed (bc_lu_mean_ordered), else the currents only */
+    float i[3];       /* currents at the end of the half period */
+    float mean;       /* mean torque over it, N m */
+    int32_t dry;      /* the current stops in it (bc_lu_mean_ordered) */
+} half_eval;
+
+typedef struct {
+    const bc_lu_point *x; /* the point every half starts from (the second halves: from a first one's end) */
+    int32_t pos, neg;
+    int32_t want_mean;    /* also compute the mean and dry of an end-value evaluation (a period test follows) */
+    half_eval half[MEMO_HALVES];    /* half periods from x */
+    half_eval second[MEMO_SECONDS]; /* the half period after one from x under the same duty, keyed by the first */
+    int32_t n_half, n_second, next_half, next_second;
+} lu_memo;
+
+static void memo_init(lu_memo *m, const bc_lu_point *x, int pos, int neg, int want_mean)
+{
+    m->x = x;
+    m->pos = pos;
+    m->neg = neg;
+    m->want_mean = want_mean;
+    m->n_half = m->n_second = m->next_half = m->next_second = 0;
+}
+
+/* The memo for this point and pair (cleared if it held another). */
+static void memo_bind(lu_memo *m, const bc_lu_point *x, int pos, int neg)
+{
+    if (m->x != x || m->pos != pos || m->neg != neg) memo_init(m, x, pos, neg, m->want_mean);
+}
+
+static const half_eval *memo_find(const half_eval *e, int32_t n, float d, int rising, int mean)
+{
+    for (int32_t k = 0; k < n; ++k) {
+        if (e[k].d == d && e[k].rising == rising && (e[k].has_mean || !mean)) return &e[k];
+    }
+    return 0;
+}
+
+/* The half period from x under the PAIR plan with duty d (mean: with its mean torque and dry). */
+static const half_eval *half_of(const bc_lu_params *p, lu_memo *m, bc_lu_plan *plan, int rising, float d, int mean)
+{
+    float dc = bc_clampf(d, 0.0f, 1.0f);
+    const half_eval *hit = memo_find(m->half, m->n_half, dc, rising, mean);
+    if (hit) return hit;
+    half_eval *e = &m->half[m->next_half];
+    if (++m->next_half == MEMO_HALVES) m->next_half = 0;
+    if (m->n_half < MEMO_HALVES) ++m->n_half;
+    e->d = dc;
+    e->rising = rising;
+    e->has_mean = mean;
+    plan->duty = d;
+    if (mean) {
+        int dry;
+        e->mean = bc_lu_mean_ordered(p, m->x, plan, rising, e->i, &dry);
+        e->dry = dry;
+    } else {
+        bc_lu_predict_ordered(p, m->x, plan, rising, e->i);
+        e->mean = 0.0f;
+        e->dry = 0;
+    }
+    return e;
+}
+
+/* The half period after `first` (from its end, the other direction, the same duty), with its mean and dry. */
+static const half_eval *second_of(const bc_lu_params *p, lu_memo *m, bc_lu_plan *plan, const half_eval *first)
+{
+    const half_eval *hit = memo_find(m->second, m->n_second, first->d, first->rising, 1);
+    if (hit) return hit;
+    half_eval *e = &m->second[m->next_second];
+    if (++m->next_second == MEMO_SECONDS) m->next_second = 0;
+    if (m->n_second < MEMO_SECONDS) ++m->n_second;
+    bc_lu_point y = *m->x;
+    int dry;
+    for (int k = 0; k < 3; ++k) y.i[k] = first->i[k];
+    plan->duty = first->d;
+    e->d = first->d;
+    e->rising = first->rising;
+    e->has_mean = 1;
+    e->mean = bc_lu_mean_ordered(p, &y, plan, !first->rising, e->i, &dry);
+    e->dry = dry;
+    return e;
+}
+
 /* The ordered model's torque under a PAIR duty d: at the end of the step (mean = 0), its mean over the step
  * (mean = 1), or its mean over the step and the next one under the same duty, the next half period the other
  * direction (mean = 2: a whole PWM period when the step rises). */
-static float pair_torque(const bc_lu_params *p, const bc_lu_point *x, bc_lu_plan *plan, int rising, float d, int mean)
+static float pair_torque(const bc_lu_params *p, lu_memo *m, bc_lu_plan *plan, int rising, float d, int mean)
 {
-    bc_lu_point y = *x;
-    int dry;
-    plan->duty = d;
     if (!mean) {
-        bc_lu_predict_ordered(p, x, plan, rising, y.i);
+        const half_eval *h = half_of(p, m, plan, rising, d, m->want_mean);
+        bc_lu_point y = *m->x;
+        for (int k = 0; k < 3; ++k) y.i[k] = h->i[k];
         return bc_lu_torque(&y);
     }
-    float t_mean = bc_lu_mean_ordered(p, x, plan, rising, y.i, &dry);
-    if (mean == 2) {
-        bc_lu_point z = y;
-        t_mean = 0.5f * (t_mean + bc_lu_mean_ordered(p, &y, plan, !rising, z.i, &dry));
-    }
-    return t_mean;
+    const half_eval *h = half_of(p, m, plan, rising, d, 1);
+    if (mean == 1) return h->mean;
+    return 0.5f * (h->mean + second_of(p, m, plan, h)->mean);
 }
 
 typedef struct {
     const bc_lu_params *p;
-    const bc_lu_point *x;
+    lu_memo *m;
     bc_lu_plan *plan;
     float t_ref, sgn;
     int rising, mean;
@@ -259,19 +363,20 @@ typedef struct {
 static float pair_gap(float d, void *ctx)
 {
     const pair_goal *g = (const pair_goal *)ctx;
-    return g->sgn * (pair_torque(g->p, g->x, g->plan, g->rising, d, g->mean) - g->t_ref);
+    return g->sgn * (pair_torque(g->p, g->m, g->plan, g->rising, d, g->mean) - g->t_ref);
 }
 
-/* Root of sgn (pair_torque(d) - T*) on [0, 1] (see bc_lu_solve_pair). */
-static float solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
-                        float d0, float tol, int mean)
+/* Root of sgn (pair_torque(d) - T*) on [0, 1] (see bc_lu_solve_pair), the evaluations kept in m. */
+static float solve_pair(const bc_lu_params *p, lu_memo *m, const bc_lu_point *x, int pos, int neg, float t_ref,
+                        int rising, float d0, float tol, int mean)
 {
     /* g(d) = sgn (T(d) - T*), increasing in d (sgn: the sign of the pair's lever f_P - f_N) */
     float sgn = x->f[pos] - x->f[neg] >= 0.0f ? 1.0f : -1.0f;
     bc_lu_plan plan = {BC_LU_PAIR, pos, neg, 3 - pos - neg, 0, 0.0f};
+    memo_bind(m, x, pos, neg);
 #define G_OF(dd, out)                                                              \
     do {                                                                           \
-        (out) = sgn * (pair_torque(p, x, &plan, rising, (dd), mean) - t_ref);      \
+        (out) = sgn * (pair_torque(p, m, &plan, rising, (dd), mean) - t_ref);      \
     } while (0)
     float g;
     float a = 0.0f, b = 1.0f, ga, gb, d;
@@ -305,20 +410,24 @@ static float solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, in
     }
     /* Illinois (modified regula falsi, bc_root_bracket) on the bracket [a, b], g(a) <= 0 <= g(b) */
 #undef G_OF
-    pair_goal goal = {p, x, &plan, t_ref, sgn, rising, mean};
+    pair_goal goal = {p, m, &plan, t_ref, sgn, rising, mean};
     return bc_root_bracket(pair_gap, &goal, a, b, ga, gb, d, tol, 1e-7f, 40, BC_ROOT_ILLINOIS);
 }
 
 float bc_lu_solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
                        float d0, float tol)
 {
-    return solve_pair(p, x, pos, neg, t_ref, rising, d0, tol, 0);
+    lu_memo m;
+    memo_init(&m, x, pos, neg, 0);
+    return solve_pair(p, &m, x, pos, neg, t_ref, rising, d0, tol, 0);
 }
 
 float bc_lu_solve_pair_mean(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
                             float d0, float tol, int two)
 {
-    return solve_pair(p, x, pos, neg, t_ref, rising, d0, tol, two ? 2 : 1);
+    lu_memo m;
+    memo_init(&m, x, pos, neg, 0);
+    return solve_pair(p, &m, x, pos, neg, t_ref, rising, d0, tol, two ? 2 : 1);
 }
 
 /* ---- the laws -------------------------------------------------------------------------------------------- */
@@ -393,16 +502,16 @@ void bc_lu_do_bounds(const bc_lu_params *p, const bc_lu_point *x, int pos, int n
 }
 
 /* Whether the current stops at some instant of a PWM period (a rising half period from x, then a falling one)
- * under the PAIR plan with duty d in both halves; *t_first: the model's mean torque over the first half (N m). */
-static int period_dry(const bc_lu_params *p, const bc_lu_point *x, bc_lu_plan *plan, float d, float *t_first)
+ * under the PAIR plan with duty d in both halves; *t_first: the model's mean torque over the first half (N m). The
+ * halves are the memo's (x and the plan's pair). */
+static int period_dry(const bc_lu_params *p, lu_memo *m, const bc_lu_point *x, bc_lu_plan *plan, float d,
+                      float *t_first)
 {
-    bc_lu_point y = *x;
-    float i_end[3];
-    int dry, dry2;
-    plan->duty = d;
-    *t_first = bc_lu_mean_ordered(p, x, plan, 1, y.i, &dry);
-    (void)bc_lu_mean_ordered(p, &y, plan, 0, i_end, &dry2);
-    return dry || dry2;
+    memo_bind(m, x, plan->pos, plan->neg);
+    const half_eval *h = half_of(p, m, plan, 1, d, 1);
+    const half_eval *h2 = second_of(p, m, plan, h);
+    *t_first = h->mean;
+    return h->dry || h2->dry;
 }
 
 /* ---- init and step --------------------------------------------------------------------------------------- */
@@ -608,6 +717,8 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
 
     bc_lu_plan plan = {BC_LU_PAIR, pos, neg, off, 0, 0.0f};
     int rising_out = p->delay == 1 ? !rising_now : rising_now; /* the half period the new output applies to */
+    lu_memo memo; /* the ordered model's evaluations from x1 for this pair (with means where a period test follows) */
+    memo_init(&memo, &x1, pos, neg, p->order == 2 && rising_out);
     if (rising_out) s->dcm = 0; /* set again below if the new period conducts discontinuously */
     float d;
     int deferred = 0; /* the end-value solve of normal conduction is left to after the mean law's test */
@@ -619,13 +730,13 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
         /* order 2 in a discontinuous period (the last one, or this one's first half, was): the mean law below
          * comes first and the end-value solve only if it does not apply (it is costly where the end value is flat) */
         deferred = p->order == 2 && (rising_out ? s->d_mean > 0.0f : s->dcm);
-        if (p->order && !deferred) d = bc_lu_solve_pair(p, &x1, pos, neg, t_ref, rising_out, d, s->tol);
+        if (p->order && !deferred) d = solve_pair(p, &memo, &x1, pos, neg, t_ref, rising_out, d, s->tol, 0);
     } else {
         /* commutation: (17') if F conducts the whole sample, D_s if it opens inside it */
         float t_x = bc_lu_extinction(p, &x1, pos, neg);
         d = t_x >= p->ts ? bc_lu_dc(p, &x1, pos, neg, t_ref, s->lever_min)
                          : bc_lu_ds(p, &x1, pos, neg, t_ref, s->lever_min);
-        if (p->order) d = bc_lu_solve_pair(p, &x1, pos, neg, t_ref, rising_out, d, s->tol);
+        if (p->order) d = solve_pair(p, &memo, &x1, pos, neg, t_ref, rising_out, d, s->tol, 0);
         if (p->method == BC_LU_TORQUE && d > 1.0f) {
             /* torque still short at full duty: D_o mode if F's switch acts in the torque's direction */
             float fbar = sum3(x1.f) / 3.0f;
@@ -648,31 +759,31 @@ void bc_lu_step(const bc_lu_params *p, bc_lu_state *s, const bc_ctrl_in *in, bc_
          * current does not stop under the end-value duty either, the period is continuous: nothing to solve. */
         bc_lu_plan trial = plan;
         float t_first;
-        int dcm = deferred || period_dry(p, &x1, &trial, bc_clampf(d, 0.0f, 1.0f), &t_first);
+        int dcm = deferred || period_dry(p, &memo, &x1, &trial, bc_clampf(d, 0.0f, 1.0f), &t_first);
         float guess = s->d_mean > 0.0f ? s->d_mean : d;
         s->d_mean = 0.0f;
         if (dcm) {
-            float d_m = bc_lu_solve_pair_mean(p, &x1, pos, neg, t_ref, 1, guess, s->tol, 1);
-            if (period_dry(p, &x1, &trial, bc_clampf(d_m, 0.0f, 1.0f), &s->t_first)) {
+            float d_m = solve_pair(p, &memo, &x1, pos, neg, t_ref, 1, guess, s->tol, 2);
+            if (period_dry(p, &memo, &x1, &trial, bc_clampf(d_m, 0.0f, 1.0f), &s->t_first)) {
                 d = d_m;
                 mode = 3.0f;
                 s->dcm = 1;
                 s->d_mean = bc_clampf(d_m, 0.0f, 1.0f); /* the next period's first guess */
             } else if (deferred) {
-                d = bc_lu_solve_pair(p, &x1, pos, neg, t_ref, 1, d, s->tol);
+                d = solve_pair(p, &memo, &x1, pos, neg, t_ref, 1, d, s->tol, 0);
             }
         }
     } else if (p->order == 2 && s->dcm && plan.kind == BC_LU_PAIR && p->method != BC_LU_RECT) {
         /* the period's second half: its mean makes up for the first half's (the model's, from the
          * measurements with delay 1) */
         float d0 = s->applied.kind == BC_LU_PAIR ? s->applied.duty : d; /* the first half's: symmetric at rest */
-        float d_m = bc_lu_solve_pair_mean(p, &x1, pos, neg, 2.0f * t_ref - t_half, 0, d0, s->tol, 0);
+        float d_m = solve_pair(p, &memo, &x1, pos, neg, 2.0f * t_ref - t_half, 0, d0, s->tol, 1);
         if (d_m >= 0.0f && d_m <= 1.0f) {
             d = d_m;
             mode = 3.0f;
         } else if (deferred) {
             /* the make-up is out of reach (e.g. a commutation in this half): the end value at least */
-            d = bc_lu_solve_pair(p, &x1, pos, neg, t_ref, 0, d, s->tol);
+            d = solve_pair(p, &memo, &x1, pos, neg, t_ref, 0, d, s->tol, 0);
         }
     }
     if (isnan(d)) { /* only a degenerate measurement (e.g. v_dc ~ 1e-38) gets here */

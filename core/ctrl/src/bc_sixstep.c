@@ -138,38 +138,10 @@ int bc_sixstep_predict(const bc_leg_cmd cmd[3], float v, const float e[3], float
 /* ------------------------------------------------------------------------------------------------------------ */
 /* commands */
 
-/* Leg commands of a chopping pattern for the normalised pair voltage m (third leg off). m < 0: both legs chop. */
-static void build(int chop, int pos, int neg, int chop_leg, float m, bc_leg_cmd c[3])
-{
-    for (int x = 0; x < 3; ++x) {
-        c[x].mode = BC_LEG_OFF;
-        c[x].duty = 0.0f;
-    }
-    c[pos].mode = BC_LEG_HIGH;
-    c[neg].mode = BC_LEG_LOW;
-    if (chop == BC_SIXSTEP_BIPOLAR || m < 0.0f) { /* u = (2 d - 1) V,  d = (1 + m)/2 */
-        float d = bc_clampf(0.5f * (1.0f + m), 0.0f, 1.0f);
-        c[pos].duty = d;
-        c[neg].duty = d;
-        return;
-    }
-    m = bc_clampf(m, 0.0f, 1.0f);
-    switch (chop) {
-    case BC_SIXSTEP_PWMPWM: /* u = m V: one leg chops, the other is fully on */
-        c[pos].duty = chop_leg == pos ? m : 1.0f;
-        c[neg].duty = chop_leg == neg ? m : 1.0f;
-        break;
-    case BC_SIXSTEP_SYNC:   /* u = m V */
-        c[pos].mode = BC_LEG_PWM;
-        c[pos].duty = m;
-        c[neg].duty = 1.0f;
-        break;
-    default:                /* high side: u = m V */
-        c[pos].duty = m;
-        c[neg].duty = 1.0f;
-        break;
-    }
-}
+/* Leg commands of a chopping pattern: bc_pair_legs (bc_commutation.h), whose pattern constants are the same numbers
+ * as this controller's (checked at compile time). */
+typedef char chop_values_agree[(BC_SIXSTEP_BIPOLAR == BC_CHOP_BIPOLAR && BC_SIXSTEP_HIGH == BC_CHOP_HIGH &&
+                                BC_SIXSTEP_PWMPWM == BC_CHOP_PWMPWM && BC_SIXSTEP_SYNC == BC_CHOP_SYNC) ? 1 : -1];
 
 /* The ideal limiter's legs (BC_SIXSTEP_IDEAL): the continuing phase fully on, the incoming phase x held at sgn_x I_ref
  * (pos: +, neg: -), the third off. */
@@ -217,7 +189,7 @@ static float pred_end(const pred_ctx *c, float m, int *opened)
 {
     bc_leg_cmd cmd[3];
     float i[3] = {c->i1[0], c->i1[1], c->i1[2]};
-    build(c->chop, c->pos, c->neg, c->chop_leg, m, cmd);
+    bc_pair_legs(c->chop, c->pos, c->neg, c->chop_leg, m, cmd);
     *opened += bc_sixstep_predict(cmd, c->v, c->e1, c->R, c->L, c->ts, i);
     return c->sgn * i[c->x];
 }
@@ -474,7 +446,7 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
     if (p->reg == BC_SIXSTEP_IDEAL) {
         build_ideal(pos, neg, x, i_ref, out->leg, &out->i_hold);
     } else {
-        build((int)p->chop, pos, neg, chop_leg, m, out->leg);
+        bc_pair_legs((int)p->chop, pos, neg, chop_leg, m, out->leg);
     }
     if (next >= 0) { /* the timed commutation: the next sector's legs from t_next, the same pair voltage */
         int pn, nn;
@@ -489,7 +461,7 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
         if (p->reg == BC_SIXSTEP_IDEAL) {
             build_ideal(pn, nn, xn, i_ref, out->leg_at, &out->i_hold_at);
         } else {
-            build((int)p->chop, pn, nn, chop_leg_of(p, pn, nn, xn, 0.0f), m, out->leg_at);
+            bc_pair_legs((int)p->chop, pn, nn, chop_leg_of(p, pn, nn, xn, 0.0f), m, out->leg_at);
         }
         out->has_at = 1u;
         out->t_at = t_next;

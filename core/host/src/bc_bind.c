@@ -3,6 +3,7 @@
 
 #include <stddef.h>
 
+#include "bldc/bc_commutation.h"
 #include "bldc/bc_emf.h"
 #include "bldc/bc_plant.h"
 #include "bldc/bc_sensors.h"
@@ -214,10 +215,16 @@ static const bc_struct_desc STRUCTS[] = {
 
 #define K BC_BIND_CONST
 
-/* Constants shared by every block (bc_types.h) and the plant's (bc_emf.h, bc_plant.h). */
+/* Constants shared by every block (bc_types.h, the chopping patterns of bc_commutation.h) and the plant's (bc_emf.h,
+ * bc_plant.h). */
 static const bc_const_desc CONSTS[] = {
     K("flag", BC_FLAG_SAFE),         K("flag", BC_FLAG_HALL_INVALID),     K("flag", BC_FLAG_OVERCURRENT),
-    K("flag", BC_FLAG_BAD_INPUT),    K("flag", BC_FLAG_SATURATED),
+    K("flag", BC_FLAG_BAD_INPUT),    K("flag", BC_FLAG_SATURATED),        K("flag", BC_FLAG_DESYNC),
+    K("flag", BC_FLAG_ZC_TIMEOUT),   K("flag", BC_FLAG_ZC_HIDDEN),        K("flag", BC_FLAG_ZC_JUMP),
+    K("flag", BC_FLAG_STALL),        K("flag", BC_FLAG_START_FAIL),       K("flag", BC_FLAG_OPEN_LOOP),
+    K("flag", BC_FLAG_COMM_LATE),    K("flag", BC_FLAG_LOCK_LOST),
+    K("chop", BC_CHOP_BIPOLAR),      K("chop", BC_CHOP_HIGH),             K("chop", BC_CHOP_PWMPWM),
+    K("chop", BC_CHOP_SYNC),
     K("leg", BC_LEG_OFF),            K("leg", BC_LEG_PWM),                K("leg", BC_LEG_HIGH),
     K("leg", BC_LEG_LOW),            K("leg", BC_LEG_HOLD),
     K("err", BC_OK),                 K("err", BC_ERR_PARAM),              K("err", BC_ERR_SIZE),
@@ -238,6 +245,7 @@ extern const bc_bind_provider bc_bind_sixstep;
 extern const bc_bind_provider bc_bind_sine;
 extern const bc_bind_provider bc_bind_lu;
 extern const bc_bind_provider bc_bind_hallcal;
+extern const bc_bind_provider bc_bind_bemf;
 
 static const bc_bind_provider *const PROVIDERS[] = {
     &bc_bind_openloop_table,
@@ -246,6 +254,7 @@ static const bc_bind_provider *const PROVIDERS[] = {
     &bc_bind_sine,
     &bc_bind_lu,
     &bc_bind_hallcal,
+    &bc_bind_bemf,
 };
 
 #define N_PROVIDERS ((int32_t)(sizeof PROVIDERS / sizeof PROVIDERS[0]))

@@ -67,11 +67,12 @@ static inline void shapes_at(const bc_plant_params *restrict p, const bc_plant_s
                              double *restrict k, double *restrict dk, const double *ref, double *cs)
 {
     if (cs) cs[0] = HUGE_VAL;
+    const double ks = s->k_scale; /* the magnets' flux at temperature (bc_plant_set_thermal) */
     if (s->emf_tables) { /* the usual case (tables and trapezoids): one multiply-add per phase */
         for (int x = 0; x < 3; ++x) {
             const bc_emf_piece *pc = &s->piece[x];
-            k[x] = pc->k0 + pc->slope * (th - pc->lo);
-            if (dk) dk[x] = pc->slope;
+            k[x] = ks * (pc->k0 + pc->slope * (th - pc->lo));
+            if (dk) dk[x] = ks * pc->slope;
         }
         return;
     }
@@ -98,13 +99,13 @@ static inline void shapes_at(const bc_plant_params *restrict p, const bc_plant_s
             sm = sm * c + cm * sn;
             cm = cn;
         }
-        k[0] = k0;
-        k[1] = k1;
-        k[2] = k2;
+        k[0] = ks * k0;
+        k[1] = ks * k1;
+        k[2] = ks * k2;
         if (dk) {
-            dk[0] = d0;
-            dk[1] = d1;
-            dk[2] = d2;
+            dk[0] = ks * d0;
+            dk[1] = ks * d1;
+            dk[2] = ks * d2;
         }
         return;
     }
@@ -113,8 +114,8 @@ static inline void shapes_at(const bc_plant_params *restrict p, const bc_plant_s
     for (int x = 0; x < 3; ++x) {
         const bc_emf_shape *sh = &p->emf[x];
         if (sh->kind == BC_EMF_TABLE) {
-            k[x] = s->piece[x].k0 + s->piece[x].slope * (th - s->piece[x].lo);
-            if (dk) dk[x] = s->piece[x].slope;
+            k[x] = ks * (s->piece[x].k0 + s->piece[x].slope * (th - s->piece[x].lo));
+            if (dk) dk[x] = ks * s->piece[x].slope;
             continue;
         }
         if (!trig) {
@@ -137,8 +138,8 @@ static inline void shapes_at(const bc_plant_params *restrict p, const bc_plant_s
             sm = sm * c1 + cm * s1;
             cm = cn;
         }
-        k[x] = acc;
-        if (dk) dk[x] = acc_d;
+        k[x] = ks * acc;
+        if (dk) dk[x] = ks * acc_d;
     }
 }
 
@@ -279,7 +280,7 @@ static void aux_terminals(const bc_plant_params *restrict p, const bc_plant_stat
     const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
     const double e0 = a->e[0], e1 = a->e[1], e2 = a->e[2], w0 = a->w[0], w1 = a->w[1], w2 = a->w[2];
     const double vbus = a->vbus;
-    const double R = p->R;
+    const double R = s->r_ph;
     const double r0 = s->tc_r[0], r1 = s->tc_r[1], r2 = s->tc_r[2];
     double v0, v1, v2;
     if (s->tc_msrc) {
@@ -330,7 +331,7 @@ static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restr
     const double i[3] = {y[Y_I], y[Y_I + 1], y[Y_I + 2]};
     const double di[3] = {dy[Y_I], dy[Y_I + 1], dy[Y_I + 2]};
     const double om = y[Y_OM], dom = dy[Y_OM], dth = dy[Y_TH];
-    const double R = p->R, R_src = p->R_src;
+    const double R = s->r_ph, R_src = p->R_src;
     const uint32_t on = s->acc_mask;
     double dkt[3], de[3], sq[3];
     for (int x = 0; x < 3; ++x) {
@@ -546,9 +547,9 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
             /* averaged leg (bc_plant.h): the weighted mean of its gate states */
             const double fu = s->fr_u[x], fo = s->fr_o[x], fs = s->fr_u[x] + s->fr_l[x];
             switch (s->cond[x]) {
-            case BC_COND_SW_U: case BC_COND_SW_L: up = fu; r = p->R_on; rsw = p->R_on; break;
-            case BC_COND_D_U: up = fu + fo; u0 = fo * p->V_f; rsw = fs * p->R_on; dio = fo; break;
-            case BC_COND_D_L: up = fu; u0 = -fo * p->V_f; rsw = fs * p->R_on; dio = fo; break;
+            case BC_COND_SW_U: case BC_COND_SW_L: up = fu; r = s->r_on; rsw = s->r_on; break;
+            case BC_COND_D_U: up = fu + fo; u0 = fo * p->V_f; rsw = fs * s->r_on; dio = fo; break;
+            case BC_COND_D_L: up = fu; u0 = -fo * p->V_f; rsw = fs * s->r_on; dio = fo; break;
             default: conn = 0.0; break;
             }
             if (s->cond[x] == BC_COND_D_U || s->cond[x] == BC_COND_D_L) r = rsw + fo * p->r_d;
@@ -565,8 +566,8 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
             s->tc_hi_b[x] = fo * p->V_f;
         } else {
             switch (s->cond[x]) {
-            case BC_COND_SW_U: up = 1.0; r = p->R_on; rsw = p->R_on; break;
-            case BC_COND_SW_L: r = p->R_on; rsw = p->R_on; break;
+            case BC_COND_SW_U: up = 1.0; r = s->r_on; rsw = s->r_on; break;
+            case BC_COND_SW_L: r = s->r_on; rsw = s->r_on; break;
             case BC_COND_D_U: up = 1.0; u0 = p->V_f; r = p->r_d; dio = 1.0; break;
             case BC_COND_D_L: u0 = -p->V_f; r = p->r_d; dio = 1.0; break;
             default: conn = 0.0; break;
@@ -638,7 +639,7 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
     if (same) return;
     s->tc_b_ok = 1;
     for (int y = 0; y < 3; ++y) {
-        const double d = s->tc_r[y] + p->R; /* diagonal of M + R I */
+        const double d = s->tc_r[y] + s->r_ph; /* diagonal of M + R I */
         double col[3] = {0.0, 0.0, 0.0};    /* R_src W's column y */
         if (p->R_src > 0.0) {
             for (int x = 0; x < 3; ++x) {
@@ -725,7 +726,7 @@ static void taylor4(const bc_plant_params *p, const bc_plant_state *s, const dou
     const double *B = s->tc_b;
     const double om = y0[Y_OM], wth = (double)p->p * om; /* d theta/dt */
     double de[3]; /* de_x/dt = omega slope_x p omega */
-    for (int x = 0; x < 3; ++x) de[x] = om * s->piece[x].slope * wth;
+    for (int x = 0; x < 3; ++x) de[x] = om * s->k_scale * s->piece[x].slope * wth;
     const double eb = s->tc_cn[0] * de[0] + s->tc_cn[1] * de[1] + s->tc_cn[2] * de[2];
     double d1[3], d2[3], d3[3], d4[3];
     for (int x = 0; x < 3; ++x) d1[x] = k1[Y_I + x];
@@ -1629,6 +1630,9 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     memset(s, 0, sizeof *s);
     s->tc_cond[0] = s->tc_cond[1] = s->tc_cond[2] = -1; /* no conduction coefficients computed yet */
     s->hold_x = -1; /* no ideal current limiter */
+    s->r_ph = p->R; /* at the parameters' temperature (bc_plant_set_thermal) */
+    s->r_on = p->R_on;
+    s->k_scale = 1.0;
     s->t = t0;
     s->sw_on = sw_on;
     s->sw_inv_vi = sw_on ? 1.0 / (p->V_test * p->I_test) : 0.0;
@@ -2224,6 +2228,23 @@ void bc_plant_set_terminals(const bc_plant_params *p, bc_plant_state *s, int on)
     if (v == s->term_on) return;
     s->term_on = v;
     lanes_change(p, s, s->acc_on);
+}
+
+int bc_plant_set_thermal(const bc_plant_params *p, bc_plant_state *s, double r_scale, double k_scale,
+                         double ron_scale)
+{
+    if (!(isfinite(r_scale) && r_scale > 0.0 && isfinite(k_scale) && k_scale > 0.0 && isfinite(ron_scale) &&
+          ron_scale > 0.0))
+        return BC_ERR_PARAM;
+    s->r_ph = p->R * r_scale;
+    s->r_on = p->R_on * ron_scale;
+    s->k_scale = k_scale;
+    /* every coefficient afresh: the device resistances of the switching legs and B = P (M + R I) */
+    for (int x = 0; x < 3; ++x) s->tc_cond[x] = -1;
+    s->tc_b_ok = 0;
+    topology_set(p, s);
+    s->work.valid = 0;
+    return BC_OK;
 }
 
 void bc_plant_reset_extremes(const bc_plant_params *p, bc_plant_state *s)

@@ -46,6 +46,12 @@ int bc_sim_init(const bc_sim_config *cfg, bc_sim_state *s, double theta0, double
     return BC_OK;
 }
 
+int bc_sim_set_thermal(const bc_sim_config *cfg, bc_sim_state *s, double r_scale, double k_scale, double ron_scale)
+{
+    if (!config_ok(cfg) || s == 0) return BC_ERR_PARAM;
+    return bc_plant_set_thermal(cfg->plant, &s->plant, r_scale, k_scale, ron_scale);
+}
+
 static double input_at(const double *arr, double c, int64_t n) { return arr ? arr[n] : c; }
 
 /* ---- trace rows ---------------------------------------------------------------------------------------- */

@@ -49,6 +49,7 @@ from .experiments import map_points, steady_state
 from .losses import LOSS_BUCKETS, NOT_LOSSES, loss_buckets, point_losses
 
 __all__ = [
+    "COMPARISON",
     "FEASIBLE_TOL_PU",
     "LOSS_BUCKETS",
     "NOT_LOSSES",
@@ -71,6 +72,11 @@ RESOLUTION = VERDICT_TOLERANCE["eta"]
 
 SUPPLIES = ("square", "sine")
 _RPM = 30.0 / math.pi
+
+#: The comparison :func:`efficiency_map` makes, in one sentence (printed by ``bldclab effmap`` and in the report).
+COMPARISON = ("Comparison at equal torque: at every point both supplies are asked for the same torque, each drawing "
+              "the current it needs, so the efficiencies are at the same output (bldclab compare compares at equal "
+              "current).")
 
 
 def map_controls(drive: Drive, lowest_speed: float, chopping: str = "pwm-on-pwm") -> dict[str, Control]:
@@ -276,7 +282,8 @@ def _compute(jobs: list[EffMapJob], executor: Executor | None, n_pool: int,
 def efficiency_map(drive: Drive, torques: Sequence[float] | np.ndarray, speeds: Sequence[float] | np.ndarray,
                    supplies: Sequence[str] = SUPPLIES, workers: int | None = None, *,
                    executor: Executor | None = None, controls: dict[str, Control] | None = None,
-                   resolution: float = RESOLUTION, cache: PointCache | None = None) -> EffMapResult:
+                   resolution: float = RESOLUTION, cache: PointCache | None = None, summarise: bool = True
+                   ) -> EffMapResult:
     """Map efficiency and losses of the supplies over a torque x speed grid.
 
     Parameters
@@ -302,6 +309,10 @@ def efficiency_map(drive: Drive, torques: Sequence[float] | np.ndarray, speeds: 
     cache : PointCache, optional
         Points found there are not simulated again; new points are saved to it as they arrive, while the next ones
         run (e.g. :class:`bldclab.sweep.effmap_store.EffMapStore`, a sweep store). The result is the same either way.
+    summarise : bool
+        Issue one :class:`~bldclab.errors.PlausibilityWarning` summarising the points' warnings
+        (:func:`bldclab.sim.plausibility.summary`); False leaves that to the caller (``bldclab effmap`` does it last,
+        or lists them all with ``--verbose``).
 
     Returns
     -------
@@ -339,6 +350,6 @@ def efficiency_map(drive: Drive, torques: Sequence[float] | np.ndarray, speeds: 
                        buckets=buckets, resolution=resolution, seconds=seconds, warnings=caught,
                        cached=len(jobs) - len(todo))
     line = _plaus.summary(caught, len(jobs))
-    if line:
+    if line and summarise:
         warnings.warn(line, PlausibilityWarning, stacklevel=2)
     return res

@@ -15,8 +15,10 @@ result has been computed, so an error leaves no half-written output.
 from __future__ import annotations
 
 import argparse
+import difflib
 import gc
 import os  # bldclab.cli.os: the tests fail os.replace through it
+import re
 import sys
 import warnings
 from collections.abc import Callable, Iterable, Sequence
@@ -30,7 +32,7 @@ from .._version import __version__
 from ..errors import BldclabError, PlausibilityWarning
 from ..model.analytic.table import table1_text
 
-__all__ = ["COMMANDS", "Command", "build_parser", "main", "table1_text", "write_files"]
+__all__ = ["COMMANDS", "Command", "build_parser", "did_you_mean", "main", "table1_text", "write_files"]
 
 PROG = "bldclab"
 
@@ -155,6 +157,55 @@ def _command_name(argv: Sequence[str]) -> list[str]:
     return [a for a in argv if not a.startswith("-")][:1]
 
 
+def _options(parser: argparse.ArgumentParser, argv: Sequence[str]) -> list[str]:
+    """Return the option strings the command line could have meant: the program's and its subcommand's."""
+    out = [s for a in parser._actions for s in a.option_strings]
+    names = _command_name(argv)
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction) and names and names[0] in action.choices:
+            sub = action.choices[names[0]]
+            out += [s for a in sub._actions for s in a.option_strings]
+    return out
+
+
+def did_you_mean(parser: argparse.ArgumentParser, argv: Sequence[str], message: str) -> str:
+    """Add the nearest valid spelling to a usage error: a mistyped option, subcommand or choice.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The program's parser (with the subcommand's arguments declared).
+    argv : sequence of str
+        The command line, without the program name.
+    message : str
+        argparse's message (``"unrecognized arguments: --contrl sine"``, ``"argument COMMAND: invalid choice:
+        'simulat' (choose from ...)"``).
+
+    Returns
+    -------
+    str
+        The message with ``"; did you mean --control?"`` where a close spelling exists (``difflib``), else as it was.
+    """
+    m = re.match(r"(.*invalid choice: '([^']*)')( \(choose from (.*)\))$", message)
+    if m:
+        close = difflib.get_close_matches(m.group(2), re.findall(r"'([^']*)'", m.group(4)), n=1, cutoff=0.6)
+        return f"{m.group(1)}: did you mean {close[0]!r}?{m.group(3)}" if close else message
+    m = re.match(r"unrecognized arguments: (.*)$", message)
+    options = _options(parser, argv)
+    hints = []
+    for token in (m.group(1).split() if m else argv):  # else: a required argument missing past a mistyped option
+        name = token.split("=", 1)[0]
+        if name.startswith("--") or (name.startswith("-") and name[1:2].isalpha()):
+            close = difflib.get_close_matches(name, options, n=1, cutoff=0.6) if name not in options else []
+            if close:
+                hints.append((close[0], name))
+    if len(hints) == 1:
+        return f"{message}: did you mean {hints[0][0]}?"
+    if hints:
+        return f"{message}: did you mean {', '.join(f'{h} (for {t})' for h, t in hints)}?"
+    return message
+
+
 def _one_line(text: str) -> str:
     """Collapse a message onto one line."""
     return " ".join(str(text).split())
@@ -198,7 +249,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             return int(args.run(args))
     except SystemExit as exc:  # --help, --version
         return exc.code if isinstance(exc.code, int) else 0  # argparse exits 0 after printing help
-    except (_UsageError, BldclabError) as exc:
+    except _UsageError as exc:
+        sys.stderr.write(f"{PROG}: error: {_one_line(did_you_mean(parser, argv, str(exc)))}\n")
+        return 2
+    except BldclabError as exc:
         sys.stderr.write(f"{PROG}: error: {_one_line(str(exc))}\n")
         return 2
     except KeyboardInterrupt:

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import re
 import warnings
 from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
@@ -19,11 +18,11 @@ from ..errors import BldclabError, PlausibilityWarning
 from ..model import analytic
 from ..model.catalog import load
 from ..model.motor import Drive, Inverter
-from ..model.units import to_si
+from ..model.units import per_unit, to_si
 from ..sim import plausibility as _plaus
 
-__all__ = ["CONTROLS", "add_inverter_option", "check_speed_range", "control_of", "load_drive", "parse_speed",
-           "positive_int", "summarise", "worker_pool", "workers_of"]
+__all__ = ["CONTROLS", "add_inverter_option", "add_verbose_option", "check_speed_range", "control_of", "load_drive",
+           "parse_speed", "positive_int", "summarise", "worker_pool", "workers_of"]
 
 
 CONTROLS = ("square", "sine", "sixv", "lu", "lu-no-do", "rect")
@@ -34,12 +33,9 @@ def parse_speed(text: str, drive: Drive, option: str = "--speed") -> float:
 
     ``option`` is the option named in the error.
     """
-    m = re.fullmatch(r"\s*([-+]?[\d.]+(?:[eE][-+]?\d+)?)\s*pu\s*", text)
-    if m:
-        try:
-            return float(m.group(1)) * drive.Omega_0
-        except ValueError:
-            raise BldclabError(option, f"cannot read {text!r}") from None
+    pu = per_unit(text)
+    if pu is not None:
+        return pu * drive.Omega_0
     return to_si(text, "speed", option)
 
 
@@ -70,11 +66,23 @@ def load_drive(args: argparse.Namespace) -> Drive:
     return drive if args.inverter is None else drive.replace(inverter__model=args.inverter)
 
 
-def summarise(caught: list[str], runs: int) -> None:
-    """Issue one plausibility warning for the many an experiment collected (count and first message)."""
+def summarise(caught: list[str], runs: int | str, verbose: bool = False) -> None:
+    """Issue one plausibility warning for the many an experiment collected (:func:`bldclab.sim.plausibility.summary`).
+
+    ``verbose`` (``--verbose``): every distinct warning first, one line each, then the summary.
+    """
+    if verbose:
+        for text in _plaus.distinct(caught):
+            warnings.warn(text, PlausibilityWarning, stacklevel=2)
     line = _plaus.summary(caught, runs)
     if line:
         warnings.warn(line, PlausibilityWarning, stacklevel=2)
+
+
+def add_verbose_option(p: argparse.ArgumentParser) -> None:
+    """Add ``--verbose``: every distinct plausibility warning of the runs, not only their one summary line."""
+    p.add_argument("--verbose", action="store_true",
+                   help="list every distinct plausibility warning of the runs (default: one summary line)")
 
 
 def positive_int(text: str) -> int:

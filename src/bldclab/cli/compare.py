@@ -12,10 +12,20 @@ from ..analysis.compare import CompareResult, compare, default_controls, speed_g
 from ..control.sixstep import CHOPPINGS
 from ..errors import BldclabError
 from ..model import analytic
+from ..model.limits import TOP_SPEED_PU
 from ..model.motor import Drive
-from ..report.bundle import compare_command, compare_directory
+from ..report.bundle import compare_command, compare_directory, runs_text
 from ..report.plots import load_matplotlib
-from .common import add_inverter_option, check_speed_range, load_drive, positive_int, worker_pool, workers_of
+from .common import (
+    add_inverter_option,
+    add_verbose_option,
+    check_speed_range,
+    load_drive,
+    positive_int,
+    summarise,
+    worker_pool,
+    workers_of,
+)
 from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
@@ -29,7 +39,8 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", type=Path, help="directory for CSV, figures and the report (default out/<motor>)")
     p.add_argument("--speeds", type=int, default=32, help="speeds per supply (default 32)")
     p.add_argument("--min-speed", type=float, default=0.05, help="lowest speed, p.u. of Omega_0 (default 0.05)")
-    p.add_argument("--max-speed", type=float, default=0.98, help="highest speed, p.u. of Omega_0 (default 0.98)")
+    p.add_argument("--max-speed", type=float, default=TOP_SPEED_PU,
+                   help=f"highest speed, p.u. of Omega_0 (default {TOP_SPEED_PU:g})")
     p.add_argument("--workers", type=positive_int, help="processes, >= 1 (default: all cores; 1: serial)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (it is shown on a terminal only)")
     p.add_argument("--no-report", action="store_true", help="do not write report.html (docs/report.md)")
@@ -40,6 +51,7 @@ def configure_command(p: argparse.ArgumentParser) -> None:
                    help="square-wave supply's chopping pattern (default pwm-on-pwm; sync: the positive leg "
                         "complementary, no freewheeling through a diode in the off-time)")
     add_inverter_option(p)
+    add_verbose_option(p)
 
 
 def run_command(args: argparse.Namespace) -> int:
@@ -58,12 +70,14 @@ def run_command(args: argparse.Namespace) -> int:
     with worker_pool(workers) as pool:  # the points, then paper 1's figures and the waveforms, and the drawing
         res = compare(drive, w, workers=workers, executor=pool,
                       progress=not args.no_progress and sys.stderr.isatty(), pwm_phases=args.pwm_phases,
-                      controls=default_controls(drive, min(w), args.chopping))
+                      controls=default_controls(drive, min(w), args.chopping), summarise=False)
         _print(args, drive, w, res)
         files = compare_directory(res, command=compare_command(args, out), motor_source=args.motor,
                                   report=not args.no_report, executor=pool)
     for path in write_files(out, files):
         print(f"wrote {path}")
+    # one line for every run: the points, the waveforms and paper 1's figures (manifest.json lists them all)
+    summarise(res.warnings, runs_text(res, figures=True), args.verbose)
     return 0
 
 
@@ -75,6 +89,7 @@ def _print(args: argparse.Namespace, drive: Drive, w: list[float], res: CompareR
     print(f"{drive.name}: square-wave (SixStep{chop}, I_N = {drive.motor.I_N:g} A) vs sinusoidal (Sine, "
           f"T_sN = {analytic.t_sN(drive):.4g} N m), {args.speeds} speeds x 2 supplies in {res.seconds:.1f} s; "
           f"Omega_0 = {drive.Omega_0:.4g} rad/s = {drive.Omega_0 * RPM_PER_RAD_S:.4g} rpm")
+    print(f"  {res.comparison}")
     bs = {} if res.base_speeds is None else res.base_speeds.set_index("supply").simulated_pu.to_dict()
     print(f"  Theta_m {t1.Theta_m * 1e3:.2f} mrad; base speed (21) sine {t1.Omega_sB_pu:.3f} p.u., (30) square "
           f"{t1.Omega_qB_pu:.3f} p.u.; with R: {t1.Omega_sB_R_pu:.3f} / {t1.Omega_qB_R_pu:.3f} p.u.; simulated: "
@@ -108,6 +123,8 @@ def _print(args: argparse.Namespace, drive: Drive, w: list[float], res: CompareR
         print("  * not applicable to this drive (paper 1's closed forms, shown for reference), because:")
         for reason in res.not_applicable:
             print(f"    - {reason}")
-    print("verdict:")
-    for line in res.verdict:
+    head, *detail = res.verdict
+    print(head if head.startswith("bottom line") else f"  - {head}")
+    print("verdict in detail:")
+    for line in detail:
         print(f"  - {line}")

@@ -9,14 +9,23 @@ from pathlib import Path
 import numpy as np
 
 from .._files import write_files
-from ..analysis.effmap import FEASIBLE_TOL_PU, efficiency_map, map_controls
+from ..analysis.effmap import COMPARISON, FEASIBLE_TOL_PU, efficiency_map, map_controls
 from ..control.sixstep import CHOPPINGS
 from ..errors import BldclabError
 from ..report.effmap_plots import effmap_figures
 from ..report.plots import load_matplotlib
 from ..sweep.effmap_store import EffMapStore
 from ..sweep.store import Store
-from .common import add_inverter_option, check_speed_range, load_drive, positive_int, worker_pool, workers_of
+from .common import (
+    add_inverter_option,
+    add_verbose_option,
+    check_speed_range,
+    load_drive,
+    positive_int,
+    summarise,
+    worker_pool,
+    workers_of,
+)
 from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
@@ -46,6 +55,7 @@ def configure_command(p: argparse.ArgumentParser) -> None:
                    help="square-wave supply's chopping pattern (default pwm-on-pwm; sync: the positive leg "
                         "complementary, no freewheeling through a diode in the off-time)")
     add_inverter_option(p)
+    add_verbose_option(p)
 
 
 def _store_path(out: Path, store: Path | None) -> Path:
@@ -79,13 +89,14 @@ def run_command(args: argparse.Namespace) -> int:
     load_matplotlib()  # before the pool starts: its workers draw the figures with it already loaded
     with worker_pool(workers) as pool:  # the points, then the figures
         if args.no_store:
-            res = efficiency_map(drive, torques, speeds, workers=workers, executor=pool, controls=controls)
+            res = efficiency_map(drive, torques, speeds, workers=workers, executor=pool, controls=controls,
+                                 summarise=False)
         else:
             path = _store_path(out, args.store)
             path.parent.mkdir(parents=True, exist_ok=True)
             with Store(path) as st:
                 res = efficiency_map(drive, torques, speeds, workers=workers, executor=pool, controls=controls,
-                                     cache=EffMapStore(st))
+                                     cache=EffMapStore(st), summarise=False)
             print(f"store {path}: {res.cached} of {len(res.points)} points found there, "
                   f"{len(res.points) - res.cached} simulated")
         mode = "generating (braking)" if args.generating else "motoring"
@@ -93,6 +104,7 @@ def run_command(args: argparse.Namespace) -> int:
               f"(square wave: {args.chopping} chopping) in "
               f"{res.seconds:.1f} s (T_N = {drive.T_N:.4g} N m, Omega_0 = {drive.Omega_0 * RPM_PER_RAD_S:.4g} rpm; "
               f"a point is feasible when its mean torque is within {FEASIBLE_TOL_PU:g} T_N of the reference)")
+        print(f"  {COMPARISON}")
         for line in res.summary():
             print(f"  {line}")
         print(f"  loss buckets: {', '.join(res.buckets)}")
@@ -101,4 +113,5 @@ def run_command(args: argparse.Namespace) -> int:
         files.update(effmap_figures(res, pool))
     for path in write_files(out, files):
         print(f"wrote {path}")
+    summarise(res.warnings, len(res.points), args.verbose)  # one line for every point (--verbose: each one)
     return 0

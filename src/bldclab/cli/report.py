@@ -12,6 +12,7 @@ from .._files import write_files
 from ..analysis.compare import speed_grid
 from ..errors import BldclabError
 from ..model.catalog import load
+from ..model.limits import TOP_SPEED_PU
 from ..report.bundle import motor_results, read_results
 from ..report.html import REPORT, WAVEFORM_SPEEDS, Results, render
 from .common import check_speed_range, positive_int
@@ -32,7 +33,8 @@ def configure_command(p: argparse.ArgumentParser) -> None:
                    "out/<motor>/report.html for a motor)")
     p.add_argument("--speeds", type=int, help="motor only: speeds per supply (default 32)")
     p.add_argument("--min-speed", type=float, help="motor only: lowest speed, p.u. of Omega_0 (default 0.05)")
-    p.add_argument("--max-speed", type=float, help="motor only: highest speed, p.u. of Omega_0 (default 0.98)")
+    p.add_argument("--max-speed", type=float,
+                   help=f"motor only: highest speed, p.u. of Omega_0 (default {TOP_SPEED_PU:g})")
     p.add_argument("--waveform-speeds", help='motor only: per-unit speeds of the waveform panels (default "0.3,0.8")')
     p.add_argument("--torque-control", action="store_true",
                    help="motor only: also compare paper 2's torque control methods (table and torque traces)")
@@ -75,7 +77,7 @@ def run_command(args: argparse.Namespace) -> int:
         drive = load(args.source)
         n = 32 if args.speeds is None else args.speeds
         lo = 0.05 if args.min_speed is None else args.min_speed
-        hi = 0.98 if args.max_speed is None else args.max_speed
+        hi = TOP_SPEED_PU if args.max_speed is None else args.max_speed
         if n < 2:
             raise BldclabError("--speeds", f"needs at least 2, got {n}")
         check_speed_range(lo, hi)

@@ -8,6 +8,7 @@ import json
 import math
 import sys
 import time
+import warnings
 from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
@@ -15,12 +16,15 @@ from typing import Any
 from .._core import decode_flags
 from .._files import write_files
 from ..analysis.experiments import electrical_period
-from ..control import Sine
-from ..errors import BldclabError
+from ..control import Control, Sine, SixStep
+from ..control.sixstep import COMMUTATIONS as SIXSTEP_COMMUTATIONS
+from ..control.sixstep import REGULATIONS as SIXSTEP_REGULATIONS
+from ..errors import BldclabError, PlausibilityError, PlausibilityWarning
 from ..model.units import to_si
 from ..report import plots
 from ..sim import CHUNK, TRACE_LIMIT, Piecewise, Scenario, parse_profile, samples_of, simulate, trace_bytes, trace_rows
 from .common import CONTROLS, add_inverter_option, control_of, load_drive, parse_speed
+from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
 
@@ -45,7 +49,22 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     ref = p.add_mutually_exclusive_group()
     ref.add_argument("--torque", help='torque reference, e.g. "20 N m" (sine, lu, rect)')
     ref.add_argument("--current", help='current reference, e.g. "50 A" (square)')
-    ref.add_argument("--duty", type=float, help="duty in [-1, 1] (sixv)")
+    ref.add_argument("--duty", type=float, help="duty in [-1, 1] (sixv; square with --regulation duty)")
+    six = p.add_argument_group("six-step settings (--control square: bldclab.SixStep, docs/sixstep.md)")
+    six.add_argument("--regulation", choices=SIXSTEP_REGULATIONS,
+                     help="current regulation (default predictive); duty: no current loop, the reference is the duty "
+                          "(an ESC's throttle; give it with --duty, default 0.5); ideal: paper 1's ideal current "
+                          "limiter (averaged inverter only)")
+    six.add_argument("--timed", action="store_true",
+                     help="commutate at the predicted instant inside the PWM period (an ESC's commutation timer), "
+                          "not at the sample nearest it")
+    six.add_argument("--timing", metavar="ANGLE",
+                     help='timing advance, electrical: "15 deg" (or rad); with --timing-time at most 30 deg')
+    six.add_argument("--timing-time", metavar="TIME",
+                     help='timing advance per speed, "20 us": the advance grows by |Omega_e| times it')
+    six.add_argument("--commutation", choices=SIXSTEP_COMMUTATIONS,
+                     help="where the commutation instants come from (default hall; encoder: the exact angle, the "
+                          "ideal commutation)")
     p.add_argument("--speed-ref",
                    help='speed reference for a speed loop (--control sine with --mechanics; the loop sets the '
                         'torque): "1000 rpm", "0.5 pu"' + _PROFILE_HELP.format(u="rpm", v=1000))
@@ -82,13 +101,45 @@ def _reference(args: argparse.Namespace, default: float, unit: str) -> float:
         return to_si(args.current, "current", "--current")
     if args.duty is not None:
         if unit != "duty" or not -1.0 <= args.duty <= 1.0 or math.isnan(args.duty):
-            raise BldclabError("--duty", f"needs --control sixv and a value in [-1, 1], got {args.duty}")
+            raise BldclabError("--duty", f"needs --control sixv (or square with --regulation duty) and a value in "
+                               f"[-1, 1], got {args.duty}")
         return float(args.duty)
     return default
 
 
+#: The six-step settings on the command line: option, attribute of the parsed arguments.
+_SIXSTEP_OPTIONS = (("--regulation", "regulation"), ("--timed", "timed"), ("--timing", "timing"),
+                    ("--timing-time", "timing_time"), ("--commutation", "commutation"))
+
+
+def _sixstep(args: argparse.Namespace, ctl: Control) -> Control:
+    """Return ``SixStep`` with the six-step settings of the command line (each read as the option it came from)."""
+    if not isinstance(ctl, SixStep):
+        return ctl
+    kw: dict[str, Any] = {}
+    for option, attr in _SIXSTEP_OPTIONS:
+        value = getattr(args, attr)
+        if value is None or value is False:
+            continue
+        if attr == "timing":
+            value = to_si(value, "angle", option)
+        elif attr == "timing_time":
+            value = to_si(value, "time", option)
+        kw[attr] = value
+    try:
+        return replace(ctl, **kw)
+    except BldclabError as exc:  # SixStep's own check (an advance above 30 deg, ...): name the option
+        option = next((o for o, a in _SIXSTEP_OPTIONS if exc.field == f"control.{a}"), exc.field)
+        raise BldclabError(option, exc.problem) from None
+
+
 def _check_options(args: argparse.Namespace) -> None:
     """Refuse option combinations before any work (each error names the option typed)."""
+    for option, attr in _SIXSTEP_OPTIONS:
+        if getattr(args, attr) not in (None, False) and args.control != "square":
+            raise BldclabError(option, f"is a six-step setting: it needs --control square, got --control "
+                               f"{args.control}")
+    check_out_dir(args.out)  # before the run: a bad --out fails at once, not after the simulation
     if args.plot and args.out is None:
         raise BldclabError("--plot", "needs --out DIR to write the figures into")
     if args.plot and args.no_trace:
@@ -191,6 +242,15 @@ class _Progress:
         sys.stderr.flush()
 
 
+def _show(caught: list[warnings.WarningMessage]) -> None:
+    """Issue again the warnings recorded during a run (the program shows plausibility warnings as one line each)."""
+    for w in caught:
+        if issubclass(w.category, PlausibilityWarning):
+            warnings.warn(str(w.message), PlausibilityWarning, stacklevel=2)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+
 def _fmt_bytes(b: float) -> str:
     for unit in ("B", "kB", "MB", "GB", "TB"):
         if b < 1000 or unit == "TB":
@@ -204,6 +264,9 @@ def run_command(args: argparse.Namespace) -> int:
     _check_options(args)
     drive = load_drive(args)
     ctl, default_ref, unit = control_of(args.control, drive)
+    ctl = _sixstep(args, ctl)
+    if isinstance(ctl, SixStep) and ctl.regulation == "duty":  # no current loop: the reference is the duty
+        default_ref, unit = 0.5, "duty"
     ref = _reference(args, default_ref, unit)
     if args.speed_ref is not None and isinstance(ctl, Sine):  # --speed-ref: --control sine, checked above
         ctl = replace(ctl, speed_loop=True)
@@ -216,12 +279,29 @@ def run_command(args: argparse.Namespace) -> int:
                            "drop it with --no-trace")
     n = samples_of(drive, sc.duration)
     progress = _Progress(args.progress, sc.duration) if (args.progress or n > 4 * CHUNK) else None
-    res = simulate(drive, ctl, sc, progress=progress)
+    with warnings.catch_warnings(record=True) as caught:  # shown after the run: a failed run's cause is in its error
+        warnings.simplefilter("always", PlausibilityWarning)
+        try:
+            res = simulate(drive, ctl, sc, progress=progress)
+        except PlausibilityError as exc:
+            _show([w for w in caught if str(w.message) not in str(exc)])  # what the error leads with: not again
+            raise
+    _show(caught)
     m = res.metrics
     assert m is not None  # the window ends with the run
     flags = int(res.meta["controller_flags"])
+    speed_loop = args.speed_ref is not None
+    if speed_loop:  # the loop's reference is the speed; Scenario.ref is not used
+        assert isinstance(ctl, Sine)
+        ref_text, limit = args.speed_ref, ctl.torque_limit(drive)
+        reference: dict[str, Any] = {"reference": ref_text, "reference_unit": "speed (as given)",
+                                     "torque_limit_N_m": limit}
+        heading = f"speed reference {ref_text} (speed loop; torque up to {limit:.4g} N m)"
+    else:
+        reference = {"reference": ref, "reference_unit": unit}
+        heading = f"reference {ref:.4g} {unit}"
     summary: dict[str, Any] = {
-        "motor": drive.name, "control": args.control, "reference": ref, "reference_unit": unit,
+        "motor": drive.name, "control": args.control, **reference,
         "inverter": drive.inverter.model, "duration_s": sc.duration,
         "speed_rad_s": m.omega_mean, "speed_rpm": m.omega_mean * _RPM, "speed_pu": m.omega_mean / drive.Omega_0,
         "window_s": [m.t0, m.t1],
@@ -231,6 +311,7 @@ def run_command(args: argparse.Namespace) -> int:
         "p_dc_W": m.p_src_total, "p_copper_W": m.p_cu,
         "p_inverter_W": m.p_sw + m.p_diode + m.p_Rsrc + m.p_swloss + m.p_rr, "p_iron_W": m.p_fe,
         "i_rms_A": list(m.i_rms), "i_peak_A": list(m.i_peak), "energy_balance_residue": m.balance_electrical,
+        "flags_summary": res.flags_summary(), "flags": res.meta["flags"],
         "controller_flags": decode_flags(flags) or "none", "controller_flags_bits": flags,
         "trace_rows": len(res),
         "warnings": list(res.meta.get("warnings", [])),
@@ -240,15 +321,15 @@ def run_command(args: argparse.Namespace) -> int:
     if args.format == "json":
         print(json.dumps(summary, indent=2))
     else:
-        print(f"{drive.name}, {args.control} control, reference {ref:.4g} {unit}, "
+        print(f"{drive.name}, {args.control} control, {heading}, "
               f"{'dynamometer' if sc.speed is not None else 'rotor dynamics'}, {drive.inverter.model} inverter")
         for key, value in summary.items():
-            if key in ("motor", "control", "reference", "reference_unit", "inverter", "warnings",
-                       "controller_flags_bits"):  # warnings: stderr
+            if key in ("motor", "control", "reference", "reference_unit", "torque_limit_N_m", "inverter", "warnings",
+                       "flags", "controller_flags", "controller_flags_bits"):  # warnings: stderr; flags: the summary
                 continue
             text = ", ".join(f"{v:.4g}" for v in value) if isinstance(value, list) else (
                 f"{value:.5g}" if isinstance(value, float) else str(value))
-            print(f"  {key:<28} {text}")
+            print(f"  {'flags' if key == 'flags_summary' else key:<28} {text}")
     if args.out is not None:
         files: dict[str, bytes] = {}
         if sc.trace:

@@ -7,6 +7,7 @@ above every field; optional parts the drive does not use are shown commented out
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import sys
 from pathlib import Path
@@ -14,6 +15,7 @@ from pathlib import Path
 from .._files import write_atomic
 from ..errors import BldclabError
 from ..model.catalog import load
+from ..model.motor import Drive
 from .paths import check_out_file
 
 __all__ = ["FIELDS", "configure_command", "run_command", "template"]
@@ -23,9 +25,9 @@ __all__ = ["FIELDS", "configure_command", "run_command", "template"]
 FIELDS: dict[tuple[str, str], str] = {
     ("", "name"): "the drive's name (default: the file name without .toml)",
     ("", "description"): "free text: where the numbers come from, which are assumed",
-    ("motor", "p"): "pole pairs (integer >= 1)",
-    ("motor", "R"): "Ohm: phase resistance (>= 0)",
-    ("motor", "L"): "H: phase inductance L_self - M (> 0)",
+    ("motor", "p"): "pole pairs (integer >= 1; or poles = 2 p, the pole count)",
+    ("motor", "R"): "Ohm: phase resistance (>= 0; or R_ll = 2 R, line to line)",
+    ("motor", "L"): "H: phase inductance L_self - M (> 0; or L_ll = 2 L, line to line)",
     ("motor", "V_N"): "V: nominal voltage",
     ("motor", "I_N"): "A: nominal current, the square-wave current amplitude of the rating",
     ("motor", "Omega_N"): "rad/s: rated speed (optional; default (V_N - 2 R I_N) / (2 k_phi))",
@@ -36,9 +38,9 @@ FIELDS: dict[tuple[str, str], str] = {
     ("motor", "speed_fe_ref"): "rad/s: speed of the iron-loss data (required with any P_fe_*)",
     ("motor.emf", "kind"): "back-EMF shape: trapezoid (k_phi, flat_top), sinusoid (k_1), fourier (a, b), table "
                            "(theta, k or k_a/k_b/k_c)",
-    ("motor.emf", "k_phi"): "V s/rad: flat-top back-EMF per mechanical rad/s",
+    ("motor.emf", "k_phi"): "V s/rad: flat-top back-EMF per mechanical rad/s (or KV = \"... rpm/V\" in [motor])",
     ("motor.emf", "flat_top"): "rad: width of the flat top in electrical angle (2.0944 rad = 120 deg)",
-    ("motor.emf", "k_1"): "V s/rad: peak phase back-EMF per mechanical rad/s",
+    ("motor.emf", "k_1"): "V s/rad: peak phase back-EMF per mechanical rad/s (or KV = \"... rpm/V\" in [motor])",
     ("motor.emf", "a"): "V s/rad (see unit): cosine coefficients, index = harmonic order",
     ("motor.emf", "b"): "V s/rad (see unit): sine coefficients, index = harmonic order",
     ("motor.emf", "unit"): "unit of the shape values (default V s/rad)",
@@ -86,29 +88,41 @@ FIELDS: dict[tuple[str, str], str] = {
     ("sensors", "seed"): "seed of the noise generator (integer >= 0)",
 }
 
-#: Optional fields and tables shown commented out when the drive does not use them.
-_OPTIONAL: dict[str, list[str]] = {
-    "motor": ["# Omega_N = 67.0  # rad/s (optional)", "# T_peak = 100.0  # N m (optional)",
-              "# P_fe_eddy = 0.0  # W: iron loss (optional, default none), eddy-current part at speed_fe_ref",
-              "# P_fe_hyst = 0.0  # W: iron loss, hysteresis part at speed_fe_ref",
-              "# P_fe_ex = 0.0  # W: iron loss, excess part at speed_fe_ref",
-              '# speed_fe_ref = "3000 rpm"  # rad/s: speed of the iron-loss data',
-              "# (or, instead of P_fe_*: a [motor.iron] table, a steel grade with core mass and flux density: "
-              "docs/motor-files.md)"],
-    "motor.emf": ["", "# [motor.cogging]  # optional: cogging torque sum_j A_j sin(n_j theta_m + phi_j), theta_m the "
-                  "mechanical angle",
-                  "# orders = [48]      # n_j: harmonic orders in the mechanical angle (integers >= 1)",
-                  "# amplitudes = [0.3] # A_j: N m",
-                  "# phases = [0.0]     # phi_j: rad"],
-    "inverter": ["# model: switching (every gate edge) or average (half-period averages, no PWM ripple)",
-                 '# model = "switching"',
-                 '# E_on = "40 uJ"  # J: switching losses (optional, default none): turn-on energy at V_test, I_test '
-                 '(or t_rise = "58 ns")',
-                 '# E_off = "60 uJ"  # J: turn-off energy (or t_fall = "144 ns")',
-                 '# E_rr = "3 uJ"  # J: diode reverse-recovery energy (or Q_rr = "71 nC")',
-                 '# V_test = "48 V"  # V: test voltage of the energies',
-                 '# I_test = "100 A"  # A: test current of the energies'],
-}
+def _optional(drive: Drive) -> dict[str, list[str]]:
+    """Return the optional fields and tables shown commented out when the drive does not use them, per table.
+
+    Every example value is this drive's (its own default rated speed, twice its torque base, its bus and rated
+    current), written with its unit in the string so that no comment names another unit.
+    """
+    m, inv = drive.motor, drive.inverter
+    rpm = m.Omega_nominal * 30.0 / math.pi
+    e_on = inv.V_dc * m.I_N * 20e-9 / 2.0  # a 20 ns rise at V_dc, I_N (docs/motor-files.md: E = V I t / 2)
+    return {
+        "motor": [f'# Omega_N = "{rpm:.4g} rpm"  # rated speed (optional; without it (V_N - 2 R I_N) / (2 k_phi), '
+                  f"{rpm:.4g} rpm here)",
+                  f'# T_peak = "{2.0 * drive.T_N:.3g} N m"  # peak torque (optional, informative; here 2 T_N)',
+                  '# P_fe_eddy = "0 W"  # iron loss (optional, default none): eddy-current part at speed_fe_ref',
+                  '# P_fe_hyst = "0 W"  # iron loss, hysteresis part at speed_fe_ref',
+                  '# P_fe_ex = "0 W"  # iron loss, excess part at speed_fe_ref',
+                  f'# speed_fe_ref = "{rpm:.4g} rpm"  # speed of the iron-loss data (a plain number: rad/s)',
+                  "# (or, instead of P_fe_*: a [motor.iron] table, a steel grade with core mass and flux density: "
+                  "docs/motor-files.md)"],
+        "motor.emf": ["", "# [motor.cogging]  # optional: cogging torque sum_j A_j sin(n_j theta_m + phi_j), theta_m "
+                      "the mechanical angle",
+                      f"# orders = [{6 * m.p}]  # n_j: harmonic orders in the mechanical angle (integers >= 1; here "
+                      "6 p, an integral-slot winding's)",
+                      f"# amplitudes = [{0.01 * drive.T_N:.3g}]  # A_j: N m (here 1 % of T_N)",
+                      "# phases = [0.0]  # phi_j: rad"],
+        "inverter": ["# model: switching (every gate edge) or average (half-period averages, no PWM ripple)",
+                     '# model = "switching"',
+                     f'# E_on = "{e_on * 1e6:.3g} uJ"  # switching losses (optional, default none): turn-on energy '
+                     'at V_test, I_test (here a 20 ns rise; or t_rise = "20 ns")',
+                     f'# E_off = "{e_on * 1e6:.3g} uJ"  # turn-off energy (or t_fall = "20 ns")',
+                     '# E_rr = "0 uJ"  # diode reverse-recovery energy (or Q_rr = "50 nC")',
+                     f'# V_test = "{inv.V_dc:g} V"  # test voltage of the energies (here V_dc)',
+                     f'# I_test = "{m.I_N:g} A"  # test current of the energies (here I_N)'],
+    }
+
 
 _KEY = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)\s*=")
 _TABLE = re.compile(r"^\[([A-Za-z0-9_.]+)\]\s*$")
@@ -134,12 +148,13 @@ def template(source: str) -> str:
         TOML text that loads back (:func:`bldclab.model.catalog.load`) to the same drive.
     """
     drive = load(source)
+    optional = _optional(drive)
     out = [HEADER.rstrip("\n"), f"# Written by bldclab template from {source}.", ""]
     table = ""
     present: set[str] = set()
 
     def close(tbl: str) -> None:
-        extra = [line for line in _OPTIONAL.get(tbl, []) if not any(
+        extra = [line for line in optional.get(tbl, []) if not any(
             line.startswith((f"# {k} =", f"# {k}:")) for k in present)]
         if tbl == "motor.emf" and drive.motor.cogging is not None:
             extra = []

@@ -83,8 +83,8 @@ def run_command(args: argparse.Namespace) -> int:
     for _, row in table.iterrows():
         cause = paper2.shortfall_cause(row)
         if cause is not None:
-            print(f"warning: {row['method']} at {row['torque_pct']:.0f} % of T_N, {row['speed_rpm']:.0f} rpm: {cause}",
-                  file=sys.stderr)
+            print(f"bldclab: warning: {row['method']} at {row['torque_pct']:.0f} % of T_N, {row['speed_rpm']:.0f} rpm: "
+                  f"{cause}", file=sys.stderr)
     if args.out is not None:
         files = {"methods.csv": table.to_csv(index=False).encode()}
         tq, om = max(torques), max(speeds)

@@ -11,7 +11,9 @@ from .base import Control
 from .hallcal import HallCal, HallCalibration
 from .lu import Lu
 from .openloop import OpenLoop, SixStepVoltage
+from .sensorless import SixStepSensorless
 from .sine import Sine
 from .sixstep import SixStep
 
-__all__ = ["Control", "HallCal", "HallCalibration", "Lu", "OpenLoop", "Sine", "SixStep", "SixStepVoltage"]
+__all__ = ["Control", "HallCal", "HallCalibration", "Lu", "OpenLoop", "Sine", "SixStep", "SixStepSensorless",
+           "SixStepVoltage"]

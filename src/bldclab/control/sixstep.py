@@ -23,7 +23,7 @@ from ..model.units import to_si
 from .base import Control, check_number
 from .hall import check_hall_options, hall_record, normalize_table
 
-__all__ = ["CHOPPINGS", "SixStep"]
+__all__ = ["CHOPPINGS", "COMMUTATIONS", "REGULATIONS", "SixStep"]
 
 # the settings' C constants (values read from the library: bldclab._core)
 _REG = {"pi": "BC_SIXSTEP_PI", "hysteresis": "BC_SIXSTEP_HYST", "predictive": "BC_SIXSTEP_PRED",
@@ -35,6 +35,10 @@ _REF = {"current": 0, "torque": 1}  # ref_torque, a 0/1 switch
 
 #: The chopping patterns of :class:`SixStep` (its ``chopping`` field).
 CHOPPINGS: tuple[str, ...] = tuple(_CHOP)
+#: The regulations of :class:`SixStep` (its ``regulation`` field).
+REGULATIONS: tuple[str, ...] = ("predictive", "pi", "hysteresis", "duty", "ideal")
+#: Where :class:`SixStep` takes its commutation instants from (its ``commutation`` field).
+COMMUTATIONS: tuple[str, ...] = tuple(_COMM)
 
 
 @dataclass(frozen=True)
@@ -146,8 +150,9 @@ class SixStep(Control):
             if isinstance(v, str):
                 object.__setattr__(self, name, to_si(v, dim, f"control.{name}"))
             check_number(name, getattr(self, name), allow_zero=True)
-        if self.timing > math.pi / 6:
-            raise BldclabError("control.timing", f"must be at most 30 deg (pi/6 rad), got {self.timing:.4g} rad")
+        timing = float(self.timing)  # a number now: read from its string above
+        if timing > math.pi / 6:
+            raise BldclabError("control.timing", f"must be at most 30 deg (pi/6 rad), got {timing:.4g} rad")
         for name, table in (("regulation", _REG), ("chopping", _CHOP), ("reference", _REF), ("commutation", _COMM)):
             if getattr(self, name) not in table:
                 raise BldclabError(f"control.{name}", f"must be one of {', '.join(table)}, got {getattr(self, name)!r}")

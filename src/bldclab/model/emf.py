@@ -413,6 +413,20 @@ class BackEmf:
         th = np.asarray(theta_e, dtype=float)
         return np.stack([s(th - x * TWO_PI / 3.0) for x, s in enumerate(self.shapes)])
 
+    def line_rms(self) -> float:
+        """Return the rms of the line-to-line shapes ``k_x - k_y`` over a period and the three pairs (V s/rad).
+
+        ``sqrt(mean over the pairs of mean (k_x - k_y)^2)`` on 16384 points per period (piecewise-linear shapes:
+        relative error about 1e-9); computed once per back-EMF and cached, as :meth:`line_peak`.
+        """
+        return self._line_rms
+
+    @functools.cached_property
+    def _line_rms(self) -> float:
+        th = np.arange(1 << 14) * (TWO_PI / (1 << 14))
+        k = self.k_abc(th)
+        return math.sqrt(float(np.mean([(k[x] - k[y]) ** 2 for x, y in ((0, 1), (1, 2), (2, 0))])))
+
     def line_peak(self) -> float:
         """Return ``max |k_x - k_y|`` over angles and phase pairs (V s/rad); exact for piecewise-linear.
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,11 +19,22 @@ from typing import Any, ClassVar
 import numpy as np
 
 from .._files import read_toml
-from ..errors import BldclabError
+from ..errors import BldclabError, PlausibilityWarning
 from ._checks import check_number
-from .emf import PHASES, BackEmf, Cogging
+from .emf import PHASES, BackEmf, Cogging, Shape, Sinusoid, Trapezoid
 from .iron import GRADES, SteelGrade
-from .motorfile import Section, cogging_table, emf_tables, read_cogging, read_emf, toml_table, wrap
+from .motorfile import (
+    Section,
+    cogging_table,
+    emf_tables,
+    read_cogging,
+    read_emf,
+    read_form,
+    toml_table,
+    toml_value,
+    wrap,
+)
+from .ratings import KV_CONVENTIONS, RPM_PER_V, emf_for_kv, kv, pole_count_hint, pole_pairs
 from .units import to_si
 
 __all__ = [
@@ -109,6 +121,102 @@ class Motor:
         if self.has_iron_losses and self.speed_fe_ref is None:
             raise BldclabError("speed_fe_ref", "is missing: P_fe_eddy, P_fe_hyst and P_fe_ex are losses at a "
                                "reference speed, give it (e.g. speed_fe_ref = \"3000 rpm\")")
+
+    @classmethod
+    def from_ratings(cls, *, V_N: float | str, I_N: float | str, p: int | None = None, poles: int | None = None,
+                     R: float | str | None = None, R_ll: float | str | None = None, L: float | str | None = None,
+                     L_ll: float | str | None = None, emf: BackEmf | None = None, KV: float | str | None = None,
+                     KV_rms: float | str | None = None, shape: str | Shape = "sinusoid", **fields: Any) -> Motor:
+        """Build a motor from catalogue ratings: pole count, line-to-line R and L, speed constant KV.
+
+        The conversions (:mod:`bldclab.model.ratings`, docs/motor-files.md "Catalogue ratings"): ``p = poles / 2``,
+        ``R = R_ll / 2``, ``L = L_ll / 2`` (star connection, two phases between two terminals), and the back-EMF
+        of ``shape``'s form whose speed per volt of peak line-to-line back-EMF is ``KV`` (``k_phi = 15 / (pi KV)``
+        with KV in rpm/V: bldclab's no-load speed per volt of DC bus) or of rms line-to-line back-EMF is ``KV_rms``.
+        A motor file's ``poles``, ``R_ll``, ``L_ll``, ``KV`` and ``KV_rms`` are read through this.
+
+        Parameters
+        ----------
+        V_N, I_N : float or str
+            Nominal voltage (V) and current (A), numbers or unit strings.
+        p, poles : int, optional
+            Pole pairs, or the pole count (even): one of them.
+        R, R_ll : float or str, optional
+            Phase or line-to-line resistance (Ohm, or ``"0.08 Ohm"``): one of them.
+        L, L_ll : float or str, optional
+            Phase (inclusive, ``L_self - M``) or line-to-line inductance (H, or ``"15 uH"``): one of them.
+        emf : BackEmf, optional
+            The back-EMF in V s/rad; or instead:
+        KV, KV_rms : float or str, optional
+            Speed constant: a number in rpm/V (a KV rating's unit) or a string with a unit (``"1950 rpm/V"``,
+            ``"204 rad/s/V"``); per volt of peak (``KV``) or rms (``KV_rms``) line-to-line back-EMF.
+        shape : {"sinusoid", "trapezoid"} or Shape
+            The back-EMF's form with a speed constant: a sinusoid, the ideal 120-degree trapezoid, or any shape
+            (its size is replaced).
+        **fields
+            The other fields of :class:`Motor` (``Omega_N``, ``T_peak``, ``cogging``, iron losses), SI numbers.
+
+        Returns
+        -------
+        Motor
+
+        Raises
+        ------
+        BldclabError
+            Naming the argument: both forms of one quantity given, neither, an odd pole count, a bad value.
+        """
+        pairs = pole_pairs(p, poles)
+        r = _phase_value("R", R, R_ll, "resistance")
+        ind = _phase_value("L", L, L_ll, "inductance")
+        given = [(k, v) for k, v in (("KV", KV), ("KV_rms", KV_rms)) if v is not None]
+        if len(given) > 1:
+            raise BldclabError("KV_rms", "cannot be given with KV: one speed constant, per volt of peak (KV) or of "
+                               "rms (KV_rms) line-to-line back-EMF")
+        if given:
+            key, value = given[0]
+            if emf is not None:
+                raise BldclabError(key, "cannot be given with emf: the back-EMF's size is given once")
+            speed = value * RPM_PER_V if isinstance(value, int | float) and not isinstance(value, bool) else \
+                to_si(value, "speed_constant", key)
+            check_number(key, speed, lo=0.0, lo_open=True)
+            forms = {"sinusoid": Sinusoid(1.0), "trapezoid": Trapezoid(1.0)}
+            if not isinstance(shape, Shape) and shape not in forms:
+                raise BldclabError("shape", f"must be 'sinusoid', 'trapezoid' or a Shape, got {shape!r}")
+            form = shape if isinstance(shape, Shape) else forms[shape]
+            emf = emf_for_kv(form, speed, KV_CONVENTIONS[key])
+        elif emf is None:
+            raise BldclabError("emf", "is missing: give the back-EMF, or a speed constant KV (or KV_rms) and its "
+                               "shape")
+        return cls(p=pairs, R=r, L=ind, emf=emf, V_N=to_si(V_N, "voltage", "V_N"), I_N=to_si(I_N, "current", "I_N"),
+                   **fields)
+
+    @property
+    def poles(self) -> int:
+        """Pole count ``2 p``."""
+        return 2 * int(self.p)
+
+    @property
+    def R_ll(self) -> float:
+        """Line-to-line resistance ``2 R`` (Ohm): two phases in series between two terminals."""
+        return 2.0 * self.R
+
+    @property
+    def L_ll(self) -> float:
+        """Line-to-line inductance ``2 L`` (H): two phases in series between two terminals, the third open."""
+        return 2.0 * self.L
+
+    @property
+    def KV(self) -> float:
+        """Speed constant (rpm/V) per volt of peak line-to-line back-EMF: ``60 / (2 pi) / (2 k_phi)``.
+
+        bldclab's no-load speed per volt of DC bus, ``Omega_0 / V_dc`` in rpm/V.
+        """
+        return kv(self.emf, "peak") / RPM_PER_V
+
+    @property
+    def KV_rms(self) -> float:
+        """Speed constant (rpm/V) per volt of rms line-to-line back-EMF (depends on the shape)."""
+        return kv(self.emf, "rms") / RPM_PER_V
 
     @property
     def has_iron_losses(self) -> bool:
@@ -261,6 +369,24 @@ class Motor:
         if self.Omega_N is not None:
             return float(self.Omega_N)
         return (self.V_N - 2.0 * self.R * self.I_N) / (2.0 * self.k_phi)
+
+
+def _phase_value(name: str, phase: object, line: object, dimension: str) -> float:
+    """Return a phase quantity given per phase (``R``) or line to line (``R_ll``, halved): exactly one of them."""
+    ll = f"{name}_ll"
+    if phase is not None and line is not None:
+        raise BldclabError(ll, f"cannot be given with {name}: give the phase value {name} or the line-to-line value "
+                           f"{ll} (= 2 {name}), not both")
+    if line is not None:
+        value = to_si(line, dimension, ll)
+        check_number(ll, value, lo=0.0)
+        return value / 2.0
+    if phase is None:
+        raise BldclabError(name, f"is missing (per phase; or give the line-to-line value as {ll})")
+    if isinstance(phase, str) and "line" in phase.lower():
+        typed = phase[:phase.lower().index("line")].strip().rstrip("(,;").strip()
+        raise BldclabError(name, f"is the phase value; a line-to-line one goes in {ll}: {ll} = \"{typed}\"")
+    return to_si(phase, dimension, name)
 
 
 @dataclass(frozen=True)
@@ -715,9 +841,14 @@ class Drive:
     def from_dict(cls, data: Mapping[str, Any], source: str | None = None, default_name: str = "") -> Drive:
         """Build a drive from the parsed TOML structure (see :meth:`from_toml`)."""
         try:
-            return _drive_from_dict(data, default_name)
+            drive = _drive_from_dict(data, default_name)
         except BldclabError as exc:
             raise BldclabError(exc.field, exc.problem, source) from None
+        hint = pole_count_hint(drive.motor.p, drive.Omega_0)
+        if hint:  # a pole count typed as pole pairs: valid, and a PlausibilityWarning naming both readings
+            where = f"{source}: " if source else ""
+            warnings.warn(f"{where}motor.p: {hint}", PlausibilityWarning, stacklevel=3)
+        return drive
 
     def to_toml(self) -> str:
         """Return the drive as a TOML motor file (SI numbers)."""
@@ -738,7 +869,9 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
     es = ms.sub("emf")
     if es is None:
         raise BldclabError("motor.emf", "is missing (a [motor.emf] table is required)")
-    emf = read_emf(es)
+    sizes = [k for k in KV_CONVENTIONS if ms.has(k)]
+    form = read_form(es, ms.name(sizes[0])) if sizes else None
+    emf = read_emf(es) if form is None else None
     cog = None
     cs = ms.sub("cogging")
     if cs is not None:
@@ -749,8 +882,10 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
         raise BldclabError(ms.name(given_p[0]), f"cannot be given with {iron_s.prefix}: give the iron losses as "
                            "powers (P_fe_eddy, P_fe_hyst, P_fe_ex at speed_fe_ref) or as a steel grade, core mass "
                            "and flux density ([motor.iron]), not both")
-    motor = wrap("motor", Motor, p=ms.integer("p"), R=ms.quantity("R", "resistance"),
-                  L=ms.quantity("L", "inductance"), emf=emf, V_N=ms.quantity("V_N", "voltage"),
+    motor = wrap("motor", Motor.from_ratings, p=ms.integer("p", None), poles=ms.integer("poles", None),
+                  R=ms.raw("R", None), R_ll=ms.raw("R_ll", None), L=ms.raw("L", None), L_ll=ms.raw("L_ll", None),
+                  emf=emf, KV=ms.raw("KV", None), KV_rms=ms.raw("KV_rms", None), shape=form or "sinusoid",
+                  V_N=ms.quantity("V_N", "voltage"),
                   I_N=ms.quantity("I_N", "current"), Omega_N=ms.quantity("Omega_N", "speed", None),
                   T_peak=ms.quantity("T_peak", "torque", None), cogging=cog,
                   P_fe_eddy=ms.quantity("P_fe_eddy", "power", 0.0), P_fe_hyst=ms.quantity("P_fe_hyst", "power", 0.0),
@@ -888,14 +1023,32 @@ def _inverter_energies(inv_s: Section, motor: Motor) -> dict[str, float]:
     return {"E_on": e_on, "E_off": e_off, "E_rr": e_rr, "V_test": v, "I_test": i}
 
 
-def _drive_to_toml(d: Drive) -> str:
-    out = [toml_table("", {"name": d.name, "description": d.description})]
-    m = d.motor
+def _motor_table(m: Motor) -> str:
+    """Return the ``[motor]`` table in bldclab's canonical fields, the catalogue forms in comments beside them.
+
+    ``p``, ``R``, ``L`` as the file reads them (a file with ``poles``, ``R_ll``, ``L_ll`` or ``KV`` is written back in
+    these), with the pole count, the line-to-line values and the speed constants (of the ``[motor.emf]`` below) as
+    comments: docs/motor-files.md, "Catalogue ratings".
+    """
     mot: dict[str, object] = {"p": int(m.p), "R": float(m.R), "L": float(m.L), "V_N": float(m.V_N),
                               "I_N": float(m.I_N), "Omega_N": m.Omega_N, "T_peak": m.T_peak}
     if m.has_iron_losses or m.speed_fe_ref is not None:  # otherwise (the default) written as before they existed
         mot.update({k: getattr(m, k) for k in Motor.IRON_LOSS_FIELDS})
-    out.append(toml_table("motor", mot))
+    notes = {"p": f"pole pairs ({m.poles} poles)", "R": f"Ohm per phase (line to line R_ll = {toml_value(m.R_ll)})",
+             "L": f"H per phase (line to line L_ll = {toml_value(m.L_ll)})"}
+    lines = ["[motor]"]
+    for k, v in mot.items():
+        if v is not None:
+            lines.append(f"{k} = {toml_value(v)}" + (f"  # {notes[k]}" if k in notes else ""))
+    lines.append(f"# back-EMF below: KV = {m.KV:.6g} rpm/V (per volt of peak line-to-line back-EMF: Omega_0 / V_dc), "
+                 f"KV_rms = {m.KV_rms:.6g} rpm/V")
+    return "\n".join(lines) + "\n"
+
+
+def _drive_to_toml(d: Drive) -> str:
+    out = [toml_table("", {"name": d.name, "description": d.description})]
+    m = d.motor
+    out.append(_motor_table(m))
     out += emf_tables(m.emf)
     if m.cogging is not None:
         out.append(cogging_table(m.cogging))

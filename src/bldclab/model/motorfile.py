@@ -19,7 +19,8 @@ from ._checks import check_array
 from .emf import PHASES, SHAPES, TWO_PI, BackEmf, Cogging, Fourier, Shape, Sinusoid, Table, Trapezoid
 from .units import to_si
 
-__all__ = ["Section", "cogging_table", "emf_tables", "read_cogging", "read_emf", "toml_table", "toml_value", "wrap"]
+__all__ = ["Section", "cogging_table", "emf_tables", "read_cogging", "read_emf", "read_form", "toml_table",
+           "toml_value", "wrap"]
 
 
 class Section:
@@ -119,16 +120,52 @@ def _unit_scale(sec: Section, key: str, default: str, dim: str) -> float:
     return to_si(f"1 {unit}", dim, sec.name(key))
 
 
-def _shape_from(sec: Section, phase: int | None) -> Shape:
-    """Read one shape; ``phase`` (0, 1, 2) reads the per-phase table column ``k_a``/``k_b``/``k_c``."""
+def _magnitude(sec: Section, key: str, sizeless: str | None) -> float:
+    """Read the size of an analytic shape (``k_phi``, ``k_1``); 1 when a speed constant gives it (``sizeless``)."""
+    if sizeless is not None:
+        if sec.has(key):
+            raise BldclabError(sec.name(key), f"cannot be given with {sizeless}: the back-EMF's size is given once "
+                               f"(a speed constant in [motor], or {key} here)")
+        return 1.0
+    try:
+        value: float = sec.quantity(key, "emf_constant")
+    except BldclabError:
+        raw = sec.data.get(key)
+        if not _is_speed_constant(raw):
+            raise
+        raise BldclabError(sec.name(key), f"{raw!r} is a speed constant (KV), not V s/rad: write KV = \"{raw}\" in "
+                           f"[motor] and leave {key} out (docs/motor-files.md, \"Catalogue ratings\")") from None
+    return value
+
+
+def _is_speed_constant(raw: object) -> bool:
+    """Whether ``raw`` is a string with a speed-constant unit (``"1950 rpm/V"``)."""
+    if not isinstance(raw, str):
+        return False
+    try:
+        to_si(raw, "speed_constant", "")
+    except BldclabError:
+        return False
+    return True
+
+
+def _shape_from(sec: Section, phase: int | None, sizeless: str | None = None) -> Shape:
+    """Read one shape; ``phase`` (0, 1, 2) reads the per-phase table column ``k_a``/``k_b``/``k_c``.
+
+    ``sizeless`` (the field that gives the size instead, e.g. ``motor.KV``): a trapezoid or sinusoid of size 1,
+    without its ``k_phi`` or ``k_1``.
+    """
     kind = sec.string("kind")
     if kind not in SHAPES:
         raise BldclabError(sec.name("kind"), f"unknown shape {kind!r} (use one of {', '.join(SHAPES)})")
+    if sizeless is not None and kind not in ("trapezoid", "sinusoid"):
+        raise BldclabError(sec.name("kind"), f"must be trapezoid or sinusoid with {sizeless}: a {kind}'s values "
+                           f"give its size in V s/rad (drop {sizeless})")
     if kind == "trapezoid":
-        shape: Shape = wrap(sec.prefix, Trapezoid, sec.quantity("k_phi", "emf_constant"),
+        shape: Shape = wrap(sec.prefix, Trapezoid, _magnitude(sec, "k_phi", sizeless),
                              sec.quantity("flat_top", "angle", TWO_PI / 3.0))
     elif kind == "sinusoid":
-        shape = wrap(sec.prefix, Sinusoid, sec.quantity("k_1", "emf_constant"))
+        shape = wrap(sec.prefix, Sinusoid, _magnitude(sec, "k_1", sizeless))
     elif kind == "fourier":
         k_scale = _unit_scale(sec, "unit", "V s/rad", "emf_constant")
         shape = wrap(sec.prefix, Fourier, tuple(sec.numbers("a", k_scale)), tuple(sec.numbers("b", k_scale)))
@@ -143,6 +180,20 @@ def _shape_from(sec: Section, phase: int | None) -> Shape:
         except BldclabError as exc:
             field_ = key if exc.field == "k" else exc.field  # name the column the file has (k_a, k_b, k_c)
             raise BldclabError(sec.name(field_), exc.problem) from None
+    return shape
+
+
+def read_form(sec: Section, sizeless: str) -> Shape:
+    """Read the ``[motor.emf]`` table of a motor whose back-EMF size is a speed constant (``sizeless``: its field).
+
+    One trapezoid or sinusoid for the three phases, without ``k_phi`` or ``k_1``: the form the size is applied to.
+    """
+    if sec.has("phase") or (sec.data.get("kind") == "table" and not sec.has("k")):
+        raise BldclabError(sec.name("phase" if sec.has("phase") else "kind"), f"{sizeless} gives one size to one "
+                           "shape for the three phases: kind = \"trapezoid\" or \"sinusoid\" (per-phase shapes give "
+                           f"their own sizes in V s/rad: drop {sizeless})")
+    shape = _shape_from(sec, None, sizeless)
+    sec.finish()
     return shape
 
 

@@ -15,6 +15,7 @@ import json
 import math
 import platform
 import shlex
+import warnings
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor
 from pathlib import Path
@@ -29,10 +30,12 @@ from ..analysis import paper1, paper2
 from ..analysis.compare import SUPPLIES, CompareResult, compare, default_controls
 from ..analysis.experiments import electrical_period, map_points, steady_state
 from ..control import Control, Lu
-from ..errors import BldclabError
+from ..errors import BldclabError, PlausibilityWarning
+from ..model import analytic
 from ..model.analytic.table import table1_text
 from ..model.motor import Drive
 from ..sim import Scenario
+from ..sim import plausibility as _plaus
 from . import plots
 from .html import _KNOWN, FORMAT, FORMAT_VERSION, MANIFEST, REPORT, WAVEFORM_SPEEDS, WAVEFORM_SUB, Results, _now, render
 from .plots import FigureJob
@@ -52,16 +55,23 @@ __all__ = [
     "motor_results",
     "read_results",
     "ripple_figure",
+    "runs_text",
     "torque_figure",
     "waveforms",
 ]
 
 
-def _waveform(job: tuple[Drive, str, Control, float, float, int]) -> tuple[pd.DataFrame, dict[str, Any]]:
-    """One supply at one speed for :func:`waveforms`: the first period of the measuring window, and the point."""
+def _waveform(job: tuple[Drive, str, Control, float, float, int]
+              ) -> tuple[pd.DataFrame, dict[str, Any], list[str]]:
+    """Run one supply at one speed for :func:`waveforms`: the window's first period, the point, its warnings.
+
+    The plausibility warnings of the run are prefixed as :func:`~bldclab.analysis.compare.compare`'s: the same point
+    gives the same message, counted once.
+    """
     drive, supply, ctl, ref, s, trace_sub = job
     om = s * drive.Omega_0
-    point, res = steady_state(drive, ctl, om, ref, trace=True, trace_sub=trace_sub)
+    with _plaus.collect() as caught:  # recorded (on a worker they would reach its stderr one by one), summarised once
+        point, res = steady_state(drive, ctl, om, ref, trace=True, trace_sub=trace_sub)
     m = point.metrics
     te = electrical_period(drive, om)
     sel = (res.t >= m.t0) & (res.t < m.t0 + te)
@@ -73,7 +83,7 @@ def _waveform(job: tuple[Drive, str, Control, float, float, int]) -> tuple[pd.Da
         "tau_e_pu": res["tau_e"][sel] / drive.T_N})
     return frame, {"supply": supply, "speed_pu": s, "tau_mean_pu": point.tau_mean_pu,
                    "ripple_pu": point.ripple_sampled_pu, "ripple_inst_pu": point.ripple_pu,
-                   "efficiency": point.efficiency}
+                   "efficiency": point.efficiency}, [f"{supply} at {s:.3g} p.u.: {text}" for text in caught]
 
 
 def waveforms(drive: Drive, speeds_pu: Sequence[float] = WAVEFORM_SPEEDS, *,
@@ -106,8 +116,16 @@ def waveforms(drive: Drive, speeds_pu: Sequence[float] = WAVEFORM_SPEEDS, *,
     list of dict
         Per supply and speed: ``supply``, ``speed_pu``, ``tau_mean_pu``, ``ripple_pu`` (without PWM),
         ``ripple_inst_pu`` (instantaneous), ``efficiency`` over the measuring window.
+
+    The runs' plausibility warnings are issued as one :class:`~bldclab.errors.PlausibilityWarning`
+    (:func:`bldclab.sim.plausibility.summary`).
     """
-    return _waveform_table(map_points(_waveform, _waveform_jobs(drive, speeds_pu, controls, trace_sub), executor))
+    jobs = _waveform_jobs(drive, speeds_pu, controls, trace_sub)
+    done = map_points(_waveform, jobs, executor)
+    line = _plaus.summary(_waveform_warnings(done), len(jobs))
+    if line:
+        warnings.warn(line, PlausibilityWarning, stacklevel=2)
+    return _waveform_table(done)
 
 
 def _waveform_jobs(drive: Drive, speeds_pu: Sequence[float], controls: Mapping[str, tuple[Control, float]] | None,
@@ -120,9 +138,15 @@ def _waveform_jobs(drive: Drive, speeds_pu: Sequence[float], controls: Mapping[s
     return [(drive, supply, *controls[supply], s, trace_sub) for supply in SUPPLIES for s in w]
 
 
-def _waveform_table(done: Sequence[tuple[pd.DataFrame, dict[str, Any]]]) -> tuple[pd.DataFrame, list[dict[str, Any]]]:
+def _waveform_table(done: Sequence[tuple[pd.DataFrame, dict[str, Any], list[str]]]
+                    ) -> tuple[pd.DataFrame, list[dict[str, Any]]]:
     """Return :func:`waveforms`' table and points from the results of its points, in order."""
-    return pd.concat([frame for frame, _ in done], ignore_index=True), [point for _, point in done]
+    return pd.concat([frame for frame, _, _ in done], ignore_index=True), [point for _, point, _ in done]
+
+
+def _waveform_warnings(done: Sequence[tuple[pd.DataFrame, dict[str, Any], list[str]]]) -> list[str]:
+    """Return the plausibility warnings of :func:`waveforms`' runs, in order, each prefixed by its point."""
+    return [text for _, _, caught in done for text in caught]
 
 
 def methods_traces(drive: Drive, torque: float | None = None, speed: float | None = None,
@@ -241,7 +265,7 @@ def make_manifest(res: CompareResult, controls: Mapping[str, tuple[Control, floa
         "speeds_pu": speeds, "supplies": _supplies(res.drive, controls), "scenario": _scenario(),
         "waveforms": {"speeds_pu": sorted({float(p["speed_pu"]) for p in waveform_points}),
                       "trace_sub": waveform_sub, "periods_shown": 1, "points": _plain(list(waveform_points))},
-        "verdict": list(res.verdict), "files": sorted(set(files)),
+        "verdict": list(res.verdict), "warnings": _plaus.distinct(res.warnings), "files": sorted(set(files)),
     }
 
 
@@ -270,7 +294,8 @@ def compare_files(res: CompareResult, *, figures: bool = True, executor: Executo
     ``figures``, the PNG and SVG of the torque, ripple and efficiency characteristics and of paper 1's Figs 9, 11
     and 12.
     :func:`compare_outputs` adds ``waveforms.csv``, ``manifest.json`` and ``report.html``; :func:`compare_directory`
-    makes both.
+    makes both. The plausibility warnings of the figures' simulations are added to ``res.warnings``, prefixed by
+    the figure (not shown: the caller summarises them, :func:`bldclab.sim.plausibility.summary`).
 
     Parameters
     ----------
@@ -287,7 +312,9 @@ def compare_files(res: CompareResult, *, figures: bool = True, executor: Executo
     dict of str to bytes
     """
     files = _data_files(res)
-    files.update(_figure_files(plots.render_figures(_figure_jobs(res, figures), executor), figures))
+    drawn = plots.render_figures(_figure_jobs(res, figures), executor)
+    res.warnings += _figure_warnings(drawn)
+    files.update(_figure_files(drawn, figures))
     return files
 
 
@@ -328,7 +355,17 @@ def _figure_names(figures: bool) -> list[str]:
     return ["dynamometer.csv", *(f"{stem}.{fmt}" for stem in stems for fmt in ("png", "svg"))]
 
 
-def _figure_files(drawn: Mapping[str, tuple[dict[str, bytes], Any]], figures: bool) -> dict[str, bytes]:
+#: What the figures that simulate are called in a warning's prefix.
+_FIGURE_LABELS = {_DYNAMOMETER: "paper 1 Fig 12 (dynamometer)", "fig11_currents": "paper 1 Fig 11",
+                  "fig9_torque_0.8pu": "paper 1 Fig 9"}
+
+
+def _figure_warnings(drawn: Mapping[str, tuple[dict[str, bytes], Any, list[str]]]) -> list[str]:
+    """Return the plausibility warnings the figures' simulations raised, each prefixed by its figure."""
+    return [f"{_FIGURE_LABELS.get(name, name)}: {text}" for name, (_, _, caught) in drawn.items() for text in caught]
+
+
+def _figure_files(drawn: Mapping[str, tuple[dict[str, bytes], Any, list[str]]], figures: bool) -> dict[str, bytes]:
     """Return ``dynamometer.csv`` and the figure files from the drawn :func:`_figure_jobs`."""
     files = {"dynamometer.csv": drawn[_DYNAMOMETER][1].to_csv(index=False).encode()}
     for name in _figure_names(figures)[1:]:
@@ -365,11 +402,16 @@ def compare_outputs(res: CompareResult, files: Mapping[str, bytes], *, command: 
     -------
     dict of str to bytes
         ``waveforms.csv``, ``manifest.json`` and, with ``report``, ``report.html``.
+
+    The waveforms' plausibility warnings are added to ``res.warnings`` (prefixed by their point: where a waveform
+    repeats a point of the comparison its message is the same, counted once by the summary); the manifest lists
+    every distinct one.
     """
     controls = _controls_of(res)
-    wf = waveforms(res.drive, waveform_speeds, controls=controls, executor=executor)
-    return _outputs(res, files, list(files), controls, wf, command=command, motor_source=motor_source, report=report,
-                    extra=extra)
+    done = map_points(_waveform, _waveform_jobs(res.drive, waveform_speeds, controls, WAVEFORM_SUB), executor)
+    res.warnings += _waveform_warnings(done)
+    return _outputs(res, files, list(files), controls, _waveform_table(done), command=command,
+                    motor_source=motor_source, report=report, extra=extra)
 
 
 def _controls_of(res: CompareResult) -> Mapping[str, tuple[Control, float]]:
@@ -401,8 +443,9 @@ def compare_directory(res: CompareResult, *, command: str, motor_source: str | N
 
     :func:`compare_files` then :func:`compare_outputs`: the same files. On an executor (the pool that ran the
     comparison), paper 1's Figs 9, 11 and 12 and the waveforms run and the figures are drawn on its workers, while
-    this process writes the data files, the manifest and the report (it needs Fig 12's measurements and the
-    waveforms, which go first).
+    this process writes the data files; the manifest and the report follow (they need Fig 12's measurements, the
+    waveforms and every run's warnings). The warnings of the figures' and waveforms' runs are added to
+    ``res.warnings`` in the order of :func:`compare_files` then :func:`compare_outputs`.
 
     Parameters
     ----------
@@ -432,11 +475,13 @@ def compare_directory(res: CompareResult, *, command: str, motor_source: str | N
                                                                          WAVEFORM_SUB)]
     drawing.update({name: executor.submit(plots.render_figure, job) for name, job in jobs.items()})
     files = _data_files(res)
-    files["dynamometer.csv"] = drawing[_DYNAMOMETER].result()[1].to_csv(index=False).encode()
-    wf = _waveform_table([f.result() for f in running])
-    outputs = _outputs(res, files, [*files, *_figure_names(True)[1:]], controls, wf, command=command,
-                       motor_source=motor_source, report=report, extra=None)
-    files.update(_figure_files({name: f.result() for name, f in drawing.items()}, True))
+    done = [f.result() for f in running]
+    drawn = {name: f.result() for name, f in drawing.items()}  # their warnings belong in the manifest
+    res.warnings += _figure_warnings(drawn) + _waveform_warnings(done)
+    files["dynamometer.csv"] = drawn[_DYNAMOMETER][1].to_csv(index=False).encode()
+    outputs = _outputs(res, files, [*files, *_figure_names(True)[1:]], controls, _waveform_table(done),
+                       command=command, motor_source=motor_source, report=report, extra=None)
+    files.update(_figure_files(drawn, True))
     files.update(outputs)
     return files
 
@@ -472,7 +517,7 @@ def motor_results(drive: Drive, speeds_pu: Sequence[float], *, command: str, mot
         ``waveforms.csv``, ``manifest.json`` and, with ``torque_control``, ``methods.csv`` and
         ``methods_traces.csv``.
     """
-    res = compare(drive, speeds_pu, workers=workers, progress=progress)
+    res = compare(drive, speeds_pu, workers=workers, progress=progress, summarise=False)
     files = compare_files(res, figures=False)
     extra: dict[str, Any] = {}
     if torque_control:
@@ -488,7 +533,16 @@ def motor_results(drive: Drive, speeds_pu: Sequence[float], *, command: str, mot
             "(at least 10 ms) settling, 2 measured; computation delay 1 sample"}
     files.update(compare_outputs(res, files, command=command, motor_source=motor_source, report=False,
                                  waveform_speeds=waveform_speeds, extra=extra))
+    line = _plaus.summary(res.warnings, runs_text(res, len(waveform_speeds)))
+    if line:  # one line for the comparison's points, paper 1's Fig 12 and the waveforms
+        warnings.warn(line, PlausibilityWarning, stacklevel=2)
     return files
+
+
+def runs_text(res: CompareResult, waveform_speeds: int = len(WAVEFORM_SPEEDS), figures: bool = False) -> str:
+    """Say what a comparison's files ran, for its warnings' summary line: ``"64 points, 4 waveforms and ..."``."""
+    figs = "paper 1's Figs 9, 11 and 12" if figures else "paper 1's Fig 12"
+    return f"{len(res.simulated)} points, {2 * waveform_speeds} waveforms and {figs}"
 
 
 def read_results(path: Path) -> dict[str, bytes]:
@@ -530,31 +584,46 @@ def _split(res: CompareResult) -> tuple[pd.DataFrame, pd.DataFrame]:
     return sim[sim.supply == "sine"], sim[sim.supply == "square"]
 
 
+def _physical(res: CompareResult, torque: bool) -> plots.Physical:
+    """Return how the comparison's figures are drawn: rpm (and N m), per unit on the opposite axes.
+
+    The closed forms are left out where the back-EMF is not paper 1's trapezoid
+    (:func:`bldclab.model.analytic.shape_applies`), with a note saying so.
+    """
+    d = res.drive
+    closed = analytic.shape_applies(d)
+    note = ("paper 1's closed forms not drawn: they assume the ideal trapezoidal back-EMF, which this drive does not "
+            "have (bldclab check)") if not closed else ""
+    return plots.Physical(rpm=d.Omega_0 * 30.0 / math.pi, y_base=d.T_N if torque else None,
+                          y_unit="N m" if torque else "", closed_forms=closed, note=note)
+
+
 def torque_figure(res: CompareResult) -> Figure:
-    """Torque vs speed: paper 1's curves (Fig 7) and the simulated points of both supplies."""
+    """Torque vs speed in rpm and N m (p.u. on the opposite axes): paper 1's closed forms (Fig 7), simulated points."""
     si, sq = _split(res)
     over_t = {"simulated, sinusoidal": si.rename(columns={"T_pu": "T_s_pu"})[["Omega_pu", "T_s_pu"]],
               "simulated, square-wave": sq.rename(columns={"T_pu": "T_q_pu"})[["Omega_pu", "T_q_pu"]]}
-    fig, _ = plots.plot_torque_speed(res.analytic, overlays=over_t, title=f"{res.drive.name}: torque vs speed")
+    fig, _ = plots.plot_torque_speed(res.analytic, overlays=over_t, title=f"{res.drive.name}: torque vs speed",
+                                     physical=_physical(res, True))
     return fig
 
 
 def ripple_figure(res: CompareResult) -> Figure:
-    """Torque ripple vs speed: paper 1's curves (Fig 8) and the simulated points on the averaged inverter."""
+    """Torque ripple vs speed in rpm and N m: paper 1's closed forms (Fig 8), the points on the averaged inverter."""
     si, sq = _split(res)
     # one point set (one marker) for the averaged inverter; each supply's points carry their own column
     avg = si.rename(columns={"TR_avg_pu": "TR_s_pu"})[["Omega_pu", "TR_s_pu"]].merge(
         sq.rename(columns={"TR_avg_pu": "TR_q_pu"})[["Omega_pu", "TR_q_pu"]], on="Omega_pu", how="outer")
     fig, _ = plots.plot_ripple(res.analytic, overlays={"simulated, averaged inverter": avg},
-                               title=f"{res.drive.name}: torque ripple vs speed")
+                               title=f"{res.drive.name}: torque ripple vs speed", physical=_physical(res, True))
     return fig
 
 
 def efficiency_figure(res: CompareResult) -> Figure:
-    """Efficiency vs speed: paper 1's (38)/(39) and the simulated points of both supplies."""
+    """Efficiency vs speed in rpm: paper 1's closed forms (38)/(39) and the simulated points of both supplies."""
     si, sq = _split(res)
     fig, _ = plots.plot_efficiency(res.analytic, {"sinusoidal": si, "square-wave": sq},
-                                   title=f"{res.drive.name}: efficiency vs speed")
+                                   title=f"{res.drive.name}: efficiency vs speed", physical=_physical(res, False))
     return fig
 
 

@@ -47,7 +47,8 @@ import numpy as np
 import pandas as pd
 
 from .._version import __version__
-from ..analysis.compare import EFFICIENCY_COUNTS
+from ..analysis.compare import COMPARISON, EFFICIENCY_COUNTS
+from ..analysis.effmap import COMPARISON as EFFMAP_COMPARISON
 from ..analysis.effmap import EffMapResult
 from ..analysis.losses import loss_buckets
 from ..errors import BldclabError
@@ -573,7 +574,8 @@ def _section_table1(r: Results) -> str:
     note = ""
     if reasons:
         note = ('<p class="warning"><b>Not applicable to this drive:</b> the closed forms below are outside paper 1\'s '
-                "premises here (shown for reference, labelled <i>not applicable</i> in the figures):</p><ul>"
+                "premises here (labelled <i>not applicable</i> in the figures, and hidden there at first where the "
+                "back-EMF is not the trapezoid they assume; click the legend to show them):</p><ul>"
                 + "".join(f"<li>{html.escape(x)}</li>" for x in reasons) + "</ul>")
     return ('<section id="table1"><h2>2. Paper 1 Table I and derived quantities</h2>'
             "<p>Closed forms of paper 1 (R neglected; equation numbers as in the paper) and, marked <i>numeric</i>, "
@@ -620,9 +622,11 @@ def _section_characteristics(r: Results, page: _Page) -> str:
     x = {"xlabel": "speed \u03a9 [p.u. of \u03a90]", "xname": "\u03a9 [p.u.]", "xmin": 0, "xmax": 1}
 
     na = " (not applicable)" if _not_applicable(r) else ""  # outside paper 1's premises: labelled, kept
+    off = not analytic.shape_applies(d)  # not the trapezoid they assume: hidden at first (the legend shows them)
 
     def an(name: str, col: str, color: str, dash: str | None = None) -> dict[str, Any]:
-        return {"name": name + na, "table": "closed_forms", "x": "Omega_pu", "y": col, "color": color, "dash": dash}
+        return {"name": name + na, "table": "closed_forms", "x": "Omega_pu", "y": col, "color": color, "dash": dash,
+                "hidden": off}
 
     def sim(name: str, col: str, supply: str, marker: str, hidden: bool = False) -> dict[str, Any]:
         return {"name": name, "table": "simulated", "x": "Omega_pu", "y": col, "where": {"supply": supply},
@@ -843,7 +847,8 @@ def _section_effmap(r: Results) -> str:
     out = ['<section id="effmap"><h2>7. Efficiency maps over torque and speed</h2>'
            "<p>From the files <code>bldclab effmap ... --out</code> wrote into this directory (effmap.csv, "
            "effmap_difference.csv and its figures): both supplies on a torque x speed grid of imposed-speed steady "
-           "states; points the drive cannot reach are marked infeasible and left out of the comparison.</p>",
+           "states; points the drive cannot reach are marked infeasible and left out of the comparison. "
+           f"{_e(EFFMAP_COMPARISON)}</p>",
            _verdict_list(res.summary())]
     if r.effmap_svg is not None:
         out.append(f'<figure class="static">{r.effmap_svg}<figcaption><b>Sinusoidal minus square-wave '
@@ -995,7 +1000,10 @@ def render(results: Results, *, report_command: str, created: str | None = None)
             "<p>Square-wave vs sinusoidal supply (paper 1): switching-level simulation beside the closed forms, "
             f"{n} speeds per supply.</p><p>Results of <code>{_e(r.manifest['command'])}</code>, "
             f"{_e(r.manifest['created'])}; bldclab {_e(r.manifest['bldclab_version'])}.</p></div></header>")
-    verdict = (f'<section id="verdict"><h2>Verdict</h2><div class="verdict">{_verdict_list(r.verdict)}'
+    tops = [v for v in r.verdict if v.startswith("bottom line")]
+    bottom = f'<p class="bottom-line"><b>{_e(tops[0])}</b></p>' if tops else ""
+    verdict = (f'<section id="verdict"><h2>Verdict</h2><div class="verdict">{bottom}<p>{_e(COMPARISON)}</p>'
+               f"{_verdict_list([v for v in r.verdict if not v.startswith('bottom line')])}"
                "<p class=\"muted\">Which supply gives more mean torque, less ripple (without PWM) and more efficiency, "
                "speed range by speed range, from the simulation.</p></div></section>")
     data = page.json()

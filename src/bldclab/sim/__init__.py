@@ -12,7 +12,7 @@ import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,15 +20,16 @@ from numpy.typing import ArrayLike, NDArray
 from .._core import core
 from .._version import __version__
 from ..control import Control
-from ..errors import BldclabError
+from ..errors import BldclabError, PlausibilityError
 from ..model.motor import Drive
-from ..model.units import to_si
+from ..model.units import per_unit, to_si
 from . import plausibility as _plaus
 from .results import Metrics, SimResult
 
-__all__ = ["TRACE_LIMIT", "Fault", "Piecewise", "Scenario", "parse_profile", "simulate", "trace_bytes", "trace_rows"]
+__all__ = ["TRACE_LIMIT", "Fault", "PerUnit", "Piecewise", "Scenario", "parse_profile", "simulate", "trace_bytes",
+           "trace_rows"]
 
-Profile = float | ArrayLike | Callable[[NDArray[np.float64]], ArrayLike] | None
+Profile = float | ArrayLike | Callable[[NDArray[np.float64]], ArrayLike] | None  # or a PerUnit speed
 
 #: Fault kind -> (C constant ``BC_FAULT_*``, whose record holds it)
 _FAULT_KINDS = {"phase_open": ("BC_FAULT_PHASE_OPEN", "plant"), "hall_stuck": ("BC_FAULT_HALL_STUCK", "plant"),
@@ -47,6 +48,8 @@ _DIAG_UNITS = {"i_d": "A", "i_q": "A", "i_q_ref": "A", "i_reg": "A", "i_ref": "A
 
 #: Scenario inputs that also take a unit string or a profile string (:func:`parse_profile`), and their dimension
 _UNIT_FIELDS = {"speed": "speed", "omega_ref": "speed", "load_torque": "torque", "v_dc": "voltage"}
+#: Scenario inputs that also take speeds in per unit of the drive's Omega_0 (``"0.5 pu"``, :class:`PerUnit`)
+_PU_FIELDS = ("speed", "omega_ref")
 
 
 @dataclass(frozen=True)
@@ -81,8 +84,59 @@ class Piecewise:
         return ", ".join(f"{a:g} s: {b:g}" for a, b in zip(self.times, self.values, strict=True))
 
 
-def parse_profile(text: str, dimension: str, field: str,
-                  convert: Callable[[str], float] | None = None) -> float | Piecewise:
+@dataclass(frozen=True)
+class PerUnit:
+    """A speed given in per unit of the drive's no-load speed ``Omega_0`` (``"0.5 pu"``), resolved by :func:`simulate`.
+
+    A :class:`Scenario` does not know the drive: ``Scenario(speed="0.5 pu")`` holds this, and :func:`simulate` (or
+    :meth:`Scenario.resolved`) multiplies the per-unit values by the drive's ``Omega_0 = V_dc / (2 k_phi)`` (at the
+    inverter's ``V_dc``), as ``bldclab simulate --speed "0.5 pu"`` does.
+
+    Parameters
+    ----------
+    values : tuple of float
+        The values: per unit where ``per_unit`` says so, else rad/s.
+    per_unit : tuple of bool
+        Which values are per unit (a profile may mix ``"0 rpm"`` and ``"0.5 pu"`` points).
+    times : tuple of float, optional
+        The profile's times (s); None for a constant (one value).
+    """
+
+    values: tuple[float, ...]
+    per_unit: tuple[bool, ...]
+    times: tuple[float, ...] | None = None
+
+    def resolve(self, omega_0: float) -> float | Piecewise:
+        """Return the speed in rad/s: a number, or a :class:`Piecewise` profile.
+
+        Parameters
+        ----------
+        omega_0 : float
+            The drive's no-load speed (rad/s), the per-unit base.
+        """
+        v = tuple(x * omega_0 if pu else x for x, pu in zip(self.values, self.per_unit, strict=True))
+        return v[0] if self.times is None else Piecewise(self.times, v)
+
+    def __str__(self) -> str:
+        """Return the speed as typed, in the syntax :func:`parse_profile` reads (SI values without a unit)."""
+        text = [f"{x:g} pu" if pu else f"{x:g}" for x, pu in zip(self.values, self.per_unit, strict=True)]
+        if self.times is None:
+            return text[0]
+        return ", ".join(f"{t:g} s: {v}" for t, v in zip(self.times, text, strict=True))
+
+
+@overload
+def parse_profile(text: str, dimension: str, field: str, convert: Callable[[str], float] | None = None, *,
+                  per_unit_base: Literal[False] = False) -> float | Piecewise: ...
+
+
+@overload
+def parse_profile(text: str, dimension: str, field: str, convert: Callable[[str], float] | None = None, *,
+                  per_unit_base: bool) -> float | Piecewise | PerUnit: ...
+
+
+def parse_profile(text: str, dimension: str, field: str, convert: Callable[[str], float] | None = None, *,
+                  per_unit_base: bool = False) -> float | Piecewise | PerUnit:
     """Read a constant (``"300 rpm"``) or a piecewise-linear profile (``"0 s: 0 rpm, 0.1 s: 1000 rpm"``).
 
     A profile is a comma-separated list of ``time: value`` points, times non-decreasing (a time without a unit is
@@ -100,21 +154,33 @@ def parse_profile(text: str, dimension: str, field: str,
     convert : callable, optional
         Reads one value (default :func:`bldclab.model.units.to_si` with ``dimension``), e.g. to accept per-unit
         speeds.
+    per_unit_base : bool
+        Also accept values in per unit (``"0.5 pu"``) of a base the caller applies later: then a text holding any
+        returns a :class:`PerUnit` (the speeds of a :class:`Scenario`, in p.u. of the drive's ``Omega_0``).
 
     Returns
     -------
-    float or Piecewise
+    float or Piecewise or PerUnit
 
     Raises
     ------
     BldclabError
         Naming ``field`` and the point that could not be read.
     """
+    flags: list[bool] = []
+
     def value(v: str, where: str) -> float:
+        pu = per_unit(v) if per_unit_base else None
+        flags.append(pu is not None)
+        if pu is not None:
+            return pu
         return convert(v) if convert is not None else to_si(v, dimension, where)
 
     if ":" not in text:
-        return value(text, field)
+        x = value(text, field)
+        if not math.isfinite(x):
+            raise BldclabError(field, f"must be finite, got {text!r}")
+        return PerUnit((x,), (True,)) if flags[0] else x
     times, values = [], []
     for j, point in enumerate(text.split(",")):
         if point.count(":") != 1:
@@ -129,6 +195,8 @@ def parse_profile(text: str, dimension: str, field: str,
                                f"({ta:g} s)")
     if not all(math.isfinite(v) for v in times + values):
         raise BldclabError(field, f"every time and value must be finite, got {text!r}")
+    if any(flags):
+        return PerUnit(tuple(values), tuple(flags), tuple(times))
     return Piecewise(tuple(times), tuple(values))
 
 
@@ -184,15 +252,18 @@ class Scenario:
     duration : float or str
         Simulated time (s, or a string such as ``"200 ms"``); rounded up to whole samples of ``1/(2 f_pwm)``.
     speed : profile, optional
-        Imposed mechanical speed (rad/s); also a string, ``"300 rpm"``, or a piecewise-linear profile such as
-        ``"0 s: 0 rpm, 0.1 s: 1000 rpm"`` (see :func:`parse_profile`). The rotor is held by a dynamometer.
+        Imposed mechanical speed (rad/s); also a string, ``"300 rpm"``, ``"0.5 pu"`` (per unit of the drive's
+        no-load speed ``Omega_0``: a :class:`PerUnit`, which :func:`simulate` resolves with the drive it runs), or a
+        piecewise-linear profile such as ``"0 s: 0 rpm, 0.1 s: 1000 rpm"`` (see :func:`parse_profile`). The rotor is
+        held by a dynamometer.
         ``None`` (default): the rotor follows ``J dw/dt = tau_e - tau_L - B w - tau_c sign(w)`` with the drive's
         mechanics.
     ref : profile
         The controller's reference (what it means depends on the controller, e.g. a duty or a torque in N m), in
         SI numbers (its unit depends on the controller, so no unit strings).
     omega_ref : profile
-        Speed reference (rad/s, or a unit/profile string as for ``speed``) for controllers with a speed loop.
+        Speed reference (rad/s, or a unit, per-unit or profile string as for ``speed``) for controllers with a speed
+        loop.
     load_torque : profile
         Load torque ``tau_L`` (N m, or ``"10 N m"``, or a profile string), rotor dynamics only.
     v_dc : profile, optional
@@ -245,7 +316,8 @@ class Scenario:
         for name, dim in _UNIT_FIELDS.items():
             v = getattr(self, name)
             if isinstance(v, str):
-                object.__setattr__(self, name, parse_profile(v, dim, f"scenario.{name}"))
+                object.__setattr__(self, name, parse_profile(v, dim, f"scenario.{name}",
+                                                             per_unit_base=name in _PU_FIELDS))
         if self.window is not None and any(isinstance(v, str) for v in self.window):
             object.__setattr__(self, "window", tuple(to_si(v, "time", "scenario.window") for v in self.window))
         _check_scalar("scenario.duration", self.duration, positive=True)
@@ -280,6 +352,23 @@ class Scenario:
             _check_scalar("scenario.window", t1)
             if not 0.0 <= t0 < t1 <= self.duration * (1 + 1e-12) + 1e-15:
                 raise BldclabError("scenario.window", f"needs 0 <= t0 < t1 <= duration, got ({t0}, {t1})")
+
+
+    def resolved(self, drive: Drive) -> Scenario:
+        """Return the scenario with its per-unit speeds (:class:`PerUnit`) in rad/s for ``drive`` (itself if none).
+
+        Parameters
+        ----------
+        drive : Drive
+            The drive whose no-load speed ``Omega_0`` is the per-unit base.
+
+        Returns
+        -------
+        Scenario
+        """
+        changes = {name: getattr(self, name).resolve(drive.Omega_0) for name in _PU_FIELDS
+                   if isinstance(getattr(self, name), PerUnit)}
+        return dataclasses.replace(self, **changes) if changes else self
 
 
 def _check_scalar(name: str, v: object, positive: bool = False) -> None:
@@ -531,7 +620,8 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         For invalid scenario inputs (NaN in a profile, wrong length) or parameters the C core rejects.
     PlausibilityError
         With ``check="error"``, for a run whose result would be physically meaningless (a subclass of
-        :class:`~bldclab.errors.BldclabError` naming the cause and the numbers).
+        :class:`~bldclab.errors.BldclabError` naming the cause and the numbers). When its inputs raised warnings
+        before the run, the error leads with them as the cause (:func:`bldclab.sim.plausibility.cause_first`).
     """
     if check not in _plaus.CHECK_MODES:
         raise BldclabError("check", f"must be one of {', '.join(_plaus.CHECK_MODES)}, got {check!r}")
@@ -540,6 +630,9 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     if not isinstance(control, Control):
         raise BldclabError("control", f"expected a bldclab.control controller, got {type(control).__name__}")
     _check_estimate(drive, estimate)
+    if not isinstance(scenario, Scenario):
+        raise BldclabError("scenario", f"expected a bldclab.Scenario, got {type(scenario).__name__}")
+    scenario = scenario.resolved(drive)
     need = trace_bytes(drive, scenario)
     if max_trace_bytes is not None and need > max_trace_bytes:
         raise BldclabError("scenario.trace", f"a run of {scenario.duration:.4g} s keeps {trace_rows(drive, scenario)} "
@@ -672,7 +765,10 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     chosen = scenario.window is not None
     # the default window (the whole run) is not checked as a measurement: guards see the run as before it existed
     res = SimResult(signals, units, docs, metrics if chosen else None, meta)
-    meta["warnings"] = issued + _guards_after(drive, res, imposed, check)
+    try:
+        meta["warnings"] = issued + _guards_after(drive, res, imposed, check)
+    except PlausibilityError as exc:  # the inputs' warnings are its cause: they lead the message
+        raise _plaus.cause_first(exc, issued) from None
     res.metrics = metrics
     return res
 
@@ -766,7 +862,7 @@ def _describe_scenario(s: Scenario) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for f in dataclasses.fields(s):
         v = getattr(s, f.name)
-        if isinstance(v, Piecewise):
+        if isinstance(v, Piecewise | PerUnit):
             out[f.name] = f"profile {v}"
         elif callable(v):
             out[f.name] = f"function {getattr(v, '__name__', '')}"

@@ -1,7 +1,9 @@
 """Plausibility guards: checks that a simulation's result is physically meaningful.
 
 :func:`bldclab.simulate` runs these checks before the run (drive, scenario, reference) and after it (the result).
-Each check is a pure function returning :class:`Finding` objects; :func:`apply` turns them into
+Each check is a pure function returning :class:`Finding` objects (those that need only the drive,
+:func:`check_pwm` and :func:`check_speed`, are :mod:`bldclab.model.limits`'s, re-exported here: ``bldclab check``
+states them for a motor file in the same words); :func:`apply` turns them into
 :class:`~bldclab.errors.PlausibilityWarning` warnings (the run is questionable) or a
 :class:`~bldclab.errors.PlausibilityError` (the result would be physically meaningless). Every message names the
 cause, the number and the threshold.
@@ -46,30 +48,37 @@ Thresholds and why (``T_pwm = 1 / f_pwm``, ``tau_el = L / R``, ``f_e = p |Omega|
 from __future__ import annotations
 
 import math
+import re
 import warnings
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 
 from ..control import Control
 from ..errors import PlausibilityError, PlausibilityWarning
+from ..model.limits import (
+    PWM_PER_PERIOD_ERROR,
+    PWM_PER_PERIOD_WARN,
+    PWM_TAU_ERROR,
+    PWM_TAU_WARN,
+    SPEED_ERROR_PU,
+    Finding,
+    check_pwm,
+    check_speed,
+)
+from ..model.limits import grade as _grade
 from ..model.motor import Drive
 from .results import SimResult
 
-__all__ = ["BALANCE_ERROR", "BALANCE_WARN", "CHECK_MODES", "Finding", "apply", "check_pwm", "check_reference",
-           "check_result", "check_speed", "check_steady", "collect", "summary"]
+__all__ = ["BALANCE_ERROR", "BALANCE_WARN", "CHECK_MODES", "PWM_PER_PERIOD_ERROR", "PWM_PER_PERIOD_WARN",
+           "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "Finding", "apply", "cause_first", "cause_of",
+           "check_pwm", "check_reference", "check_result", "check_speed", "check_steady", "collect", "distinct",
+           "summary"]
 
 #: Accepted values of ``simulate(..., check=)``.
 CHECK_MODES = ("error", "warn", "off")
 
-PWM_TAU_WARN = 1.0
-PWM_TAU_ERROR = 10.0
-PWM_PER_PERIOD_WARN = 12.0
-PWM_PER_PERIOD_ERROR = 3.0
-SPEED_ERROR_PU = 10.0
 REF_ERROR_FACTOR = 10.0
 BALANCE_WARN = 1e-4
 BALANCE_ERROR = 1e-2
@@ -80,106 +89,10 @@ STEADY_SPEED = 0.01
 STEADY_TORQUE = 0.05
 
 
-@dataclass(frozen=True)
-class Finding:
-    """One plausibility finding.
-
-    Attributes
-    ----------
-    level : {"warning", "error"}
-        ``error``: the result would be physically meaningless.
-    cause : str
-        What is implausible, as a dotted name (``"inverter.f_pwm"``, ``"scenario.speed"``, ``"scenario.ref"``,
-        ``"result.energy_balance"``, ``"result.currents"``, ``"result.finite"``, ``"scenario.window"``).
-    message : str
-        The numbers and the threshold crossed.
-    """
-
-    level: Literal["warning", "error"]
-    cause: str
-    message: str
-
-    def __str__(self) -> str:
-        """``cause: message``."""
-        return f"{self.cause}: {self.message}"
-
-
-def _grade(value: float, warn: float, error: float, above: bool = True) -> Literal["warning", "error"] | None:
-    if above:
-        return "error" if value > error else "warning" if value > warn else None
-    return "error" if value < error else "warning" if value < warn else None
-
-
-def check_pwm(drive: Drive, omega_max: float | None, time_constant: bool = True) -> list[Finding]:
-    """Check the PWM frequency against the electrical time constant and the electrical frequency.
-
-    Parameters
-    ----------
-    drive : Drive
-    omega_max : float or None
-        Highest mechanical speed of the run (rad/s); ``None``: only the time-constant check.
-    time_constant : bool
-        Also check the PWM period against ``L / R``.
-
-    Returns
-    -------
-    list of Finding
-    """
-    out = []
-    f_pwm = drive.inverter.f_pwm
-    m = drive.motor
-    if time_constant and m.R > 0:
-        tau_el = m.L / m.R
-        ratio = 1.0 / f_pwm / tau_el
-        level = _grade(ratio, PWM_TAU_WARN, PWM_TAU_ERROR)
-        if level:
-            out.append(Finding(level, "inverter.f_pwm",
-                               f"the PWM period 1/f_pwm = {1 / f_pwm:.4g} s is {ratio:.3g} times the electrical time "
-                               f"constant L/R = {tau_el:.4g} s (limit {PWM_TAU_WARN:g} for a warning, "
-                               f"{PWM_TAU_ERROR:g} for an error): the current is no PWM average with a ripple"))
-    if omega_max is not None and omega_max > 0:
-        f_e = m.p * omega_max / (2.0 * math.pi)
-        n = f_pwm / f_e
-        level = _grade(n, PWM_PER_PERIOD_WARN, PWM_PER_PERIOD_ERROR, above=False)
-        if level:
-            out.append(Finding(level, "inverter.f_pwm",
-                               f"f_pwm = {f_pwm:.4g} Hz gives {n:.3g} PWM periods per electrical period at "
-                               f"{omega_max:.4g} rad/s (f_e = {f_e:.4g} Hz; at least {PWM_PER_PERIOD_WARN:g} "
-                               f"wanted, below {PWM_PER_PERIOD_ERROR:g} the controller misses commutation sectors)"))
-    return out
-
-
-def check_speed(drive: Drive, omega_max: float, v_dc_max: float | None = None) -> list[Finding]:
-    """Check an imposed speed against the no-load speed ``Omega_0`` at the highest bus voltage.
-
-    Parameters
-    ----------
-    drive : Drive
-    omega_max : float
-        Highest imposed mechanical speed (rad/s, magnitude).
-    v_dc_max : float, optional
-        Highest DC source voltage of the run (V); default the inverter's ``V_dc``.
-
-    Returns
-    -------
-    list of Finding
-    """
-    v = drive.inverter.V_dc if v_dc_max is None else v_dc_max
-    omega_0 = v / (2.0 * drive.motor.k_phi)
-    pu = omega_max / omega_0
-    level = _grade(pu, 1.0 + 1e-9, SPEED_ERROR_PU)
-    if not level:
-        return []
-    return [Finding(level, "scenario.speed",
-                    f"{omega_max:.4g} rad/s ({omega_max * 30 / math.pi:.4g} rpm) is {pu:.4g} times the no-load speed "
-                    f"Omega_0 = V_dc / (2 k_phi) = {omega_0:.4g} rad/s at V_dc = {v:.4g} V: the back-EMF exceeds the "
-                    f"bus (error above {SPEED_ERROR_PU:g} Omega_0)")]
-
-
 def _reference_kind(control: Control) -> str | None:
     """Return ``"current"``, ``"torque"`` or ``None`` (a duty, an open-loop command or a speed loop's output)."""
-    if getattr(control, "speed_loop", False):
-        return None
+    if getattr(control, "speed_loop", False) or getattr(control, "regulation", None) == "duty":
+        return None  # the output of a speed loop, or a duty (six-step without a current loop)
     if control.ref_meaning.startswith("current"):
         return str(getattr(control, "reference", "current"))
     if control.ref_meaning.startswith("torque"):
@@ -382,6 +295,34 @@ def apply(findings: Iterable[Finding], check: str, stacklevel: int = 3) -> list[
     return issued
 
 
+def cause_first(error: PlausibilityError, before: Sequence[str]) -> PlausibilityError:
+    """Return the error of a finished run led by the warnings its inputs raised before it ran: the cause first.
+
+    A run that failed after warnings on its inputs (``--speed 300`` on ``htm-48v``: 4 times the no-load speed, so
+    the back-EMF drives the currents through the diodes past the hardware trip) is reported as
+    ``scenario.speed: 300 rad/s ... is 4 times the no-load speed ...; the run then failed: result.currents: ...``,
+    naming the input as the field; without such warnings the error is returned as it is.
+
+    Parameters
+    ----------
+    error : PlausibilityError
+        What the finished run's check found.
+    before : sequence of str
+        The warnings the inputs raised (``"cause: message"``), in order.
+
+    Returns
+    -------
+    PlausibilityError
+    """
+    if not before:
+        return error
+    cause = cause_of(before[0]) or error.field
+    first = before[0].removeprefix(f"{cause}: ")
+    rest = "".join(f"; {text}" for text in before[1:])
+    return PlausibilityError(cause, f"{first}{rest}; the run then failed: {error.field}: {error.problem}",
+                             error.source)
+
+
 @contextmanager
 def collect() -> Iterator[list[str]]:
     """Record plausibility warnings instead of showing them (for experiments that run many points).
@@ -405,16 +346,44 @@ def collect() -> Iterator[list[str]]:
     # the list is complete once the block has ended
 
 
-def summary(messages: Sequence[str], runs: int) -> str | None:
-    """One line for many warnings: their count, the runs they came from and the first message (``None`` if none).
+_CAUSE = re.compile(r"(?:^|: )((?:inverter|scenario|result|motor|control)\.[A-Za-z_]+)(?=: )")
+
+
+def distinct(messages: Iterable[str]) -> list[str]:
+    """Return the messages with repeats left out, in the order of their first appearance."""
+    return list(dict.fromkeys(messages))
+
+
+def cause_of(message: str) -> str | None:
+    """Return the cause of a warning's message (``"inverter.f_pwm"``: :attr:`Finding.cause`), None if it names none.
+
+    The message may carry a prefix saying where it came from (``"square at 0.74 p.u.: inverter.f_pwm: ..."``).
+    """
+    m = _CAUSE.search(message)
+    return m.group(1) if m else None
+
+
+def summary(messages: Sequence[str], runs: int | str) -> str | None:
+    """One line for many warnings: how many distinct ones, where from, their causes and the first (``None`` if none).
+
+    Identical messages (the same finding at the same point, from two runs of it) count once, and the line says how
+    many repeats there were: ``"12 plausibility warnings in 64 runs (7 repeats counted once); cause: inverter.f_pwm;
+    first: square at 0.74 p.u.: inverter.f_pwm: ..."``.
 
     Parameters
     ----------
     messages : sequence of str
-    runs : int
-        Simulations run.
+        Every warning's message, repeats included.
+    runs : int or str
+        Simulations run (``"in 64 runs"``), or what ran, as text (``"in 64 points and 4 waveforms"``).
     """
     if not messages:
         return None
-    return (f"{len(messages)} plausibility warning{'s' if len(messages) != 1 else ''} in {runs} runs; first: "
-            f"{messages[0]}")
+    uniq = distinct(messages)
+    causes = distinct(c for c in map(cause_of, uniq) if c)
+    repeats = len(messages) - len(uniq)
+    where = f"{runs} runs" if isinstance(runs, int) else runs
+    return (f"{len(uniq)} plausibility warning{'s' if len(uniq) != 1 else ''} in {where}"
+            + (f" ({repeats} repeat{'s' if repeats != 1 else ''} counted once)" if repeats else "")
+            + (f"; cause{'s' if len(causes) != 1 else ''}: {', '.join(causes)}" if causes else "")
+            + f"; first: {uniq[0]}")

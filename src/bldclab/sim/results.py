@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import textwrap
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -247,6 +248,46 @@ class SimResult:
             bits = int(np.bitwise_or.reduce(self["ctrl_flags"].astype(np.int64))) if len(self) else 0
         return decode_flags(int(bits))
 
+    def flags_summary(self) -> str:
+        """Say when and how often each controller flag was raised: a finding inside the metric window, or start-up.
+
+        From ``meta["flags"]`` (per flag, its samples, their share and first and last time over the run and inside
+        the metric window): a flag raised inside the window is reported with its share of the window's samples and
+        its first and last time (``"SATURATED in 1.4 % of the window's samples (0.0203-0.0495 s)"``: the operating
+        point is voltage-limited that often); one raised only before the window is start-up
+        (``"at start-up only (before the window): SATURATED (12 samples, 0-5e-05 s)"``), not a finding about the
+        measured operating point; one raised only after it is said so.
+
+        Returns
+        -------
+        str
+            ``"none"`` when no flag was raised; the decoded flags (:attr:`flags_raised`) for a result saved before
+            the runner kept the statistics.
+        """
+        stats = self.meta.get("flags")
+        if stats is None:
+            return self.flags_raised or "none"
+        inside: list[str] = []
+        before: list[str] = []
+        after: list[str] = []
+        t0 = self.metrics.t0 if self.metrics is not None else -math.inf
+        for name, entry in stats.items():
+            w = entry.get("window")
+            if w:
+                inside.append(f"{name} in {100.0 * w['share']:.3g} % of the window's samples "
+                              f"({w['first']:.4g}-{w['last']:.4g} s)")
+                continue
+            r = entry["run"]
+            when = f"at {r['first']:.4g} s" if r["samples"] == 1 else f"{r['first']:.4g}-{r['last']:.4g} s"
+            text = f"{name} ({r['samples']} sample{'s' if r['samples'] != 1 else ''}, {when})"
+            (before if r["last"] < t0 else after).append(text)
+        parts = inside
+        if before:
+            parts.append("at start-up only (before the window): " + ", ".join(before))
+        if after:
+            parts.append("outside the window only: " + ", ".join(after))
+        return "; ".join(parts) or "none"
+
     @property
     def t(self) -> NDArray[np.float64]:
         """Time of each row (s)."""
@@ -306,10 +347,11 @@ class SimResult:
     def plot(self, signals: tuple[str, ...] | list[str] | None = None, *, fig: Any = None) -> Any:
         """Plot signals against time, one axis per group.
 
-        The default figure has a title naming the drive, controller and operating point, and panels for the phase
-        currents, the torque (instantaneous ``tau_e`` and its mean over the metric window as a dashed line), the
-        back-EMFs and, for a run with rotor dynamics, the speed (rad/s and rpm). The metric window is shaded on
-        every panel.
+        The default figure has a title naming the drive, controller, operating point (the speed reference of a speed
+        loop, else the reference) and the flags (:meth:`flags_summary`), wrapped to the figure's width, and panels
+        for the phase currents, the torque (instantaneous ``tau_e`` and its mean over the metric window as a dashed
+        line), the back-EMFs and, for a run with rotor dynamics, the speed (rad/s and rpm; a speed loop's reference
+        dashed). The metric window is shaded on every panel.
 
         Parameters
         ----------
@@ -349,6 +391,9 @@ class SimResult:
                     ax.hlines(m.tau_mean, m.t0 * 1e3, m.t1 * 1e3, colors="k", linestyles="--", lw=1.2,
                               label=f"mean {m.tau_mean:.4g} N m")
             if group == ("omega_m",):
+                ref = self._speed_reference()
+                if ref is not None:
+                    ax.plot(ref[0] * 1e3, ref[1], color="k", ls="--", lw=1.0, label="speed reference")
                 sec = ax.secondary_yaxis("right", functions=(lambda w: w * 60.0 / (2 * math.pi),
                                                              lambda n: n * 2 * math.pi / 60.0))
                 sec.set_ylabel("[rpm]")
@@ -356,8 +401,32 @@ class SimResult:
             ax.legend(loc="upper right", fontsize=8, ncols=len(group) + 2)
             ax.grid(True, lw=0.3)
         axes[-1].set_xlabel("t [ms]")
-        fig.suptitle(self._title(), fontsize=10)
+        width = fig.get_figwidth() * 72.0 / (10 * 0.6)  # characters of a 10-point title across the figure
+        fig.suptitle(textwrap.fill(self._title(), max(40, int(width))), fontsize=10)
         return fig
+
+    def _speed_loop(self) -> bool:
+        """Whether the controller ran a speed loop (its reference is ``Scenario.omega_ref``)."""
+        return bool(self.meta.get("control", {}).get("speed_loop"))
+
+    def _speed_reference(self) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+        """Return the speed loop's reference as (times s, rad/s) over the run, None without a speed loop.
+
+        From the scenario's description: a number or a piecewise-linear profile; None for a function or an array.
+        """
+        if not self._speed_loop() or not len(self):
+            return None
+        ref = self.meta.get("scenario", {}).get("omega_ref")
+        t = self.t
+        if isinstance(ref, int | float):
+            return np.array([t[0], t[-1]]), np.array([float(ref), float(ref)])
+        points = _profile_points(ref)
+        if points is None:
+            return None
+        times = np.concatenate([[t[0]], points[0], [t[-1]]])
+        values = np.concatenate([[points[1][0]], points[1], [points[1][-1]]])
+        keep = (times >= t[0]) & (times <= t[-1])
+        return times[keep], values[keep]
 
     def _title(self) -> str:
         """Drive, controller and operating point, for plot titles."""
@@ -373,12 +442,19 @@ class SimResult:
             parts.append(f"{m.omega_mean:.4g} rad/s ({m.omega_mean * 60 / (2 * math.pi):.4g} rpm)")
             parts.append(f"tau_mean {m.tau_mean:.4g} N m over [{m.t0 * 1e3:.4g}, {m.t1 * 1e3:.4g}] ms")
         ref = sc.get("ref")
-        if isinstance(ref, int | float):
+        if self._speed_loop():
+            parts.append(f"speed reference {_speed_text(sc.get('omega_ref'))}")
+        elif isinstance(ref, int | float):
             parts.append(f"ref {ref:.4g}")
-        flags = self.flags_raised if ("controller_flags" in meta or "ctrl_flags" in self.signals
-                                      or "flags" in self.signals) else ""
-        if flags:
-            parts.append(f"flags {flags}")
+        if "flags" in meta:
+            summary = self.flags_summary()
+            if summary != "none":
+                parts.append(f"flags: {summary}")
+        else:
+            flags = self.flags_raised if ("controller_flags" in meta or "ctrl_flags" in self.signals
+                                          or "flags" in self.signals) else ""
+            if flags:
+                parts.append(f"flags {flags}")
         return ", ".join(p for p in parts if p)
 
     # ---------------------------------------------------------------------------------------------------------
@@ -435,6 +511,32 @@ class SimResult:
                     kw[f.name] = tuple(kw[f.name])
             metrics = Metrics(**kw)
         return cls(signals, header["units"], header["docs"], metrics, header["meta"])
+
+
+def _profile_points(text: object) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+    """Return the (times, values) of a scenario's profile description ``"profile 0 s: 0, 0.1 s: 31.4"`` (SI)."""
+    if not isinstance(text, str) or not text.startswith("profile "):
+        return None
+    times, values = [], []
+    try:
+        for point in text.removeprefix("profile ").split(","):
+            t_text, v_text = point.split(":")
+            times.append(float(t_text.strip().removesuffix("s")))
+            values.append(float(v_text))
+    except ValueError:
+        return None
+    return np.asarray(times), np.asarray(values)
+
+
+def _speed_text(ref: object) -> str:
+    """Return a speed reference from the scenario's description in rpm: ``"300 rpm"``, ``"0 s: 0 rpm, 1 s: 9 rpm"``."""
+    rpm = 60.0 / (2.0 * math.pi)
+    if isinstance(ref, int | float):
+        return f"{ref * rpm:.4g} rpm"
+    points = _profile_points(ref)
+    if points is None:
+        return str(ref)
+    return ", ".join(f"{t:g} s: {v * rpm:.4g} rpm" for t, v in zip(*points, strict=True))
 
 
 def _metric_unit(name: str) -> str:

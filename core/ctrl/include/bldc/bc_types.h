@@ -53,6 +53,19 @@ typedef struct {
 #define BC_FLAG_OVERCURRENT 0x4u /* a measured current exceeded the limit */
 #define BC_FLAG_BAD_INPUT 0x8u   /* a measurement was NaN/inf or out of its physical range */
 #define BC_FLAG_SATURATED 0x10u  /* the demanded voltage/duty was limited */
+/* Sensorless commutation (bc_bemf.h). DESYNC is raised at the sample that detects a loss of synchronisation, with
+ * the flag of its reason; OPEN_LOOP at every sample of the start-up (alignment, forced commutation); COMM_LATE at a
+ * sample whose commutation instant had already passed (it commutates at once, at the start of the output's interval). */
+#define BC_FLAG_DESYNC 0x20u     /* synchronisation lost: all legs off, restart (one of the next five says why) */
+#define BC_FLAG_ZC_TIMEOUT 0x40u /* reason: no crossing within the timeout after the floating phase left the clamp */
+#define BC_FLAG_ZC_HIDDEN 0x80u  /* reason: the floating phase never left the clamp level in the window (the
+                                    demagnetisation outlasted the crossing: the crossing hidden) */
+#define BC_FLAG_ZC_JUMP 0x100u   /* reason: ratio of successive crossing intervals out of bounds (a false crossing) */
+#define BC_FLAG_STALL 0x200u     /* reason: speed from the crossings below the slowest closed-loop speed */
+#define BC_FLAG_START_FAIL 0x400u /* reason: the open-loop ramp ended without the crossings for a handover */
+#define BC_FLAG_OPEN_LOOP 0x800u /* aligning or commutating open loop (start-up) */
+#define BC_FLAG_COMM_LATE 0x1000u /* a commutation instant already past: commutated at once */
+#define BC_FLAG_LOCK_LOST 0x2000u /* reason: the rotor-angle observer's flux left its band (sensorless sine) */
 
 /* Measurements presented to a controller at one sample. */
 typedef struct {

@@ -379,6 +379,9 @@ typedef struct {
     double fe_tc;           /* Coulomb-like hysteresis drag p k_fe_h, N m */
     int32_t drag_on;        /* 1 if B, tau_c or an iron-loss coefficient is positive (set at init) */
     int32_t prop_on;        /* 1 if k_q > 0 with rotor dynamics (set at init) */
+    double r_ph;            /* phase resistance now, Ohm: R at init, R r_scale after bc_plant_set_thermal */
+    double r_on;            /* switch on-resistance now, Ohm */
+    double k_scale;         /* the back-EMF shapes' factor now (magnets' flux at temperature), 1 at init */
     int32_t acc_on;         /* BC_ACC_OFF, _METRICS or _ALL: what is integrated (bc_plant_set_accumulate; _ALL
                                after init) */
     uint32_t acc_mask;      /* bit j: lane j of acc[] is integrated (its rate can be nonzero at this level) */
@@ -496,6 +499,13 @@ void bc_plant_set_accumulate(const bc_plant_params *p, bc_plant_state *s, int le
 /* Watch the terminal voltages (on = 1): their values and time derivatives are computed at every step's ends and
  * passed to on_term, whatever the accumulation level (the state evolves bit for bit the same). */
 void bc_plant_set_terminals(const bc_plant_params *p, bc_plant_state *s, int on);
+
+/* Temperature: from now on the phase resistance is R r_scale, the back-EMF shapes k_scale times theirs (the
+ * magnets' remanence; the cogging torque is left as given) and the switches' on-resistance R_on ron_scale. The
+ * state is continuous (currents, angle, speed); the circuit's coefficients follow. A thermal model calls it between
+ * chunks of a run. Returns BC_ERR_PARAM (nothing changed) unless each scale is finite and > 0. */
+int bc_plant_set_thermal(const bc_plant_params *p, bc_plant_state *s, double r_scale, double k_scale,
+                         double ron_scale);
 
 /* Electromagnetic torque tau_e at the current state, N m (cheaper than bc_plant_output: cached). */
 double bc_plant_tau(const bc_plant_params *p, bc_plant_state *s);

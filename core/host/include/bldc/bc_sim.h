@@ -188,6 +188,10 @@ typedef struct {
 int bc_sim_init(const bc_sim_config *cfg, bc_sim_state *s, double theta0, double omega0, const double i0[3],
                 double v_src0);
 
+/* Temperature between chunks of a run (bc_plant_set_thermal on the run's plant): R r_scale, k_scale times the
+ * back-EMF, R_on ron_scale from the next sample on. BC_ERR_PARAM for a scale that is not finite and > 0. */
+int bc_sim_set_thermal(const bc_sim_config *cfg, bc_sim_state *s, double r_scale, double k_scale, double ron_scale);
+
 /* Run n samples. Writes complete trace rows into rows[0 .. rows_cap) and their count into *rows_written.
  * Returns BC_OK, BC_ERR_PARAM (bad config/inputs) or BC_ERR_SIZE (rows_cap too small; rows beyond it dropped). */
 int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *in, int64_t n, bc_trace_row *rows,

@@ -52,6 +52,7 @@ from .premises import (
     commutation_periods,
     commutation_premise,
     harmonic_ratio,
+    shape_applies,
     shape_deviation,
     sine_torque_pu,
 )
@@ -141,6 +142,7 @@ __all__ = [
     "r_total",
     "region_q",
     "region_s",
+    "shape_applies",
     "shape_deviation",
     "sine_torque_pu",
     "t_N",

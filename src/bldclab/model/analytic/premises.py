@@ -28,6 +28,7 @@ __all__ = [
     "commutation_periods",
     "commutation_premise",
     "harmonic_ratio",
+    "shape_applies",
     "shape_deviation",
     "sine_torque_pu",
 ]
@@ -79,6 +80,15 @@ def shape_deviation(drive: Drive, n_grid: int = 7200) -> float:
     ref = ideal(th)
     k_phi = drive.motor.k_phi
     return float(max(np.max(np.abs(s(th) / k_phi - ref)) for s in drive.motor.emf.shapes))
+
+
+def shape_applies(drive: Drive) -> bool:
+    """Whether the back-EMF is paper 1's ideal trapezoid (:func:`shape_deviation` within :data:`SHAPE_DEVIATION_MAX`).
+
+    Every closed form of paper 1 assumes it: where it does not hold (a sinusoidal back-EMF), ``compare``'s figures
+    leave the closed-form curves out rather than draw them as a reference they are not.
+    """
+    return shape_deviation(drive) <= SHAPE_DEVIATION_MAX
 
 
 def harmonic_ratio(drive: Drive, n_max: int = 49) -> float:

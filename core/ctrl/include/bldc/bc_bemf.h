@@ -1,0 +1,318 @@
+/*
+ * bc_bemf.h - sensorless six-step (square-wave) drive: commutation from the back-EMF of the floating phase, as a
+ * drone or RC ESC (AM32, BLHeli) or VESC's BLDC mode does it. Float C99, no Hall sensors, no encoder.
+ *
+ * The drive it assumes. 120-degree conduction: in sector s (bc_commutation.h) phase pos is driven positive, neg
+ * negative, the third phase F = 3 - pos - neg floats. Its back-EMF crosses zero in the middle of the sector, 30
+ * electrical degrees after the sector's start, in either direction of rotation; the crossing falls (F's level goes
+ * from above to below the reference) in the even sectors and rises in the odd ones, forward and backward alike (the
+ * direction reverses both the order of the angles and the sign of the back-EMF). After a commutation the outgoing
+ * phase is F: its current freewheels through a diode until it is zero (demagnetisation), which clamps F's terminal
+ * to a rail: 0 V (lower diode) if the current was positive, V_dc (upper diode) if negative. For a motoring current
+ * that rail is always on the *post-crossing* side of the reference: the comparator shows during the clamp the level
+ * the crossing will give. What the comparator shows after a commutation is therefore
+ *
+ *     [clamp: post level]  ->  [demagnetisation over: pre level]  ->  crossing  ->  [post level]
+ *
+ * and a demagnetisation that lasts past the crossing hides it (post level throughout): the desync.
+ *
+ * Inputs (bc_ctrl_in): the comparators (zc_state bit x: phase x above the reference; zc_count[x] edges since start;
+ * zc_tick[x] capture tick of the last edge), the ADC samples of the terminal voltages (v_term[x], v_neutral, a new
+ * conversion when n_adc changes, sampled at tick_adc), tick_now, v_dc, the phase currents if use_current, and ref.
+ * Times are capture-timer ticks (f_tick, wrap-safe unsigned differences); t_k = tick_now. The output applies over
+ * [t_a, t_a + T_s), t_a = t_k + D T_s (D = delay).
+ *
+ * One sample, in order:
+ *
+ *  1. Input checks. ref finite; 0 < v_dc <= v_max; with use_current the input guard (bc_guard.h: currents of i_mask,
+ *     i_max trip latched until every |i_x| < i_max/2, fault pin), else the fault pin alone (BC_FLAG_OVERCURRENT);
+ *     with an ADC method, a new conversion's v_term[0..2] and v_neutral finite. Any failure: all legs off,
+ *     BC_FLAG_SAFE | the reason, state STOP (a restart then waits as in 3).
+ *
+ *  2. Throttle. The duty asked for d_ref = min(|ref|, 1) (BC_FLAG_SATURATED above 1), the direction sgn(ref). The
+ *     commanded duty moves toward it at most duty_rate T_s per sample (duty_rate in 1/s; 0: no limit):
+ *
+ *         d_cmd <- d_cmd + clamp(d_ref - d_cmd, -duty_rate T_s, +duty_rate T_s)
+ *
+ *     and the duty applied is m = min(d_state, d_lim), d_state = align_duty (ALIGN), min(ramp_duty + ramp_vf Omega, 1)
+ *     (RAMP, Omega the speed of 5: with ramp_vf = k_e / (p V_dc) the back-EMF is compensated and the current stays
+ *     near ramp_duty V_dc / (2 R)), max(d_cmd, duty_min) (CLOSED; d_cmd starts from the ramp's duty at the handover).
+ *     Current limit (use_current,
+ *     i_limit > 0), an integrating limiter on the largest measured phase current (d_lim = 1 at init and after a
+ *     safe state; without a limit always 1):
+ *
+ *         d_lim <- clamp(d_lim + k_limit (i_limit - max_x |i_x|) T_s, 0, 1)
+ *
+ *     A current-limited alignment: align_duty = 1 and i_limit the alignment current.
+ *
+ *  3. States. STOP (all legs off, coasting: not the safe state, no BC_FLAG_SAFE) -> ALIGN (align_time > 0) or RAMP
+ *     (direct start, align_time = 0) -> CLOSED; a desync, |ref| <= ref_stop or a change of sign of ref goes back to
+ *     STOP. STOP starts when |ref| > ref_stop and either the controller has never run (the rotor is taken to be at
+ *     rest after init), or the comparators have been quiet (no edge on any phase) for restart_wait and STOP has
+ *     lasted restart_wait, or STOP has lasted restart_max: a rotor still turning after a desync or a stop coasts down
+ *     before a new start, and a reverse (sign change) is a stop followed by a start the other way.
+ *
+ *  4. ALIGN: the pair of sector 0 driven forward (a+, b-) at align_duty for align_time. The rotor settles where the
+ *     pair's torque is zero and restoring: theta_e = 5 pi/6, the boundary between sectors 1 and 2. RAMP then
+ *     commands sector 2 (forward: the rotor at its start) or 1 (backward: the rotor at its end) from t_a.
+ *
+ *  5. RAMP (forced commutation). The open-loop speed Omega_ol(t) = min(ramp_w0 + ramp_accel t, ramp_w1) (electrical
+ *     rad/s, t since the ramp began); a forced sector begun at t_c with Omega_ol = w ends when the open-loop angle
+ *     has advanced pi/3, at t_c + tau(w):
+ *
+ *         tau = 2 (pi/3) / (w + sqrt(w^2 + 2 ramp_accel pi/3))      (below the cap; with the cap reached on the way:
+ *                                                                     the time to it plus the rest at ramp_w1)
+ *
+ *     scheduled with the commutation timer (8). The zero-crossing detector (6) runs in every forced sector (its
+ *     speed: w, or the speed from the last forced sector's crossing if higher). A sector with an accepted crossing
+ *     counts as valid, one without resets the count. At a crossing:
+ *       - handover to CLOSED when it makes n_handover consecutive valid sectors and the speed from its crossing
+ *         interval T (two valid sectors in a row) is at least 1.5 omega_stall (a margin above the stall limit):
+ *         T60 = T, and the commutation is scheduled from that crossing as in 7;
+ *       - else the crossing commutates the forced sector pi/6 / w_c after it if that comes before the forced instant
+ *         (w_c = (pi/3) / T, or (pi/6) / (t_zc - t_c) without T: the rotor crossed 30 degrees after the sector
+ *         began), as an ESC does as soon as it sees the back-EMF: a rotor faster than the ramp is followed, not left
+ *         to run ahead of the field.
+ *     A rotor that leads the forced field by more than 30 degrees crosses before the window opens: if F shows the
+ *     post level from the window's opening until half the forced sector (tau / 2 after t_c; a clamp ends long
+ *     before that at start-up currents), the sector is cut short: the next one is commanded from t_a (not a valid
+ *     crossing). After ramp_hold forced sectors begun at ramp_w1 without a handover: desync BC_FLAG_START_FAIL.
+ *
+ *  6. Zero-crossing detection on F, after the commutation at t_c that began the sector. The window opens at
+ *
+ *         t_open = t_c + max(blank_angle / Omega, blank_time)       (Omega: the speed estimate, 7, or that of 5)
+ *
+ *     The fixed blanking must cover the comparator's view of the clamp's onset (its filter and propagation delay:
+ *     a window that opens before the clamp shows takes the clamp's onset for a crossing). A post level that is
+ *     already there when the window opens is never a crossing: it is the clamp, or a crossing that came before the
+ *     window ("a crossing already past", rejected: the controller waits for an edge; if none comes, 9 decides; in
+ *     RAMP, 5's lead rule). post = F's level after the crossing (even sector: below, odd: above).
+ *
+ *     Comparator (method BC_BEMF_COMPARATOR). The crossing is the first edge into the post level inside the window
+ *     (its tick t_e >= t_open, zc_count[F] changed since the last sample before the window), once the post level
+ *     has been held min_pulse since that edge (the minimum-pulse filter: t_k - t_e >= min_pulse; a later edge
+ *     restarts it). The demagnetisation's end is the first sample in the window showing the pre level: t_dm = its
+ *     edge's tick if that edge came after t_c, else t_c (no clamp seen). With blanking = BC_BEMF_BLANK_DEMAG the
+ *     crossing's window opens there: the edge into post must come at least min_pulse after t_dm (a short return to
+ *     the pre level inside the clamp, ringing, does not end it); a pre level shorter than a sample (two edges
+ *     between samples) is not measured and the crossing is accepted as with BC_BEMF_BLANK_FIXED, which needs no
+ *     pre level at a sample: the first edge into post in the window.
+ *
+ *     ADC (BC_BEMF_ADC, BC_BEMF_INTEGRATE). At each new conversion sampled at t >= t_open, the sign-corrected sample
+ *     u = s_F (v_term[F] - v_neutral), s_F = +1 (post above) or -1, is post when u > 0. The crossing needs a pre
+ *     sample (u <= 0) in the window, then n_samples consecutive post samples (the N-consistent-samples filter; a
+ *     pre sample in between restarts it); it is placed by linear interpolation between the last pre sample
+ *     (t0, u0) and the first post one (t1, u1):  t_e = t0 + (t1 - t0) (-u0) / (u1 - u0). The demagnetisation end
+ *     t_dm is the first pre sample in the window (resolution: one conversion). Every level is seen at a conversion,
+ *     so the two blankings are the same rule here.
+ *
+ *     Measured demagnetisation (diag 4): t_demag = t_dm - t_c - the delays of 7 (the filter's, and the comparator's
+ *     propagation with BC_BEMF_COMPARATOR; exact for a pure delay, an RC filter shows a step tau ln 2 late rather
+ *     than atan(Omega tau)/Omega), at least 0; measured with either blanking.
+ *
+ *  7. Commutation from the crossing (CLOSED; also the handover of 5). The true crossing, the filter and comparator
+ *     delays compensated, and the interval estimate:
+ *
+ *         t_zc = t_e - atan(Omega tau_filter) / Omega - t_comp       (t_comp: comparator only, 0 for the ADC methods)
+ *         T    = t_zc - t_zc,prev;   T60 <- T60 + t60_gain (T - T60);   Omega = (pi/3) / T60
+ *
+ *     (the first-order RC filter of the terminal divider delays a sinusoid by its phase lag atan(Omega tau) / Omega,
+ *     a ramp by tau; the compensation uses the estimate before this crossing). Advance:
+ *
+ *         adv = min(adv_angle + Omega adv_time + adv_demag Omega t_demag, adv_max)      (t_demag: last measured, 6)
+ *
+ *     BC_BEMF_COMPARATOR, BC_BEMF_ADC: the next commutation at  t_zc + (pi/6 - adv) / Omega.
+ *     BC_BEMF_INTEGRATE (VESC's BLDC mode): from the crossing the sign-corrected samples are integrated by the
+ *     trapezoidal rule (the first piece from t_e, where u = 0),
+ *
+ *         lambda(t) = integral from t_e to t of u dt,      commutation when  lambda = int_limit ((pi/6 - adv)/(pi/6))^2
+ *
+ *     int_limit (V s) is the integral from the crossing to 30 degrees; for a back-EMF proportional to speed the
+ *     integral over an angle does not depend on the speed (e = k Omega (theta - theta_zc) gives lambda =
+ *     k (theta - theta_zc)^2 / 2), which is why the threshold is speed-independent, and the square scales it to
+ *     30 - adv (exact for a linear ramp, 1.3 % off at 10 degrees for a sinusoid). After each conversion the instant
+ *     is predicted from the last sample u_j and slope r (from the previous post sample; for the first, from the last
+ *     pre sample, as the interpolation; clamped >= 0): lambda_j + u_j tau + r tau^2 / 2 = threshold, commutation at
+ *     t_j + tau - atan(Omega tau_filter) / Omega (a threshold already passed: interpolated back between the samples).
+ *     It is committed once it falls before the end of the interval the output applies to (8), else predicted again
+ *     from the next conversion. Not reached by t_zc + (pi/3) / Omega (60 degrees after the crossing): at once.
+ *
+ *     Checks at each accepted crossing in CLOSED (a desync, 10): T / T_prev outside [1/jump_max, jump_max] (T_prev:
+ *     the previous interval between two real crossings) -> BC_FLAG_ZC_JUMP; Omega < omega_stall -> BC_FLAG_STALL.
+ *
+ *  8. Commutation timer. A commutation due at t_n (7, or 5) is issued by the first output whose interval
+ *     [t_a, t_a + T_s) it falls before the end of: t_n >= t_a: out->has_at = 1, out->t_at = t_n - t_a, the current
+ *     sector's legs in out->leg and the next sector's in out->leg_at (the plant switches at t_n exactly); t_n < t_a
+ *     (already past): the next sector's legs from t_a, BC_FLAG_COMM_LATE (with delay = 1 a crossing seen at t_k can
+ *     move the legs at t_k + T_s at the earliest). At most one commutation per half period. The next sector:
+ *     s + 1 forward, s - 1 backward; its legs: bc_pair_legs (bc_commutation.h) with the pattern chop, the pair
+ *     voltage m, pos and neg swapped backward. BC_CHOP_PWMPWM chops the incoming phase (the one that entered the
+ *     pair at the last commutation) during the first half of the sector (Omega (t_a - t_c) < pi/6) and the
+ *     continuing one after; the other patterns chop pos.
+ *
+ *  9. Timeout (CLOSED). No crossing accepted by t_zc,prev + zc_timeout T60 (zc_timeout = 1.5: when the next
+ *     commutation would be due without advance): with fewer than miss_max misses in a row, a blind commutation at
+ *     once (BC_FLAG_COMM_LATE) and a virtual crossing t_zc,prev += T60 (T60 kept; no jump check on the next
+ *     interval); otherwise a desync, BC_FLAG_ZC_HIDDEN if F never showed the pre level in the window (the
+ *     demagnetisation outlasted the crossing, or the crossing came before the window), else BC_FLAG_ZC_TIMEOUT (it
+ *     left the clamp, and no crossing followed: the rotor slowed or stopped).
+ *
+ * 10. Desync: BC_FLAG_DESYNC | the reason's flag at that sample, all legs off from t_a, state STOP (the restart
+ *     rule of 3). The reason stays in diag 7 until the next start.
+ *
+ * Reference: in->ref = duty (throttle) in [-1, 1], its sign the direction of rotation. Output duties are finite and
+ * in [0, 1] for any input; flags as above; BC_FLAG_OPEN_LOOP at every sample of ALIGN and RAMP.
+ *
+ * Diagnostics: diag[0] state (0 STOP, 1 ALIGN, 2 RAMP, 3 CLOSED; -1 safe), [1] sector commanded at the start of the
+ * output's interval (ALIGN: 0; -1 legs off), [2] speed estimate Omega (electrical rad/s, signed by the direction;
+ * in RAMP that of 5, in STOP 0), [3]
+ * commutation error at the last crossing, rad: the crossing's angle after the commutation that began its sector,
+ * Omega (t_zc - t_c), minus the expected pi/6 + adv (positive: the commutation came early for the rotor), [4]
+ * demagnetisation time last measured (6), s, [5] advance adv computed at the last crossing, rad, [6] duty m applied,
+ * [7] desync reason (0 none, 1 ZC_TIMEOUT, 2 ZC_HIDDEN, 3 ZC_JUMP, 4 STALL, 5 START_FAIL).
+ */
+#ifndef BC_BEMF_H
+#define BC_BEMF_H
+
+#include <stdint.h>
+
+#include "bldc/bc_guard.h"
+#include "bldc/bc_types.h"
+
+/* crossing detection and commutation method */
+#define BC_BEMF_COMPARATOR 0 /* comparator edges; commutation 30 - adv degrees after the crossing */
+#define BC_BEMF_ADC 1        /* ADC samples, N consistent, interpolated; commutation 30 - adv degrees after */
+#define BC_BEMF_INTEGRATE 2  /* ADC crossing, then the back-EMF integral to int_limit (VESC's BLDC mode) */
+
+/* blanking after a commutation */
+#define BC_BEMF_BLANK_FIXED 0 /* the window opens at t_c + max(blank_angle / Omega, blank_time) */
+#define BC_BEMF_BLANK_DEMAG 1 /* ... and the crossing's window at the measured end of the demagnetisation */
+
+/* states (diag[0]) */
+#define BC_BEMF_STOP 0
+#define BC_BEMF_ALIGN 1
+#define BC_BEMF_RAMP 2
+#define BC_BEMF_CLOSED 3
+
+/* desync reasons (diag[7]) */
+#define BC_BEMF_REASON_NONE 0
+#define BC_BEMF_REASON_TIMEOUT 1
+#define BC_BEMF_REASON_HIDDEN 2
+#define BC_BEMF_REASON_JUMP 3
+#define BC_BEMF_REASON_STALL 4
+#define BC_BEMF_REASON_START 5
+
+typedef struct {
+    int32_t method;      /* BC_BEMF_COMPARATOR, _ADC, _INTEGRATE */
+    int32_t chop;        /* BC_CHOP_BIPOLAR, _HIGH, _PWMPWM, _SYNC (bc_commutation.h) */
+    int32_t delay;       /* samples between computing and applying an output, 0 or 1 */
+    int32_t blanking;    /* BC_BEMF_BLANK_FIXED or _DEMAG */
+    float ts;            /* sampling period, half the PWM period, s (> 0) */
+    float f_tick;        /* capture-timer frequency, Hz (> 0) */
+    float blank_angle;   /* blanking after a commutation, electrical rad, [0, pi/3) */
+    float blank_time;    /* blanking after a commutation, s (>= 0; the larger of the two applies) */
+    float min_pulse;     /* comparator: post level held at least this long after its edge, s (>= 0) */
+    int32_t n_samples;   /* ADC: consecutive post samples for a crossing (1 .. 16) */
+    float tau_filter;    /* time constant of the terminal voltages' RC filter, s (>= 0) */
+    float t_comp;        /* comparator propagation delay, s (>= 0) */
+    float adv_angle;     /* timing advance, electrical rad (>= 0) */
+    float adv_time;      /* timing advance per speed, s: + Omega adv_time (>= 0) */
+    float adv_demag;     /* automatic advance: + adv_demag x the measured demagnetisation angle (>= 0) */
+    float adv_max;       /* cap of the total advance, electrical rad, [0, pi/6] */
+    float t60_gain;      /* gain of the crossing-interval filter, (0, 1] (1: the last interval) */
+    float int_limit;     /* BC_BEMF_INTEGRATE: back-EMF integral from the crossing to 30 degrees, V s (> 0) */
+    float zc_timeout;    /* crossing missing after zc_timeout T60 from the previous crossing, [1.05, 4] */
+    float jump_max;      /* largest ratio of successive crossing intervals, > 1 */
+    int32_t miss_max;    /* blind commutations in a row before a desync (0 .. 100) */
+    float omega_stall;   /* slowest closed-loop speed, electrical rad/s (> 0) */
+    float align_time;    /* alignment, s (>= 0; 0: direct start) */
+    float align_duty;    /* duty of the alignment, [0, 1] */
+    float ramp_w0;       /* open-loop speed at the start of the ramp, electrical rad/s (>= 0) */
+    float ramp_w1;       /* open-loop speed at its end, electrical rad/s (>= ramp_w0, >= 1.5 omega_stall) */
+    float ramp_accel;    /* open-loop acceleration, electrical rad/s^2 (>= 0; > 0 if ramp_w0 = 0) */
+    float ramp_duty;     /* duty of the forced commutation at standstill, [0, 1] */
+    float ramp_vf;       /* ... plus ramp_vf per electrical rad/s of the speed estimate (V/f), 1/(rad/s) (>= 0) */
+    int32_t ramp_hold;   /* forced sectors at ramp_w1 before the start fails (>= 1) */
+    int32_t n_handover;  /* consecutive valid crossings for the handover (2 .. 1000) */
+    float duty_min;      /* smallest duty in closed loop, [0, 1] */
+    float duty_rate;     /* throttle ramp limit, 1/s (>= 0; 0: none; 10 /s = 1 %/ms) */
+    float ref_stop;      /* |ref| <= ref_stop: stop (legs off), [0, 1) */
+    float restart_wait;  /* quiet comparators (and time in STOP) before a restart, s (>= 0) */
+    float restart_max;   /* restart after this long in STOP whatever the comparators show, s (>= restart_wait) */
+    int32_t use_current; /* 1: phase currents measured (the input guard, i_max, i_limit); 0: ignored */
+    float i_max;         /* over-current trip, A (> 0) */
+    float i_limit;       /* current limit, A (>= 0; 0: none) */
+    float k_limit;       /* current limiter gain, 1/(A s) (>= 0) */
+    float v_max;         /* largest plausible DC-bus measurement, V (> 0) */
+} bc_bemf_params;
+
+typedef struct {
+    float ts_tick;         /* derived: T_s in ticks */
+    float inv_tick;        /* derived: 1 / f_tick, s */
+    int32_t mode;          /* BC_BEMF_STOP ... CLOSED */
+    int32_t dir;           /* +1 forward, -1 backward (the run's direction) */
+    int32_t fresh;         /* never run since init: the rotor is taken to be at rest */
+    int32_t started;       /* a sample has been seen */
+    int32_t reason;        /* last desync reason (BC_BEMF_REASON_*) */
+    float t_in;            /* time in the state, s */
+    float quiet;           /* time since the last comparator edge on any phase, s */
+    uint32_t cnt_seen[3];  /* zc_count at the last sample */
+    uint32_t n_adc_seen;   /* n_adc at the last sample */
+    /* commutation */
+    int32_t sector;        /* sector in force at the end of the last output's interval, -1 none */
+    int32_t incoming;      /* phase that entered the pair at the last commutation, -1 none */
+    uint32_t t_c;          /* tick of the commutation that began the sector */
+    int32_t pending;       /* a commutation is scheduled at t_next */
+    uint32_t t_next;       /* tick of the scheduled commutation */
+    float d_cmd;           /* ramped throttle */
+    float d_lim;           /* current limiter's duty */
+    float adv;             /* advance computed at the last crossing, rad */
+    float adv_prev;        /* advance of the commutation that began the sector, rad */
+    /* crossing interval */
+    float t60;             /* filtered crossing interval, s (0: none) */
+    float t_last;          /* last interval between two real crossings, s (0: none) */
+    uint32_t t_zc;         /* tick of the previous (true or virtual) crossing */
+    int32_t have_zc;       /* t_zc valid */
+    int32_t virt;          /* t_zc is virtual (a blind commutation) */
+    int32_t misses;        /* blind commutations in a row */
+    float t_demag;         /* last measured demagnetisation, s */
+    float err;             /* last commutation error, rad */
+    /* open loop */
+    float w_ol;            /* open-loop speed at the start of the forced sector, electrical rad/s */
+    float tau_ol;          /* duration of the forced sector, s */
+    float w_zc;            /* speed from the last forced sector's crossing, electrical rad/s (0: none) */
+    int32_t valid;         /* consecutive forced sectors with a crossing */
+    int32_t hold;          /* forced sectors at ramp_w1 */
+    int32_t sector_ok;     /* the current forced sector had a crossing */
+    /* detector of the current sector */
+    int32_t det;           /* 0 before the window, 1 in it, 2 crossing found (commutation pending) */
+    int32_t pre_seen;      /* the pre level was in the window */
+    int32_t adc_seen;      /* ADC: a conversion in the window */
+    int32_t post_open;     /* the post level since the window opened */
+    int32_t dm_known;      /* t_dm measured */
+    uint32_t t_open;       /* tick the window opens */
+    uint32_t t_dm;         /* tick the demagnetisation ended */
+    uint32_t cnt_c;        /* zc_count[F] at the last sample before the commutation */
+    uint32_t cnt_open;     /* zc_count[F] at the last sample before the window */
+    int32_t n_post;        /* ADC: consecutive post samples */
+    float u_pre;           /* ADC: the last pre sample */
+    uint32_t t_pre;        /* ADC: its tick */
+    float te_off;          /* ADC: the crossing, ticks after t_pre */
+    /* integration (BC_BEMF_INTEGRATE) */
+    int32_t integ;         /* integrating since the crossing */
+    float lam;             /* integral so far, V s */
+    float u_last;          /* last post sample */
+    float r_last;          /* its slope, V/s */
+    uint32_t t_u;          /* its tick */
+    uint32_t t_int_max;    /* commutate at once after this tick */
+    bc_guard_params guard_p; /* derived: i_max, v_max */
+    bc_guard_state guard;
+} bc_bemf_state;
+
+/* Validate the parameters (finite, in range) and reset the state. BC_OK or BC_ERR_PARAM. */
+int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s);
+
+/* One sample: measurements in, leg commands for the next half period (and a timed commutation inside it) out. */
+void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, bc_ctrl_out *out);
+
+#endif /* BC_BEMF_H */

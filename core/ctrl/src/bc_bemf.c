@@ -1,0 +1,704 @@
+/* bc_bemf.c - sensorless six-step drive from the floating phase's back-EMF. Laws (numbered as here) in bc_bemf.h. */
+#include "bldc/bc_bemf.h"
+
+#include <math.h>
+
+#include "bldc/bc_commutation.h"
+#include "bldc/bc_math.h"
+
+#define PI3_F (BC_PI_F / 3.0f)
+#define PI6_F (BC_PI_F / 6.0f)
+
+static int fin(float v) { return isfinite(v) ? 1 : 0; }
+
+/* a - b in ticks, signed (wrap-safe: the two within 2^31 ticks of each other) */
+static float tdiff(uint32_t a, uint32_t b)
+{
+    uint32_t d = a - b;
+    return d < 0x80000000u ? (float)d : -(float)(0u - d);
+}
+
+/* t + n ticks (n rounded to the nearest tick, limited to +-2e9) */
+static uint32_t tadd(uint32_t t, float n)
+{
+    if (!fin(n)) return t;
+    n = bc_clampf(n, -2.0e9f, 2.0e9f);
+    int32_t k = (int32_t)(n >= 0.0f ? n + 0.5f : n - 0.5f);
+    return t + (uint32_t)k;
+}
+
+static int in01(float v) { return fin(v) && v >= 0.0f && v <= 1.0f; }
+static int nonneg(float v) { return fin(v) && v >= 0.0f; }
+
+int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
+{
+    if (p == 0 || s == 0) return BC_ERR_PARAM;
+    if (p->method < BC_BEMF_COMPARATOR || p->method > BC_BEMF_INTEGRATE) return BC_ERR_PARAM;
+    if (p->chop < BC_CHOP_BIPOLAR || p->chop > BC_CHOP_SYNC) return BC_ERR_PARAM;
+    if ((p->delay != 0 && p->delay != 1) || (p->blanking != BC_BEMF_BLANK_FIXED && p->blanking != BC_BEMF_BLANK_DEMAG) ||
+        (p->use_current != 0 && p->use_current != 1))
+        return BC_ERR_PARAM;
+    if (!(fin(p->ts) && p->ts > 0.0f) || !(fin(p->f_tick) && p->f_tick > 0.0f) || !(p->ts * p->f_tick >= 1.0f))
+        return BC_ERR_PARAM;
+    if (!nonneg(p->blank_angle) || !(p->blank_angle < PI3_F) || !nonneg(p->blank_time) || !nonneg(p->min_pulse) ||
+        p->n_samples < 1 || p->n_samples > 16 || !nonneg(p->tau_filter) || !nonneg(p->t_comp))
+        return BC_ERR_PARAM;
+    if (!nonneg(p->adv_angle) || !nonneg(p->adv_time) || !nonneg(p->adv_demag) || !nonneg(p->adv_max) ||
+        p->adv_max > PI6_F || !(fin(p->t60_gain) && p->t60_gain > 0.0f && p->t60_gain <= 1.0f))
+        return BC_ERR_PARAM;
+    if (p->method == BC_BEMF_INTEGRATE && !(fin(p->int_limit) && p->int_limit > 0.0f)) return BC_ERR_PARAM;
+    if (!nonneg(p->int_limit) || !(fin(p->zc_timeout) && p->zc_timeout >= 1.05f && p->zc_timeout <= 4.0f) ||
+        !(fin(p->jump_max) && p->jump_max > 1.0f) || p->miss_max < 0 || p->miss_max > 100 ||
+        !(fin(p->omega_stall) && p->omega_stall > 0.0f))
+        return BC_ERR_PARAM;
+    if (!nonneg(p->align_time) || !in01(p->align_duty) || !nonneg(p->ramp_w0) || !(fin(p->ramp_w1) && p->ramp_w1 > 0.0f) ||
+        p->ramp_w1 < p->ramp_w0 || !nonneg(p->ramp_accel) || (p->ramp_w0 == 0.0f && !(p->ramp_accel > 0.0f)) ||
+        !in01(p->ramp_duty) || !nonneg(p->ramp_vf) || p->ramp_hold < 1 || p->n_handover < 2 || p->n_handover > 1000)
+        return BC_ERR_PARAM;
+    if (!in01(p->duty_min) || !nonneg(p->duty_rate) || !(fin(p->ref_stop) && p->ref_stop >= 0.0f && p->ref_stop < 1.0f) ||
+        !nonneg(p->restart_wait) || !(fin(p->restart_max) && p->restart_max >= p->restart_wait))
+        return BC_ERR_PARAM;
+    if (!(fin(p->i_max) && p->i_max > 0.0f) || !nonneg(p->i_limit) || !nonneg(p->k_limit) ||
+        !(fin(p->v_max) && p->v_max > 0.0f))
+        return BC_ERR_PARAM;
+    *s = (bc_bemf_state){0};
+    s->ts_tick = p->ts * p->f_tick;
+    s->inv_tick = 1.0f / p->f_tick;
+    s->mode = BC_BEMF_STOP;
+    s->dir = 1;
+    s->fresh = 1;
+    s->sector = -1;
+    s->incoming = -1;
+    s->d_lim = 1.0f;
+    s->guard_p = (bc_guard_params){.i_max = p->i_max, .v_max = p->v_max};
+    if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
+    return BC_OK;
+}
+
+/* ------------------------------------------------------------------------------------------------------------ */
+
+/* Everything one sample needs besides params and state. */
+typedef struct {
+    uint32_t tk;     /* tick_now */
+    uint32_t ta;     /* start of the interval the output applies to */
+    int adc_new;     /* a new conversion in this input */
+    uint32_t flags;  /* flags raised so far */
+} bemf_now;
+
+static int floating(int sector)
+{
+    int pos, neg;
+    if (bc_sector_phases(sector, &pos, &neg) != 0) return 0;
+    return 3 - pos - neg;
+}
+
+/* speed estimate, electrical rad/s (0: none) */
+static float omega_of(const bc_bemf_params *p, const bc_bemf_state *s)
+{
+    (void)p;
+    if (s->mode == BC_BEMF_RAMP) return s->w_zc > s->w_ol ? s->w_zc : s->w_ol;
+    if (s->t60 > 0.0f) {
+        float w = PI3_F / s->t60;
+        return fin(w) ? w : 0.0f;
+    }
+    return 0.0f;
+}
+
+/* the filter's delay of a crossing at electrical speed w: atan(w tau) / w (tau as w -> 0) */
+static float filter_delay(const bc_bemf_params *p, float w)
+{
+    if (!(p->tau_filter > 0.0f)) return 0.0f;
+    if (!(w > 0.0f) || !fin(w)) return p->tau_filter;
+    float d = atanf(w * p->tau_filter) / w;
+    return fin(d) ? d : p->tau_filter;
+}
+
+/* adv = min(adv_angle + w adv_time + adv_demag w t_demag, adv_max) */
+static float advance_of(const bc_bemf_params *p, const bc_bemf_state *s, float w)
+{
+    float a = p->adv_angle + w * p->adv_time + p->adv_demag * w * s->t_demag;
+    return fin(a) ? bc_clampf(a, 0.0f, p->adv_max) : p->adv_max;
+}
+
+/* Open-loop sector time: the angle w tau + a tau^2 / 2 (w + a tau capped at w1) reaches pi/3. */
+static float sector_time(float w, float a, float w1)
+{
+    if (a > 0.0f && w < w1) {
+        float t1 = (w1 - w) / a;               /* time to the cap */
+        float ang1 = 0.5f * (w + w1) * t1;     /* angle on the way */
+        if (ang1 >= PI3_F) return 2.0f * PI3_F / (w + sqrtf(w * w + 2.0f * a * PI3_F));
+        return t1 + (PI3_F - ang1) / w1;
+    }
+    return PI3_F / w1;
+}
+
+/* A new sector: the phase that entered the pair (the incoming phase), the detector reset for the commutation at tc. */
+static void enter_sector(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, int sector, uint32_t tc)
+{
+    int inc = -1;
+    int pn, nn;
+    (void)bc_sector_phases(sector, &pn, &nn);
+    if (s->sector >= 0) {
+        int po, no;
+        (void)bc_sector_phases(s->sector, &po, &no);
+        if (pn != po && pn != no) inc = pn;
+        else if (nn != po && nn != no) inc = nn;
+    } else {
+        inc = s->dir > 0 ? pn : nn;
+    }
+    s->incoming = inc;
+    s->sector = sector;
+    s->t_c = tc;
+    float w = omega_of(p, s);
+    float blank = p->blank_time;
+    if (w > 0.0f && p->blank_angle / w > blank) blank = p->blank_angle / w;
+    s->t_open = tadd(tc, blank * p->f_tick);
+    s->det = 0;
+    s->adc_seen = 0;
+    s->post_open = 0;
+    s->pre_seen = 0;
+    s->dm_known = 0;
+    s->n_post = 0;
+    s->integ = 0;
+    s->sector_ok = 0;
+    s->pending = 0;
+    s->cnt_open = in->zc_count[floating(sector)];
+    s->cnt_c = s->cnt_open;
+}
+
+static void stop(bc_bemf_state *s, int reason)
+{
+    s->mode = BC_BEMF_STOP;
+    s->t_in = 0.0f;
+    s->fresh = 0;
+    s->pending = 0;
+    s->sector = -1;
+    s->incoming = -1;
+    s->d_cmd = 0.0f;
+    if (reason != BC_BEMF_REASON_NONE) s->reason = reason;
+}
+
+static uint32_t reason_flag(int reason)
+{
+    switch (reason) {
+    case BC_BEMF_REASON_TIMEOUT: return BC_FLAG_ZC_TIMEOUT;
+    case BC_BEMF_REASON_HIDDEN: return BC_FLAG_ZC_HIDDEN;
+    case BC_BEMF_REASON_JUMP: return BC_FLAG_ZC_JUMP;
+    case BC_BEMF_REASON_STALL: return BC_FLAG_STALL;
+    default: return BC_FLAG_START_FAIL;
+    }
+}
+
+/* 10. desync: legs off from t_a, STOP, the reason's flags */
+static void desync(bc_bemf_state *s, bemf_now *n, int reason)
+{
+    n->flags |= BC_FLAG_DESYNC | reason_flag(reason);
+    stop(s, reason);
+}
+
+/* The ramp's first sector: 2 forward (the aligned rotor at its start), 1 backward (at its end); from t_a. */
+static void begin_ramp(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, const bemf_now *n)
+{
+    s->mode = BC_BEMF_RAMP;
+    s->t_in = 0.0f;
+    s->valid = 0;
+    s->hold = 0;
+    s->have_zc = 0;
+    s->sector = -1;
+    s->w_ol = p->ramp_w0;
+    s->w_zc = 0.0f;
+    s->tau_ol = sector_time(s->w_ol, p->ramp_accel, p->ramp_w1);
+    enter_sector(p, s, in, s->dir > 0 ? 2 : 1, n->ta);
+    s->t_next = tadd(n->ta, s->tau_ol * p->f_tick);
+    s->pending = 1;
+    s->adv = 0.0f;
+    s->adv_prev = 0.0f;
+}
+
+static void start(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, const bemf_now *n, int dir)
+{
+    s->dir = dir;
+    s->fresh = 0;
+    s->reason = BC_BEMF_REASON_NONE;
+    s->d_cmd = 0.0f;
+    s->t60 = 0.0f;
+    s->t_last = 0.0f;
+    s->have_zc = 0;
+    s->virt = 0;
+    s->misses = 0;
+    s->t_demag = 0.0f;
+    s->err = 0.0f;
+    s->adv = 0.0f;
+    s->adv_prev = 0.0f;
+    if (p->align_time > 0.0f) {
+        s->mode = BC_BEMF_ALIGN;
+        s->t_in = 0.0f;
+        s->sector = -1;
+        s->pending = 0;
+    } else {
+        begin_ramp(p, s, in, n);
+    }
+}
+
+/* ------------------------------------------------------------------------------------------------------------ */
+/* 6. zero-crossing detection */
+
+/* Comparator. Returns 1 with *x_e (s, relative to t_k) when a crossing is accepted at this sample; post_open while
+ * the level has been post since the window opened (the clamp, or a crossing already past). */
+static int detect_comparator(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, const bemf_now *n,
+                             float *x_e)
+{
+    int f = floating(s->sector);
+    int post = s->sector & 1; /* odd sectors: above the reference after the crossing */
+    uint32_t cnt = in->zc_count[f];
+    uint32_t te = in->zc_tick[f];
+    int lvl = (int)((in->zc_state >> f) & 1u);
+    if (tdiff(n->tk, s->t_c) < 0.0f) s->cnt_c = cnt;
+    int opening = 0;
+    if (s->det == 0) {
+        if (tdiff(n->tk, s->t_open) < 0.0f) { /* before the window */
+            s->cnt_open = cnt;
+            return 0;
+        }
+        s->det = 1;
+        opening = 1;
+    }
+    float min_pulse = p->min_pulse * p->f_tick;
+    int te_past = tdiff(te, n->tk) <= 0.0f;
+    int edge_in = cnt != s->cnt_open && te_past && tdiff(te, s->t_open) >= 0.0f;
+    if (opening && lvl == post && !edge_in) s->post_open = 1; /* the post level when the window opens */
+    if (edge_in || lvl != post) s->post_open = 0;               /* ... until it leaves it */
+    if (lvl != post) { /* the pre level at a sample: the demagnetisation is over */
+        if (!s->dm_known) {
+            s->dm_known = 1;
+            s->pre_seen = 1;
+            int edge = cnt != s->cnt_c && te_past && tdiff(te, s->t_c) >= 0.0f; /* the clamp's end, seen */
+            s->t_dm = edge ? te : s->t_c;
+            s->t_demag = edge ? fmaxf(tdiff(te, s->t_c) * s->inv_tick - filter_delay(p, omega_of(p, s)) - p->t_comp,
+                                      0.0f)
+                              : 0.0f;
+        }
+        return 0;
+    }
+    /* the post level: a crossing only through an edge inside the window (else the clamp, or a crossing already
+     * past when the window opened: rejected) */
+    if (!edge_in) return 0;
+    s->pre_seen = 1; /* an edge into post in the window: the pre level was there before it */
+    if (p->blanking == BC_BEMF_BLANK_DEMAG && s->dm_known && tdiff(te, s->t_dm) < min_pulse) return 0;
+    if (tdiff(n->tk, te) < min_pulse) return 0; /* minimum pulse: not yet */
+    *x_e = tdiff(te, n->tk) * s->inv_tick;
+    return 1;
+}
+
+/* ADC. Returns 1 with *x_e when a crossing is accepted at this sample's conversion; post_open while every
+ * conversion since the window opened showed the post level. */
+static int detect_adc(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, const bemf_now *n, float *x_e)
+{
+    if (s->det == 0) {
+        if (tdiff(n->tk, s->t_open) < 0.0f) return 0;
+        s->det = 1;
+    }
+    if (!n->adc_new) return 0;
+    uint32_t t = in->tick_adc;
+    if (tdiff(t, s->t_open) < 0.0f || tdiff(t, n->tk) > 0.0f) return 0; /* sampled before the window */
+    int f = floating(s->sector);
+    float u = (s->sector & 1) ? in->v_term[f] - in->v_neutral : in->v_neutral - in->v_term[f];
+    if (!fin(u)) return 0;
+    int opening = !s->adc_seen;
+    s->adc_seen = 1;
+    if (opening && u > 0.0f) s->post_open = 1; /* the post level at the window's first conversion ... */
+    if (!(u > 0.0f)) s->post_open = 0;         /* ... until a pre sample */
+    if (!(u > 0.0f)) { /* pre */
+        if (!s->pre_seen) {
+            s->pre_seen = 1;
+            s->dm_known = 1;
+            s->t_dm = t;
+            s->t_demag = fmaxf(tdiff(t, s->t_c) * s->inv_tick - filter_delay(p, omega_of(p, s)), 0.0f);
+        }
+        s->n_post = 0;
+        s->u_pre = u;
+        s->t_pre = t;
+        return 0;
+    }
+    if (!s->pre_seen) return 0; /* post with no pre sample in the window: the clamp, or already past */
+    if (s->n_post == 0) { /* the first post sample: the crossing between it and the last pre sample */
+        float dt = tdiff(t, s->t_pre);
+        float frac = -s->u_pre / (u - s->u_pre);
+        float xe = fin(frac) ? bc_clampf(frac, 0.0f, 1.0f) * dt : dt;
+        s->te_off = xe;                                  /* crossing, ticks after t_pre */
+        s->lam = 0.5f * u * (dt - xe) * s->inv_tick;     /* integral from the crossing (u = 0 there) */
+    } else {
+        s->lam += 0.5f * (s->u_last + u) * tdiff(t, s->t_u) * s->inv_tick;
+    }
+    /* the slope: from the previous post sample, or (first post sample) from the last pre one, as the interpolation */
+    float u0 = s->n_post > 0 ? s->u_last : s->u_pre;
+    float dtu = tdiff(t, s->n_post > 0 ? s->t_u : s->t_pre) * s->inv_tick;
+    s->r_last = dtu > 0.0f ? fmaxf((u - u0) / dtu, 0.0f) : 0.0f;
+    if (!fin(s->r_last)) s->r_last = 0.0f;
+    s->u_last = u;
+    s->t_u = t;
+    s->n_post += 1;
+    if (s->n_post < p->n_samples) return 0;
+    *x_e = (tdiff(s->t_pre, n->tk) + s->te_off) * s->inv_tick;
+    return 1;
+}
+
+/* 7. BC_BEMF_INTEGRATE: from the samples integrated so far, the commutation instant (s relative to t_k). */
+static float integrate_predict(const bc_bemf_params *p, const bc_bemf_state *s, const bemf_now *n, float w)
+{
+    float r = (PI6_F - s->adv) / PI6_F;
+    float thr = p->int_limit * r * r;
+    float x_u = tdiff(s->t_u, n->tk) * s->inv_tick; /* last sample, s relative to t_k */
+    float u = s->u_last, a = s->r_last, tau;
+    if (s->lam >= thr) { /* already reached: back between the last two samples */
+        tau = u > 0.0f ? -(s->lam - thr) / u : 0.0f;
+    } else if (a > 0.0f) {
+        tau = (-u + sqrtf(u * u + 2.0f * a * (thr - s->lam))) / a;
+    } else if (u > 0.0f) {
+        tau = (thr - s->lam) / u;
+    } else {
+        tau = 1e30f;
+    }
+    float x = x_u + tau - filter_delay(p, w);
+    return fin(x) ? x : 1e30f;
+}
+
+/* ------------------------------------------------------------------------------------------------------------ */
+
+/* 5 and 7: an accepted crossing at x_e (s relative to t_k). */
+static void on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, float x_e)
+{
+    float w0 = omega_of(p, s);
+    float x_zc = x_e - filter_delay(p, w0) - (p->method == BC_BEMF_COMPARATOR ? p->t_comp : 0.0f);
+    float T = s->have_zc ? x_zc - tdiff(s->t_zc, n->tk) * s->inv_tick : 0.0f;
+    if (!(fin(T) && T > 0.0f)) T = 0.0f;
+    s->det = 2;
+    if (s->mode == BC_BEMF_RAMP) {
+        s->sector_ok = 1;
+        s->valid += 1;
+        s->t_zc = tadd(n->tk, x_zc * p->f_tick);
+        s->have_zc = 1;
+        if (!(s->valid >= p->n_handover && T > 0.0f && PI3_F / T >= 1.5f * p->omega_stall)) {
+            /* not yet: the crossing commutates the forced sector 30 degrees after it, if that comes before
+             * the forced instant (speed from the crossing interval, else from the 30 degrees between the sector's
+             * start and its crossing) */
+            float into = x_zc - tdiff(s->t_c, n->tk) * s->inv_tick; /* from the sector's start to the crossing */
+            float wc = T > 0.0f ? PI3_F / T : (into > 0.0f ? PI6_F / into : s->w_ol);
+            s->w_zc = fin(wc) && wc > 0.0f ? wc : 0.0f;
+            if (wc > 0.0f && fin(wc)) {
+                uint32_t tn = tadd(n->tk, (x_zc + PI6_F / wc) * p->f_tick);
+                if (tdiff(tn, s->t_next) < 0.0f) s->t_next = tn;
+            }
+            return;
+        }
+        /* handover: the throttle ramp starts from the duty the forced ramp applied */
+        s->d_cmd = bc_clampf(p->ramp_duty + p->ramp_vf * omega_of(p, s), 0.0f, 1.0f);
+        s->mode = BC_BEMF_CLOSED;
+        s->t_in = 0.0f;
+        s->t60 = T;
+        s->t_last = T;
+        s->virt = 0;
+        s->misses = 0;
+        s->err = 0.0f;
+    } else {
+        s->err = w0 * (x_zc - tdiff(s->t_c, n->tk) * s->inv_tick) - (PI6_F + s->adv_prev);
+        if (!fin(s->err)) s->err = 0.0f;
+        if (T > 0.0f && s->t_last > 0.0f && !s->virt) {
+            float ratio = T / s->t_last;
+            if (!(ratio <= p->jump_max && ratio * p->jump_max >= 1.0f)) {
+                desync(s, n, BC_BEMF_REASON_JUMP);
+                return;
+            }
+        }
+        if (T > 0.0f && !s->virt) {
+            s->t60 += p->t60_gain * (T - s->t60);
+            s->t_last = T;
+        } else {
+            s->t_last = 0.0f;
+        }
+        s->virt = 0;
+        s->misses = 0;
+        s->t_zc = tadd(n->tk, x_zc * p->f_tick);
+        s->have_zc = 1;
+    }
+    float w = omega_of(p, s);
+    if (!(w >= p->omega_stall)) {
+        desync(s, n, BC_BEMF_REASON_STALL);
+        return;
+    }
+    s->adv = advance_of(p, s, w);
+    float x_n;
+    if (p->method == BC_BEMF_INTEGRATE) {
+        s->integ = 1;
+        s->t_int_max = tadd(n->tk, (x_zc + PI3_F / w) * p->f_tick);
+        x_n = integrate_predict(p, s, n, w);
+    } else {
+        x_n = x_zc + (PI6_F - s->adv) / w; /* 30 - adv degrees after the crossing */
+    }
+    s->t_next = tadd(n->tk, x_n * p->f_tick);
+    s->pending = 1;
+}
+
+/* ------------------------------------------------------------------------------------------------------------ */
+
+static void legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector, float m, float travel,
+                    bc_leg_cmd c[3])
+{
+    int pos, neg;
+    (void)bc_sector_phases(sector, &pos, &neg);
+    if (s->dir < 0) {
+        int t = pos;
+        pos = neg;
+        neg = t;
+    }
+    int inc = (s->incoming == pos || s->incoming == neg) ? s->incoming : pos;
+    int chop_leg = pos;
+    if (p->chop == BC_CHOP_PWMPWM) chop_leg = travel < PI6_F ? inc : (inc == pos ? neg : pos);
+    bc_pair_legs((int)p->chop, pos, neg, chop_leg, m, c);
+}
+
+/* 2. the duty applied: the state's, limited by the current limiter */
+static float duty_of(const bc_bemf_params *p, const bc_bemf_state *s)
+{
+    float m = 0.0f;
+    if (s->mode == BC_BEMF_ALIGN) m = p->align_duty;
+    else if (s->mode == BC_BEMF_RAMP) m = fminf(p->ramp_duty + p->ramp_vf * omega_of(p, s), 1.0f);
+    else if (s->mode == BC_BEMF_CLOSED) m = fmaxf(s->d_cmd, p->duty_min);
+    m = fminf(m, s->d_lim);
+    return fin(m) ? bc_clampf(m, 0.0f, 1.0f) : 0.0f;
+}
+
+/* all legs off, coasting (STOP: not the safe state, no BC_FLAG_SAFE) */
+static void coast(bc_ctrl_out *out)
+{
+    for (int x = 0; x < 3; ++x) {
+        out->leg[x].mode = BC_LEG_OFF;
+        out->leg[x].duty = 0.0f;
+        out->leg_at[x] = out->leg[x];
+    }
+    out->has_at = 0u;
+    out->t_at = 0.0f;
+}
+
+static void safe(bc_bemf_state *s, bc_ctrl_out *out, uint32_t flags)
+{
+    bc_legs_off(out);
+    stop(s, BC_BEMF_REASON_NONE);
+    s->d_lim = 1.0f;
+    out->flags |= flags | BC_FLAG_SAFE;
+    out->diag[0] = -1.0f;
+    out->diag[1] = -1.0f;
+    out->diag[7] = (float)s->reason;
+}
+
+void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, bc_ctrl_out *out)
+{
+    for (int j = 0; j < BC_DIAG_N; ++j) out->diag[j] = 0.0f;
+    out->flags = 0u;
+    out->has_at = 0u;
+    out->t_at = 0.0f;
+
+    bemf_now n;
+    n.tk = in->tick_now;
+    n.ta = tadd(n.tk, (float)p->delay * s->ts_tick);
+    n.flags = 0u;
+    n.adc_new = s->started && in->n_adc != s->n_adc_seen;
+    s->n_adc_seen = in->n_adc;
+    if (!s->started) {
+        s->started = 1;
+        for (int x = 0; x < 3; ++x) s->cnt_seen[x] = in->zc_count[x];
+    }
+    /* comparator activity on any phase (the restart waits for quiet comparators) */
+    s->quiet = fminf(s->quiet + p->ts, 1e6f);
+    s->t_in = fminf(s->t_in + p->ts, 1e6f);
+    for (int x = 0; x < 3; ++x) {
+        if (in->zc_count[x] != s->cnt_seen[x]) s->quiet = 0.0f;
+        s->cnt_seen[x] = in->zc_count[x];
+    }
+
+    /* 1. input checks */
+    float i[3] = {0.0f, 0.0f, 0.0f};
+    uint32_t why = 0u;
+    if (p->use_current) {
+        why |= bc_guard_step(&s->guard_p, &s->guard, in, i);
+    } else {
+        if (!(fin(in->v_dc) && in->v_dc > 0.0f && in->v_dc <= p->v_max)) why |= BC_FLAG_BAD_INPUT;
+        if (in->fault_pin) why |= BC_FLAG_OVERCURRENT;
+    }
+    if (!fin(in->ref)) why |= BC_FLAG_BAD_INPUT;
+    if (p->method != BC_BEMF_COMPARATOR && n.adc_new &&
+        !(fin(in->v_term[0]) && fin(in->v_term[1]) && fin(in->v_term[2]) && fin(in->v_neutral)))
+        why |= BC_FLAG_BAD_INPUT;
+    if (why) {
+        safe(s, out, why);
+        return;
+    }
+
+    /* 2. throttle: d_cmd toward d_ref at most duty_rate T_s per sample; the current limiter */
+    float mag = fabsf(in->ref);
+    int want = in->ref > 0.0f ? 1 : (in->ref < 0.0f ? -1 : 0);
+    if (mag > 1.0f) n.flags |= BC_FLAG_SATURATED;
+    float d_ref = bc_clampf(mag, 0.0f, 1.0f);
+    if (p->duty_rate > 0.0f) {
+        float lim = p->duty_rate * p->ts;
+        s->d_cmd = bc_clampf(s->d_cmd + bc_clampf(d_ref - s->d_cmd, -lim, lim), 0.0f, 1.0f);
+    } else {
+        s->d_cmd = d_ref;
+    }
+    if (p->use_current && p->i_limit > 0.0f) {
+        float i_pk = fmaxf(fabsf(i[0]), fmaxf(fabsf(i[1]), fabsf(i[2])));
+        float d = s->d_lim + p->k_limit * (p->i_limit - i_pk) * p->ts;
+        s->d_lim = fin(d) ? bc_clampf(d, 0.0f, 1.0f) : 0.0f;
+    } else {
+        s->d_lim = 1.0f;
+    }
+
+    /* 3. states: stop on a small or reversed reference; start from STOP */
+    if (s->mode != BC_BEMF_STOP && (mag <= p->ref_stop || want != s->dir)) stop(s, BC_BEMF_REASON_NONE);
+    if (s->mode == BC_BEMF_STOP && mag > p->ref_stop && want != 0) {
+        if (s->fresh || (s->quiet >= p->restart_wait && s->t_in >= p->restart_wait) || s->t_in >= p->restart_max)
+            start(p, s, in, &n, want);
+    }
+    /* 4. alignment over: the ramp */
+    if (s->mode == BC_BEMF_ALIGN && s->t_in >= p->align_time) begin_ramp(p, s, in, &n);
+
+    /* 5-9. detection, commutation schedule, timeout */
+    if (s->mode == BC_BEMF_RAMP || s->mode == BC_BEMF_CLOSED) {
+        float x_e = 0.0f;
+        if (s->det < 2) {
+            int got = p->method == BC_BEMF_COMPARATOR ? detect_comparator(p, s, in, &n, &x_e)
+                                                      : detect_adc(p, s, in, &n, &x_e);
+            if (got) {
+                on_crossing(p, s, &n, x_e);
+            } else if (s->mode == BC_BEMF_RAMP && s->post_open && tdiff(n.tk, s->t_c) >= 0.5f * s->tau_ol * p->f_tick) {
+                /* start-up: the post level since the window opened and still at half the forced sector: not a clamp
+                 * but a rotor leading the forced field (its crossing came before the window). The forced sector is
+                 * cut short, the next one commanded from t_a; not a valid crossing */
+                s->det = 2;
+                s->valid = 0;
+                s->have_zc = 0;
+                s->w_zc = 0.0f;
+                s->t_next = n.ta;
+            }
+        } else if (s->integ && s->mode == BC_BEMF_CLOSED && n.adc_new) {
+            /* BC_BEMF_INTEGRATE: the next conversion, integrated (trapezoid) and the instant predicted again */
+            uint32_t t = in->tick_adc;
+            int f = floating(s->sector);
+            float u = (s->sector & 1) ? in->v_term[f] - in->v_neutral : in->v_neutral - in->v_term[f];
+            float dt = tdiff(t, s->t_u) * s->inv_tick;
+            if (fin(u) && dt > 0.0f && tdiff(t, n.tk) <= 0.0f) {
+                s->lam += 0.5f * (s->u_last + u) * dt;
+                s->r_last = fmaxf((u - s->u_last) / dt, 0.0f);
+                s->u_last = u;
+                s->t_u = t;
+                s->t_next = tadd(n.tk, integrate_predict(p, s, &n, omega_of(p, s)) * p->f_tick);
+            }
+        }
+        if (s->integ && s->mode == BC_BEMF_CLOSED && s->pending && tdiff(n.tk, s->t_int_max) >= 0.0f &&
+            tdiff(s->t_next, s->t_int_max) > 0.0f)
+            s->t_next = s->t_int_max; /* not reached 60 degrees after the crossing: at once */
+        /* 9. timeout */
+        if (s->mode == BC_BEMF_CLOSED && s->det < 2 && s->have_zc &&
+            tdiff(n.tk, s->t_zc) >= p->zc_timeout * s->t60 * p->f_tick) {
+            if (s->misses < p->miss_max) { /* a blind commutation at once, a virtual crossing */
+                s->misses += 1;
+                s->t_zc = tadd(s->t_zc, s->t60 * p->f_tick);
+                s->virt = 1;
+                s->t_last = 0.0f;
+                s->t_next = tadd(n.tk, -1.0f); /* past: the late path */
+                s->pending = 1;
+                s->det = 2;
+            } else {
+                desync(s, &n, s->pre_seen ? BC_BEMF_REASON_TIMEOUT : BC_BEMF_REASON_HIDDEN);
+            }
+        }
+    }
+
+    /* 8. the commutation timer, and the legs */
+    int shown = -1;
+    float m = 0.0f;
+    if (s->mode == BC_BEMF_STOP) {
+        coast(out);
+    } else if (s->mode == BC_BEMF_ALIGN) {
+        m = duty_of(p, s);
+        bc_pair_legs((int)p->chop, 0, 1, 0, m, out->leg); /* sector 0's pair, forward */
+        shown = 0;
+    } else {
+        float w = omega_of(p, s);
+        int now = s->pending && tdiff(s->t_next, n.ta) < s->ts_tick;
+        if (now && s->mode == BC_BEMF_RAMP) { /* a forced commutation: the next sector's speed; give up? */
+            if (!s->sector_ok) {
+                s->valid = 0;
+                s->have_zc = 0;
+                s->w_zc = 0.0f;
+            }
+            /* the open-loop speed at the commutation: w0 + accel t (the sector may have ended early, at a crossing) */
+            float dn0 = tdiff(s->t_next, n.ta);
+            float el = tdiff(dn0 >= 0.0f ? s->t_next : n.ta, s->t_c) * s->inv_tick;
+            float w_next = fminf(s->w_ol + p->ramp_accel * fmaxf(el, 0.0f), p->ramp_w1);
+            if (w_next >= p->ramp_w1) s->hold += 1;
+            if (s->hold > p->ramp_hold) {
+                desync(s, &n, BC_BEMF_REASON_START);
+                coast(out);
+                now = 0;
+            } else {
+                s->w_ol = w_next;
+                s->tau_ol = sector_time(w_next, p->ramp_accel, p->ramp_w1);
+            }
+        }
+        if (s->mode != BC_BEMF_STOP) {
+            m = duty_of(p, s); /* for the interval the output applies to (the ramp's speed just updated) */
+            int next = (s->sector + (s->dir > 0 ? 1 : 5)) % 6;
+            float dn = tdiff(s->t_next, n.ta);
+            float travel = w * tdiff(n.ta, s->t_c) * s->inv_tick;
+            if (!fin(travel)) travel = 0.0f;
+            if (now && dn >= 0.0f) { /* inside the interval: the commutation timer */
+                legs_of(p, s, s->sector, m, travel, out->leg);
+                shown = s->sector;
+                uint32_t tc = s->t_next;
+                enter_sector(p, s, in, next, tc);
+                legs_of(p, s, next, m, 0.0f, out->leg_at);
+                out->has_at = 1u;
+                out->t_at = bc_clampf(dn * s->inv_tick, 0.0f, p->ts * 0.999999f);
+                s->adv_prev = s->adv;
+            } else if (now) { /* already past: at once, from t_a */
+                n.flags |= BC_FLAG_COMM_LATE;
+                enter_sector(p, s, in, next, n.ta);
+                legs_of(p, s, next, m, 0.0f, out->leg);
+                shown = next;
+                s->adv_prev = s->adv;
+            } else {
+                legs_of(p, s, s->sector, m, travel, out->leg);
+                shown = s->sector;
+            }
+            if (now && s->mode == BC_BEMF_RAMP) { /* the next forced commutation */
+                s->t_next = tadd(s->t_c, s->tau_ol * p->f_tick);
+                s->pending = 1;
+            }
+        }
+    }
+    if (s->mode == BC_BEMF_STOP) {
+        coast(out);
+        out->has_at = 0u;
+        shown = -1;
+        m = 0.0f;
+    }
+    for (int j = 0; j < 3; ++j) { /* never pass on a bad duty */
+        if (!in01(out->leg[j].duty)) out->leg[j].duty = 0.0f;
+        if (!in01(out->leg_at[j].duty)) out->leg_at[j].duty = 0.0f;
+    }
+    if (s->mode == BC_BEMF_ALIGN || s->mode == BC_BEMF_RAMP) n.flags |= BC_FLAG_OPEN_LOOP;
+    out->flags |= n.flags;
+    float w = omega_of(p, s);
+    out->diag[0] = (float)s->mode;
+    out->diag[1] = (float)shown;
+    out->diag[2] = s->mode == BC_BEMF_STOP ? 0.0f : (float)s->dir * w;
+    out->diag[3] = s->err;
+    out->diag[4] = s->t_demag;
+    out->diag[5] = s->adv;
+    out->diag[6] = m;
+    out->diag[7] = (float)s->reason;
+    for (int j = 0; j < BC_DIAG_N; ++j) {
+        if (!fin(out->diag[j])) out->diag[j] = 0.0f;
+    }
+}

@@ -1,0 +1,438 @@
+"""Sensorless six-step (square-wave) drive from the floating phase's back-EMF, as a drone or RC ESC runs it.
+
+The C controller is ``core/ctrl/include/bldc/bc_bemf.h`` (every law in its header); the laws, the parameters and the
+physics of demagnetisation and desync as the controller sees them are in ``docs/sensorless.md``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from dataclasses import dataclass
+from typing import ClassVar, Literal
+
+import numpy as np
+
+from .._core import Core, CParams
+from ..errors import BldclabError
+from ..model.analytic import r_total
+from ..model.motor import Drive
+from ..model.units import to_si
+from .base import Control, check_number
+
+__all__ = ["SixStepSensorless", "integral_to_30", "throttle_rate"]
+
+# the settings' C constants (values read from the library: bldclab._core)
+_METHOD = {"comparator": "BC_BEMF_COMPARATOR", "adc": "BC_BEMF_ADC", "integration": "BC_BEMF_INTEGRATE"}
+_BLANK = {"fixed": "BC_BEMF_BLANK_FIXED", "demag": "BC_BEMF_BLANK_DEMAG"}
+_CHOP = {"bipolar": "BC_CHOP_BIPOLAR", "high": "BC_CHOP_HIGH", "pwm-on-pwm": "BC_CHOP_PWMPWM", "sync": "BC_CHOP_SYNC"}
+_REFS = ("star", "half-bus")
+
+#: fields with a unit (dimension of :func:`bldclab.model.units.to_si`); speeds are mechanical
+_UNITS = {"blank": "angle", "blank_time": "time", "min_pulse": "time", "filter_tau": "time",
+          "comparator_delay": "time", "timing": "angle", "timing_time": "time", "timing_max": "angle",
+          "stall_speed": "speed", "align_time": "time", "ramp_start_speed": "speed", "ramp_end_speed": "speed",
+          "ramp_time": "time", "restart_wait": "time", "restart_max": "time", "current_limit_time": "time",
+          "align_current": "current", "i_max": "current", "current_limit": "current"}
+
+_RATE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*%\s*/\s*(ms|s)\s*$")
+
+
+def throttle_rate(value: float | str, field: str = "control.throttle_rate") -> float:
+    """Return a throttle ramp limit in 1/s (duty per second) from a number (1/s) or ``"<x> %/ms"``, ``"<x> %/s"``.
+
+    ``"1 %/ms"`` is 10 /s: the duty may change by 0.01 per millisecond.
+
+    Raises
+    ------
+    BldclabError
+        Naming ``field`` if the value is not a finite number >= 0 or such a string.
+    """
+    if isinstance(value, str):
+        m = _RATE.match(value)
+        if not m:
+            raise BldclabError(field, f"expected a number (1/s) or '<x> %/ms', got {value!r}")
+        v = float(m.group(1)) * 0.01 / (1e-3 if m.group(2) == "ms" else 1.0)
+    elif isinstance(value, bool) or not isinstance(value, int | float):
+        raise BldclabError(field, f"expected a number (1/s) or '<x> %/ms', got {value!r}")
+    else:
+        v = float(value)
+    if not math.isfinite(v) or v < 0.0:
+        raise BldclabError(field, f"must be a finite rate >= 0, got {value!r}")
+    return v
+
+
+def integral_to_30(drive: Drive, reference: str = "star", n: int = 721) -> float:
+    """Back-EMF integral from the floating phase's zero crossing to 30 degrees after it (V s), per sector, averaged.
+
+    What the back-EMF integration method (``method="integration"``) compares its integral with. The sampled signal is
+    the floating phase's terminal voltage minus the comparators' reference: against a virtual star point of the three
+    terminals it is ``(2 e_F - e_p - e_n) / 3``, against half the bus (sampled in the on-time) ``e_F - (e_p + e_n) / 2``
+    (``e_p``, ``e_n``: the phases driven positive and negative). Its integral over time from the crossing to an angle
+    does not depend on the speed: ``int e dt = int k(theta) dtheta_m = (1/p) int k dtheta_e``. For the ideal
+    120-degree trapezoid of flat top ``k_phi``: ``(2/3) k_phi pi / (12 p)`` (star), ``k_phi pi / (12 p)`` (half bus).
+
+    Parameters
+    ----------
+    drive : Drive
+        Its back-EMF shapes (``drive.motor.emf``) and pole pairs.
+    reference : {"star", "half-bus"}
+        The comparators' reference.
+    n : int
+        Points of the numerical integration per 60 degrees.
+
+    Returns
+    -------
+    float
+        The mean over the six sectors of the integral from the crossing (the zero of the signal near the sector's
+        middle) to 30 electrical degrees after it, V s.
+    """
+    if reference not in _REFS:
+        raise BldclabError("control.comparator_reference", f"must be one of {', '.join(_REFS)}, got {reference!r}")
+    m = drive.motor
+    pos = (0, 0, 1, 1, 2, 2)
+    neg = (1, 2, 2, 0, 0, 1)
+    out = []
+    for s in range(6):
+        start = math.pi / 6.0 + s * math.pi / 3.0
+        th = np.linspace(start, start + math.pi / 3.0, n)
+        k = m.emf.k_abc(th)
+        p, q = pos[s], neg[s]
+        f = 3 - p - q
+        u = (2.0 * k[f] - k[p] - k[q]) / 3.0 if reference == "star" else k[f] - 0.5 * (k[p] + k[q])
+        post = 1.0 if s % 2 else -1.0  # odd sectors cross upward (forward)
+        u = post * u
+        j = int(np.argmax(u > 0.0))  # the first sample after the crossing
+        if j == 0 or not np.any(u > 0.0):
+            raise BldclabError("control.int_limit", f"the back-EMF of {drive.name or 'the drive'} has no crossing "
+                               f"in sector {s}: give int_limit")
+        th0 = th[j - 1] - u[j - 1] * (th[j] - th[j - 1]) / (u[j] - u[j - 1])
+        t2 = np.linspace(th0, th0 + math.pi / 6.0, n)
+        k2 = m.emf.k_abc(t2)
+        u2 = post * ((2.0 * k2[f] - k2[p] - k2[q]) / 3.0 if reference == "star" else k2[f] - 0.5 * (k2[p] + k2[q]))
+        out.append(float(np.sum(0.5 * (u2[1:] + u2[:-1]) * np.diff(t2))) / m.p)
+    return float(np.mean(out))
+
+
+@dataclass(frozen=True)
+class SixStepSensorless(Control):
+    """Sensorless six-step drive: commutation from the floating phase's back-EMF zero crossing, as an ESC does it.
+
+    The reference (``Scenario.ref``) is the duty (throttle) in [-1, 1]; its sign is the direction of rotation (a
+    change of sign stops the drive and starts it the other way); 0 stops it (all legs off). The C controller
+    (``bc_bemf``) aligns the rotor, ramps it up with forced commutation, hands over to closed loop after
+    ``handover`` valid crossings, commutates ``30 deg - timing`` after each crossing at the instant its commutation
+    timer computes (``bc_ctrl_out.has_at``), detects a loss of synchronisation and restarts.
+
+    Angles accept strings such as ``"15 deg"``, times ``"20 us"``, speeds ``"3000 rpm"`` (speeds are mechanical,
+    rad/s), currents ``"10 A"``.
+
+    Parameters
+    ----------
+    method : {"comparator", "adc", "integration"}
+        ``comparator``: the crossing is the comparator's edge (``bc_ctrl_in.zc_*``, time-stamped by the capture
+        timer); ``adc``: from the ADC samples of the terminal voltage against the reference (once per PWM period),
+        interpolated between the last sample before and the first after it; ``integration``: the ADC crossing, then
+        the commutation when the back-EMF integral from it reaches ``int_limit`` (VESC's BLDC mode).
+    chopping : {"sync", "high", "pwm-on-pwm", "bipolar"}
+        ``sync``: the positive leg complementary (synchronous rectification, as AM32 and BLHeli_32), the negative
+        leg's lower switch on; ``high``: the positive leg's upper switch chops; ``pwm-on-pwm``: the incoming phase
+        chops in the first half of the sector, the continuing one in the second; ``bipolar``: both legs chop.
+    blanking : {"demag", "fixed"}
+        ``demag``: after the fixed blanking the window for the crossing opens at the measured end of the
+        demagnetisation (the floating phase shows the pre-crossing level, held at least ``min_pulse``); ``fixed``:
+        the first edge into the post-crossing level after the fixed blanking. With both, a post level already there
+        when the window opens is not a crossing (it is the diode clamp, or a crossing already past).
+    blank : float or str
+        Fixed blanking after each commutation, electrical angle (default ``"5 deg"``); the larger of it (at the
+        speed estimate) and ``blank_time`` applies.
+    blank_time : float or str, optional
+        Fixed blanking in time; default ``2 filter_tau + comparator_delay + 1 us``: the comparator's view of the
+        clamp's onset must fall inside it.
+    min_pulse : float or str
+        Comparator: the post level must be held this long after its edge (default ``"1 us"``).
+    n_samples : int
+        ADC methods: consecutive samples on the post side for a crossing (default 2).
+    filter_tau : float or str
+        Time constant of the terminal voltages' RC filter (default 0); compensated as ``atan(Omega tau) / Omega``.
+    comparator_delay : float or str
+        The comparators' propagation delay (default 0); compensated.
+    comparator_reference : {"star", "half-bus"}
+        The comparators' and the ADC's reference, for the default ``int_limit`` only (:func:`integral_to_30`).
+    timing : float or str
+        Timing advance (electrical angle, default 0).
+    timing_time : float or str
+        Timing advance per speed (s): ``+ Omega_e timing_time``.
+    timing_demag : float
+        Automatic advance from the measured demagnetisation: ``+ timing_demag x`` its electrical angle.
+    timing_max : float or str
+        Cap of the total advance (default ``"30 deg"``, the largest).
+    interval_gain : float
+        Gain in (0, 1] of the crossing-interval filter ``T60 <- T60 + g (T - T60)`` (default 0.5; 1: the last one).
+    int_limit : float, optional
+        Integration method: the back-EMF integral from the crossing to 30 degrees (V s); default from the drive's
+        back-EMF (:func:`integral_to_30`).
+    timeout : float
+        A crossing missing ``timeout`` crossing intervals after the previous one (default 1.5, when the next
+        commutation would be due without advance) is missed.
+    jump : float
+        Largest ratio of successive crossing intervals (default 2); beyond it a desync (a false crossing).
+    misses : int
+        Blind commutations allowed in a row for a missed crossing before a desync (default 0).
+    stall_speed : float or str, optional
+        Slowest closed-loop speed (mechanical); default ``0.03 Omega_0``.
+    align_time : float or str, optional
+        Rotor alignment before the ramp; 0: a direct start (no alignment), as drone firmware does. Default three
+        periods of the rotor's oscillation about the aligned position, ``3 x 2 pi sqrt(J / K)`` with the stiffness
+        of the aligning pair ``K = (6/pi) p k_phi align_current`` (the 120-degree trapezoid's slope; J from
+        ``drive.mechanics``), within [10 ms, 3 s].
+    align_current : float or str, optional
+        Current the alignment duty drives through the line resistance at standstill, and the forced ramp's current;
+        default ``0.5 I_N``.
+    align_duty : float, optional
+        Alignment duty; default ``2 (R + R_on) align_current / V_dc``.
+    ramp_start_speed, ramp_end_speed : float or str, optional
+        Forced commutation's speeds (mechanical); defaults ``0.01 Omega_0`` and ``0.1 Omega_0``.
+    ramp_time : float or str, optional
+        Time of the ramp from start to end speed: the acceleration. Default: the acceleration half the alignment
+        current's torque ``2 k_phi align_current`` gives the inertia J, within [10 ms, 10 s].
+    ramp_duty : float, optional
+        Duty of the forced commutation at standstill; default ``2 (R + R_on) align_current / V_dc``.
+    ramp_vf : float, optional
+        Added ramp duty per electrical rad/s of the speed (V/f), so that the current stays near ``align_current``
+        as the back-EMF grows; default ``2 k_phi / (p V_dc)``.
+    ramp_hold : int
+        Forced sectors at the end speed before the start fails (default 12).
+    handover : int
+        Consecutive valid crossings for the handover to closed loop (default 6).
+    duty_min : float
+        Smallest closed-loop duty (default 0).
+    throttle_rate : float or str, optional
+        Throttle ramp limit: 1/s or ``"5 %/ms"``; ``None`` (default): none.
+    stop_below : float
+        ``|ref| <= stop_below`` stops the drive (default 0).
+    restart_wait, restart_max : float or str
+        After a stop or a desync, a restart waits until the comparators have been quiet for ``restart_wait``
+        (default ``"50 ms"``), at most ``restart_max`` (default ``"1 s"``).
+    current_sensing : bool
+        The drive measures phase currents (default True): the input guard and ``i_max`` trip use them; without it
+        currents are ignored (most ESCs measure the bus current only).
+    i_max : float or str, optional
+        Over-current trip; default ``2 I_N``.
+    current_limit : float or str, optional
+        Current limit (an integrating limiter on the duty); ``None`` (default): none.
+    current_limit_time : float or str
+        Time constant of the limiter at standstill (default ``"1 ms"``): gain ``2 (R + R_on) / (V_dc t)``.
+    delay : int
+        Samples between computing and applying an output (0 or 1); :func:`bldclab.simulate` sets it from
+        ``Scenario.delay``.
+    """
+
+    method: Literal["comparator", "adc", "integration"] = "comparator"
+    chopping: Literal["sync", "high", "pwm-on-pwm", "bipolar"] = "sync"
+    blanking: Literal["demag", "fixed"] = "demag"
+    blank: float | str = "5 deg"
+    blank_time: float | str | None = None
+    min_pulse: float | str = "1 us"
+    n_samples: int = 2
+    filter_tau: float | str = 0.0
+    comparator_delay: float | str = 0.0
+    comparator_reference: Literal["star", "half-bus"] = "star"
+    timing: float | str = 0.0
+    timing_time: float | str = 0.0
+    timing_demag: float = 0.0
+    timing_max: float | str = "30 deg"
+    interval_gain: float = 0.5
+    int_limit: float | None = None
+    timeout: float = 1.5
+    jump: float = 2.0
+    misses: int = 0
+    stall_speed: float | str | None = None
+    align_time: float | str | None = None
+    align_current: float | str | None = None
+    align_duty: float | None = None
+    ramp_start_speed: float | str | None = None
+    ramp_end_speed: float | str | None = None
+    ramp_time: float | str | None = None
+    ramp_duty: float | None = None
+    ramp_vf: float | None = None
+    ramp_hold: int = 12
+    handover: int = 6
+    duty_min: float = 0.0
+    throttle_rate: float | str | None = None
+    stop_below: float = 0.0
+    restart_wait: float | str = "50 ms"
+    restart_max: float | str = "1 s"
+    current_sensing: bool = True
+    i_max: float | str | None = None
+    current_limit: float | str | None = None
+    current_limit_time: float | str = "1 ms"
+    delay: int = 1
+    c_name: ClassVar[str] = "bemf"
+    ref_meaning: ClassVar[str] = "duty (throttle) in [-1, 1], its sign the direction of rotation"
+
+    def __post_init__(self) -> None:
+        for name, dim in _UNITS.items():
+            v = getattr(self, name)
+            if isinstance(v, str):
+                object.__setattr__(self, name, to_si(v, dim, f"control.{name}"))
+        for name, table in (("method", _METHOD), ("chopping", _CHOP), ("blanking", _BLANK)):
+            if getattr(self, name) not in table:
+                raise BldclabError(f"control.{name}", f"must be one of {', '.join(table)}, got {getattr(self, name)!r}")
+        if self.comparator_reference not in _REFS:
+            raise BldclabError("control.comparator_reference",
+                               f"must be one of {', '.join(_REFS)}, got {self.comparator_reference!r}")
+        for name in ("blank", "min_pulse", "filter_tau", "comparator_delay", "timing", "timing_time", "timing_demag",
+                     "timing_max", "duty_min", "stop_below", "restart_wait", "restart_max"):
+            check_number(name, getattr(self, name), allow_zero=True)
+        check_number("align_time", self.align_time, allow_zero=True, allow_none=True)
+        check_number("ramp_time", self.ramp_time, allow_none=True)
+        check_number("ramp_vf", self.ramp_vf, allow_zero=True, allow_none=True)
+        for name in ("blank_time", "int_limit", "stall_speed", "align_current", "ramp_start_speed",
+                     "ramp_end_speed", "i_max", "current_limit"):
+            check_number(name, getattr(self, name), allow_none=True, allow_zero=name in ("blank_time",
+                                                                                          "ramp_start_speed"))
+        for name in ("current_limit_time", "interval_gain", "timeout", "jump"):
+            check_number(name, getattr(self, name))
+        for name in ("align_duty", "ramp_duty"):
+            check_number(name, getattr(self, name), allow_zero=True, allow_none=True)
+        blank, timing, timing_max = float(self.blank), float(self.timing), float(self.timing_max)  # numbers now
+        if blank >= math.pi / 3.0:
+            raise BldclabError("control.blank", f"must be below 60 deg (pi/3 rad), got {blank:.4g} rad")
+        if timing_max > math.pi / 6.0 + 1e-12:
+            raise BldclabError("control.timing_max", f"must be at most 30 deg (pi/6 rad), got {timing_max:.4g} rad")
+        if timing > math.pi / 6.0 + 1e-12:
+            raise BldclabError("control.timing", f"must be at most 30 deg (pi/6 rad), got {timing:.4g} rad")
+        if self.interval_gain > 1.0:
+            raise BldclabError("control.interval_gain", f"must be in (0, 1], got {self.interval_gain!r}")
+        if not 1.05 <= self.timeout <= 4.0:
+            raise BldclabError("control.timeout", f"must be in [1.05, 4] crossing intervals, got {self.timeout!r}")
+        if self.jump <= 1.0:
+            raise BldclabError("control.jump", f"must be above 1, got {self.jump!r}")
+        for name in ("align_duty", "ramp_duty", "duty_min"):
+            v = getattr(self, name)
+            if v is not None and v > 1.0:
+                raise BldclabError(f"control.{name}", f"must be a duty in [0, 1], got {v!r}")
+        if self.stop_below >= 1.0:
+            raise BldclabError("control.stop_below", f"must be below 1, got {self.stop_below!r}")
+        for name, lo, hi in (("n_samples", 1, 16), ("misses", 0, 100), ("ramp_hold", 1, 1_000_000),
+                             ("handover", 2, 1000)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+                raise BldclabError(f"control.{name}", f"must be an integer in [{lo}, {hi}], got {v!r}")
+        if self.delay not in (0, 1) or isinstance(self.delay, bool):
+            raise BldclabError("control.delay", f"must be 0 or 1 sample, got {self.delay!r}")
+        if not isinstance(self.current_sensing, bool):
+            raise BldclabError("control.current_sensing", f"must be True or False, got {self.current_sensing!r}")
+        wait, wait_max = float(self.restart_wait), float(self.restart_max)
+        if wait_max < wait:
+            raise BldclabError("control.restart_max", f"must be at least restart_wait ({wait:g} s), got {wait_max:g} s")
+        if self.throttle_rate is not None:
+            object.__setattr__(self, "throttle_rate", throttle_rate(self.throttle_rate))
+
+    def with_delay(self, delay: int) -> SixStepSensorless:  # noqa: D102 - Control.with_delay
+        return self if delay == self.delay else dataclasses.replace(self, delay=delay)
+
+    def speeds(self, drive: Drive) -> tuple[float, float, float]:
+        """Return the stall speed, the ramp's start and end speeds (mechanical rad/s) for ``drive``.
+
+        Defaults: ``0.03``, ``0.01`` and ``0.1 Omega_0``; the end speed must be at least 1.5 times the stall speed
+        (the controller hands over only above 1.5 times it).
+        """
+        w0 = drive.Omega_0
+        stall = 0.03 * w0 if self.stall_speed is None else float(self.stall_speed)
+        start = 0.01 * w0 if self.ramp_start_speed is None else float(self.ramp_start_speed)
+        end = 0.1 * w0 if self.ramp_end_speed is None else float(self.ramp_end_speed)
+        if end < start:
+            raise BldclabError("control.ramp_end_speed", f"must be at least ramp_start_speed ({start:.4g} rad/s), "
+                               f"got {end:.4g} rad/s")
+        if end < 1.5 * stall:
+            raise BldclabError("control.ramp_end_speed", f"must be at least 1.5 stall_speed ({1.5 * stall:.4g} rad/s: "
+                               f"the handover needs it), got {end:.4g} rad/s")
+        return stall, start, end
+
+    def start_up(self, drive: Drive) -> dict[str, float]:
+        """Return the start-up settings for ``drive``: the given ones, else the defaults derived from it.
+
+        Returns
+        -------
+        dict
+            ``align_current`` (A), ``align_duty``, ``align_time`` (s), ``ramp_duty``, ``ramp_vf`` (per electrical
+            rad/s), ``ramp_time`` (s), and the speeds of :meth:`speeds` (mechanical rad/s): ``stall_speed``,
+            ``ramp_start_speed``, ``ramp_end_speed``.
+        """
+        m, v, j = drive.motor, drive.inverter.V_dc, drive.mechanics.J
+        i_al = 0.5 * m.I_N if self.align_current is None else float(self.align_current)
+        r = r_total(drive)
+        stall, start, end = self.speeds(drive)
+        k = 6.0 / math.pi * m.p * m.k_phi * i_al  # stiffness of the aligning pair, N m/rad (mechanical)
+        t_align = min(max(3.0 * 2.0 * math.pi * math.sqrt(j / k), 0.01), 3.0)
+        accel = 0.5 * 2.0 * m.k_phi * i_al / j  # mechanical rad/s^2
+        t_ramp = min(max((end - start) / accel, 0.01), 10.0)
+        return {
+            "align_current": i_al,
+            "align_duty": min(2.0 * r * i_al / v if self.align_duty is None else float(self.align_duty), 1.0),
+            "align_time": t_align if self.align_time is None else float(self.align_time),
+            "ramp_duty": min(2.0 * r * i_al / v if self.ramp_duty is None else float(self.ramp_duty), 1.0),
+            "ramp_vf": 2.0 * m.k_phi / (m.p * v) if self.ramp_vf is None else float(self.ramp_vf),
+            "ramp_time": t_ramp if self.ramp_time is None else float(self.ramp_time),
+            "stall_speed": stall, "ramp_start_speed": start, "ramp_end_speed": end,
+        }
+
+    def c_record(self, drive: Drive, core: Core, n_samples: int) -> CParams:  # noqa: D102
+        m, inv = drive.motor, drive.inverter
+        p = m.p
+        su = self.start_up(drive)
+        stall, start, end = su["stall_speed"], su["ramp_start_speed"], su["ramp_end_speed"]
+        blank_time = (2.0 * float(self.filter_tau) + float(self.comparator_delay) + 1e-6
+                      if self.blank_time is None else float(self.blank_time))
+        int_limit = (integral_to_30(drive, self.comparator_reference) if self.int_limit is None and
+                     self.method == "integration" else float(self.int_limit or 0.0))
+        i_max = 2.0 * m.I_N if self.i_max is None else float(self.i_max)
+        i_limit = 0.0 if self.current_limit is None else float(self.current_limit)
+        k_limit = 2.0 * r_total(drive) / (inv.V_dc * float(self.current_limit_time))
+        return CParams(core.filled(
+            "bc_bemf_params",
+            method=core.const(_METHOD[self.method]),
+            chop=core.const(_CHOP[self.chopping]),
+            delay=self.delay,
+            blanking=core.const(_BLANK[self.blanking]),
+            ts=0.5 / inv.f_pwm,
+            f_tick=drive.sensors.f_tick,
+            blank_angle=self.blank,
+            blank_time=blank_time,
+            min_pulse=self.min_pulse,
+            n_samples=self.n_samples,
+            tau_filter=self.filter_tau,
+            t_comp=self.comparator_delay,
+            adv_angle=self.timing,
+            adv_time=self.timing_time,
+            adv_demag=self.timing_demag,
+            adv_max=min(float(self.timing_max), math.pi / 6.0 * (1.0 - 1e-6)),  # the C cap, below float pi/6
+            t60_gain=self.interval_gain,
+            int_limit=int_limit,
+            zc_timeout=self.timeout,
+            jump_max=self.jump,
+            miss_max=self.misses,
+            omega_stall=p * stall,
+            align_time=su["align_time"],
+            align_duty=su["align_duty"],
+            ramp_w0=p * start,
+            ramp_w1=p * end,
+            ramp_accel=p * (end - start) / su["ramp_time"],
+            ramp_duty=su["ramp_duty"],
+            ramp_vf=su["ramp_vf"],
+            ramp_hold=self.ramp_hold,
+            n_handover=self.handover,
+            duty_min=self.duty_min,
+            duty_rate=0.0 if self.throttle_rate is None else self.throttle_rate,
+            ref_stop=self.stop_below,
+            restart_wait=self.restart_wait,
+            restart_max=self.restart_max,
+            use_current=int(self.current_sensing),
+            i_max=i_max,
+            i_limit=i_limit,
+            k_limit=k_limit,
+            v_max=2.0 * inv.V_dc,
+        ))

@@ -1,0 +1,355 @@
+"""SixStepSensorless (``bc_bemf``): its parameters (units, errors naming the field, defaults derived from the drive
+against their closed forms), its C step driven from Python through the record Python builds, on a synthetic
+sensorless drive (comparator edges and ADC samples of a kinematic rotor with the diode clamp after each commutation),
+and its start-up path against the switching-level plant.
+
+The plant has no back-EMF sensing yet (issue 24's sensing part is built beside this controller): ``bc_ctrl_in``'s
+comparator and ADC fields are zero in ``bl.simulate``. The closed-loop tests against the plant (handover, commutation
+angle against the Hall-exact instant, desync map) are added when it lands; ``SyntheticDrive`` and
+``run_synthetic`` are the pieces they can reuse to compare the plant's sensing with the ideal one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pytest
+
+import bldclab as bl
+from bldclab._core import core
+from bldclab.control.sensorless import integral_to_30, throttle_rate
+from bldclab.errors import BldclabError
+
+TWO_PI = 2.0 * math.pi
+STATE = {"stop": 0, "align": 1, "ramp": 2, "closed": 3}
+
+
+def trap(th: float) -> float:
+    """The ideal 120-degree trapezoid of unit flat top, zero rising at 0."""
+    th = th % TWO_PI
+    sgn = 1.0
+    if th > math.pi:
+        th -= math.pi
+        sgn = -1.0
+    k = 1.0
+    if th < math.pi / 6:
+        k = th / (math.pi / 6)
+    elif th > 5 * math.pi / 6:
+        k = (math.pi - th) / (math.pi / 6)
+    return sgn * k
+
+
+@dataclass
+class SyntheticDrive:
+    """A kinematic rotor ``theta_e = th0 + w t`` and what a sensorless ESC's comparators see.
+
+    Phase x's level is 1 when driven positive, 0 when driven negative; floating, the diode clamp's after the
+    commutation that made it float (``demag`` s: 0 if it was driven positive, 1 if negative), then the sign of its
+    back-EMF ``w k(theta - x 2 pi/3)``. Edges are time-stamped ``floor(t f_tick)``. The pair in force is the
+    controller's output (from the next sample, ``has_at`` inside it).
+    """
+
+    w: float
+    th0: float
+    ts: float
+    f_tick: float
+    demag: float = 20e-6
+    pairs: list[tuple[float, int, int, int, float]] = field(default_factory=list)  # (t, pos, neg, clamp lvl, end)
+    level: list[int] = field(default_factory=lambda: [0, 0, 0])
+    count: list[int] = field(default_factory=lambda: [0, 0, 0])
+    tick: list[int] = field(default_factory=lambda: [0, 0, 0])
+    t_eval: float = 0.0
+    commutations: list[tuple[float, int]] = field(default_factory=list)  # (t, floating phase)
+    crossings: list[tuple[float, int]] = field(default_factory=list)  # (t, phase) of the floating phase
+
+    def theta(self, t: float) -> float:
+        return self.th0 + self.w * t
+
+    def pair_at(self, t: float) -> tuple[float, int, int, int, float]:
+        for p in reversed(self.pairs):
+            if p[0] <= t:
+                return p
+        return (-1.0, -1, -1, -1, -1.0)
+
+    def lvl(self, x: int, t: float) -> int:
+        _, pos, neg, cl, end = self.pair_at(t)
+        if x == pos:
+            return 1
+        if x == neg:
+            return 0
+        if pos >= 0 and x == 3 - pos - neg and t < end:
+            return cl
+        return 1 if self.w * trap(self.theta(t) - x * TWO_PI / 3) > 0 else 0
+
+    def edges(self, t1: float, t2: float) -> None:
+        for x in range(3):
+            cands = [p[0] for p in self.pairs if t1 < p[0] <= t2] + [p[4] for p in self.pairs if t1 < p[4] <= t2]
+            th1, th2 = self.theta(t1), self.theta(t2)
+            a1, a2 = sorted((th1, th2))
+            off = x * TWO_PI / 3
+            n = math.floor((a1 - off) / math.pi)
+            while n * math.pi + off <= a2:
+                tgt = n * math.pi + off
+                n += 1
+                if not (th1 < tgt <= th2 if self.w > 0 else th2 <= tgt < th1):  # crossed inside (t1, t2]
+                    continue
+                tz = min(max(t1 + (tgt - th1) / self.w, t1 + 1e-13), t2)  # (rounding at the window's ends)
+                cands.append(tz)
+                _, pos, neg, _, _ = self.pair_at(tz)
+                if pos >= 0 and x == 3 - pos - neg:
+                    self.crossings.append((tz, x))
+            cands.sort()
+            for j, c in enumerate(cands):
+                nxt = cands[j + 1] if j + 1 < len(cands) else t2
+                mid = max(0.5 * (c + nxt), c + 1e-10)
+                lv = self.lvl(x, mid)
+                if lv != self.level[x]:
+                    self.level[x] = lv
+                    self.count[x] += 1
+                    self.tick[x] = math.floor(c * self.f_tick)
+
+    def sample(self, k: int, inp: np.ndarray) -> None:
+        t = k * self.ts
+        if k == 0:
+            self.level = [self.lvl(x, 0.0) for x in range(3)]
+        else:
+            self.edges(self.t_eval, t)
+        self.t_eval = t
+        inp[...] = 0
+        inp["tick_now"] = round(t * self.f_tick)
+        inp["v_dc"] = 48.0
+        inp["i_mask"] = 3
+        inp["zc_state"] = sum(1 << x for x in range(3) if self.level[x])
+        inp["zc_count"] = self.count
+        inp["zc_tick"] = self.tick
+
+    def apply(self, k: int, out: np.ndarray, delay: int = 1) -> None:
+        ta = (k + delay) * self.ts
+        self.set_pair(ta, out["leg"][0])
+        if int(out["has_at"][0]):
+            self.set_pair(ta + float(out["t_at"][0]), out["leg_at"][0])
+
+    def set_pair(self, t: float, legs: np.ndarray) -> None:
+        pos = next((x for x in range(3) if legs["mode"][x] in (1, 2) and legs["duty"][x] > 0), -1)
+        neg = next((x for x in range(3) if legs["mode"][x] == 3 and legs["duty"][x] > 0), -1)
+        if pos < 0 or neg < 0:
+            pos = neg = -1
+        last = self.pair_at(float("inf"))
+        if (pos, neg) == (last[1], last[2]):
+            return
+        cl, end = -1, -1.0
+        if pos >= 0:
+            fl = 3 - pos - neg
+            if fl in (last[1], last[2]):  # the outgoing phase: its diode clamps it
+                cl, end = (0 if fl == last[1] else 1), t + self.demag
+            if last[1] >= 0:
+                self.commutations.append((t, fl))
+        self.pairs.append((t, pos, neg, cl, end))
+
+
+def run_synthetic(ctl: bl.SixStepSensorless, drive: bl.Drive, syn: SyntheticDrive, n: int, ref: float):
+    """Step the C controller, with the record ``ctl`` builds for ``drive``, through ``n`` samples of ``syn``.
+
+    Returns
+    -------
+    list of (numpy record copy of bc_ctrl_out)
+    """
+    c = core()
+    info = c.controllers["bemf"]
+    owner = ctl.c_record(drive, c, n)
+    state = c.opaque(info.state)
+    assert c.controller_init(info, owner.record, state) == 0
+    inp, out = c.record("bc_ctrl_in"), c.record("bc_ctrl_out")
+    outs = []
+    for k in range(n):
+        syn.sample(k, inp)
+        inp["ref"] = ref
+        out[...] = 0
+        c.controller_step(info, owner.record, state, inp, out)
+        syn.apply(k, out)
+        outs.append(out.copy())
+    return outs
+
+
+def locked(drive: bl.Drive, w_e: float, **kw) -> bl.SixStepSensorless:
+    """A direct start whose forced commutation runs at the rotor's speed ``w_e`` (electrical), so it locks at once."""
+    w_m = w_e / drive.motor.p
+    return bl.SixStepSensorless(align_time=0.0, ramp_start_speed=w_m, ramp_end_speed=w_m, stall_speed=0.2 * w_m,
+                                blank=0.0, blank_time="2 us", min_pulse=0.0, **kw)
+
+
+def commutation_errors(syn: SyntheticDrive, adv: float, after: float) -> list[float]:
+    """For each commutation after ``after``: its time minus (its sector's crossing + (30 deg - adv) / w)."""
+    errs = []
+    for (t0, fl), (t1, _) in zip(syn.commutations, syn.commutations[1:], strict=False):
+        if t0 < after:
+            continue
+        tz = [t for t, x in syn.crossings if x == fl and t0 < t < t1]
+        assert tz, f"no crossing in the sector {t0:.6f} .. {t1:.6f}"
+        errs.append(t1 - (tz[-1] + (math.pi / 6 - adv) / abs(syn.w)))
+    return errs
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# parameters
+
+
+def test_units_and_defaults_from_the_drive():
+    d = bl.load("htm-48v")
+    ctl = bl.SixStepSensorless(timing="15 deg", timing_time="20 us", blank="3 deg", min_pulse="2 us",
+                               stall_speed="20 rpm", throttle_rate="5 %/ms", restart_wait="20 ms")
+    assert ctl.timing == pytest.approx(math.radians(15)) and ctl.timing_time == pytest.approx(20e-6)
+    assert ctl.stall_speed == pytest.approx(20 * TWO_PI / 60) and ctl.throttle_rate == pytest.approx(50.0)
+    rec = ctl.c_record(d, core(), 0).record
+    m = d.motor
+    assert float(rec["omega_stall"][0]) == pytest.approx(m.p * 20 * TWO_PI / 60, rel=1e-6)  # electrical in C
+    assert float(rec["adv_angle"][0]) == pytest.approx(math.radians(15), rel=1e-6)
+    assert float(rec["duty_rate"][0]) == pytest.approx(50.0)
+    su = bl.SixStepSensorless().start_up(d)
+    r = d.motor.R + d.inverter.R_on
+    assert su["align_duty"] == pytest.approx(2 * r * 0.5 * m.I_N / d.inverter.V_dc)
+    assert su["ramp_vf"] == pytest.approx(2 * m.k_phi / (m.p * d.inverter.V_dc))
+    k = 6 / math.pi * m.p * m.k_phi * 0.5 * m.I_N
+    assert su["align_time"] == pytest.approx(3 * TWO_PI * math.sqrt(d.mechanics.J / k))
+    assert su["ramp_end_speed"] == pytest.approx(0.1 * d.Omega_0)
+    assert throttle_rate("1 %/ms") == pytest.approx(10.0) and throttle_rate("100 %/s") == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize(("kw", "field"), [
+    ({"method": "hall"}, "control.method"), ({"chopping": "low"}, "control.chopping"),
+    ({"blanking": "none"}, "control.blanking"), ({"timing": "40 deg"}, "control.timing"),
+    ({"timing": "15 us"}, "control.timing"), ({"blank": "60 deg"}, "control.blank"),
+    ({"throttle_rate": "5 %/h"}, "control.throttle_rate"), ({"throttle_rate": -1.0}, "control.throttle_rate"),
+    ({"timeout": 1.0}, "control.timeout"), ({"jump": 1.0}, "control.jump"), ({"n_samples": 0}, "control.n_samples"),
+    ({"handover": 1}, "control.handover"), ({"misses": -1}, "control.misses"), ({"delay": 2}, "control.delay"),
+    ({"interval_gain": 1.5}, "control.interval_gain"), ({"ramp_duty": 1.2}, "control.ramp_duty"),
+    ({"restart_wait": "2 s"}, "control.restart_max"), ({"current_sensing": 1}, "control.current_sensing"),
+    ({"comparator_reference": "ground"}, "control.comparator_reference"), ({"filter_tau": -1e-6}, "control.filter_tau"),
+])
+def test_bad_settings_name_the_field(kw, field):
+    with pytest.raises(BldclabError, match=field.replace(".", r"\.")):
+        bl.SixStepSensorless(**kw)
+
+
+def test_speeds_must_leave_room_for_the_handover():
+    d = bl.load("htm-48v")
+    with pytest.raises(BldclabError, match=r"control\.ramp_end_speed.*1\.5 stall_speed"):
+        bl.SixStepSensorless(stall_speed="70 rpm", ramp_end_speed="100 rpm").c_record(d, core(), 0)
+
+
+def test_integration_threshold_against_its_closed_forms():
+    """The back-EMF integral from the crossing to 30 degrees: (2/3) k_phi pi / (12 p) (star) and k_phi pi / (12 p)
+    (half bus) for the ideal trapezoid; K (1 - cos 30 deg) / p for a sinusoid of peak K (star: 2/3 (e_F - (e_p +
+    e_n)/2) = e_F when the three sum to zero)."""
+    d = bl.load("htm-48v")
+    m = d.motor
+    assert integral_to_30(d, "star") == pytest.approx(2 / 3 * m.k_phi * math.pi / 12 / m.p, rel=1e-4)
+    assert integral_to_30(d, "half-bus") == pytest.approx(m.k_phi * math.pi / 12 / m.p, rel=1e-4)
+    s = bl.load("servo-2k2")
+    k_peak = float(np.max(s.motor.emf.k_abc(np.linspace(0, TWO_PI, 3601))[0]))
+    assert integral_to_30(s, "star") == pytest.approx(k_peak * (1 - math.cos(math.pi / 6)) / s.motor.p, rel=2e-3)
+    rec = bl.SixStepSensorless(method="integration").c_record(d, core(), 0).record
+    assert float(rec["int_limit"][0]) == pytest.approx(integral_to_30(d), rel=1e-6)
+
+
+def test_new_flags_are_named():
+    names = ("DESYNC", "ZC_TIMEOUT", "ZC_HIDDEN", "ZC_JUMP", "STALL", "START_FAIL", "OPEN_LOOP", "COMM_LATE")
+    bits = [bl.flag(n) for n in names]
+    assert len(set(bits)) == len(bits) and all(b & (b - 1) == 0 for b in bits)
+    assert bl.decode_flags(bits[0] | bits[2]) == "DESYNC|ZC_HIDDEN"
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# the C step on the synthetic drive
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+@pytest.mark.parametrize("timing_deg", [0.0, 10.0])
+def test_commutation_30_deg_minus_advance_after_each_crossing(direction, timing_deg):
+    """Commutation instants ``30 deg - timing`` after the rotor's crossings, to the capture timer's resolution, in
+    both directions: the record Python builds (mechanical speeds, degrees) drives the C controller."""
+    d = bl.load("htm-48v")
+    ts = 0.5 / d.inverter.f_pwm
+    w = TWO_PI * 300.0  # 300 Hz electrical: 3.3 ms per revolution, 47 samples per sector
+    syn = SyntheticDrive(w=direction * w, th0=5 * math.pi / 6 - direction * w * ts, ts=ts, f_tick=d.sensors.f_tick)
+    outs = run_synthetic(locked(d, w, timing=f"{timing_deg} deg"), d, syn, 1400, 0.5 * direction)
+    flags = np.array([int(o["flags"][0]) for o in outs])
+    states = np.array([float(o["diag"][0][0]) for o in outs])
+    assert not np.any(flags & bl.flag("DESYNC")) and not np.any(flags & bl.flag("COMM_LATE"))
+    handover = int(np.argmax(states == STATE["closed"]))
+    assert 0 < handover < 400
+    errs = commutation_errors(syn, math.radians(timing_deg), after=(handover + 50) * ts)
+    assert len(errs) > 30
+    assert max(abs(e) for e in errs) < 2.5 / d.sensors.f_tick  # the tick of the edge, the tick of the schedule
+    last = outs[-1]["diag"][0]
+    assert last[2] == pytest.approx(direction * w, rel=1e-3)  # omega_e, signed
+    assert last[4] == pytest.approx(syn.demag, abs=3 / d.sensors.f_tick)  # demagnetisation measured
+
+
+def test_a_clamp_outlasting_the_crossing_is_a_named_desync():
+    """From a time on the clamp lasts 40 degrees: the floating phase never leaves the post-crossing level before
+    the timeout, the crossing is hidden; the controller says so (ZC_HIDDEN, reason 2), turns the legs off and waits."""
+    d = bl.load("htm-48v")
+    ts = 0.5 / d.inverter.f_pwm
+    w = TWO_PI * 300.0
+    syn = SyntheticDrive(w=w, th0=5 * math.pi / 6 - w * ts, ts=ts, f_tick=d.sensors.f_tick)
+    c = core()
+    info = c.controllers["bemf"]
+    owner = locked(d, w).c_record(d, c, 0)
+    state = c.opaque(info.state)
+    assert c.controller_init(info, owner.record, state) == 0
+    inp, out = c.record("bc_ctrl_in"), c.record("bc_ctrl_out")
+    t_long, first = 0.02, None
+    for k in range(1200):
+        if k * ts >= t_long:
+            syn.demag = math.radians(40) / w
+        syn.sample(k, inp)
+        inp["ref"] = 0.5
+        out[...] = 0
+        c.controller_step(info, owner.record, state, inp, out)
+        syn.apply(k, out)
+        if first is None and int(out["flags"][0]) & bl.flag("DESYNC"):
+            first = (k, int(out["flags"][0]), out.copy())
+    assert first is not None
+    k, flags, o = first
+    assert bl.decode_flags(flags) == "DESYNC|ZC_HIDDEN"
+    assert t_long < k * ts < t_long + 3 * (math.pi / 3) / w
+    assert int(o["diag"][0][7]) == c.const("BC_BEMF_REASON_HIDDEN")
+    assert np.all(o["leg"]["mode"][0] == 0) and not flags & bl.flag("SAFE")  # coasting, not the safe state
+    assert float(out["diag"][0][0]) == STATE["stop"]
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# the start-up path against the plant (no back-EMF sensing in it yet)
+
+
+def test_alignment_and_forced_ramp_on_the_plant():
+    """htm-48v, rotor free: the alignment holds sector 0's pair and brings the rotor to theta_e = 5 pi/6 (where the
+    pair's torque vanishes and restores); the forced ramp then applies the V/f duty ramp_duty + ramp_vf Omega_ol;
+    OPEN_LOOP is raised at every start-up sample. Without the plant's back-EMF sensing no crossing comes: the start
+    fails by name (START_FAIL) after ramp_hold sectors at the end speed, the legs go off, and a new start follows the
+    wait. (With the sensing this test becomes the handover test.)"""
+    d = bl.load("htm-48v")
+    ctl = bl.SixStepSensorless()
+    su = ctl.start_up(d)
+    res = bl.simulate(d, ctl, bl.Scenario(duration=0.8, ref=0.5, theta0=0.3), check="warn")
+    t, st = res.t, res.signals["state"]
+    j_end = int(np.searchsorted(t, su["align_time"])) - 1
+    assert np.all(st[:j_end] == STATE["align"])
+    dist = (res.signals["theta_e"][j_end] - 5 * math.pi / 6 + math.pi) % TWO_PI - math.pi
+    assert abs(dist) < 0.25, dist  # within 15 electrical degrees of the aligned position
+    ramp = st == STATE["ramp"]
+    assert np.any(ramp)
+    w_e = np.abs(res.signals["omega_e"][ramp])
+    assert np.allclose(res.signals["duty"][ramp], np.minimum(su["ramp_duty"] + su["ramp_vf"] * w_e, 1.0), atol=1e-6)
+    flags = res.meta["flags"]
+    assert set(flags) >= {"OPEN_LOOP", "DESYNC", "START_FAIL"} and "SAFE" not in flags
+    fail = flags["START_FAIL"]["run"]["first"]
+    t_ramp = su["align_time"] + su["ramp_time"]
+    sector_end = (math.pi / 3) / (d.motor.p * su["ramp_end_speed"])
+    assert t_ramp < fail < t_ramp + (ctl.ramp_hold + 1) * sector_end
+    off = (t > fail + 1e-3) & (t < fail + 0.9 * ctl.restart_wait)
+    assert np.all(st[off] == STATE["stop"]) and np.all(res.signals["mode_a"][off] == 0)
+    assert np.any(st[t > fail + ctl.restart_wait + 1e-3] == STATE["align"])  # and starts again
