@@ -349,7 +349,7 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->n_quiet = 0;
     s->sl_phase = BC_SINE_SL_IDLE;
     s->sl_dir = 1;
-    s->if_theta = s->if_omega = s->sl_t = s->n_lock = 0.0f;
+    s->if_theta = s->if_omega = s->sl_t = s->n_lock = s->omega_f = 0.0f;
     s->u_hist[0][0] = s->u_hist[0][1] = s->u_hist[1][0] = s->u_hist[1][1] = 0.0f;
     s->u_ok[0] = s->u_ok[1] = 0;
     s->n_restart = 0u;
@@ -493,6 +493,7 @@ static void reset_to_start(const bc_sine_params *p, bc_sine_state *s)
     s->sl_phase = BC_SINE_SL_IDLE;
     s->sl_t = 0.0f;
     s->n_lock = 0.0f;
+    s->omega_f = 0.0f;
     s->u_ok[0] = s->u_ok[1] = 0;
 }
 
@@ -654,6 +655,8 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
     s->u_ok[0] = 0;
     float psi = p->observer == BC_SINE_OBS_FLUX ? p->fobs.psi : p->robs.psi;
     int flux_ok = fabsf(o.flux / psi - 1.0f) <= p->lock_tol;
+    /* the observer's speed through a first-order low-pass of time constant lock_time (the rotor's I/f swing out) */
+    s->omega_f += bc_clampf(p->ts / p->lock_time, 0.0f, 1.0f) * (o.omega_e - s->omega_f);
 
     float tau, tau_u = 0.0f, e_w = 0.0f, ref = p->speed_loop ? in->omega_ref : in->ref;
     int was = s->mode;
@@ -661,8 +664,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
 
     if (s->mode == BC_SINE_MODE_SINE) {
         s->n_lock = flux_ok ? 0.0f : s->n_lock + p->ts;
-        s->sl_t = fabsf(o.omega_e) >= p->omega_off ? 0.0f : s->sl_t + p->ts;
-        if (s->sl_t >= p->lock_time) {
+        if (fabsf(s->omega_f) < p->omega_off) {
             sl_desync(p, s, out, BC_FLAG_STALL);
         } else if (s->n_lock >= p->lock_time) {
             sl_desync(p, s, out, BC_FLAG_LOCK_LOST);
@@ -702,7 +704,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             s->if_theta = bc_wrap_2pi(s->if_theta + s->if_omega * p->ts);
             if (at_top) {
                 s->sl_t += p->ts;
-                int lock = flux_ok && fabsf(o.err) <= p->lock_tol && o.omega_e * dir >= p->omega_off;
+                int lock = flux_ok && fabsf(o.err) <= p->lock_tol && s->omega_f * dir >= p->omega_off;
                 s->n_lock = lock ? s->n_lock + p->ts : 0.0f;
                 if (s->n_lock >= p->lock_time) {
                     s->mode = BC_SINE_MODE_SINE;
@@ -730,6 +732,10 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
         theta = s->if_theta;
         omega_e = s->if_omega;
         iq_ref = (float)s->sl_dir * p->if_current;
+        if (s->sl_phase == BC_SINE_SL_ALIGN && p->if_align > 0.0f) {
+            /* the current rises over 2/3 of if_align, slowly against the rotor's swing (its action stays ~0) */
+            iq_ref *= bc_clampf(1.5f * s->sl_t / p->if_align, 0.0f, 1.0f);
+        }
         out->flags |= BC_FLAG_OPEN_LOOP;
     } else {
         handoff = was == BC_SINE_MODE_START;

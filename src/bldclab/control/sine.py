@@ -330,7 +330,7 @@ class Sine(Control):
                 "if_align": align, "lock_time": lock_time, "if_hold": max(20.0 * lock_time, 10.0 * 2 * math.pi / w_on)}
 
     def _observer_records(self, drive: Drive, core: Core, i_max: float) -> dict[str, object]:
-        """The sensorless members of ``bc_sine_params``."""
+        """Return the sensorless members of ``bc_sine_params``."""
         m, inv = drive.motor, drive.inverter
         ts = 0.5 / inv.f_pwm
         st = self.sensorless_settings(drive)

@@ -186,14 +186,18 @@
  *
  *   IDLE   the reference (tau, or omega_ref with the speed loop) is 0: legs off. Otherwise dir = its sign, ALIGN.
  *   ALIGN  the current vector i_q,ref = dir if_current, i_d,ref = 0 in the frame of theta_if = 0 (the same PIs,
- *          decoupling with omega_if, no back-EMF feed-forward) for if_align. An unloaded rotor settles with its
+ *          decoupling with omega_if, no back-EMF feed-forward) for if_align, its amplitude rising linearly over the
+ *          first 2/3 of it: a rotor at rest pulled by a stiffness that grows slowly against its swing ends with
+ *          little swing (the adiabatic invariant, the action, starts at 0), a step would leave it swinging by its
+ *          whole initial offset. An unloaded rotor settles with its
  *          q axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there: theta^ = theta_if +
  *          dir pi/2, omega^ = 0, then RAMP.
  *   RAMP   omega_if += dir if_accel T_s up to |omega_if| = omega_on, theta_if += omega_if T_s. The rotor follows
  *          with the load angle its torque needs (I/f is self-stabilising for any torque below 1.5 k_1 if_current).
  *          At omega_on the lock is checked every sample: |flux / psi_f - 1| <= lock_tol (the observer's flux
  *          output, bc_obs.h), |err| <= lock_tol (its tracking loop's error: rad, or the sine of the angle error)
- *          and dir omega^ >= omega_off. The observer's own consistency, not its speed against omega_if: a current-
+ *          and dir omega_f >= omega_off (omega_f: omega^ through a low-pass of time constant lock_time). The
+ *          observer's own consistency, not its speed against omega_if: a current-
  *          fed rotor has no damping and swings about the turning vector at sqrt(p 1.5 k_1 if_current / J) (the
  *          plant's friction aside), and the observer follows the swing. When the lock has held for lock_time
  *          the drive hands over to the sine mode on the observer's angle: the d,q integrators as in the Hall
@@ -203,7 +207,7 @@
  *   WAIT   legs off for restart_wait, then IDLE (and a new ALIGN).
  *
  * In the sine mode the lock is checked every sample with the same band (the speed against itself: only the flux
- * magnitude); violated for lock_time (BC_FLAG_LOCK_LOST), or |omega^| < omega_off for lock_time (BC_FLAG_STALL):
+ * magnitude); violated for lock_time (BC_FLAG_LOCK_LOST), or |omega_f| < omega_off (BC_FLAG_STALL):
  * BC_FLAG_DESYNC,
  * legs off, WAIT, then a new start (n_restart counts them). A rotor still turning when the next ALIGN comes is
  * pulled to the aligned angle (no flying restart).
@@ -345,6 +349,7 @@ typedef struct {
     float if_omega;    /* I/f electrical speed, rad/s */
     float sl_t;        /* time in the present phase (RAMP: at omega_on; sine mode: below omega_off), s */
     float n_lock;      /* time the lock criterion has held (start) or failed (sine), s */
+    float omega_f;     /* the observer's speed low-passed (time constant lock_time), electrical rad/s */
     float u_hist[2][2]; /* alpha-beta voltage commanded one and two samples ago, V */
     int32_t u_ok[2];    /* 1: that voltage was applied by PWM on every leg */
     uint32_t n_restart; /* failed starts and lost locks since init */

@@ -1,0 +1,75 @@
+"""Sensorless sinusoidal supply: the observers' angle error against the plant's true angle (issue 26).
+
+For each catalog drive, observer and speed: the rotor starts from standstill (the drive's inertia, no load), the
+sensorless drive starts it (I/f, hand-off to the observer) and its speed loop brings it to the speed; then a load
+rises to half the rated torque ``T_s,N / 2`` (at least 0.3 s, slow enough for the speed PI's ramp error
+``(dtau/dt) / k_i,w`` to stay below 20 % of the speed), and over the last 20 electrical periods the angle error
+``theta^ - theta_e`` (deg electrical, rms and worst) is read against the plant's angle, with the mean torque and
+efficiency beside those of the encoder-based ``Sine`` run the same way. The hand-off speed is at most half the
+point's, the return to the start mode (loss of lock) at a quarter of it.
+
+Run: ``PYTHONPATH=src python benchmarks/sensorless_sine.py [DRIVE ...]``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+
+import numpy as np
+
+import bldclab as bl
+from bldclab.model.analytic import i_sN
+from bldclab.sim import Scenario, simulate
+
+SPEEDS = (0.05, 0.1, 0.25, 0.5, 0.75, 0.9)  # of Omega_0 (at Omega_0 itself the back-EMF takes the whole bus)
+
+
+def angle_error(drive: bl.Drive, control: bl.Sine, speed: float, torque: float, t_load: float, t_ramp: float,
+                duration: float, estimate: bl.Drive | None = None) -> dict[str, float]:
+    """Run one point (speed loop to ``speed``, load ``torque`` from ``t_load``); return the angle error (deg, rms and
+    worst over the window, sine mode only), the mean torque (N m), efficiency (-) and the window's share of the sine
+    mode (-)."""
+    t0 = duration - 20 * 2 * math.pi / (drive.motor.p * speed)
+    r = simulate(drive, dataclasses.replace(control, speed_loop=True),
+                 Scenario(duration=duration, omega_ref=speed, trace_every=4,
+                          load_torque=lambda t: torque * np.clip((t - t_load) / t_ramp, 0.0, 1.0),
+                          window=(t0, duration)), estimate=estimate)
+    t = r["t"]
+    last = t >= t0
+    on = last & (r["mode"] > 0.5)
+    err = np.degrees(np.angle(np.exp(1j * (r["theta"] - r["theta_e"]))))[on]
+    m = r.metrics
+    return {"rms": float(np.sqrt(np.mean(err**2))) if err.size else math.nan,
+            "worst": float(np.max(np.abs(err))) if err.size else math.nan,
+            "sine": float(on.sum() / max(last.sum(), 1)), "tau": m.tau_mean, "eff": m.efficiency}
+
+
+def main(names: list[str]) -> None:
+    print(f"{'drive':16s} {'obs':8s} {'speed':>6s} {'rms deg':>8s} {'worst':>8s} {'sine':>5s} {'tau':>9s} "
+          f"{'tau enc':>9s} {'eff':>6s} {'eff enc':>7s}")
+    for name in names:
+        d = bl.load(name)
+        torque = 0.5 * 1.5 * bl.control.sine.fundamental_k1(d) * i_sN(d)
+        for frac in SPEEDS:
+            w = frac * d.Omega_0
+            # long enough for the alignment, the ramp and the lock, then 20 electrical periods
+            on = min(0.1 * d.motor.Omega_nominal, 0.5 * w)
+            ctl = bl.Sine(angle="observer", handoff_speed=on, handoff_hysteresis=0.5)
+            st = ctl.sensorless_settings(d)
+            # start, then the speed loop's way up at T_s,N / 2 of acceleration torque, then 0.3 s to settle
+            t_load = st["if_align"] + d.motor.p * on / st["if_accel"] + 2 * st["lock_time"] \
+                + d.mechanics.J * w / torque + 0.3
+            wb = 2 * math.pi * ctl.speed_bandwidth_hz
+            t_ramp = max(0.3, torque / (d.mechanics.J * wb**2 / 4 * 0.2 * w))
+            dur = t_load + t_ramp + 0.3 + 20 * 2 * math.pi / (d.motor.p * w)
+            enc = angle_error(d, bl.Sine(angle="encoder", handoff_speed=on), w, torque, t_load, t_ramp, dur)
+            for obs in ("flux", "reduced"):
+                a = angle_error(d, dataclasses.replace(ctl, observer=obs), w, torque, t_load, t_ramp, dur)
+                print(f"{name:16s} {obs:8s} {frac:6.2f} {a['rms']:8.3f} {a['worst']:8.3f} {a['sine']:5.2f} "
+                      f"{a['tau']:9.4g} {enc['tau']:9.4g} {a['eff']:6.3f} {enc['eff']:7.3f}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv", "f60prov-2550kv"])
