@@ -246,6 +246,7 @@ extern const bc_bind_provider bc_bind_sine;
 extern const bc_bind_provider bc_bind_lu;
 extern const bc_bind_provider bc_bind_hallcal;
 extern const bc_bind_provider bc_bind_bemf;
+extern const bc_bind_provider bc_bind_commission;
 
 static const bc_bind_provider *const PROVIDERS[] = {
     &bc_bind_openloop_table,
@@ -255,6 +256,7 @@ static const bc_bind_provider *const PROVIDERS[] = {
     &bc_bind_lu,
     &bc_bind_hallcal,
     &bc_bind_bemf,
+    &bc_bind_commission,
 };
 
 #define N_PROVIDERS ((int32_t)(sizeof PROVIDERS / sizeof PROVIDERS[0]))
