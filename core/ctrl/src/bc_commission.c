@@ -35,7 +35,7 @@ int bc_commission_init(const bc_commission_params *p, bc_commission_state *s)
         s->i_prev[j] = 0.0f;
         s->u_hold[j] = 0.0f;
     }
-    s->n = s->s_v = s->s_i = s->s_vb = s->v_lo = s->v_hi = s->s_e = s->s_e2 = 0.0f;
+    s->n = s->s_v = s->s_i = s->s_vb = s->v_lo = s->v_hi = s->s_e = s->s_e2 = s->s_dd = s->e_ang = 0.0f;
     s->l_num = s->l_den = 0.0f;
     s->V1 = s->I1 = s->V2 = s->I2 = 0.0f;
     s->R = s->L = s->psi = 0.0f;
@@ -47,7 +47,7 @@ static void next_phase(bc_commission_state *s, int32_t phase)
     s->phase = phase;
     s->t = 0.0f;
     s->k = 0;
-    s->n = s->s_v = s->s_i = s->s_vb = s->s_e = s->s_e2 = 0.0f;
+    s->n = s->s_v = s->s_i = s->s_vb = s->s_e = s->s_e2 = s->s_dd = s->e_ang = 0.0f;
     s->v_lo = 3.0e38f;
     s->v_hi = -3.0e38f;
 }
@@ -174,20 +174,29 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
         break;
     }
     case BC_COMM_PH_SPIN: {
-        /* the current rises from i_test/2 to i_if over the first t_ramp, the vector turns at the ramp */
+        /* the current rises from i_test/2 to i_if over the first t_ramp (the vector still), then it turns with the
+         * ramp: the whole I/f torque is there before the acceleration asks for its share */
         float a = p->t_ramp > 0.0f ? bc_clampf(s->t / p->t_ramp, 0.0f, 1.0f) : 1.0f;
         i_ref = 0.5f * p->i_test + a * (p->i_if - 0.5f * p->i_test);
-        s->w_phi = fminf(s->w_phi + p->if_accel * ts, p->w_spin);
+        if (s->t > p->t_ramp) s->w_phi = fminf(s->w_phi + p->if_accel * ts, p->w_spin);
         float t_top = p->t_ramp + p->w_spin / p->if_accel + p->t_settle;
         if (s->t > t_top) {
             /* e' = u' - R i' - j omega L i' (u' at the interval's mid-angle, i' at phi_k) */
-            float pm = phi_u + 0.5f * s->w_phi * ts;
+            float pm = phi_u + 1.5f * s->w_phi * ts; /* the interval [t_k-1, t_k]: 1.5 samples after its command */
             float cu = cosf(pm), su = sinf(pm), ci = cosf(s->phi), si = sinf(s->phi);
             float ud = cu * u.alpha + su * u.beta, uq = -su * u.alpha + cu * u.beta;
             float id = ci * i.alpha + si * i.beta, iq = -si * i.alpha + ci * i.beta;
             float ed = ud - s->R * id + s->w_phi * s->L * iq;
             float eq = uq - s->R * iq - s->w_phi * s->L * id;
             float e = sqrtf(ed * ed + eq * eq);
+            /* the rotor's travel against the vector: the angle of e' (q of the rotor) advances by dd */
+            float ang = atan2f(eq, ed);
+            if (s->n > 0.0f) {
+                float dd = ang - s->e_ang;
+                dd = dd > BC_PI_F ? dd - BC_TWO_PI_F : (dd < -BC_PI_F ? dd + BC_TWO_PI_F : dd);
+                s->s_dd += dd;
+            }
+            s->e_ang = ang;
             s->n += 1.0f;
             s->s_e += e;
             s->s_e2 += e * e;
@@ -195,7 +204,9 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
         if (s->t >= t_top + p->t_spin) {
             float m = s->s_e / s->n;
             float var = fmaxf(s->s_e2 / s->n - m * m, 0.0f);
-            s->psi = m / p->w_spin; /* psi_f = <|e'|> / w_spin */
+            /* psi_f = sum |e'| T_s / (rotor travel) = sum |e'| T_s / (n w_spin T_s + sum dd) */
+            float travel = s->n * p->w_spin * ts + s->s_dd;
+            s->psi = travel > 0.0f ? s->s_e * ts / travel : 0.0f;
             if (!(sqrtf(var) <= p->tol_follow * m) || !(m >= p->w_spin * p->psi_min)) {
                 stop(s, BC_COMM_NOT_FOLLOWING);
             } else {
@@ -251,7 +262,8 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
     float duty[3];
     int clipped = bc_svm(bc_clarke_inv(uab), in->v_dc, duty);
     if (clipped) {
-        stop(s, BC_COMM_SATURATED);
+        /* the bus is not enough: with less than half the current it drives, the circuit is open */
+        stop(s, fabsf(id) < 0.5f * fabsf(i_ref) ? BC_COMM_NO_CURRENT : BC_COMM_SATURATED);
         out->flags |= BC_FLAG_SAFE | BC_FLAG_SATURATED;
         out->diag[7] = (float)s->status;
         return;

@@ -1,5 +1,8 @@
-"""Self-commissioning of a drive ("motor detection"): run :class:`~bldclab.control.commission.Commission` on the
-plant and build the estimated drive from what the controller measured (``docs/sensorless-sine.md``)."""
+"""Self-commissioning of a drive ("motor detection").
+
+Runs :class:`~bldclab.control.commission.Commission` on the plant and builds the estimated drive from what the
+controller measured (``docs/sensorless-sine.md``).
+"""
 
 from __future__ import annotations
 
@@ -11,7 +14,7 @@ from ..control.commission import Commission
 from ..control.sine import fundamental_k1
 from ..errors import BldclabError
 from ..model.motor import Drive
-from ..sim import Scenario, simulate
+from ..sim import Fault, Scenario, simulate
 
 __all__ = ["Estimate", "commission"]
 
@@ -54,9 +57,10 @@ class Estimate:
 
     @property
     def drive(self) -> Drive:
-        """The estimated drive for ``simulate(..., estimate=)``: the nominal drive with its motor's R (the
-        measured value less the inverter's ``R_on``), L and back-EMF amplitude (its shape kept) from the
-        measurement.
+        """Return the estimated drive for ``simulate(..., estimate=)``.
+
+        The nominal drive with its motor's R (the measured value less the inverter's ``R_on``), L and back-EMF
+        amplitude (its shape kept) from the measurement.
 
         Raises
         ------
@@ -80,7 +84,7 @@ class Estimate:
 
 
 def commission(drive: Drive, nominal: Drive | None = None, control: Commission | None = None, *,
-               speed: float | None = None, load_torque: float = 0.0) -> Estimate:
+               speed: float | None = None, load_torque: float = 0.0, faults: tuple[Fault, ...] = ()) -> Estimate:
     """Run the self-commissioning routine on a drive's plant and return what it measured.
 
     Parameters
@@ -97,6 +101,8 @@ def commission(drive: Drive, nominal: Drive | None = None, control: Commission |
         A dynamometer holding the rotor at this speed (rad/s) instead of the free rotor (to show ROTOR_MOVING).
     load_torque : float
         Load on the free rotor (N m).
+    faults : tuple of Fault
+        Faults of the plant during the routine (an open phase: NO_CURRENT).
 
     Returns
     -------
@@ -106,7 +112,8 @@ def commission(drive: Drive, nominal: Drive | None = None, control: Commission |
     control = Commission() if control is None else control
     t_run = 1.05 * control.duration(nominal)
     t0 = time.perf_counter()
-    r = simulate(drive, control, Scenario(duration=t_run, speed=speed, load_torque=load_torque, trace_every=64),
+    r = simulate(drive, control, Scenario(duration=t_run, speed=speed, load_torque=load_torque, trace_every=64,
+                                                  faults=faults),
                  estimate=nominal)
     wall = time.perf_counter() - t0
     names = {v: k.removeprefix("BC_COMM_") for k, v in load_core().groups["commission_status"].items()}

@@ -115,6 +115,8 @@ COMMANDS: tuple[Command, ...] = (
             "hall"),
     Command("torque-control", "paper 2's torque control vs its baselines over a load x speed grid",
             "torque_control"),
+    Command("commission", "self-commissioning on the plant: R, L and flux linkage measured by the controller",
+            "commission"),
     Command("faults", "inject sensor, bus and phase faults: detection, time to safe state, peak current",
             "faults"),
     Command("report", "one self-contained HTML report of a comparison (a results directory, or a motor to run)",

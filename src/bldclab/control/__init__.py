@@ -8,6 +8,7 @@ controller family; adding one: a module here with a :class:`Control` subclass, a
 from __future__ import annotations
 
 from .base import Control
+from .commission import Commission
 from .hallcal import HallCal, HallCalibration
 from .lu import Lu
 from .openloop import OpenLoop, SixStepVoltage
@@ -15,5 +16,5 @@ from .sensorless import SixStepSensorless
 from .sine import Sine
 from .sixstep import SixStep
 
-__all__ = ["Control", "HallCal", "HallCalibration", "Lu", "OpenLoop", "Sine", "SixStep", "SixStepSensorless",
-           "SixStepVoltage"]
+__all__ = ["Commission", "Control", "HallCal", "HallCalibration", "Lu", "OpenLoop", "Sine", "SixStep",
+           "SixStepSensorless", "SixStepVoltage"]

@@ -1,5 +1,8 @@
-"""Motor self-commissioning (``core/ctrl/include/bldc/bc_commission.h``): R, L and the PM flux linkage measured by
-the controller. :func:`bldclab.analysis.commission.commission` runs it and builds the estimated drive."""
+"""Motor self-commissioning (``core/ctrl/include/bldc/bc_commission.h``).
+
+R, L and the PM flux linkage measured by the controller; :func:`bldclab.analysis.commission.commission` runs it and
+builds the estimated drive.
+"""
 
 from __future__ import annotations
 
@@ -83,7 +86,7 @@ class Commission(Control):
         swing = 2 * math.pi / w_n
         return {
             "ts": ts, "i_test": i_t, "i_if": i_if,
-            "t_ramp": 3 * swing, "t_settle": 5 * tau_el + 0.01 + 0.5 * swing, "t_window": max(0.05, 2 * swing),
+            "t_ramp": 3 * swing, "t_settle": 5 * tau_el + 0.01 + 2 * swing, "t_window": max(0.05, 2 * swing),
             "v_pulse": 0.25 * i_t * m.L / (self.pulse_samples * ts),
             "if_accel": min(m.p * 0.5 * 1.5 * k1 * i_if / J, 0.02 * w_spin * w_nif), "w_spin": w_spin,
             "t_spin": max(10 * 2 * math.pi / w_spin, 5 * 2 * math.pi / w_nif), "psi_min": 0.25 * k1 / m.p,

@@ -31,19 +31,24 @@
  *
  *             (u - V_1 - R (i - I_1) is what the inductance takes, the inverter's error cancelled by V_1 - R I_1).
  *             Then t_settle with the PIs at I_1 again.
- *  5. SPIN    I/f: i_ref = i_if, the vector turning, omega_phi ramped by if_accel to w_spin (electrical rad/s),
- *             t_settle there, then t_spin of the back-EMF in the frame of phi,
+ *  5. SPIN    I/f: i_ref rising to i_if over t_ramp with the vector still, then the vector turning, omega_phi
+ *             ramped by if_accel to w_spin (electrical rad/s), t_settle there, then t_spin of the back-EMF in the frame of phi,
  *
- *                 e' = u' - R i' - j omega_phi L i'      (u' the applied voltage at the interval's mid-angle)
+ *                 e' = u' - R i' - j omega_phi L i'      (u' the applied voltage in the frame at the
+ *                                                    interval's middle, 1.5 samples after its command's angle)
  *
- *             psi_f = <|e'|> / w_spin (the rotor follows the vector at its speed on average, swinging about it).
+ *             and psi_f = sum |e'| T_s / (n w_spin T_s + sum d arg e'): |e'| = |omega_r| psi_f, and the rotor's
+ *             travel is the vector's plus the change of the angle of e' (the rotor's q axis in the frame of phi),
+ *             so the swing of a current-fed rotor about the vector (undamped) leaves no error.
  *  6. DONE    legs off; the results stay in the state.
  *
  * Statuses (status, diag 7): RUNNING until DONE; a failure turns the legs off for good and names its cause:
  *   ROTOR_MOVING   in R_HI or R_LO, the largest |u_beta| or the spread of u_alpha exceeds tol_move |V| (a rotor
  *                  turned by its load or a dynamometer: back-EMF where a standing rotor has none)
- *   NO_CURRENT     |I_2| < i_test / 2 at the end of R_HI (an open phase or no bus)
- *   SATURATED      the duties clipped (the test voltage or the spin's back-EMF above the bus)
+ *   NO_CURRENT     |I_2| < i_test / 2 at the end of R_HI, or the duties clipped with |i_d| < i_ref / 2 (an open
+ *                  phase: the PI winds up against no current)
+ *   SATURATED      the duties clipped with the current there (the test voltage or the spin's back-EMF above the
+ *                  bus)
  *   NOT_FOLLOWING  in SPIN, the spread (standard deviation) of |e'| exceeds tol_follow <|e'|>, or <|e'|> is below
  *                  w_spin psi_min: the rotor does not turn with the vector
  *   FAULT          the input guard (over-current, bus, fault pin, non-finite measurement; bc_guard.h)
@@ -112,6 +117,7 @@ typedef struct {
     float u_hold[2];       /* the PIs' output (frame of phi) held during the pulses, V */
     float n, s_v, s_i, s_vb, v_lo, v_hi; /* window sums: count, u_alpha, i_alpha, max |u_beta|, u_alpha range */
     float s_e, s_e2;      /* spin: sum |e'|, |e'|^2 */
+    float s_dd, e_ang;    /* spin: the rotor's travel against the vector (sum of the steps of arg e'), last arg e' */
     float l_num, l_den;   /* inductance sums */
     float V1, I1, V2, I2;
     float R, L, psi;       /* results (0 until measured) */
