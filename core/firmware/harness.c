@@ -66,6 +66,18 @@ static const bc_sine_params P = HTM_SINE_PARAMS;
 static bc_sine_state S;
 #define INIT() bc_sine_init(&P, &S)
 #define STEP(in, out) bc_sine_step(&P, &S, in, out)
+#elif defined(BC_FW_SINE_OBS)
+#include "params.h"
+static bc_sine_params P = HTM_SINE_PARAMS;
+static bc_sine_state S;
+#define INIT() (htm_sine_observer(&P), bc_sine_init(&P, &S))
+#define STEP(in, out) bc_sine_step(&P, &S, in, out)
+#elif defined(BC_FW_COMMISSION)
+#include "params.h"
+static const bc_commission_params P = HTM_COMMISSION_PARAMS;
+static bc_commission_state S;
+#define INIT() bc_commission_init(&P, &S)
+#define STEP(in, out) bc_commission_step(&P, &S, in, out)
 #elif defined(BC_FW_LU)
 #include "params.h"
 static const bc_lu_params P = LU4KW_LU_PARAMS;

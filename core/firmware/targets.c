@@ -84,6 +84,21 @@ static bc_sine_state sine_s;
 static int sine_init(void) { return bc_sine_init(&sine_p, &sine_s); }
 STEP_FN sine_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sine_step(&sine_p, &sine_s, in, out); }
 
+/* the sensorless Sine (flux observer, I/f start-up) and the self-commissioning routine, on htm-48v */
+static bc_sine_params sine_obs_p = HTM_SINE_PARAMS;
+static bc_sine_state sine_obs_s;
+static int sine_obs_init(void)
+{
+    htm_sine_observer(&sine_obs_p);
+    return bc_sine_init(&sine_obs_p, &sine_obs_s);
+}
+STEP_FN sine_obs_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sine_step(&sine_obs_p, &sine_obs_s, in, out); }
+
+static const bc_commission_params comm_p = HTM_COMMISSION_PARAMS;
+static bc_commission_state comm_s;
+static int commission_init(void) { return bc_commission_init(&comm_p, &comm_s); }
+STEP_FN commission_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_commission_step(&comm_p, &comm_s, in, out); }
+
 static const bc_lu_params lu_p = LU4KW_LU_PARAMS;
 static bc_lu_state lu_s;
 static int lu_init(void) { return bc_lu_init(&lu_p, &lu_s); }
@@ -173,6 +188,8 @@ const bc_fw_target bc_fw_targets[] = {
     {"sixstep_timed", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sixstep_timed_init, sixstep_timed_step, 48.0f,
      50.0f, 50.0f, 357.0f},
     {"sine", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sine_init, sine_step, 48.0f, 57.7f, 33.7f, 357.0f},
+    {"sine_obs", BC_USES_CURRENT | BC_USES_VDC, sine_obs_init, sine_obs_step, 48.0f, 57.7f, 33.7f, 357.0f},
+    {"commission", BC_USES_CURRENT | BC_USES_VDC, commission_init, commission_step, 48.0f, 57.7f, 0.0f, 357.0f},
     {"lu", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, lu_init, lu_step, 300.0f, 15.9f, 12.7f, 1000.0f},
     {"hall", BC_IS_BLOCK, hall_init, hall_step, 48.0f, 50.0f, 0.0f, 357.0f},
     {"hall_pll", BC_IS_BLOCK, hall_pll_init, hall_pll_step, 48.0f, 50.0f, 0.0f, 357.0f},
