@@ -77,6 +77,38 @@ def sensitivity(names: list[str]) -> None:
             print(f"{name:16s} {label:12s} {a['rms']:8.3f} {a['worst']:8.3f} {a['tau']:9.4g} {after}")
 
 
+def startup_map(names: list[str]) -> None:
+    """Print the start-up's success over load torque x inertia and the time to the hand-off.
+
+    The controller is configured from the nominal drive (its I/f ramp from the nominal inertia); the plant's inertia
+    is the nominal times a factor and a constant load (a fraction of the I/f current's torque ``1.5 k_1 if_current``)
+    acts from t = 0. Speed loop to 0.3 Omega_0. Success: in the sine mode at the end with the speed within 5 % of the
+    reference; ``t_lock``: the first sample in the sine mode; ``restarts``: samples flagged DESYNC (0: none).
+    """
+    print(f"\n{'drive':16s} {'load/tau_if':>11s} {'J/J_nom':>8s} {'ok':>3s} {'t_lock s':>9s} {'DESYNC':>7s}")
+    for name in names:
+        d = bl.load(name)
+        ctl = bl.Sine(angle="observer", speed_loop=True)
+        st = ctl.sensorless_settings(d)
+        tau_if = 1.5 * bl.control.sine.fundamental_k1(d) * st["if_current"]
+        w = 0.3 * d.Omega_0
+        for kj in (0.5, 1.0, 2.0, 5.0):
+            plant = dataclasses.replace(d, mechanics=dataclasses.replace(d.mechanics, J=kj * d.mechanics.J))
+            for fl in (0.0, 0.25, 0.5, 0.75, 0.9, 1.1):
+                load = fl * tau_if
+                t_acc = plant.mechanics.J * w / max(ctl.torque_limit(d) - load, 0.1 * ctl.torque_limit(d))
+                dur = 3 * (st["if_align"] + d.motor.p * ctl.handoff(d) / st["if_accel"] + 4 * st["lock_time"]) \
+                    + t_acc + 0.5
+                r = simulate(plant, ctl, Scenario(duration=dur, omega_ref=w, load_torque=load, trace_every=8),
+                             estimate=d)
+                on = r["mode"] > 0.5
+                ok = bool(on[-1]) and abs(r["omega_m"][-1] / w - 1) < 0.05
+                t_lock = float(r["t"][on][0]) if on.any() else math.nan
+                flags = r.flags_raised
+                print(f"{name:16s} {fl:11.2f} {kj:8.1f} {'yes' if ok else 'no':>3s} {t_lock:9.3f} "
+                      f"{'yes' if 'DESYNC' in flags else 'no':>7s}")
+
+
 def commissioning(names: list[str]) -> None:
     """Print the commissioning accuracy and time on each drive."""
     print(f"\n{'drive':16s} {'status':8s} {'R err %':>8s} {'L err %':>8s} {'psi err %':>9s} {'t test s':>9s} "
@@ -119,3 +151,4 @@ if __name__ == "__main__":
     main(drives)
     sensitivity(drives)
     commissioning(drives)
+    startup_map(drives[:3])

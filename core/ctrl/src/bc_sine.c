@@ -312,7 +312,7 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
         }
         if (!finite_pos(p->if_current) || p->if_current > p->i_s_max || !finite_nonneg(p->if_align) ||
             !finite_pos(p->if_accel) || !finite_pos(p->if_hold) || !finite_pos(p->lock_time) ||
-            !finite_pos(p->lock_tol) || p->lock_tol >= 1.0f || !finite_nonneg(p->restart_wait))
+            !finite_pos(p->lock_tol) || p->lock_tol >= 1.0f || !finite_nonneg(p->restart_wait) || !finite_nonneg(p->if_damp))
             return BC_ERR_PARAM;
     }
     if (p->emf_ff) {
@@ -732,9 +732,15 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
         theta = s->if_theta;
         omega_e = s->if_omega;
         iq_ref = (float)s->sl_dir * p->if_current;
-        if (s->sl_phase == BC_SINE_SL_ALIGN && p->if_align > 0.0f) {
-            /* the current rises over 2/3 of if_align, slowly against the rotor's swing (its action stays ~0) */
-            iq_ref *= bc_clampf(1.5f * s->sl_t / p->if_align, 0.0f, 1.0f);
+        if (s->sl_phase == BC_SINE_SL_ALIGN) {
+            /* the current rises over a tenth of if_align (enough holding torque early against an active load), and
+             * the rotor's swing is braked: its back-EMF lies on d of theta_if (the rotor's q axis there, either
+             * direction), seen in the d integrator; i_d,ref = -if_damp (x_d - R i_d) */
+            if (p->if_align > 0.0f) iq_ref *= bc_clampf(10.0f * s->sl_t / p->if_align, 0.0f, 1.0f);
+            float sd1 = -sinf(theta), cd1 = -cosf(theta);
+            bc_dq idq1 = bc_park(bc_clarke(i), sd1, cd1);
+            id_ref = bc_clampf(-p->if_damp * (s->pi_d.x - p->R * idq1.d), -0.5f * p->if_current,
+                               0.5f * p->if_current);
         }
         out->flags |= BC_FLAG_OPEN_LOOP;
     } else {

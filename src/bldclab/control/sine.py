@@ -306,8 +306,8 @@ class Sine(Control):
         -------
         dict of str to float
             ``psi`` (V s, ``k_1 / p``), ``gain`` (``lambda``, rad/s), ``bandwidth`` (rad/s), ``sigma0`` (rad/s),
-            ``if_current`` (A), ``if_accel`` (electrical rad/s^2), ``if_align`` (s), ``lock_time`` (s) and
-            ``if_hold`` (s).
+            ``if_current`` (A), ``if_accel`` (electrical rad/s^2), ``if_align`` (s), ``if_damp`` (A/V, the
+            alignment's swing damping ``omega_n J / (1.5 p^2 psi_f^2)``), ``lock_time`` (s) and ``if_hold`` (s).
         """
         m = drive.motor
         ts = 0.5 / drive.inverter.f_pwm
@@ -325,9 +325,11 @@ class Sine(Control):
                 else m.p * float(self.if_accel))
         align = 3.0 * 2.0 * math.pi / w_n if self.if_align is None else float(self.if_align)
         lock_time = 5.0 / min(gain, bw)
+        # i_d = -k u_d brakes the alignment swing at the rate 1.5 p^2 psi^2 k / J: made w_n (near critical damping)
+        damp = w_n * drive.mechanics.J / (1.5 * m.p**2 * (k1 / m.p) ** 2)
         return {"psi": k1 / m.p, "gain": gain, "bandwidth": bw,
                 "sigma0": min(r_total(drive) / (2.0 * m.L), 0.2 / ts), "if_current": i_if, "if_accel": a_if,
-                "if_align": align, "lock_time": lock_time, "if_hold": max(20.0 * lock_time, 10.0 * 2 * math.pi / w_on)}
+                "if_align": align, "if_damp": damp, "lock_time": lock_time, "if_hold": max(20.0 * lock_time, 10.0 * 2 * math.pi / w_on)}
 
     def _observer_records(self, drive: Drive, core: Core, i_max: float) -> dict[str, object]:
         """Return the sensorless members of ``bc_sine_params``."""
@@ -343,7 +345,7 @@ class Sine(Control):
         return {"observer": core.const(_OBSERVER[self.observer]), "fobs": fobs[0], "robs": robs[0],
                 "if_current": st["if_current"], "if_align": st["if_align"],
                 "if_accel": st["if_accel"], "if_hold": st["if_hold"], "lock_time": st["lock_time"],
-                "lock_tol": self.lock_tolerance, "restart_wait": self.restart_wait}
+                "lock_tol": self.lock_tolerance, "restart_wait": self.restart_wait, "if_damp": st["if_damp"]}
 
     def _r_design(self, drive: Drive, scale: float) -> float:
         """Design resistance of a loop of ``scale`` phases in series (Ohm)."""

@@ -187,11 +187,11 @@
  *   IDLE   the reference (tau, or omega_ref with the speed loop) is 0: legs off. Otherwise dir = its sign, ALIGN.
  *   ALIGN  the current vector i_q,ref = dir if_current, i_d,ref = 0 in the frame of theta_if = 0 (the same PIs,
  *          decoupling with omega_if, no back-EMF feed-forward) for if_align, its amplitude rising linearly over the
- *          first 2/3 of it: a rotor at rest pulled by a stiffness that grows slowly against its swing ends with
- *          little swing (the adiabatic invariant, the action, starts at 0), a step would leave it swinging by its
- *          whole initial offset. An unloaded rotor settles with its
- *          q axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there: theta^ = theta_if +
- *          dir pi/2, omega^ = 0, then RAMP.
+ *          first tenth of it (holding torque early, against an active load). A current-fed rotor has no damping of
+ *          its own and would swing about the vector; its swing's back-EMF lies on d of theta_if (the rotor's q axis
+ *          there, for either dir), and i_d,ref = -if_damp (x_d - R i_d) (x_d the d PI's integrator, clamped to
+ *          +-if_current / 2) brakes it. An unloaded rotor settles with its q axis pi/2 behind the vector's (dir =
+ *          -1: ahead); the observer is seeded there: theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP.
  *   RAMP   omega_if += dir if_accel T_s up to |omega_if| = omega_on, theta_if += omega_if T_s. The rotor follows
  *          with the load angle its torque needs (I/f is self-stabilising for any torque below 1.5 k_1 if_current).
  *          At omega_on the lock is checked every sample: |flux / psi_f - 1| <= lock_tol (the observer's flux
@@ -315,6 +315,7 @@ typedef struct {
     float lock_time;  /* the lock criterion must hold this long for the handover, its violation for a loss, s (> 0) */
     float lock_tol;   /* relative band of the lock criterion, - (0 .. 1) */
     float restart_wait; /* legs off after a failed start or a lost lock, s (>= 0) */
+    float if_damp;      /* swing damping of ALIGN, A/V (>= 0) */
 } bc_sine_params;
 
 typedef struct {
