@@ -329,7 +329,8 @@ class Sine(Control):
         damp = w_n * drive.mechanics.J / (1.5 * m.p**2 * (k1 / m.p) ** 2)
         return {"psi": k1 / m.p, "gain": gain, "bandwidth": bw,
                 "sigma0": min(r_total(drive) / (2.0 * m.L), 0.2 / ts), "if_current": i_if, "if_accel": a_if,
-                "if_align": align, "if_damp": damp, "lock_time": lock_time, "if_hold": max(20.0 * lock_time, 10.0 * 2 * math.pi / w_on)}
+                "if_align": align, "if_damp": damp, "lock_time": lock_time,
+                "if_hold": max(20.0 * lock_time, 10.0 * 2 * math.pi / w_on)}
 
     def _observer_records(self, drive: Drive, core: Core, i_max: float) -> dict[str, object]:
         """Return the sensorless members of ``bc_sine_params``."""
