@@ -148,6 +148,25 @@ def test_lowest_speed_tried_holds_lock(obs: str) -> None:
     assert np.max(np.abs(np.degrees(angle_error(r, last)))) < 0.5
 
 
+@pytest.mark.parametrize("kj", [0.5, 1.0])
+def test_start_under_half_the_if_torque(kj: float) -> None:
+    """outrunner-24v, the controller configured for the nominal inertia, the plant's 0.5 or 1 times it, an active
+    load of half the I/f current's torque from t = 0: the drive starts, hands over, and its speed loop holds the
+    reference (within 5 %) with no restart."""
+    d = bl.load("outrunner-24v")
+    ctl = bl.Sine(angle="observer", speed_loop=True)
+    st = ctl.sensorless_settings(d)
+    load = 0.5 * 1.5 * fundamental_k1(d) * st["if_current"]
+    plant = dataclasses.replace(d, mechanics=dataclasses.replace(d.mechanics, J=kj * d.mechanics.J))
+    w = 0.3 * d.Omega_0
+    dur = 3 * (st["if_align"] + d.motor.p * ctl.handoff(d) / st["if_accel"] + 4 * st["lock_time"]) \
+        + plant.mechanics.J * w / (ctl.torque_limit(d) - load) + 0.5
+    r = simulate(plant, ctl, Scenario(duration=dur, omega_ref=w, load_torque=load, trace_every=8), estimate=d)
+    assert r["mode"][-1] == 1
+    assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
+    assert "DESYNC" not in r.flags_raised
+
+
 def test_start_against_a_load_above_the_if_torque_fails_by_name() -> None:
     """A load above the I/f current's largest torque ``1.5 k_1 if_current`` (here 1.3 times it) cannot be started:
     the start ends in START_FAIL (with DESYNC) and the drive retries, never a silent run in the sine mode."""
