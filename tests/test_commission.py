@@ -117,3 +117,21 @@ def test_cli(capsys: pytest.CaptureFixture[str]) -> None:
     out = capsys.readouterr().out
     assert '"status": "DONE"' in out
     assert main(["commission", "no-such-motor"]) == 2
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["htm-48v", "outrunner-24v"])
+def test_inverter_errors_within_the_goals(name: str) -> None:
+    """With a dead time of 1 % of the PWM period, 0.7 V diodes and switch on-resistance 20 % of R in the plant (the
+    routine configured from the ideal drive's data): R + R_on within 2 %, L within 5 %, psi_f within 2 % (the
+    issue's goals; measured 0.4 %, 0.02 %, 0.8 %). The two-level R and the pulses about a held point cancel the
+    dead time's constant voltage error; the spin's back-EMF keeps the error of its unmodelled dead-time voltage."""
+    d = bl.load(name)
+    inv = dataclasses.replace(d.inverter, t_dead=0.01 / d.inverter.f_pwm, V_f=0.7, R_on=0.2 * d.motor.R)
+    p = dataclasses.replace(d, inverter=inv)
+    e = commission(p)
+    assert e.status == "DONE"
+    R, L, psi = true_values(p)
+    assert e.R == pytest.approx(R, rel=0.02)
+    assert e.L == pytest.approx(L, rel=0.05)
+    assert e.psi_f == pytest.approx(psi, rel=0.02)
