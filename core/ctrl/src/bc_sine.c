@@ -312,7 +312,8 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
         }
         if (!finite_pos(p->if_current) || p->if_current > p->i_s_max || !finite_nonneg(p->if_align) ||
             !finite_pos(p->if_accel) || !finite_pos(p->if_hold) || !finite_pos(p->lock_time) ||
-            !finite_pos(p->lock_tol) || p->lock_tol >= 1.0f || !finite_nonneg(p->restart_wait) || !finite_nonneg(p->if_damp))
+            !finite_pos(p->lock_tol) || p->lock_tol >= 1.0f || !finite_nonneg(p->restart_wait) || !finite_nonneg(p->if_damp) ||
+            !finite_nonneg(p->t_dead) || p->t_dead >= p->ts)
             return BC_ERR_PARAM;
     }
     if (p->emf_ff) {
@@ -766,8 +767,14 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
     out->diag[1] = idq.q;
     current_loops(p, s, idq, id_ref, iq_ref, theta, omega_e, in->v_dc,
                   s->mode == BC_SINE_MODE_SINE ? p->emf_ff : 0, handoff, out);
-    /* the voltage these duties apply: Clarke(d_x v_dc), the zero sequence removed */
-    bc_abc va = {out->leg[0].duty * in->v_dc, out->leg[1].duty * in->v_dc, out->leg[2].duty * in->v_dc};
+    /* the voltage these duties apply: Clarke(d_x v_dc - dead-time error), the zero sequence removed. A phase whose
+     * current flows into the motor loses v_dc t_dead at each turn-on of its upper switch (its lower diode holds
+     * the terminal low meanwhile), one per PWM period: -sgn(i_x) v_dc t_dead / (2 T_s) on average, sgn linear
+     * within +-2 % of i_s_max */
+    float vd = in->v_dc * p->t_dead / (2.0f * p->ts), band = 0.02f * p->i_s_max;
+    float i3v[3] = {i.a, i.b, i.c}, vx[3];
+    for (int x = 0; x < 3; ++x) vx[x] = out->leg[x].duty * in->v_dc - vd * bc_clampf(i3v[x] / band, -1.0f, 1.0f);
+    bc_abc va = {vx[0], vx[1], vx[2]};
     bc_ab ua = bc_clarke(va);
     s->u_hist[0][0] = ua.alpha;
     s->u_hist[0][1] = ua.beta;

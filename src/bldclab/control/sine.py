@@ -346,7 +346,8 @@ class Sine(Control):
         return {"observer": core.const(_OBSERVER[self.observer]), "fobs": fobs[0], "robs": robs[0],
                 "if_current": st["if_current"], "if_align": st["if_align"],
                 "if_accel": st["if_accel"], "if_hold": st["if_hold"], "lock_time": st["lock_time"],
-                "lock_tol": self.lock_tolerance, "restart_wait": self.restart_wait, "if_damp": st["if_damp"]}
+                "lock_tol": self.lock_tolerance, "restart_wait": self.restart_wait, "if_damp": st["if_damp"],
+                "t_dead": inv.t_dead}
 
     def _r_design(self, drive: Drive, scale: float) -> float:
         """Design resistance of a loop of ``scale`` phases in series (Ohm)."""

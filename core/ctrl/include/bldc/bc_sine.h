@@ -181,8 +181,10 @@
  * Sensorless (angle = BC_SINE_ANGLE_OBSERVER; docs/sensorless-sine.md). No Hall sensor is read (its code is not
  * checked); the angle and the speed come from an observer (observer = BC_SINE_OBS_FLUX: bc_fluxobs.h, or
  * BC_SINE_OBS_REDUCED: bc_redobs.h) fed, at sample k, with the current measured at t_k and the voltage commanded
- * at sample k-2, the one applied over [t_k-1, t_k]: u = Clarke(d_x v_dc) of its duties (the half-period mean of
- * centre-aligned PWM; the inverter's dead time and drops are not in it). The start mode is I/f, in phases:
+ * at sample k-2, the one applied over [t_k-1, t_k]: u = Clarke(d_x v_dc - sgn(i_x) v_dc t_dead / (2 T_s)) of its
+ * duties and the currents measured when they were computed (the half-period mean of centre-aligned PWM, less the
+ * dead time's mean loss: one turn-on delay per PWM period against the current's sign; sgn linear within +-2 % of
+ * i_s_max; device drops are not in it). The start mode is I/f, in phases:
  *
  *   IDLE   the reference (tau, or omega_ref with the speed loop) is 0: legs off. Otherwise dir = its sign, ALIGN.
  *   ALIGN  the current vector i_q,ref = dir if_current, i_d,ref = 0 in the frame of theta_if = 0 (the same PIs,
@@ -316,6 +318,7 @@ typedef struct {
     float lock_tol;   /* relative band of the lock criterion, - (0 .. 1) */
     float restart_wait; /* legs off after a failed start or a lost lock, s (>= 0) */
     float if_damp;      /* swing damping of ALIGN, A/V (>= 0) */
+    float t_dead;       /* the inverter's dead time, s (0 <= t_dead < ts): the observer's voltage is corrected */
 } bc_sine_params;
 
 typedef struct {
