@@ -8,7 +8,9 @@ scenario (one ``bldclab.simulate`` call, run in its own ``valgrind --tool=callgr
 - ``calls out``: the calls from the core into other objects (libm, libc), gated by their number; their
   instructions are reported only, because glibc picks FMA or SSE variants of ``sin``/``cos``/``memcpy`` by CPU;
 - ``<fn>/call``: for scenarios with a controller, the core's own instructions of one controller step
-  (``bc_sine_step`` ...: inclusive, minus the library calls inside it), mean over the run.
+  (``bc_sine_step`` ...: inclusive, minus the library calls inside it), mean over the run; where the link-time
+  optimisation inlined the step into its binding's wrapper (``sine_step`` in ``bc_bind_sine.c``, called through a
+  pointer), the wrapper's calls, which add its call overhead (a few instructions).
 
 The core is built fresh from this tree's sources exactly as ``pip install`` builds it (``setup.py build_ext``: the
 setuptools compiler flags plus the project's), into a temporary directory beside a copy of the Python package, so
@@ -624,6 +626,10 @@ def measure_one(build: Build, name: str, scale: float, tmp: Path) -> Measurement
     prof = parse(cg)
     cost = prof.core_cost()
     step = prof.function_cost(sc.step) if sc.step else None
+    if step is not None and step.calls == 0 and sc.step is not None:
+        # link-time optimisation may inline the step into its binding's wrapper (bc_bind_*.c: bc_X_step -> X_step),
+        # which the runner calls through a pointer: the wrapper's calls are the step's (plus its own call overhead)
+        step = prof.function_cost(sc.step.removeprefix("bc_"))
     if step is not None and step.calls == 0:
         raise RuntimeError(f"cost run {name}: no call of {sc.step} in the profile")
     top = sorted(cost.by_function.items(), key=lambda kv: -kv[1])[:12]

@@ -31,12 +31,15 @@ def build(name: str, tmp: Path) -> Path:
     return exe
 
 
-def run(exe: Path, seconds: int, tmp: Path) -> tuple[int, bool, str]:
-    """Run for a bounded time; return (inputs executed, finding?, tail of the log)."""
+def run(exe: Path, seconds: int, tmp: Path, inputs: int | None = None) -> tuple[int, bool, str]:
+    """Run for a bounded time, or until ``inputs`` inputs ran (the time then a cap); return (inputs executed,
+    finding?, tail of the log)."""
     corpus = tmp / f"corpus_{exe.name}"
     corpus.mkdir(exist_ok=True)
-    proc = subprocess.run([str(exe), f"-max_total_time={seconds}", "-seed=1", "-max_len=4096", "-print_final_stats=1",
-                           f"-artifact_prefix={tmp}/", str(corpus)], capture_output=True, text=True)
+    count = [] if inputs is None else [f"-runs={inputs}"]
+    proc = subprocess.run([str(exe), f"-max_total_time={seconds}", *count, "-seed=1", "-max_len=4096",
+                           "-print_final_stats=1", f"-artifact_prefix={tmp}/", str(corpus)], capture_output=True,
+                          text=True)
     log = proc.stdout + proc.stderr
     m = re.search(r"stat::number_of_executed_units:\s*(\d+)", log)
     runs = int(m.group(1)) if m else 0

@@ -992,8 +992,14 @@ def test_doc_examples_load(tmp_path: Path) -> None:
     assert all(isinstance(s, Table) and len(s.theta) == 24 for s in table.motor.emf.shapes)
     assert not table.motor.emf.is_symmetric
     snippets = [b for b in blocks if "[motor]" not in b and "[inverter]" not in b and "[motor.iron]" not in b
-                and "poles =" not in b]
+                and "poles =" not in b and "[thermal]" not in b]
     assert len(snippets) == 1
+    # the [thermal] example loads on top of a drive (issue 27)
+    thermal = [b for b in blocks if "[thermal]" in b]
+    assert len(thermal) == 1
+    th = Drive.from_toml(write(tmp_path, BASE + "\n" + thermal[0], "th.toml")).thermal
+    assert th is not None and th.magnets == "rotor" and th.switches == ("junction",)
+    assert th.alpha_k == pytest.approx(-0.0012) and th.node("junction").T_max == 175.0
     # the [motor.iron] example: a built-in grade, core mass and flux density give with_iron_from_grade's powers
     irons = [b for b in blocks if "[motor.iron]" in b]
     assert len(irons) == 1

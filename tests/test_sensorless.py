@@ -11,6 +11,7 @@ angle against the Hall-exact instant, desync map) are added when it lands; ``Syn
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -132,10 +133,14 @@ class SyntheticDrive:
             self.set_pair(ta + float(out["t_at"][0]), out["leg_at"][0])
 
     def set_pair(self, t: float, legs: np.ndarray) -> None:
-        pos = next((x for x in range(3) if legs["mode"][x] in (1, 2) and legs["duty"][x] > 0), -1)
-        neg = next((x for x in range(3) if legs["mode"][x] == 3 and legs["duty"][x] > 0), -1)
-        if pos < 0 or neg < 0:
-            pos = neg = -1
+        # the two driven legs; pos the one of the higher mean terminal voltage (PWM, HIGH: duty; LOW: 1 - duty), so
+        # that a pair whose continuing leg chops (fast demagnetisation) is read as the same pair
+        on = [x for x in range(3) if legs["mode"][x] != 0]
+        pos = neg = -1
+        if len(on) == 2:
+            mean = [float(legs["duty"][x]) if legs["mode"][x] in (1, 2) else 1.0 - float(legs["duty"][x]) for x in on]
+            if mean[0] != mean[1]:
+                pos, neg = (on[0], on[1]) if mean[0] > mean[1] else (on[1], on[0])
         last = self.pair_at(float("inf"))
         if (pos, neg) == (last[1], last[2]):
             return
@@ -209,7 +214,7 @@ def test_units_and_defaults_from_the_drive():
     assert float(rec["duty_rate"][0]) == pytest.approx(50.0)
     su = bl.SixStepSensorless().start_up(d)
     r = d.motor.R + d.inverter.R_on
-    assert su["align_duty"] == pytest.approx(2 * r * 0.5 * m.I_N / d.inverter.V_dc)
+    assert su["align_duty"] == pytest.approx(1.5 * r * 0.5 * m.I_N / d.inverter.V_dc)  # a against b and c in parallel
     assert su["ramp_vf"] == pytest.approx(2 * m.k_phi / (m.p * d.inverter.V_dc))
     k = 6 / math.pi * m.p * m.k_phi * 0.5 * m.I_N
     assert su["align_time"] == pytest.approx(3 * TWO_PI * math.sqrt(d.mechanics.J / k))
@@ -226,11 +231,26 @@ def test_units_and_defaults_from_the_drive():
     ({"handover": 1}, "control.handover"), ({"misses": -1}, "control.misses"), ({"delay": 2}, "control.delay"),
     ({"interval_gain": 1.5}, "control.interval_gain"), ({"ramp_duty": 1.2}, "control.ramp_duty"),
     ({"restart_wait": "2 s"}, "control.restart_max"), ({"current_sensing": 1}, "control.current_sensing"),
-    ({"comparator_reference": "ground"}, "control.comparator_reference"), ({"filter_tau": -1e-6}, "control.filter_tau"),
+    ({"comparator_delay": "-1 us"}, "control.comparator_delay"), ({"filter_tau": -1e-6}, "control.filter_tau"),
 ])
 def test_bad_settings_name_the_field(kw, field):
     with pytest.raises(BldclabError, match=field.replace(".", r"\.")):
         bl.SixStepSensorless(**kw)
+
+
+def test_comparator_needs_the_star_reference():
+    """The comparators' reference is hardware (``drive.sensors.bemf_reference``): against half the bus the comparator
+    method is refused by name (the comparator sees the PWM), the ADC methods run (they sample in the on-time) and
+    the integration threshold is computed against half the bus."""
+    d = bl.load("htm-48v")
+    half = d.replace(sensors=dataclasses.replace(d.sensors, bemf_reference="half"))
+    with pytest.raises(BldclabError, match=r"control\.method.*star"):
+        bl.SixStepSensorless().c_record(half, core(), 0)
+    rec = bl.SixStepSensorless(method="integration").c_record(half, core(), 0).record
+    assert float(rec["int_limit"][0]) == pytest.approx(integral_to_30(d, "half"), rel=1e-6)
+    res = bl.simulate(half, bl.SixStepSensorless(method="adc", throttle_rate="1 %/ms"),
+                      bl.Scenario(duration=1.0, ref=0.4, theta0=1.0), check="warn")
+    assert set(res.meta["flags"]) == {"OPEN_LOOP"} and res.signals["state"][-1] == STATE["closed"]
 
 
 def test_speeds_must_leave_room_for_the_handover():
@@ -246,7 +266,7 @@ def test_integration_threshold_against_its_closed_forms():
     d = bl.load("htm-48v")
     m = d.motor
     assert integral_to_30(d, "star") == pytest.approx(2 / 3 * m.k_phi * math.pi / 12 / m.p, rel=1e-4)
-    assert integral_to_30(d, "half-bus") == pytest.approx(m.k_phi * math.pi / 12 / m.p, rel=1e-4)
+    assert integral_to_30(d, "half") == pytest.approx(m.k_phi * math.pi / 12 / m.p, rel=1e-4)
     s = bl.load("servo-2k2")
     k_peak = float(np.max(s.motor.emf.k_abc(np.linspace(0, TWO_PI, 3601))[0]))
     assert integral_to_30(s, "star") == pytest.approx(k_peak * (1 - math.cos(math.pi / 6)) / s.motor.p, rel=2e-3)
@@ -322,34 +342,145 @@ def test_a_clamp_outlasting_the_crossing_is_a_named_desync():
 
 
 # ---------------------------------------------------------------------------------------------------------------
-# the start-up path against the plant (no back-EMF sensing in it yet)
+# the start-up path against the plant and its back-EMF sensing
 
 
-def test_alignment_and_forced_ramp_on_the_plant():
-    """htm-48v, rotor free: the alignment holds sector 0's pair and brings the rotor to theta_e = 5 pi/6 (where the
-    pair's torque vanishes and restores); the forced ramp then applies the V/f duty ramp_duty + ramp_vf Omega_ol;
-    OPEN_LOOP is raised at every start-up sample. Without the plant's back-EMF sensing no crossing comes: the start
-    fails by name (START_FAIL) after ramp_hold sectors at the end speed, the legs go off, and a new start follows the
-    wait. (With the sensing this test becomes the handover test.)"""
+def test_alignment_ramp_and_handover_on_the_plant():
+    """htm-48v, rotor free, the plant's comparators (virtual star, no filter): the alignment (a+ and b+ against c-,
+    then a+ against b- and c-) brings the rotor to theta_e = pi; the forced ramp's duty follows V/f between its
+    standstill value and that of the end speed and never falls; the crossings hand over to closed loop within the
+    ramp and the sectors it may hold; at the handover the speed estimate is the rotor's within 10 %; in closed loop
+    the drive accelerates without a desync, and at the end the estimate is the rotor's electrical speed within
+    1 %. OPEN_LOOP is raised exactly up to the handover."""
     d = bl.load("htm-48v")
-    ctl = bl.SixStepSensorless()
+    ctl = bl.SixStepSensorless(throttle_rate="0.1 %/ms")
     su = ctl.start_up(d)
-    res = bl.simulate(d, ctl, bl.Scenario(duration=0.8, ref=0.5, theta0=0.3), check="warn")
-    t, st = res.t, res.signals["state"]
+    res = bl.simulate(d, ctl, bl.Scenario(duration=1.2, ref=0.3, theta0=0.3), check="warn")
+    t, st, p = res.t, res.signals["state"], d.motor.p
     j_end = int(np.searchsorted(t, su["align_time"])) - 1
     assert np.all(st[:j_end] == STATE["align"])
-    dist = (res.signals["theta_e"][j_end] - 5 * math.pi / 6 + math.pi) % TWO_PI - math.pi
+    dist = (res.signals["theta_e"][j_end] - math.pi + math.pi) % TWO_PI - math.pi
     assert abs(dist) < 0.25, dist  # within 15 electrical degrees of the aligned position
     ramp = st == STATE["ramp"]
     assert np.any(ramp)
-    w_e = np.abs(res.signals["omega_e"][ramp])
-    assert np.allclose(res.signals["duty"][ramp], np.minimum(su["ramp_duty"] + su["ramp_vf"] * w_e, 1.0), atol=1e-6)
+    duty = res.signals["duty"][ramp]
+    top = su["ramp_duty"] + su["ramp_vf"] * p * su["ramp_end_speed"]
+    assert np.all(duty >= su["ramp_duty"] - 1e-6) and np.all(duty <= top + 1e-6)
+    assert np.all(np.diff(duty) >= -1e-6)  # the forced speed never falls
+    closed = st == STATE["closed"]
+    j_h = int(np.argmax(closed))
+    assert closed[j_h] and np.all(closed[j_h:])
+    sector_end = (math.pi / 3) / (p * su["ramp_end_speed"])
+    assert t[j_h] < su["align_time"] + su["ramp_time"] + ctl.ramp_hold * sector_end
+    w_true = p * res.signals["omega_m"]
+    assert res.signals["omega_e"][j_h] == pytest.approx(w_true[j_h], rel=0.1)
+    assert res.signals["omega_e"][-1] == pytest.approx(w_true[-1], rel=0.01)
+    assert w_true[-1] > 1.5 * w_true[j_h]
     flags = res.meta["flags"]
-    assert set(flags) >= {"OPEN_LOOP", "DESYNC", "START_FAIL"} and "SAFE" not in flags
-    fail = flags["START_FAIL"]["run"]["first"]
-    t_ramp = su["align_time"] + su["ramp_time"]
-    sector_end = (math.pi / 3) / (d.motor.p * su["ramp_end_speed"])
-    assert t_ramp < fail < t_ramp + (ctl.ramp_hold + 1) * sector_end
-    off = (t > fail + 1e-3) & (t < fail + 0.9 * ctl.restart_wait)
-    assert np.all(st[off] == STATE["stop"]) and np.all(res.signals["mode_a"][off] == 0)
-    assert np.any(st[t > fail + ctl.restart_wait + 1e-3] == STATE["align"])  # and starts again
+    assert set(flags) == {"OPEN_LOOP"}, flags
+    assert flags["OPEN_LOOP"]["run"]["last"] == pytest.approx(t[j_h - 1])
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# closed loop on the plant
+
+
+def _final_speed(res: bl.SimResult, share: float = 0.1) -> float:
+    k = max(1, int(len(res.t) * share))
+    return float(np.mean(res.signals["omega_m"][-k:]))
+
+
+@pytest.mark.parametrize(("name", "duty", "dur", "chop", "method", "load", "tol"), [
+    ("htm-48v", 0.5, 1.5, "sync", "comparator", 0.0, 0.005),
+    ("htm-48v", 0.6, 2.0, "high", "comparator", 0.3, 0.005),
+    ("htm-48v", 0.5, 1.5, "sync", "adc", 0.0, 0.005),
+    ("mn3110-780kv", 0.5, 1.0, "sync", "comparator", 0.0, 0.02),
+    ("mn3110-780kv", 0.5, 1.0, "high", "comparator", 0.0, 0.02),
+    ("mn3110-780kv", 0.5, 1.0, "pwm-on-pwm", "comparator", 0.0, 0.02),
+    ("mn3110-780kv", 0.5, 1.0, "bipolar", "comparator", 0.0, 0.02),
+    ("mn3110-780kv", 0.5, 1.0, "sync", "adc", 0.0, 0.02),
+    ("f60prov-2550kv", 0.3, 0.6, "sync", "comparator", 0.0, 0.02),
+    ("f60prov-2550kv", 0.3, 0.6, "high", "comparator", 0.0, 0.02),
+    ("f60prov-2550kv", 0.3, 0.6, "pwm-on-pwm", "comparator", 0.0, 0.02),
+    ("f60prov-2550kv", 0.3, 0.6, "bipolar", "comparator", 0.0, 0.02),
+    ("f60prov-2550kv", 0.2, 0.6, "sync", "adc", 0.0, 0.02),
+])
+def test_steady_speed_matches_hall_six_step_at_equal_duty(name, duty, dur, chop, method, load, tol):
+    """Rotor free (the drones with their propellers): started, handed over and run to steady state, the
+    sensorless drive settles at the speed Hall six-step (``SixStep(regulation="duty")``, the same pattern, the
+    commutation timer at the predicted Hall instants) settles at with the same duty, within 0.5 % on htm-48v and 2 %
+    on the drone motors (few samples per sector: the floating phase's off-time clamp and the sample grid move their
+    crossings by up to a PWM off-time). Unloaded htm-48v with the non-synchronous patterns is left out: its current
+    is discontinuous (about 0.6 A) and its torque-speed curve so flat that neither drive settles within seconds
+    (at equal imposed speed their torques agree to 1e-4 N m, docs/sensorless.md); loaded (0.3 T_N, applied after
+    the start) the two agree to 0.1 %."""
+    d = bl.load(name)
+    t_n = 2 * d.motor.k_phi * d.motor.I_N
+
+    def load_torque(t):  # applied after the start (a load at standstill is the start-up study's question)
+        return load * t_n * np.clip((t - 0.5 * dur) / (0.2 * dur), 0.0, 1.0)
+
+    sl = bl.simulate(d, bl.SixStepSensorless(chopping=chop, method=method, throttle_rate="1 %/ms"),
+                     bl.Scenario(duration=dur, ref=duty, theta0=1.0, load_torque=load_torque), check="warn")
+    assert "DESYNC" not in sl.meta["flags"] and "SAFE" not in sl.meta["flags"], sl.meta["flags"]
+    assert np.all(sl.signals["state"][-len(sl.t) // 5:] == STATE["closed"])
+    n = bl.sim.samples_of(d, dur)
+    ramp = np.minimum(duty, np.arange(n) * 0.5 / d.inverter.f_pwm * (1.0 if load else 10.0))
+    hall = bl.simulate(d, bl.SixStep(regulation="duty", chopping=chop, timed=True),
+                       bl.Scenario(duration=dur, ref=ramp, theta0=1.0, load_torque=load_torque), check="warn")
+    w_sl, w_h = _final_speed(sl), _final_speed(hall)
+    assert w_h > 0.1 * d.Omega_0
+    assert w_sl == pytest.approx(w_h, rel=tol)
+
+
+def test_hard_throttle_step_on_the_drone_stays_in_sync():
+    """f60prov-2550kv with its propeller, default settings (no throttle ramp): at 0.3 s the throttle steps from 0.25
+    to 1 in one sample. The drive stays in closed loop, without a desync or a trip, and accelerates to above 0.45
+    Omega_0: the speed-dependent duty limit holds the current near I_N and the demagnetisation limiter keeps the
+    clamp at 0.6 of the window on average (measured 0.59, the duty then 0.72). Without the two limits and the fast
+    demagnetisation the same step hides the crossing behind the clamp (ZC_HIDDEN) within 40 ms."""
+    d = bl.load("f60prov-2550kv")
+    dur, t_step = 0.6, 0.3
+    n = bl.sim.samples_of(d, dur)
+    t = np.arange(n) * 0.5 / d.inverter.f_pwm
+    ref = np.where(t < t_step, 0.25, 1.0)
+    res = bl.simulate(d, bl.SixStepSensorless(), bl.Scenario(duration=dur, ref=ref, theta0=1.0), check="warn")
+    flags = res.meta["flags"]
+    assert not {"DESYNC", "SAFE", "OVERCURRENT"} & set(flags), flags
+    st = res.signals["state"]
+    assert np.all(st[res.t > t_step - 0.1] == STATE["closed"])
+    assert _final_speed(res) > 0.45 * d.Omega_0
+    assert np.max(np.abs(res.signals["i_a"])) < 2 * d.motor.I_N
+    # the demagnetisation limiter at its set point: the clamp takes 0.6 of the window on average, the duty below 1
+    late = res.t > dur - 0.1
+    share = np.abs(res.signals["omega_e"][late]) * res.signals["demag"][late] / (math.pi / 6)
+    assert np.mean(share) == pytest.approx(0.6, abs=0.05) and np.max(res.signals["duty"][late]) < 0.9
+    bare = bl.SixStepSensorless(fast_demag=False, demag_limit=0.0, duty_limit_current=0.0, throttle_rate="0.65 %/ms")
+    res = bl.simulate(d, bare, bl.Scenario(duration=dur, ref=ref, theta0=1.0), check="warn")
+    flags = res.meta["flags"]
+    assert "ZC_HIDDEN" in flags and t_step < flags["ZC_HIDDEN"]["run"]["first"] < t_step + 0.04, flags
+
+
+def test_speed_dependent_duty_limit_after_the_handover():
+    """htm-48v, throttle 0.5 from the start without a ramp: after the handover the duty is the speed-dependent limit
+    ``2 (R + R_on) I_N sqrt(1 + (Omega_e L / (R + R_on))^2) / V_dc + 2 k_phi Omega_e / (p V_dc)`` at the estimated
+    speed (to float precision) until it reaches the throttle, and the drive neither trips nor desyncs; with the
+    limit off the same start trips the over-current protection at the handover."""
+    d = bl.load("htm-48v")
+    m, v = d.motor, d.inverter.V_dc
+    r = d.motor.R + d.inverter.R_on
+    res = bl.simulate(d, bl.SixStepSensorless(), bl.Scenario(duration=1.0, ref=0.5, theta0=1.0), check="warn")
+    assert set(res.meta["flags"]) == {"OPEN_LOOP"}, res.meta["flags"]
+    s = res.signals
+    closed = s["state"] == STATE["closed"]
+    closed[int(np.argmax(closed))] = False  # the handover's sample applies the ramp's duty
+    w = np.abs(s["omega_e"][closed])
+    cap = 2 * r * m.I_N * np.sqrt(1 + (w * m.L / r) ** 2) / v + 2 * m.k_phi * w / (m.p * v)
+    duty = s["duty"][closed]
+    limited = cap < 0.5 - 1e-3
+    assert np.count_nonzero(limited) > 100
+    assert np.allclose(duty[limited], cap[limited], rtol=1e-4, atol=1e-5)
+    assert np.all(duty <= np.minimum(cap, 0.5) + 1e-5)
+    res = bl.simulate(d, bl.SixStepSensorless(duty_limit_current=0.0), bl.Scenario(duration=1.0, ref=0.5, theta0=1.0),
+                      check="warn")
+    assert "OVERCURRENT" in res.meta["flags"]

@@ -369,17 +369,33 @@ static inline void sb_pair(synth_bemf *g, double t, int pos, int neg, double m)
 
 static inline void sb_legs_pair(const bc_leg_cmd l[3], int *pos, int *neg, double *m)
 {
+    /* the two driven legs; pos the one of the higher mean terminal voltage (PWM, HIGH: the duty; LOW: one minus it),
+     * so that a pair whose continuing leg chops (fast demagnetisation) is the same pair; m the pair's mean voltage */
     *pos = *neg = -1;
     *m = 0.0;
+    int on[3], n = 0;
+    double mean[3] = {0.0, 0.0, 0.0};
     for (int x = 0; x < 3; ++x) {
-        if ((l[x].mode == BC_LEG_HIGH || l[x].mode == BC_LEG_PWM) && l[x].duty > 0.0f) *pos = x;
-        if (l[x].mode == BC_LEG_LOW && l[x].duty > 0.0f) *neg = x;
+        if (l[x].mode == BC_LEG_OFF) continue;
+        mean[x] = l[x].mode == BC_LEG_LOW ? 1.0 - (double)l[x].duty : (double)l[x].duty;
+        on[n++] = x;
     }
-    if (*pos < 0 || *neg < 0) {
-        *pos = *neg = -1;
+    if (n == 3) { /* a three-leg alignment: the positive leg against one of the negative ones */
+        for (int x = 0; x < 3; ++x) {
+            if ((l[x].mode == BC_LEG_HIGH || l[x].mode == BC_LEG_PWM) && l[x].duty > 0.0f) *pos = x;
+            if (l[x].mode == BC_LEG_LOW && l[x].duty > 0.0f) *neg = x;
+        }
+        if (*pos < 0 || *neg < 0) {
+            *pos = *neg = -1;
+            return;
+        }
+        *m = (double)l[*pos].duty * (double)l[*neg].duty;
         return;
     }
-    *m = (double)l[*pos].duty * (double)l[*neg].duty;
+    if (n != 2 || mean[on[0]] == mean[on[1]]) return;
+    *pos = mean[on[0]] > mean[on[1]] ? on[0] : on[1];
+    *neg = on[0] + on[1] - *pos;
+    *m = mean[*pos] - mean[*neg];
 }
 
 /* the controller's output of sample k */

@@ -735,7 +735,11 @@ static void test_ramp_follows_crossings(void)
         sb_apply(&g, k, &o);
         if (o.diag[0] == (float)BC_BEMF_RAMP) {
             ++n_ramp;
-            if (fabs((double)o.diag[6] - (0.05 + 1e-4 * fabs((double)o.diag[2]))) > 1e-6) ++bad_duty;
+            /* V/f at the forced speed, which is never above the estimate (max of it and the crossings' speed) */
+            double d6 = (double)o.diag[6];
+            if (d6 < 0.05 + 1e-4 * 0.99 * (double)p.ramp_w0 - 1e-6 || d6 > 0.05 + 1e-4 * fabs((double)o.diag[2]) + 1e-6 ||
+                d6 > 0.05 + 1e-4 * (double)p.ramp_w1 + 1e-6)
+                ++bad_duty;
         }
         if (k_closed < 0 && o.diag[0] == (float)BC_BEMF_CLOSED) k_closed = k;
     }
@@ -757,7 +761,7 @@ static void test_ramp_follows_crossings(void)
     CHECK(k_closed > 0 && missing == 0 && n > 80 && worst < 2.5 * TICK,
           "ramp at half the rotor's speed: handover at sample %ld, %ld commutations 30 deg after their crossing "
           "within %.3g s, %ld sectors without one", k_closed, n, worst, missing);
-    CHECK(n_ramp > 0 && bad_duty == 0, "V/f ramp duty 0.05 + 1e-4 Omega in %ld of %ld ramp samples", n_ramp - bad_duty,
+    CHECK(n_ramp > 0 && bad_duty == 0, "V/f ramp duty 0.05 + 1e-4 Omega_ol in %ld of %ld ramp samples", n_ramp - bad_duty,
           n_ramp);
 }
 
@@ -981,6 +985,100 @@ static void test_throttle_and_limit(void)
           (double)o.diag[6]);
 }
 
+/* fast demagnetisation and the demagnetisation limiter on the kinematic rotor (300 Hz, 22 samples a sector) */
+static void test_fast_demag_and_limiter(void)
+{
+    static synth_bemf g;
+    const double w = 2.0 * BC_PI * 300.0;
+    /* sync: after each commutation whose outgoing current was positive (its clamp at 0 V) the negative leg is
+     * complementary at 1 - m until the clamp's end is seen; the commutation instants stay 30 degrees after the
+     * crossings */
+    bc_bemf_params p = locked(BC_BEMF_COMPARATOR, w);
+    p.chop = BC_CHOP_SYNC;
+    p.fast_demag = 1;
+    sb_init(&g, TS, F_TICK, 1);
+    kin_rotor(&g, w, 1, 0.0);
+    g.demag = 60e-6; /* 2.4 samples */
+    bc_bemf_state s;
+    CHECK(bc_bemf_init(&p, &s) == BC_OK, "init");
+    long n_fast = 0, n_bad = 0, n_closed = 0;
+    for (long k = 0; k < 2400; ++k) {
+        bc_ctrl_in in;
+        sb_sample(&g, k, &in);
+        in.ref = 0.5f;
+        bc_ctrl_out o;
+        memset(&o, 0, sizeof o);
+        bc_bemf_step(&p, &s, &in, &o);
+        sb_apply(&g, k, &o);
+        if (o.diag[0] != (float)BC_BEMF_CLOSED || o.has_at) continue; /* (a commutation's sample: two pairs) */
+        ++n_closed;
+        int pos, neg;
+        double m;
+        sb_legs_pair(o.leg, &pos, &neg, &m);
+        if (pos < 0) continue;
+        int bad = 0;
+        if (o.leg[neg].mode == BC_LEG_PWM) { /* the fast pattern: pos on, neg at 1 - m, the pair at m */
+            ++n_fast;
+            bad = o.leg[pos].mode != BC_LEG_HIGH || o.leg[pos].duty != 1.0f || fabs(m - (double)o.diag[6]) > 1e-6;
+        } else {
+            bad = o.leg[pos].mode != BC_LEG_PWM || o.leg[neg].mode != BC_LEG_LOW || fabs(m - (double)o.diag[6]) > 1e-6;
+        }
+        if (bad) {
+            ++n_bad;
+            printf("    k %ld legs (%d %.3f) (%d %.3f) (%d %.3f) m %.4f\n", k, o.leg[0].mode, (double)o.leg[0].duty,
+                   o.leg[1].mode, (double)o.leg[1].duty, o.leg[2].mode, (double)o.leg[2].duty, m);
+        }
+    }
+    /* three of the six commutations per period have a positive outgoing current; their clamp (60 us) is seen at
+     * the first sample after it: 3 to 5 samples of the fast pattern each */
+    double per = (double)n_fast / ((double)n_closed * TS * 300.0 * 3.0); /* per positive-outgoing commutation */
+    CHECK(n_bad == 0 && per >= 3.0 && per <= 5.0, "fast demagnetisation: %ld samples of %ld (%.2f per commutation), "
+          "%ld with wrong legs", n_fast, n_closed, per, n_bad);
+    /* the demagnetisation limiter: a clamp of 0.7 of the window (30 degrees: 278 us) against demag_max 0.6 lowers
+     * the duty cap by 0.2 x 0.1 per crossing once it is below the duty plus 0.05; with a clamp of 0.3 the duty
+     * stays at the throttle */
+    for (int longer = 0; longer <= 1; ++longer) {
+        p = locked(BC_BEMF_COMPARATOR, w);
+        p.demag_max = 0.6f;
+        sb_init(&g, TS, F_TICK, 1);
+        kin_rotor(&g, w, 1, 0.0);
+        g.demag = (longer ? 0.7 : 0.3) * (BC_PI / 6.0) / w;
+        CHECK(bc_bemf_init(&p, &s) == BC_OK, "init");
+        float d_first = -1.0f, d_last = -1.0f;
+        long k_first = -1, k_last = -1;
+        int full = 0; /* the duty has reached the throttle (after the handover's sample at the ramp's duty) */
+        for (long k = 0; k < 2400; ++k) {
+            bc_ctrl_in in;
+            sb_sample(&g, k, &in);
+            in.ref = 0.5f;
+            bc_ctrl_out o;
+            memset(&o, 0, sizeof o);
+            bc_bemf_step(&p, &s, &in, &o);
+            sb_apply(&g, k, &o);
+            if (o.diag[0] != (float)BC_BEMF_CLOSED || (o.flags & BC_FLAG_DESYNC)) continue;
+            if (o.diag[6] >= 0.5f) full = 1;
+            if (!full) continue;
+            if (k_first < 0 && o.diag[6] < 0.45f) {
+                k_first = k;
+                d_first = o.diag[6];
+            }
+            if (k_first >= 0 && k - k_first < 440) { /* 20 sectors of 22 samples */
+                k_last = k;
+                d_last = o.diag[6];
+            }
+            if (!longer) d_last = o.diag[6];
+        }
+        if (longer) {
+            /* 20 sectors after the duty first fell below 0.45: 0.4 lower (one crossing per sector) */
+            double fall = (double)(d_first - d_last);
+            CHECK(k_first > 0 && fabs(fall - 0.02 * (double)((k_last - k_first) / 22)) < 0.021,
+                  "limiter: the duty falls %.3f over %ld samples (0.02 a sector)", fall, k_last - k_first);
+        } else {
+            CHECK(k_first < 0 && fabs((double)d_last - 0.5) < 1e-6, "limiter idle: duty %.4f", (double)d_last);
+        }
+    }
+}
+
 int main(void)
 {
     test_init();
@@ -997,5 +1095,6 @@ int main(void)
     test_start_up();
     test_stop_and_reverse();
     test_throttle_and_limit();
+    test_fast_demag_and_limiter();
     return bc_test_summary("test_bemf");
 }

@@ -831,8 +831,40 @@ static void test_timed_commutation(void)
     }
 }
 
+/* Temperature derating (bc_derate.h via p.derate): the reference's limit is f(T) i_max, the winding's band 100-150
+ * degC with f_min 0.2; no sensor (NaN) gives f_fault; a band that is not valid is refused at init. */
+static void test_derating(void)
+{
+    bc_sixstep_params p = params(BC_SIXSTEP_PRED, BC_SIXSTEP_HIGH);
+    p.derate.enabled[0] = 1;
+    p.derate.T_start[0] = 100.0f;
+    p.derate.T_end[0] = 150.0f;
+    p.derate.f_min = 0.2f;
+    p.derate.f_fault = 0.5f;
+    p.derate.T_lo = -40.0f;
+    p.derate.T_hi = 250.0f;
+    p.derate.tau = 0.0f;
+    p.derate.ts = (float)TS;
+    bc_sixstep_state s;
+    bc_ctrl_out o;
+    const float temps[][2] = {{25.0f, 1.0f}, {125.0f, 0.6f}, {160.0f, 0.2f}, {NAN, 0.5f}, {400.0f, 0.5f}};
+    for (int k = 0; k < 5; ++k) {
+        CHECK(bc_sixstep_init(&p, &s) == BC_OK, "init");
+        bc_ctrl_in in = input(1u, 0.0f, 0.0f, 48.0f, 1e9f);
+        in.temp[0] = temps[k][0];
+        in.temp[1] = NAN; /* channel 1 not fitted: ignored */
+        bc_sixstep_step(&p, &s, &in, &o);
+        CHECK_NEAR(o.diag[2], temps[k][1] * p.i_max, 1e-4, "derated limit");
+        for (int x = 0; x < 3; ++x) CHECK(isfinite(o.leg[x].duty) && o.leg[x].duty >= 0.0f && o.leg[x].duty <= 1.0f,
+                                          "duty in [0, 1]");
+    }
+    p.derate.T_end[0] = 90.0f;
+    CHECK(bc_sixstep_init(&p, &s) == BC_ERR_PARAM, "a band ending before it starts is refused");
+}
+
 int main(void)
 {
+    test_derating();
     test_ideal_legs();
     test_init();
     test_commutation_table();

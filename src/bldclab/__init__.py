@@ -28,7 +28,9 @@ if TYPE_CHECKING:  # the same names, for type checkers and readers; at run time 
         SixStep,
         SixStepSensorless,
         SixStepVoltage,
+        UserControl,
     )
+    from .control.user import PythonControl
     from .model import catalog
     from .model.catalog import load
     from .model.emf import BackEmf, Cogging, Fourier, Sinusoid, Table, Trapezoid
@@ -46,7 +48,9 @@ LAZY: Lazy = {
     "experiments": ("bldclab.analysis.experiments", None),
     **{name: ("bldclab.analysis.commission", name) for name in ("Estimate", "commission")},
     **{name: ("bldclab.control", name) for name in ("Control", "HallCal", "HallCalibration", "Lu", "OpenLoop",
-                                                    "Sine", "SixStep", "SixStepSensorless", "SixStepVoltage")},
+                                                    "Sine", "SixStep", "SixStepSensorless", "SixStepVoltage",
+                                                    "UserControl")},
+    "PythonControl": ("bldclab.control.user", "PythonControl"),
     "catalog": ("bldclab.model.catalog", None),
     "load": ("bldclab.model.catalog", "load"),
     **{name: ("bldclab.model.emf", name) for name in ("BackEmf", "Cogging", "Fourier", "Sinusoid", "Table",
@@ -78,6 +82,7 @@ __all__ = [
     "Metrics",
     "Motor",
     "OpenLoop",
+    "PythonControl",
     "Scenario",
     "Sensors",
     "SimResult",
@@ -88,6 +93,7 @@ __all__ = [
     "SixStepVoltage",
     "Table",
     "Trapezoid",
+    "UserControl",
     "__version__",
     "calibrate_hall",
     "catalog",

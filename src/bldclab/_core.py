@@ -145,6 +145,15 @@ class Core:
         lib.bc_sim_set_thermal.restype = ctypes.c_int
         lib.bc_sim_set_thermal.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_double,
                                            ctypes.c_double)
+        lib.bc_sim_set_temperatures.restype = ctypes.c_int
+        lib.bc_sim_set_temperatures.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_double)
+        lib.bc_derate_init.restype = ctypes.c_int
+        lib.bc_derate_init.argtypes = (ctypes.c_void_p, ctypes.c_void_p)
+        lib.bc_derate_step.restype = ctypes.c_float
+        lib.bc_derate_step.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+        lib.bc_derate_r_to_temp.restype = ctypes.c_int
+        lib.bc_derate_r_to_temp.argtypes = (ctypes.c_float, ctypes.c_float, ctypes.c_float, ctypes.c_float,
+                                            ctypes.POINTER(ctypes.c_float))
         lib.bc_sim_run.restype = ctypes.c_int
         lib.bc_sim_run.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int64,
                                    ctypes.c_void_p, ctypes.c_int64, ctypes.POINTER(ctypes.c_int64))

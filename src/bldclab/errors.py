@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["BldclabError", "PlausibilityError", "PlausibilityWarning"]
+__all__ = ["BldclabError", "ControllerError", "PlausibilityError", "PlausibilityWarning"]
 
 
 class BldclabError(ValueError):
@@ -36,6 +36,16 @@ class PlausibilityError(BldclabError):
 
     ``field`` names the cause (``"inverter.f_pwm"``, ``"scenario.speed"``, ``"result.energy_balance"``, ...),
     ``problem`` the numbers and the threshold crossed.
+    """
+
+
+class ControllerError(BldclabError):
+    """A user's controller (:mod:`bldclab.control.user`) failed during a run: no result is returned.
+
+    ``field`` names the controller (``"control (my, ./my.so)"``), ``problem`` what it did and at which sample:
+    crashed (the signal and the address), did not return within the step-time budget, wrote NaN or a duty outside
+    [0, 1] (the output field and the value), wrote to its inputs, its init rejected the parameters, or a Python
+    controller raised (its exception is the ``__cause__``).
     """
 
 

@@ -59,7 +59,9 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
         !nonneg(p->restart_wait) || !(fin(p->restart_max) && p->restart_max >= p->restart_wait))
         return BC_ERR_PARAM;
     if (!(fin(p->i_max) && p->i_max > 0.0f) || !nonneg(p->i_limit) || !nonneg(p->k_limit) ||
-        !(fin(p->v_max) && p->v_max > 0.0f))
+        !(fin(p->v_max) && p->v_max > 0.0f) || (p->fast_demag != 0 && p->fast_demag != 1) || !in01(p->dlim_d0) ||
+        !nonneg(p->dlim_vf) || !nonneg(p->dlim_tau) || !(fin(p->demag_max) && p->demag_max >= 0.0f && p->demag_max < 1.0f) ||
+        (p->cmp_gate != 0 && p->cmp_gate != 1))
         return BC_ERR_PARAM;
     *s = (bc_bemf_state){0};
     s->ts_tick = p->ts * p->f_tick;
@@ -69,7 +71,9 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
     s->fresh = 1;
     s->sector = -1;
     s->incoming = -1;
+    s->outgoing = -1;
     s->d_lim = 1.0f;
+    s->d_dm = 1.0f;
     s->guard_p = (bc_guard_params){.i_max = p->i_max, .v_max = p->v_max};
     if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
     return BC_OK;
@@ -120,22 +124,24 @@ static float advance_of(const bc_bemf_params *p, const bc_bemf_state *s, float w
     return fin(a) ? bc_clampf(a, 0.0f, p->adv_max) : p->adv_max;
 }
 
-/* Open-loop sector time: the angle w tau + a tau^2 / 2 (w + a tau capped at w1) reaches pi/3. */
-static float sector_time(float w, float a, float w1)
+/* Open-loop time to an angle: w tau + a tau^2 / 2 (w + a tau capped at w1) reaches ang. */
+static float angle_time(float w, float a, float w1, float ang)
 {
     if (a > 0.0f && w < w1) {
         float t1 = (w1 - w) / a;               /* time to the cap */
         float ang1 = 0.5f * (w + w1) * t1;     /* angle on the way */
-        if (ang1 >= PI3_F) return 2.0f * PI3_F / (w + sqrtf(w * w + 2.0f * a * PI3_F));
-        return t1 + (PI3_F - ang1) / w1;
+        if (ang1 >= ang) return 2.0f * ang / (w + sqrtf(w * w + 2.0f * a * ang));
+        return t1 + (ang - ang1) / w1;
     }
-    return PI3_F / w1;
+    return ang / w1;
 }
+
+static float sector_time(float w, float a, float w1) { return angle_time(w, a, w1, PI3_F); }
 
 /* A new sector: the phase that entered the pair (the incoming phase), the detector reset for the commutation at tc. */
 static void enter_sector(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, int sector, uint32_t tc)
 {
-    int inc = -1;
+    int inc = -1, outp = -1;
     int pn, nn;
     (void)bc_sector_phases(sector, &pn, &nn);
     if (s->sector >= 0) {
@@ -143,10 +149,22 @@ static void enter_sector(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctr
         (void)bc_sector_phases(s->sector, &po, &no);
         if (pn != po && pn != no) inc = pn;
         else if (nn != po && nn != no) inc = nn;
+        if (po != pn && po != nn) outp = po;
+        else if (no != pn && no != nn) outp = no;
     } else {
         inc = s->dir > 0 ? pn : nn;
     }
     s->incoming = inc;
+    s->outgoing = outp;
+    {
+        int pp = pn, qq = nn;
+        if (s->dir < 0) {
+            pp = nn;
+            qq = pn;
+        }
+        int cont = inc == pp ? qq : pp;
+        s->fd_neg = p->fast_demag && outp >= 0 && p->chop != BC_CHOP_BIPOLAR && inc >= 0 && cont == qq;
+    }
     s->sector = sector;
     s->t_c = tc;
     float w = omega_of(p, s);
@@ -174,6 +192,7 @@ static void stop(bc_bemf_state *s, int reason)
     s->pending = 0;
     s->sector = -1;
     s->incoming = -1;
+    s->outgoing = -1;
     s->d_cmd = 0.0f;
     if (reason != BC_BEMF_REASON_NONE) s->reason = reason;
 }
@@ -196,9 +215,11 @@ static void desync(bc_bemf_state *s, bemf_now *n, int reason)
     stop(s, reason);
 }
 
-/* The ramp's first sector: 2 forward (the aligned rotor at its start), 1 backward (at its end); from t_a. */
+/* The ramp's first sector, from t_a: after the alignment (the rotor at pi, the middle of sector 2) sector 2 in
+ * either direction for the open-loop time of 30 degrees; a direct start: 2 forward, 1 backward, a whole sector. */
 static void begin_ramp(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, const bemf_now *n)
 {
+    int aligned = s->mode == BC_BEMF_ALIGN;
     s->mode = BC_BEMF_RAMP;
     s->t_in = 0.0f;
     s->valid = 0;
@@ -208,8 +229,9 @@ static void begin_ramp(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_
     s->w_ol = p->ramp_w0;
     s->w_zc = 0.0f;
     s->tau_ol = sector_time(s->w_ol, p->ramp_accel, p->ramp_w1);
-    enter_sector(p, s, in, s->dir > 0 ? 2 : 1, n->ta);
-    s->t_next = tadd(n->ta, s->tau_ol * p->f_tick);
+    enter_sector(p, s, in, aligned ? 2 : (s->dir > 0 ? 2 : 1), n->ta);
+    float first = aligned ? angle_time(s->w_ol, p->ramp_accel, p->ramp_w1, PI6_F) : s->tau_ol;
+    s->t_next = tadd(n->ta, first * p->f_tick);
     s->pending = 1;
     s->adv = 0.0f;
     s->adv_prev = 0.0f;
@@ -228,6 +250,7 @@ static void start(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
     s->misses = 0;
     s->t_demag = 0.0f;
     s->err = 0.0f;
+    s->d_dm = 1.0f;
     s->adv = 0.0f;
     s->adv_prev = 0.0f;
     if (p->align_time > 0.0f) {
@@ -253,6 +276,9 @@ static int detect_comparator(const bc_bemf_params *p, bc_bemf_state *s, const bc
     uint32_t cnt = in->zc_count[f];
     uint32_t te = in->zc_tick[f];
     int lvl = (int)((in->zc_state >> f) & 1u);
+    /* fast demagnetisation on the negative leg: the comparator only in the pair's on-time, centred at the carrier
+     * peak (odd samples) when the leg chops with its lower switch, at the valley when it is complementary (sync) */
+    if (p->cmp_gate && s->fd_neg && (s->k_samp & 1u) == (p->chop == BC_CHOP_SYNC ? 1u : 0u)) return 0;
     if (tdiff(n->tk, s->t_c) < 0.0f) s->cnt_c = cnt;
     int opening = 0;
     if (s->det == 0) {
@@ -403,6 +429,11 @@ static void on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, 
     } else {
         s->err = w0 * (x_zc - tdiff(s->t_c, n->tk) * s->inv_tick) - (PI6_F + s->adv_prev);
         if (!fin(s->err)) s->err = 0.0f;
+        if (p->demag_max > 0.0f && s->dm_known) { /* the demagnetisation limiter */
+            float r = w0 * s->t_demag / (PI6_F + s->adv_prev);
+            float d = fminf(s->d_dm, s->m_app + 0.05f) + 0.2f * (p->demag_max - r);
+            s->d_dm = fin(d) ? bc_clampf(d, 0.0f, 1.0f) : s->d_dm;
+        }
         if (T > 0.0f && s->t_last > 0.0f && !s->virt) {
             float ratio = T / s->t_last;
             if (!(ratio <= p->jump_max && ratio * p->jump_max >= 1.0f)) {
@@ -441,7 +472,8 @@ static void on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, 
 
 /* ------------------------------------------------------------------------------------------------------------ */
 
-static void legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector, float m, float travel,
+/* demag: the outgoing phase may still conduct (fast demagnetisation, 8) */
+static void legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector, float m, float travel, int demag,
                     bc_leg_cmd c[3])
 {
     int pos, neg;
@@ -452,18 +484,41 @@ static void legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector,
         neg = t;
     }
     int inc = (s->incoming == pos || s->incoming == neg) ? s->incoming : pos;
+    int cont = inc == pos ? neg : pos;
     int chop_leg = pos;
-    if (p->chop == BC_CHOP_PWMPWM) chop_leg = travel < PI6_F ? inc : (inc == pos ? neg : pos);
+    if (p->chop == BC_CHOP_PWMPWM) chop_leg = travel < PI6_F ? inc : cont;
+    if (demag && p->fast_demag && p->chop != BC_CHOP_BIPOLAR && s->incoming >= 0 && s->outgoing >= 0) {
+        if (p->chop == BC_CHOP_SYNC && cont == neg) { /* neg complementary at the average (1 - m) V, pos on */
+            bc_pair_legs(BC_CHOP_PWMPWM, pos, neg, neg, m, c);
+            c[neg].mode = BC_LEG_PWM;
+            c[neg].duty = bc_clampf(1.0f - m, 0.0f, 1.0f);
+            return;
+        }
+        if (p->chop != BC_CHOP_SYNC) { /* the continuing leg chops with its own switch */
+            bc_pair_legs(BC_CHOP_PWMPWM, pos, neg, cont, m, c);
+            return;
+        }
+    }
     bc_pair_legs((int)p->chop, pos, neg, chop_leg, m, c);
 }
+
+/* the demagnetisation of the sector's commutation not yet seen over (no pre level, no crossing) */
+static int demag_now(const bc_bemf_state *s) { return s->det < 2 && !s->dm_known && !s->pre_seen; }
 
 /* 2. the duty applied: the state's, limited by the current limiter */
 static float duty_of(const bc_bemf_params *p, const bc_bemf_state *s)
 {
     float m = 0.0f;
     if (s->mode == BC_BEMF_ALIGN) m = p->align_duty;
-    else if (s->mode == BC_BEMF_RAMP) m = fminf(p->ramp_duty + p->ramp_vf * omega_of(p, s), 1.0f);
-    else if (s->mode == BC_BEMF_CLOSED) m = fmaxf(s->d_cmd, p->duty_min);
+    else if (s->mode == BC_BEMF_RAMP) m = fminf(p->ramp_duty + p->ramp_vf * s->w_ol, 1.0f); /* forced speed */
+    else if (s->mode == BC_BEMF_CLOSED) {
+        m = fmaxf(s->d_cmd, p->duty_min);
+        if (p->demag_max > 0.0f) m = fminf(m, s->d_dm);
+        if (p->dlim_d0 > 0.0f) { /* speed-dependent limit */
+            float w = omega_of(p, s), x = w * p->dlim_tau;
+            m = fminf(m, p->dlim_d0 * sqrtf(1.0f + x * x) + p->dlim_vf * w);
+        }
+    }
     m = fminf(m, s->d_lim);
     return fin(m) ? bc_clampf(m, 0.0f, 1.0f) : 0.0f;
 }
@@ -502,6 +557,7 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
     n.tk = in->tick_now;
     n.ta = tadd(n.tk, (float)p->delay * s->ts_tick);
     n.flags = 0u;
+    if (s->started) s->k_samp += 1u;
     n.adc_new = s->started && in->n_adc != s->n_adc_seen;
     s->n_adc_seen = in->n_adc;
     if (!s->started) {
@@ -602,6 +658,7 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
             tdiff(n.tk, s->t_zc) >= p->zc_timeout * s->t60 * p->f_tick) {
             if (s->misses < p->miss_max) { /* a blind commutation at once, a virtual crossing */
                 s->misses += 1;
+                s->d_dm *= 0.7f;
                 s->t_zc = tadd(s->t_zc, s->t60 * p->f_tick);
                 s->virt = 1;
                 s->t_last = 0.0f;
@@ -621,7 +678,13 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
         coast(out);
     } else if (s->mode == BC_BEMF_ALIGN) {
         m = duty_of(p, s);
-        bc_pair_legs((int)p->chop, 0, 1, 0, m, out->leg); /* sector 0's pair, forward */
+        if (s->t_in < p->align_time / 3.0f) { /* a+ and b+ with a, c-: the rotor to 4 pi/3, off the next step's dead point */
+            bc_pair_legs((int)p->chop, 0, 2, 0, m, out->leg);
+            out->leg[1] = out->leg[0];
+        } else { /* a+, b- and c- with b: the rotor to theta_e = pi */
+            bc_pair_legs((int)p->chop, 0, 1, 0, m, out->leg);
+            out->leg[2] = out->leg[1];
+        }
         shown = 0;
     } else {
         float w = omega_of(p, s);
@@ -653,22 +716,22 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
             float travel = w * tdiff(n.ta, s->t_c) * s->inv_tick;
             if (!fin(travel)) travel = 0.0f;
             if (now && dn >= 0.0f) { /* inside the interval: the commutation timer */
-                legs_of(p, s, s->sector, m, travel, out->leg);
+                legs_of(p, s, s->sector, m, travel, demag_now(s), out->leg);
                 shown = s->sector;
                 uint32_t tc = s->t_next;
                 enter_sector(p, s, in, next, tc);
-                legs_of(p, s, next, m, 0.0f, out->leg_at);
+                legs_of(p, s, next, m, 0.0f, 1, out->leg_at);
                 out->has_at = 1u;
                 out->t_at = bc_clampf(dn * s->inv_tick, 0.0f, p->ts * 0.999999f);
                 s->adv_prev = s->adv;
             } else if (now) { /* already past: at once, from t_a */
                 n.flags |= BC_FLAG_COMM_LATE;
                 enter_sector(p, s, in, next, n.ta);
-                legs_of(p, s, next, m, 0.0f, out->leg);
+                legs_of(p, s, next, m, 0.0f, 1, out->leg);
                 shown = next;
                 s->adv_prev = s->adv;
             } else {
-                legs_of(p, s, s->sector, m, travel, out->leg);
+                legs_of(p, s, s->sector, m, travel, demag_now(s), out->leg);
                 shown = s->sector;
             }
             if (now && s->mode == BC_BEMF_RAMP) { /* the next forced commutation */
@@ -697,6 +760,7 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
     out->diag[4] = s->t_demag;
     out->diag[5] = s->adv;
     out->diag[6] = m;
+    s->m_app = m;
     out->diag[7] = (float)s->reason;
     for (int j = 0; j < BC_DIAG_N; ++j) {
         if (!fin(out->diag[j])) out->diag[j] = 0.0f;

@@ -42,7 +42,10 @@ uint32_t bc_guard_step(const bc_guard_params *p, bc_guard_state *s, const bc_ctr
     /* 3. the inverter's hardware protection */
     if (in->fault_pin) return BC_FLAG_OVERCURRENT;
     /* 4. trip above i_max, latched until every |i| < i_max / 2 */
-    float i_abs = fmaxf(fabsf(i[0]), fmaxf(fabsf(i[1]), fabsf(i[2])));
+    /* the largest |i| (finite here): compared in line, no libm call (fmaxf) per sample */
+    float i_abs = fabsf(i[0]);
+    if (fabsf(i[1]) > i_abs) i_abs = fabsf(i[1]);
+    if (fabsf(i[2]) > i_abs) i_abs = fabsf(i[2]);
     if (!(i_abs <= p->i_max)) s->latched = 1;
     else if (s->latched && i_abs < 0.5f * p->i_max) s->latched = 0;
     return s->latched ? BC_FLAG_OVERCURRENT : 0u;

@@ -354,6 +354,9 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->u_hist[0][0] = s->u_hist[0][1] = s->u_hist[1][0] = s->u_hist[1][1] = 0.0f;
     s->u_ok[0] = s->u_ok[1] = 0;
     s->n_restart = 0u;
+    s->derate_on = p->derate.enabled[0] != 0 || p->derate.enabled[1] != 0;
+    s->derate_f = 1.0f;
+    if (s->derate_on && bc_derate_init(&p->derate, &s->derate) != BC_OK) return BC_ERR_PARAM;
     s->lim_shape = 0;
     if (p->speed_limit && p->emf_k[0] != 0 && p->emf_k[1] != 0 && p->emf_k[2] != 0) {
         if (p->emf_n < 3 || p->emf_n > BC_SINE_EMF_N_MAX) return BC_ERR_PARAM;
@@ -732,7 +735,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
         /* I/f: the current vector on the q axis of theta_if */
         theta = s->if_theta;
         omega_e = s->if_omega;
-        iq_ref = (float)s->sl_dir * p->if_current;
+        iq_ref = (float)s->sl_dir * p->if_current * s->derate_f; /* derated like the current limit */
         if (s->sl_phase == BC_SINE_SL_ALIGN) {
             /* the current rises over a tenth of if_align (enough holding torque early against an active load), and
              * the rotor's swing is braked: its back-EMF lies on d of theta_if (the rotor's q axis there, either
@@ -757,7 +760,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
         } else {
             tau = in->ref;
         }
-        float i_lim = bc_sine_i_limit(p, s, in->v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f);
+        float i_lim = s->derate_f * bc_sine_i_limit(p, s, in->v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f);
         iq_ref = bc_clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
         if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, 1.5f * p->k_1 * iq_ref);
     }
@@ -793,6 +796,7 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     /* 1. safety: the input guard (bc_guard.h), the Hall code, the reference and the encoder angle if used */
     bc_hall_out h;
     bc_hall_step(&s->hall_p, &s->hall, in, &h); /* keeps the edge bookkeeping even when the output is safe */
+    if (s->derate_on) s->derate_f = bc_derate_step(&p->derate, &s->derate, in->temp); /* in [0, 1] */
     float i3[3];
     uint32_t why = bc_guard_step(&s->guard_p, &s->guard, in, i3);
     if (!h.valid && p->angle != BC_SINE_ANGLE_OBSERVER) why |= BC_FLAG_HALL_INVALID;
@@ -861,7 +865,7 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     if (s->mode == BC_SINE_MODE_START) return;
 
     /* 5. current references (45), (8), I_s,sat from the table or (23) with R */
-    float i_lim = bc_sine_i_limit(p, s, v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f);
+    float i_lim = s->derate_f * bc_sine_i_limit(p, s, v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f);
     float iq_ref = bc_clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
     if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, 1.5f * p->k_1 * iq_ref);
     current_loops(p, s, idq, 0.0f, iq_ref, theta, omega_e, v_dc, p->emf_ff, was == BC_SINE_MODE_START, out);

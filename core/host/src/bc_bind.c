@@ -4,10 +4,13 @@
 #include <stddef.h>
 
 #include "bldc/bc_commutation.h"
+#include "bldc/bc_derate.h"
 #include "bldc/bc_emf.h"
 #include "bldc/bc_plant.h"
 #include "bldc/bc_sensors.h"
 #include "bldc/bc_sim.h"
+#include "bldc/bc_user.h"
+#include "bldc/bc_userguard.h"
 
 #define F BC_BIND_FIELD
 
@@ -195,6 +198,8 @@ static const bc_field_desc FIELDS[] = {
     F(bc_ctrl_in, n_adc, "u4"),
     F(bc_ctrl_in, tick_adc, "u4"),
 
+    F(bc_ctrl_in, temp, "f4"),
+
     F(bc_ctrl_out, leg, "bc_leg_cmd"),
     F(bc_ctrl_out, diag, "f4"),
     F(bc_ctrl_out, flags, "u4"),
@@ -203,6 +208,68 @@ static const bc_field_desc FIELDS[] = {
     F(bc_ctrl_out, leg_at, "bc_leg_cmd"),
     F(bc_ctrl_out, i_hold, "f4"),
     F(bc_ctrl_out, i_hold_at, "f4"),
+
+    /* a user's controller (bc_user.h) and the guard it runs through (bc_userguard.h) */
+    F(bc_user_desc, name, "ptr"),
+    F(bc_user_desc, fields, "ptr"),
+    F(bc_user_desc, n_fields, "i4"),
+    F(bc_user_desc, structs, "ptr"),
+    F(bc_user_desc, n_structs, "i4"),
+    F(bc_user_desc, diag, "ptr"),
+    F(bc_user_desc, consts, "ptr"),
+    F(bc_user_desc, n_consts, "i4"),
+    F(bc_user_desc, defaults, "ptr"),
+    F(bc_user_desc, ref, "ptr"),
+    F(bc_user_desc, bemf_sensing, "i4"),
+
+    F(bc_user_entry, abi, "u4"),
+    F(bc_user_entry, size_in, "u4"),
+    F(bc_user_entry, size_out, "u4"),
+    F(bc_user_entry, diag_n, "u4"),
+    F(bc_user_entry, built_by, "ptr"),
+    F(bc_user_entry, desc, "ptr"),
+    F(bc_user_entry, params, "ptr"),
+    F(bc_user_entry, state, "ptr"),
+    F(bc_user_entry, params_size, "u4"),
+    F(bc_user_entry, state_size, "u4"),
+    F(bc_user_entry, init, "ptr"),
+    F(bc_user_entry, step, "ptr"),
+
+    F(bc_user_watch, k, "i8"),
+    F(bc_user_watch, entered, "u8"),
+    F(bc_user_watch, done, "u8"),
+    F(bc_user_watch, busy, "i4"),
+    F(bc_user_watch, fault, "i4"),
+    F(bc_user_watch, where, "i4"),
+    F(bc_user_watch, index, "i4"),
+    F(bc_user_watch, value, "f8"),
+    F(bc_user_watch, signo, "i4"),
+    F(bc_user_watch, pad, "i4"),
+    F(bc_user_watch, addr, "u8"),
+    F(bc_user_watch, at, "u8"),
+    F(bc_user_watch, size, "u8"),
+
+    F(bc_user_guard, init, "ptr"),
+    F(bc_user_guard, step, "ptr"),
+    F(bc_user_guard, params, "ptr"),
+    F(bc_user_guard, state, "ptr"),
+    F(bc_user_guard, in, "ptr"),
+    F(bc_user_guard, out, "ptr"),
+    F(bc_user_guard, watch, "ptr"),
+    F(bc_user_guard, stop, "i4"),
+    F(bc_user_guard, pad, "i4"),
+    F(bc_user_guard, k, "i8"),
+    F(bc_user_guard, jump, "ptr"),
+
+    F(bc_derate_params, enabled, "i4"),
+    F(bc_derate_params, T_start, "f4"),
+    F(bc_derate_params, T_end, "f4"),
+    F(bc_derate_params, f_min, "f4"),
+    F(bc_derate_params, f_fault, "f4"),
+    F(bc_derate_params, T_lo, "f4"),
+    F(bc_derate_params, T_hi, "f4"),
+    F(bc_derate_params, tau, "f4"),
+    F(bc_derate_params, ts, "f4"),
 };
 
 #define S BC_BIND_STRUCT
@@ -211,6 +278,8 @@ static const bc_struct_desc STRUCTS[] = {
     S(bc_fault),        S(bc_leg_cmd),      S(bc_emf_shape),    S(bc_plant_params), S(bc_plant_state), S(bc_sensor_params),
     S(bc_sensor_state), S(bc_ctrl),         S(bc_sim_config),   S(bc_sim_inputs),  S(bc_sim_metrics),
     S(bc_sim_state),    S(bc_trace_row),    S(bc_ctrl_in),      S(bc_ctrl_out),     S(bc_sense_params), S(bc_sense_state),
+    S(bc_user_desc),    S(bc_user_entry),   S(bc_user_watch),   S(bc_user_guard),
+    S(bc_derate_params), S(bc_derate_state),
 };
 
 #define K BC_BIND_CONST
@@ -236,6 +305,12 @@ static const bc_const_desc CONSTS[] = {
     K("fault", BC_FAULT_HALL_GLITCH), K("fault", BC_FAULT_CURRENT_OFFSET), K("fault", BC_FAULT_CURRENT_LOSS),
     K("sense_ref", BC_SENSE_REF_STAR), K("sense_ref", BC_SENSE_REF_HALF),
     K("plant_flag", BC_PLANT_BAD_DUTY), K("plant_flag", BC_PLANT_CHATTER), K("plant_flag", BC_PLANT_HALL_OVERRUN),
+    K("user", BC_USER_ABI),          K("user", BC_USER_STOPPED),
+    K("user_fault", BC_USER_FAULT_NONE), K("user_fault", BC_USER_FAULT_OUTPUT), K("user_fault", BC_USER_FAULT_INPUT),
+    K("user_fault", BC_USER_FAULT_STOP), K("user_fault", BC_USER_FAULT_SIGNAL),
+    K("user_at", BC_USER_AT_MODE),   K("user_at", BC_USER_AT_DUTY),       K("user_at", BC_USER_AT_HAS_AT),
+    K("user_at", BC_USER_AT_T_AT),   K("user_at", BC_USER_AT_MODE_AT),    K("user_at", BC_USER_AT_DUTY_AT),
+    K("user_at", BC_USER_AT_DIAG),   K("user_at", BC_USER_AT_HOLD),
 };
 
 /* Controller providers (host/src/bc_bind_<name>.c): one line each. */

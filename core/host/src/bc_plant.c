@@ -22,10 +22,17 @@ static const double SIN_PHI[3] = {0.0, 0.86602540378443864676, -0.86602540378443
 #define MAX_ZERO_LENGTH_EVENTS 64
 #define ROOT_MAX_ITER 80
 
+/* Force inlining where a function's constant arguments select its branches (GCC and Clang; elsewhere a hint). */
+#if defined(__GNUC__)
+#define BC_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define BC_ALWAYS_INLINE inline
+#endif
+
 typedef bc_plant_aux aux_t; /* the circuit quantities computed with a derivative (bc_plant.h) */
 
-static int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
-                      int dir_om, double *g);
+static BC_ALWAYS_INLINE uint32_t watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y,
+                                            const aux_t *a, int dir_om, double *g);
 static int faults_apply(const bc_plant_params *p, bc_plant_state *s);
 
 double bc_plant_t_half(const bc_plant_params *p) { return 0.5 / p->f_pwm; }
@@ -167,14 +174,15 @@ static double sign_of(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0);
  * phases, L di_x/dt = c_x (u_x - v_n), i.e. di/dt = P u with P = g (C - c c^T / n), g = 1/L (0 with fewer than
  * two connected phases). topology_set precomputes P (M + R I), P up and P U0, so that a derivative costs a 3 x 3
  * product: di/dt = v_src P up + P U0 - P (M + R I) i - g c_x (e_x - c.e / n). */
-static void aux_terminals(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+static BC_ALWAYS_INLINE void aux_terminals(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
                           aux_t *restrict a);
 
 #define WANT_DK 1 /* core(): dk/dtheta in the aux (the power flows need it) */
 #define WANT_V 2  /* core(): the terminal voltages and the star point in the aux even if no phase is open */
 
-static void core(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
-                 double *restrict dy, aux_t *restrict a, int want, const double *ref)
+static BC_ALWAYS_INLINE void core_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s,
+                                     const double *restrict y, double *restrict dy, aux_t *restrict a, int want,
+                                     const double *ref)
 {
     const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
     const double th = y[Y_TH], om = y[Y_OM];
@@ -274,7 +282,7 @@ static void core(const bc_plant_params *restrict p, const bc_plant_state *restri
 
 /* The terminals v_x = up v_bus + U0 - r i (averaged legs with R_src: up v_src - R_src w_x + U0 - r i), the open
  * terminals floating at e + v_n, and v_n, into a (whose e, w, vbus are set). */
-static void aux_terminals(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+static BC_ALWAYS_INLINE void aux_terminals(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
                           aux_t *restrict a)
 {
     const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
@@ -307,6 +315,13 @@ static void aux_terminals(const bc_plant_params *restrict p, const bc_plant_stat
     a->vn = vn;
 }
 
+/* core() out of line (the integrator's step end inlines core_at) */
+static void core(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+                 double *restrict dy, aux_t *restrict a, int want, const double *ref)
+{
+    core_at(p, s, y, dy, a, want, ref);
+}
+
 /* d tau_cog/dt = omega_m sum_j amp_j order_j cos(order_j theta_m + phase_j). */
 static double cogging_rate(const bc_plant_params *p, const bc_plant_state *s, double th, double om)
 {
@@ -325,8 +340,9 @@ static double cogging_rate(const bc_plant_params *p, const bc_plant_state *s, do
  * rates of the energy balance add up to dW_L/dt identically, so do their derivatives to d^2W_L/dt^2. Only the lanes
  * of s->acc_lane[] are computed: those the parameters can make nonzero, and the trace's (terminal voltages, star
  * point, DC current) only when acc_on asks for them. */
-static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
-                  const double *restrict dy, const aux_t *restrict a, double *restrict f, double *restrict fd)
+static BC_ALWAYS_INLINE void lanes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s,
+                            const double *restrict y, const double *restrict dy, const aux_t *restrict a,
+                            double *restrict f, double *restrict fd, const int edge)
 {
     const double i[3] = {y[Y_I], y[Y_I + 1], y[Y_I + 2]};
     const double di[3] = {dy[Y_I], dy[Y_I + 1], dy[Y_I + 2]};
@@ -356,28 +372,32 @@ static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restr
 
     f[BC_ACC_SRC] = s->v_src * a->idc;
     fd[BC_ACC_SRC] = s->v_src * didc;
-    f[BC_ACC_CU] = R * (sq[0] + sq[1] + sq[2]);
+    if (!edge) f[BC_ACC_CU] = R * (sq[0] + sq[1] + sq[2]);
     fd[BC_ACC_CU] = 2.0 * R * (i[0] * di[0] + i[1] * di[1] + i[2] * di[2]);
-    f[BC_ACC_EMF] = a->e[0] * i[0] + a->e[1] * i[1] + a->e[2] * i[2];
+    if (!edge) f[BC_ACC_EMF] = a->e[0] * i[0] + a->e[1] * i[1] + a->e[2] * i[2];
     fd[BC_ACC_EMF] = de[0] * i[0] + de[1] * i[1] + de[2] * i[2] + a->e[0] * di[0] + a->e[1] * di[1] + a->e[2] * di[2];
-    f[BC_ACC_LOAD] = (s->tau_load + a->t_prop) * om;
-    fd[BC_ACC_LOAD] = (s->tau_load + 3.0 * a->t_prop) * dom; /* d(k_q omega^2 |omega|)/dt = 3 k_q omega |omega| */
+    if (!edge) {
+        f[BC_ACC_LOAD] = (s->tau_load + a->t_prop) * om;
+        fd[BC_ACC_LOAD] = (s->tau_load + 3.0 * a->t_prop) * dom; /* d(k_q omega^2 |omega|)/dt = 3 k_q omega |omega| */
+    }
     /* dtau/dt = sum_x (k_x di_x/dt + p omega dk_x/dtheta i_x) + dtau_cog/dt */
     double dtau = 0.0;
     for (int x = 0; x < 3; ++x) dtau += a->k[x] * di[x] + (double)p->p * om * a->dk[x] * i[x];
     if (on & (1u << BC_ACC_COG)) {
         double dcog = cogging_rate(p, s, y[Y_TH], om);
         dtau += dcog;
-        f[BC_ACC_COG] = a->tau_cog * om;
-        fd[BC_ACC_COG] = dcog * om + a->tau_cog * dom;
+        if (!edge) {
+            f[BC_ACC_COG] = a->tau_cog * om;
+            fd[BC_ACC_COG] = dcog * om + a->tau_cog * dom;
+        }
     }
-    f[BC_ACC_TAU] = a->tau;
     fd[BC_ACC_TAU] = dtau;
-    f[BC_ACC_TAU2] = a->tau * a->tau;
     fd[BC_ACC_TAU2] = 2.0 * a->tau * dtau;
-    for (int x = 0; x < 3; ++x) {
-        f[BC_ACC_I2A + x] = sq[x];
-        fd[BC_ACC_I2A + x] = 2.0 * i[x] * di[x];
+    for (int x = 0; x < 3; ++x) fd[BC_ACC_I2A + x] = 2.0 * i[x] * di[x];
+    if (!edge) {
+        f[BC_ACC_TAU] = a->tau;
+        f[BC_ACC_TAU2] = a->tau * a->tau;
+        for (int x = 0; x < 3; ++x) f[BC_ACC_I2A + x] = sq[x];
     }
     if (on & (1u << BC_ACC_RSRC)) {
         double dw = 0.0;
@@ -416,7 +436,7 @@ static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restr
         f[BC_ACC_DIODE] = fdi;
         fd[BC_ACC_DIODE] = fdd;
     }
-    if (on & (1u << BC_ACC_FRIC)) {
+    if (!edge && (on & (1u << BC_ACC_FRIC))) {
         f[BC_ACC_FRIC] = a->t_fric * om;
         fd[BC_ACC_FRIC] = a->sgn != 0.0 ? (2.0 * p->B * om + p->tau_c * a->sgn) * dom : 0.0;
     }
@@ -479,9 +499,25 @@ static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restr
     }
 }
 
+static void lanes(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+                  const double *restrict dy, const aux_t *restrict a, double *restrict f, double *restrict fd)
+{
+    lanes_at(p, s, y, dy, a, f, fd, 0);
+}
+
+/* The lanes after a gate edge that changed only the conduction coefficients (switch_update): the state, the back-EMFs,
+ * the torque and the rotor's rates are those of the same instant, so the rates that depend on nothing else (copper,
+ * EMF, torque, torque^2 and i^2 values, load, friction, cogging) are already in f, fd; those that depend on di/dt
+ * or on the conduction coefficients are recomputed by the same expressions (bit for bit what lanes() gives). */
+static void lanes_edge(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
+                       const double *restrict dy, const aux_t *restrict a, double *restrict f, double *restrict fd)
+{
+    lanes_at(p, s, y, dy, a, f, fd, 1);
+}
+
 /* acc[] over a step of length h from (f0, fd0) to (f1, fd1): the corrected trapezoid rule (bc_plant.h). Every lane in
  * one loop over lanes 0 .. n - 1: the rates of the lanes not integrated are held at zero (lanes_select). */
-static void acc_step(double *restrict acc, int n, double h, const double *restrict f0, const double *restrict fd0,
+static BC_ALWAYS_INLINE void acc_step(double *restrict acc, int n, double h, const double *restrict f0, const double *restrict fd0,
                      const double *restrict f1, const double *restrict fd1)
 {
     const double a = 0.5 * h, b = h * h / 12.0;
@@ -523,9 +559,73 @@ static void lanes_select(const bc_plant_params *p, bc_plant_state *s, int level)
     s->lanes_on = m != 0u;
 }
 
+/* The coefficients of switching leg x in conduction state s->cond[x] (topology_set). */
+static inline void switch_leg_set(const bc_plant_params *p, bc_plant_state *s, int x)
+{
+    double up = 0.0, u0 = 0.0, r = 0.0, conn = 1.0, rsw = 0.0, dio = 0.0;
+    switch (s->cond[x]) {
+    case BC_COND_SW_U: up = 1.0; r = s->r_on; rsw = s->r_on; break;
+    case BC_COND_SW_L: r = s->r_on; rsw = s->r_on; break;
+    case BC_COND_D_U: up = 1.0; u0 = p->V_f; r = p->r_d; dio = 1.0; break;
+    case BC_COND_D_L: u0 = -p->V_f; r = p->r_d; dio = 1.0; break;
+    default: conn = 0.0; break;
+    }
+    s->tc_cond[x] = s->cond[x];
+    s->tc_lo_a[x] = 0.0; /* the diode window [-V_f, v_bus + V_f] */
+    s->tc_lo_b[x] = -p->V_f;
+    s->tc_hi_a[x] = 1.0;
+    s->tc_hi_b[x] = p->V_f;
+    s->tc_up[x] = up;
+    s->tc_u0[x] = u0;
+    s->tc_r[x] = r;
+    s->tc_conn[x] = conn;
+    s->tc_rsw[x] = rsw;
+    s->tc_dio[x] = dio;
+    s->tc_swk[x] = 0.0;
+    s->tc_rrk[x] = 0.0;
+}
+
+/* P up and P U0 from the legs' sources and the connection weights (topology_set). */
+static inline void pu_set(bc_plant_state *s)
+{
+    const double *cn = s->tc_cn, *pc = s->tc_pc;
+    const double ub = cn[0] * s->tc_up[0] + cn[1] * s->tc_up[1] + cn[2] * s->tc_up[2];
+    const double u0b = cn[0] * s->tc_u0[0] + cn[1] * s->tc_u0[1] + cn[2] * s->tc_u0[2];
+    for (int x = 0; x < 3; ++x) {
+        s->tc_pup[x] = pc[x] * (s->tc_up[x] - ub);
+        s->tc_pu0[x] = pc[x] * (s->tc_u0[x] - u0b);
+    }
+}
+
+static void b_set(const bc_plant_params *p, bc_plant_state *s);
+
+/* topology_set where only switching legs changed state and every phase stays connected or open (a gate edge: a leg
+ * between its switches or between a switch and the opposite diode): the connection weights n, c, P's diagonal and,
+ * unless a device resistance (or, with R_src, a + rail tie) changed, B stay; the changed legs' sources and P up,
+ * P U0 are recomputed by the same expressions as in the full path. Returns 0 where it does not apply. */
+static int topology_edge(const bc_plant_params *p, bc_plant_state *s)
+{
+    if (!s->tc_b_ok || s->tc_msrc || s->hold_on || (s->avg[0] | s->avg[1] | s->avg[2])) return 0;
+    for (int x = 0; x < 3; ++x) {
+        const int32_t c = s->tc_cond[x];
+        if (c != s->cond[x] && (c < 0 || (c == BC_COND_OPEN) != (s->cond[x] == BC_COND_OPEN))) return 0;
+    }
+    int b_stale = 0;
+    for (int x = 0; x < 3; ++x) {
+        if (s->tc_cond[x] == s->cond[x]) continue;
+        const double r0 = s->tc_r[x], up0 = s->tc_up[x];
+        switch_leg_set(p, s, x);
+        b_stale |= s->tc_r[x] != r0 || (p->R_src != 0.0 && s->tc_up[x] != up0);
+    }
+    pu_set(s);
+    if (b_stale) b_set(p, s);
+    return 1;
+}
+
 /* Circuit coefficients of the present conduction states (bc_plant.h, tc_*). Call after any change of cond[]. */
 static void topology_set(const bc_plant_params *p, bc_plant_state *s)
 {
+    if (topology_edge(p, s)) return;
     /* B depends on the connected phases, the device resistances and, with R_src, on the + rail ties: a PWM leg
      * moving between its switches changes none of these (R_src = 0), so B is kept */
     double key[10];
@@ -565,17 +665,9 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
             s->tc_hi_a[x] = fu + fo;
             s->tc_hi_b[x] = fo * p->V_f;
         } else {
-            switch (s->cond[x]) {
-            case BC_COND_SW_U: up = 1.0; r = s->r_on; rsw = s->r_on; break;
-            case BC_COND_SW_L: r = s->r_on; rsw = s->r_on; break;
-            case BC_COND_D_U: up = 1.0; u0 = p->V_f; r = p->r_d; dio = 1.0; break;
-            case BC_COND_D_L: u0 = -p->V_f; r = p->r_d; dio = 1.0; break;
-            default: conn = 0.0; break;
-            }
-            s->tc_lo_a[x] = 0.0; /* the diode window [-V_f, v_bus + V_f] */
-            s->tc_lo_b[x] = -p->V_f;
-            s->tc_hi_a[x] = 1.0;
-            s->tc_hi_b[x] = p->V_f;
+            switch_leg_set(p, s, x);
+            n += s->tc_conn[x] != 0.0;
+            continue;
         }
         s->tc_up[x] = up;
         s->tc_u0[x] = u0;
@@ -625,18 +717,18 @@ static void topology_set(const bc_plant_params *p, bc_plant_state *s)
     if (s->hold_on) { /* d(di/dt)/dd = v_src P e_x: column x of P, (P e_x)_j = pc_j (delta_jx - cn_x) */
         for (int j = 0; j < 3; ++j) s->tc_hcol[j] = s->tc_pc[j] * ((j == s->hold_x ? 1.0 : 0.0) - s->tc_cn[s->hold_x]);
     }
-    const double *cn = s->tc_cn, *pc = s->tc_pc;
-    const double ub = cn[0] * s->tc_up[0] + cn[1] * s->tc_up[1] + cn[2] * s->tc_up[2];
-    const double u0b = cn[0] * s->tc_u0[0] + cn[1] * s->tc_u0[1] + cn[2] * s->tc_u0[2];
-    for (int x = 0; x < 3; ++x) {
-        s->tc_pup[x] = pc[x] * (s->tc_up[x] - ub);
-        s->tc_pu0[x] = pc[x] * (s->tc_u0[x] - u0b);
-    }
+    pu_set(s);
     int same = s->tc_b_ok && key[9] == (double)s->tc_msrc && !s->tc_msrc;
     for (int x = 0; x < 3 && same; ++x) {
         same = key[x] == s->tc_conn[x] && key[3 + x] == s->tc_r[x] && (p->R_src == 0.0 || key[6 + x] == s->tc_up[x]);
     }
-    if (same) return;
+    if (!same) b_set(p, s);
+}
+
+/* B = P (M + R I) (topology_set). */
+static void b_set(const bc_plant_params *p, bc_plant_state *s)
+{
+    const double *cn = s->tc_cn, *pc = s->tc_pc;
     s->tc_b_ok = 1;
     for (int y = 0; y < 3; ++y) {
         const double d = s->tc_r[y] + s->r_ph; /* diagonal of M + R I */
@@ -698,11 +790,11 @@ static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double 
 {
     double k2[NY], k3[NY], k4[NY], yt[NY];
     for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
-    core(p, s, yt, k2, 0, 0, s->work.cs);
+    core_at(p, s, yt, k2, 0, 0, s->work.cs);
     for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
-    core(p, s, yt, k3, 0, 0, s->work.cs);
+    core_at(p, s, yt, k3, 0, 0, s->work.cs);
     for (int j = 0; j < NY; ++j) yt[j] = y0[j] + h * k3[j];
-    core(p, s, yt, k4, 0, 0, s->work.cs);
+    core_at(p, s, yt, k4, 0, 0, s->work.cs);
     for (int j = 0; j < NY; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
     if (p->mech == BC_MECH_IMPOSED) {
         y1[Y_OM] = y0[Y_OM]; /* exactly constant */
@@ -720,7 +812,7 @@ static int linear_step_ok(const bc_plant_params *p, const bc_plant_state *s)
     return s->emf_tables && (p->mech == BC_MECH_IMPOSED || s->stuck) && !s->hold_on;
 }
 
-static void taylor4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
+static BC_ALWAYS_INLINE void taylor4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
                     double *y1)
 {
     const double *B = s->tc_b;
@@ -743,7 +835,7 @@ static void taylor4(const bc_plant_params *p, const bc_plant_state *s, const dou
 }
 
 /* One step of the five states: taylor4 where the circuit is linear (identical to RK4 there), else rk4. */
-static void state_step(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
+static BC_ALWAYS_INLINE void state_step(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
                        double *y1)
 {
     if (linear_step_ok(p, s)) {
@@ -782,6 +874,7 @@ static void hall_locate(const bc_plant_params *p, bc_plant_state *s, int keep)
         }
         s->hseg[x].lo = lo;
         s->hseg[x].hi = lo + BC_PI;
+        s->work.th_ok = 0;
         code |= bit << x;
     }
     if (keep < 0) {
@@ -796,6 +889,8 @@ static void hall_locate(const bc_plant_params *p, bc_plant_state *s, int keep)
 
 static void pieces_locate(const bc_plant_params *p, bc_plant_state *s)
 {
+    s->work.th_ok = 0; /* the angle bound ahead moves */
+    s->work.out_ok = 0; /* the shapes' pieces change */
     for (int x = 0; x < 3; ++x) {
         bc_emf_piece_at(&p->emf[x], s->theta - PHI[x], s->dir, &s->piece[x]);
         if (p->emf[x].kind == BC_EMF_TABLE) {
@@ -936,6 +1031,7 @@ static int angles_cross(const bc_plant_params *p, bc_plant_state *s, double th_r
             }
         }
     }
+    if (any) s->work.th_ok = 0;
     return any;
 }
 
@@ -968,28 +1064,34 @@ static void wrap_angle(const bc_plant_params *p, bc_plant_state *s)
         s->hseg[x].lo += shift;
         s->hseg[x].hi += shift;
     }
+    s->work.th_ok = 0;
+    s->work.out_ok = 0; /* the cached circuit quantities were computed at the unwrapped angle */
 }
 
 /* Time to the next angle bound, or HUGE_VAL. *th_ev receives the bound. */
-static double angle_event(const bc_plant_params *p, const bc_plant_state *s, double *th_ev)
+static double angle_event(const bc_plant_params *p, bc_plant_state *s, double *th_ev)
 {
     double om = s->omega;
     if (s->stuck || (p->mech == BC_MECH_IMPOSED && om == 0.0)) {
         return HUGE_VAL;
     }
-    double target;
-    if (s->dir > 0) {
-        target = HUGE_VAL;
-        for (int x = 0; x < 3; ++x) {
-            if (s->piece[x].hi < target) target = s->piece[x].hi;
-            if (s->hseg[x].hi < target) target = s->hseg[x].hi;
+    double target = s->work.th_next;
+    if (!s->work.th_ok) { /* the pieces or intervals changed (or the direction: pieces_locate) */
+        if (s->dir > 0) {
+            target = HUGE_VAL;
+            for (int x = 0; x < 3; ++x) {
+                if (s->piece[x].hi < target) target = s->piece[x].hi;
+                if (s->hseg[x].hi < target) target = s->hseg[x].hi;
+            }
+        } else {
+            target = -HUGE_VAL;
+            for (int x = 0; x < 3; ++x) {
+                if (s->piece[x].lo > target) target = s->piece[x].lo;
+                if (s->hseg[x].lo > target) target = s->hseg[x].lo;
+            }
         }
-    } else {
-        target = -HUGE_VAL;
-        for (int x = 0; x < 3; ++x) {
-            if (s->piece[x].lo > target) target = s->piece[x].lo;
-            if (s->hseg[x].lo > target) target = s->hseg[x].lo;
-        }
+        s->work.th_next = target;
+        s->work.th_ok = 1;
     }
     *th_ev = target;
     double delta = (target - s->theta) * (double)s->dir / (double)p->p; /* mechanical angle to go, >= 0 */
@@ -1012,15 +1114,14 @@ static double angle_event(const bc_plant_params *p, const bc_plant_state *s, dou
 /* ---------------------------------------------------------------------------------------------------------- */
 /* inverter gates                                                                                             */
 
-static int32_t mode_gate(int32_t mode, int active)
-{
-    switch (mode) {
-    case BC_LEG_PWM: return active ? BC_GATE_U : BC_GATE_L;
-    case BC_LEG_HIGH: return active ? BC_GATE_U : BC_GATE_O;
-    case BC_LEG_LOW: return active ? BC_GATE_L : BC_GATE_O;
-    default: return BC_GATE_O;
-    }
-}
+/* The gate state of a leg in mode OFF, PWM, HIGH, LOW (checked by the caller) while its carrier is active / idle. */
+static const int32_t MODE_GATE[2][4] = {
+    {BC_GATE_O, BC_GATE_L, BC_GATE_O, BC_GATE_O}, /* idle */
+    {BC_GATE_O, BC_GATE_U, BC_GATE_U, BC_GATE_L}, /* active */
+};
+typedef char bc_leg_mode_order[(BC_LEG_OFF == 0 && BC_LEG_PWM == 1 && BC_LEG_HIGH == 2 && BC_LEG_LOW == 3) ? 1 : -1];
+
+static int32_t mode_gate(int32_t mode, int active) { return MODE_GATE[active != 0][mode]; }
 
 /* Switching losses of the switch `sw` (BC_GATE_U / BC_GATE_L) of leg x turning on (on = 1) or off at the present
  * state (bc_plant.h): hard if the current flows the switch's forward way (upper: i > 0, lower: i < 0). */
@@ -1158,6 +1259,7 @@ static void work_fill(const bc_plant_params *p, bc_plant_state *s, const double 
     memcpy(s->work.cs, a->cs, sizeof s->work.cs);
     if (a != &s->work.a[s->work.cur]) s->work.a[s->work.cur] = *a;
     s->work.a_ok = 1;
+    s->work.out_ok = 1;
     s->work.tau = a->tau;
     s->work.wdir = s->omega > 0.0 ? 1 : (s->omega < 0.0 ? -1 : 0);
     (void)watch_eval(p, s, y, a, s->work.wdir, s->work.w[s->work.cur]);
@@ -1261,7 +1363,7 @@ static int switch_update(const bc_plant_params *p, bc_plant_state *s, const int3
               (s->cond[x] == BC_COND_SW_U || s->cond[x] == BC_COND_SW_L);
     }
     if (!sw) (void)watch_eval(p, s, y, a, s->work.wdir, s->work.w[s->work.cur]);
-    if (s->lanes_on) lanes(p, s, y, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
+    if (s->lanes_on) lanes_edge(p, s, y, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
     return 1;
 }
 
@@ -1289,22 +1391,32 @@ static void resolve(const bc_plant_params *p, bc_plant_state *s)
 #define W_REACH 17   /* free: the held current not yet reached (i_ref - i_x, signed by the drive's direction) */
 #define NW BC_PLANT_NW
 
-static int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y, const aux_t *a,
-                      int dir_om, double *g)
+/* The watches active at the present conduction states, mechanics and limiter into g, and the mask of those negative
+ * (bit w: watch w). Only the active entries are written: which watches are active depends on nothing that changes
+ * inside a step (conduction states, connected phases, faults, trip, limiter, sticking, the speed's sign at the step
+ * start), so a step's two ends have the same active set and the integrator reads g only at the bits of this mask. The
+ * one exception, the all-open pair's (it needs e_hi > e_lo on the switching inverter), is written always. */
+static BC_ALWAYS_INLINE uint32_t watch_eval(const bc_plant_params *p, const bc_plant_state *s, const double *y,
+                                            const aux_t *a, int dir_om, double *g)
 {
-    for (int j = 0; j < NW; ++j) g[j] = HUGE_VAL;
-    int neg = 0; /* any watch negative */
+    uint32_t neg = 0u;
     for (int x = 0; x < 3; ++x) {
         switch (s->cond[x]) {
-        case BC_COND_D_L: g[W_DIODE + x] = y[Y_I + x]; neg |= y[Y_I + x] < 0.0; break;
-        case BC_COND_D_U: g[W_DIODE + x] = -y[Y_I + x]; neg |= y[Y_I + x] > 0.0; break;
+        case BC_COND_D_L:
+            g[W_DIODE + x] = y[Y_I + x];
+            neg |= (uint32_t)(y[Y_I + x] < 0.0) << (W_DIODE + x);
+            break;
+        case BC_COND_D_U:
+            g[W_DIODE + x] = -y[Y_I + x];
+            neg |= (uint32_t)(y[Y_I + x] > 0.0) << (W_DIODE + x);
+            break;
         case BC_COND_OPEN:
             if (a->n_conn > 0 && !(s->open_fault & (1 << x))) {
                 double lo = a->v[x] - (s->tc_lo_a[x] * a->vbus + s->tc_lo_b[x]);
                 double hi = (s->tc_hi_a[x] * a->vbus + s->tc_hi_b[x]) - a->v[x];
                 g[W_OPEN_LO + x] = lo;
                 g[W_OPEN_HI + x] = hi;
-                neg |= (lo < 0.0) | (hi < 0.0);
+                neg |= ((uint32_t)(lo < 0.0) << (W_OPEN_LO + x)) | ((uint32_t)(hi < 0.0) << (W_OPEN_HI + x));
             }
             break;
         default: break;
@@ -1313,35 +1425,36 @@ static int watch_eval(const bc_plant_params *p, const bc_plant_state *s, const d
     if (a->n_conn == 0) {
         int hi, lo;
         double m = pair_margin(p, s, a, &hi, &lo);
+        g[W_PAIR] = HUGE_VAL;
         if (hi >= 0 && lo >= 0 && hi != lo && (s->avg[0] | s->avg[1] | s->avg[2] || a->e[hi] > a->e[lo])) {
             g[W_PAIR] = m;
-            neg |= m < 0.0;
+            neg |= (uint32_t)(m < 0.0) << W_PAIR;
         }
     }
     if (p->i_trip > 0.0 && !s->tripped) {
         for (int x = 0; x < 3; ++x) {
             g[W_TRIP + x] = p->i_trip - fabs(y[Y_I + x]);
-            neg |= g[W_TRIP + x] < 0.0;
+            neg |= (uint32_t)(g[W_TRIP + x] < 0.0) << (W_TRIP + x);
         }
     }
     if (s->hold_x >= 0) {
         if (s->hold_on) {
             g[W_HOLD_LO] = a->dh;
             g[W_HOLD_HI] = 1.0 - a->dh;
-            neg |= (a->dh < 0.0) | (a->dh > 1.0);
+            neg |= ((uint32_t)(a->dh < 0.0) << W_HOLD_LO) | ((uint32_t)(a->dh > 1.0) << W_HOLD_HI);
         } else {
             double gr = s->hold_d > 0.5 ? s->hold_i - y[Y_I + s->hold_x] : y[Y_I + s->hold_x] - s->hold_i;
             g[W_REACH] = gr;
-            neg |= gr < 0.0;
+            neg |= (uint32_t)(gr < 0.0) << W_REACH;
         }
     }
     if (p->mech == BC_MECH_DYNAMIC) {
         if (s->stuck) {
             g[W_STICK] = p->tau_c + s->fe_tc - fabs(a->tau_net);
-            neg |= g[W_STICK] < 0.0;
+            neg |= (uint32_t)(g[W_STICK] < 0.0) << W_STICK;
         } else if (dir_om != 0) {
             g[W_OMEGA] = y[Y_OM] * (double)dir_om;
-            neg |= g[W_OMEGA] < 0.0;
+            neg |= (uint32_t)(g[W_OMEGA] < 0.0) << W_OMEGA;
         }
     }
     return neg;
@@ -1959,7 +2072,7 @@ static void ensure_k1(const bc_plant_params *p, bc_plant_state *s)
 
 /* Fold the turning points of the cubic Hermite interpolant through (0, f0, d0) and (h, f1, d1) into [*lo, *hi]:
  *     q(u) = f0 + m0 u + (3 D - 2 m0 - m1) u^2 + (m0 + m1 - 2 D) u^3,  u in (0, 1),  m = h d,  D = f1 - f0. */
-static void hermite_extremes(double h, double f0, double f1, double d0, double d1, double *lo, double *hi)
+static BC_ALWAYS_INLINE void hermite_extremes(double h, double f0, double f1, double d0, double d1, double *lo, double *hi)
 {
     double m0 = h * d0, m1 = h * d1, D = f1 - f0;
     double c2 = 3.0 * D - 2.0 * m0 - m1, c3 = m0 + m1 - 2.0 * D;
@@ -1995,7 +2108,7 @@ static void hermite_extremes(double h, double f0, double f1, double d0, double d
 /* A step of length h has ended at the current state (y1, dy1 = f(y1), aux a1; the work cache still holds its start):
  * integrate acc[] over it and update the extremes, including the torque's turning points inside the step (from the
  * torque and its rate at both ends), while acc_on; then tell the observer. */
-static void step_done(const bc_plant_params *p, bc_plant_state *s, double h, const double *y1, const double *dy1,
+static BC_ALWAYS_INLINE void step_done(const bc_plant_params *p, bc_plant_state *s, double h, const double *y1, const double *dy1,
                       const aux_t *a1, double *f1, double *fd1)
 {
     if (s->lanes_on) lanes(p, s, y1, dy1, a1, f1, fd1);
@@ -2081,16 +2194,16 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             }
         }
         state_step(p, s, y0, s->work.k1, h, y1);
-        core(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, 0);
+        core_at(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, 0);
         /* watched functions: the first that goes negative inside the step is an event */
         int dir_om = s->work.wdir;
-        int any_neg = watch_eval(p, s, y1, a1, dir_om, g1);
+        const uint32_t neg = watch_eval(p, s, y1, a1, dir_om, g1);
         int w_hit = -1;
         double h_hit = h;
-        if (any_neg && zero_len <= MAX_ZERO_LENGTH_EVENTS) {
-            const double *g0 = s->work.w[s->work.cur]; /* the watches at the step start */
+        if (neg && zero_len <= MAX_ZERO_LENGTH_EVENTS) {
+            const double *g0 = s->work.w[s->work.cur]; /* the watches at the step start (the same active set) */
             for (int w = 0; w < NW; ++w) {
-                if (g1[w] < 0.0) {
+                if (neg & (1u << w)) {
                     double guess = -1.0;
                     if (w < W_OPEN_LO && g0[w] > 0.0) { /* a diode current: its derivative is known at both ends */
                         int x = w - W_DIODE;
@@ -2121,6 +2234,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             }
             unpack(s, y1);
             s->work.a_ok = 0; /* the cache holds the step's start */
+            s->work.out_ok = 0;
             s->t = (h_hit < h) ? s->t + h_hit : t_stop;
             if (p->mech == BC_MECH_IMPOSED) s->omega = y0[Y_OM];
             step_done(p, s, h_hit < h ? h_hit : h, y1, k1n, a1, f1, fd1);
@@ -2152,6 +2266,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
         memcpy(s->work.k1, k1n, sizeof k1n);
         memcpy(s->work.cs, a1->cs, sizeof a1->cs);
         s->work.a_ok = 1;
+        s->work.out_ok = 1;
         s->work.cur = nx; /* the step's end (f1, fd1, g1, a1) starts the next step */
         s->work.valid = 1;
         s->n_steps += 1;
@@ -2189,6 +2304,12 @@ void bc_plant_output(const bc_plant_params *p, const bc_plant_state *s, bc_plant
     double y[NY], dy[NY];
     aux_t a;
     pack(s, y);
+    /* the circuit quantities of the current state are cached where the integrator computed them at it with the
+     * terminals (the trace's lanes on: every step end, gate edge and refill computes them by the same expressions) */
+    if (s->work.valid && s->work.a_ok && s->work.out_ok && s->lanes_on && (s->acc_mask & (1u << BC_ACC_VA))) {
+        aux_to_out(p, s, y, &s->work.a[s->work.cur], out);
+        return;
+    }
     core(p, s, y, dy, &a, WANT_V, 0);
     aux_to_out(p, s, y, &a, out);
 }
@@ -2212,6 +2333,7 @@ static void lanes_change(const bc_plant_params *p, bc_plant_state *s, int level)
         pack(s, y);
         core(p, s, y, dy, a, WANT_DK, 0);
         s->work.a_ok = 1;
+        s->work.out_ok = 1;
         lanes(p, s, y, s->work.k1, a, s->work.f[s->work.cur], s->work.fd[s->work.cur]);
     }
 }

@@ -27,6 +27,9 @@ int bc_sensor_init(const bc_sensor_params *p, bc_sensor_state *s)
     if (s->rng == 0u) s->rng = 1u;
     s->has_spare = 0;
     s->spare = 0.0;
+    s->edge_t = NAN;
+    s->edge_f = NAN;
+    s->edge_tick = 0u;
     return BC_OK;
 }
 
@@ -74,11 +77,13 @@ uint32_t bc_sensor_tick(const bc_sensor_params *p, double t) { return tick_at(p-
 void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_plant_state *ps, double v_bus,
                        bc_ctrl_in *in)
 {
+    int faults = 0; /* any sensor fault configured: then each phase looks for its own */
+    for (int j = 0; j < BC_FAULT_MAX; ++j) faults |= p->fault[j].kind != BC_FAULT_NONE;
     for (int x = 0; x < 3; ++x) {
         if (p->i_mask & (1u << x)) {
             double v = p->i_gain[x] * ps->i[x] + p->i_offset[x];
             if (p->i_noise > 0.0) v += p->i_noise * normal(s);
-            for (int j = 0; j < BC_FAULT_MAX; ++j) {
+            for (int j = 0; j < BC_FAULT_MAX && faults; ++j) {
                 const bc_fault *f = &p->fault[j];
                 if (f->kind == BC_FAULT_NONE || f->phase != x || !(ps->t >= f->t_on && ps->t < f->t_off)) continue;
                 if (f->kind == BC_FAULT_CURRENT_OFFSET) v += f->value;
@@ -95,7 +100,12 @@ void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_p
     in->v_dc = (float)quantise(v, p->v_lsb);
     in->hall = (uint32_t)ps->hall_out;
     in->n_edges = ps->n_edges;
-    in->tick_edge = tick_at(p->f_tick, ps->t_edge);
+    if (!(ps->t_edge == s->edge_t && p->f_tick == s->edge_f)) {
+        s->edge_t = ps->t_edge;
+        s->edge_f = p->f_tick;
+        s->edge_tick = tick_at(p->f_tick, ps->t_edge);
+    }
+    in->tick_edge = s->edge_tick;
     in->tick_now = tick_at(p->f_tick, ps->t);
     in->theta_enc = (float)ps->theta;
     if (in->theta_enc >= BC_TWO_PI_F) in->theta_enc = 0.0f;

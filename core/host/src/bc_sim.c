@@ -43,6 +43,16 @@ int bc_sim_init(const bc_sim_config *cfg, bc_sim_state *s, double theta0, double
     /* s->pending, cleared above: all legs off (BC_LEG_OFF = 0), no timed change */
     s->t_pwm = 2.0 * bc_plant_t_half(cfg->plant);
     sim_on_step(s, s->plant.t, s->plant.acc, s->plant.tau_min); /* the first history node (tau_min: tau_e now) */
+    s->temp[0] = NAN; /* no temperature sensor until a thermal model says what it reads */
+    s->temp[1] = NAN;
+    return BC_OK;
+}
+
+int bc_sim_set_temperatures(const bc_sim_config *cfg, bc_sim_state *s, double T_winding, double T_switches)
+{
+    if (!config_ok(cfg) || s == 0) return BC_ERR_PARAM;
+    s->temp[0] = (float)T_winding;
+    s->temp[1] = (float)T_switches;
     return BC_OK;
 }
 
@@ -92,6 +102,7 @@ static void row_open(const bc_sim_config *cfg, bc_sim_state *s)
     r->d7 = (double)s->last.diag[7];
     r->flags = (double)s->last.flags;
     r->hw_trip = (double)ps->tripped;
+    r->t_at = -1.0;
     memcpy(s->row_acc0, ps->acc, sizeof s->row_acc0);
     s->row_tmin = po.tau_e;
     s->row_tmax = po.tau_e;
@@ -131,9 +142,16 @@ static void row_close(bc_sim_state *s, bc_trace_row *rows, int64_t cap, int64_t 
 
 /* ---- continuous moving average ------------------------------------------------------------------------- */
 
+/* Force inlining into the per-step callback (GCC and Clang; elsewhere a hint). */
+#if defined(__GNUC__)
+#define BC_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define BC_ALWAYS_INLINE inline
+#endif
+
 /* A at tq inside history segment [a, a+1] (absolute indices): cubic Hermite through the node values of A and their
  * derivatives tau_e. */
-static double hist_interp(const bc_sim_state *s, int64_t a, double tq)
+static BC_ALWAYS_INLINE double hist_interp(const bc_sim_state *s, int64_t a, double tq)
 {
     int ja = (int)(a & (BC_SIM_HIST - 1)), jb = (int)((a + 1) & (BC_SIM_HIST - 1));
     double h = s->h_t[jb] - s->h_t[ja];
@@ -172,45 +190,50 @@ static void sim_on_step(void *ctx, double t, const double *acc, double tau)
     bc_sim_state *s = (bc_sim_state *)ctx;
     angle_track(s);
     if (!s->plant.acc_on) return; /* outside the metric window, no trace: nothing reads the history */
-    double A = acc[BC_ACC_TAU];
-    if (s->h_n > 0) {
-        int jl = (int)((s->h_n - 1) & (BC_SIM_HIST - 1));
+    const double A = acc[BC_ACC_TAU];
+    int64_t n = s->h_n;
+    if (n > 0) {
+        int jl = (int)((n - 1) & (BC_SIM_HIST - 1));
         if (!(t > s->h_t[jl])) { /* a zero-length step (an event at this instant): same node */
             s->h_a[jl] = A;
             s->h_tau[jl] = tau;
             return;
         }
     }
-    int jn = (int)(s->h_n & (BC_SIM_HIST - 1));
+    int jn = (int)(n & (BC_SIM_HIST - 1));
     s->h_t[jn] = t;
     s->h_a[jn] = A;
     s->h_tau[jn] = tau;
-    s->h_n += 1;
-    int64_t oldest = s->h_n - BC_SIM_HIST;
-    int in = s->m.state == 1;
-    double T = s->t_pwm;
-    double eps = 1e-9 * T;
-    if (s->h_lag < oldest) {
-        if (in && s->h_t[(int)(oldest & (BC_SIM_HIST - 1))] - T > s->m.t0 - eps) s->m.ma_lost += 1;
-        s->h_lag = oldest;
+    s->h_n = ++n;
+    const int64_t oldest = n - BC_SIM_HIST;
+    const int in = s->m.state == 1;
+    const double T = s->t_pwm;
+    const double eps = 1e-9 * T;
+    const double t0e = s->m.t0 - eps; /* the window's start, less rounding */
+    int64_t lag = s->h_lag;           /* kept in a local: ma_fold writes through s */
+    if (lag < oldest) {
+        if (in && s->h_t[(int)(oldest & (BC_SIM_HIST - 1))] - T > t0e) s->m.ma_lost += 1;
+        lag = oldest;
     }
-    if (s->h_n < 2) return;
-    int64_t prev = s->h_n - 2;
-    double t_prev = s->h_t[(int)(prev & (BC_SIM_HIST - 1))];
+    if (n < 2) {
+        s->h_lag = lag;
+        return;
+    }
+    const int64_t prev = n - 2;
+    const double t_prev = s->h_t[(int)(prev & (BC_SIM_HIST - 1))];
     /* older nodes j whose t_j + T lies in (t_prev, t]: A(t_j + T) from the step just ended, A(t_j) exact */
-    while (s->h_lag + 1 < s->h_n - 1) {
-        int j = (int)((s->h_lag + 1) & (BC_SIM_HIST - 1));
-        double ts = s->h_t[j] + T;
+    while (lag + 1 < n - 1) {
+        const int j = (int)((lag + 1) & (BC_SIM_HIST - 1));
+        const double ts = s->h_t[j] + T;
         if (ts > t) break;
-        if (in && ts > t_prev && s->h_t[j] >= s->m.t0 - eps) {
-            ma_fold(s, (hist_interp(s, prev, ts) - s->h_a[j]) / T);
-        }
-        s->h_lag += 1;
+        if (in && ts > t_prev && s->h_t[j] >= t0e) ma_fold(s, (hist_interp(s, prev, ts) - s->h_a[j]) / T);
+        lag += 1;
     }
+    s->h_lag = lag;
     /* the new node: A(t - T) from the history segment holding t - T */
-    double tq = t - T;
-    if (in && tq >= s->m.t0 - eps && s->h_t[(int)(s->h_lag & (BC_SIM_HIST - 1))] <= tq + eps) {
-        ma_fold(s, (A - hist_interp(s, s->h_lag, tq)) / T);
+    const double tq = t - T;
+    if (in && tq >= t0e && s->h_t[(int)(lag & (BC_SIM_HIST - 1))] <= tq + eps) {
+        ma_fold(s, (A - hist_interp(s, lag, tq)) / T);
     }
 }
 
@@ -343,28 +366,30 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
                             input_at(in->v_src, in->v_src_c, j));
 
         /* 2. measure, control */
-        bc_ctrl_in ci;
-        memset(&ci, 0, sizeof ci);
-        bc_sensor_measure(cfg->sensors, &s->sensors, ps, bc_plant_vbus(pp, ps), &ci);
-        if (sense_on(cfg)) bc_sense_fill(cfg->sense, &s->sense, t_k, &ci);
-        ci.ref = (float)input_at(in->ref, in->ref_c, j);
-        ci.omega_ref = (float)input_at(in->omega_ref, in->omega_ref_c, j);
-        bc_ctrl_out co;
-        memset(&co, 0, sizeof co);
-        cfg->ctrl.step(cfg->ctrl.params, cfg->ctrl.state, &ci, &co);
-        s->last = co;
-        s->flags_seen |= co.flags;
-        flags_count(s, co.flags, t_k, has_window && t_k >= cfg->metric_t0 && t_k < cfg->metric_t1);
-        s->last_in = ci;
+        /* the measurements and the output are made in place: last_in, last (no copies per sample) */
+        bc_ctrl_in *ci = &s->last_in;
+        memset(ci, 0, sizeof *ci);
+        bc_sensor_measure(cfg->sensors, &s->sensors, ps, bc_plant_vbus(pp, ps), ci);
+        if (sense_on(cfg)) bc_sense_fill(cfg->sense, &s->sense, t_k, ci);
+        ci->ref = (float)input_at(in->ref, in->ref_c, j);
+        ci->omega_ref = (float)input_at(in->omega_ref, in->omega_ref_c, j);
+        ci->temp[0] = s->temp[0];
+        ci->temp[1] = s->temp[1];
+        bc_ctrl_out *co = &s->last;
+        memset(co, 0, sizeof *co);
+        cfg->ctrl.step(cfg->ctrl.params, cfg->ctrl.state, ci, co);
+        s->flags_seen |= co->flags;
+        flags_count(s, co->flags, t_k, has_window && t_k >= cfg->metric_t0 && t_k < cfg->metric_t1);
 
         /* 3. apply; gate edges at t_k book their energies (E_on, E_off, E_rr) here, and belong to a row or metric
          * window that starts at t_k: [t0, t1) holds the edges at t0, not those at t1 (each edge once per period) */
         double pre_swloss = ps->acc[BC_ACC_SWLOSS], pre_rr = ps->acc[BC_ACC_RR];
-        const bc_ctrl_out applied = cfg->delay ? s->pending : co;
-        s->pending = co;
-        bc_plant_set_hold(pp, ps, (double)applied.i_hold, (double)applied.i_hold_at);
-        bc_plant_set_half(pp, ps, applied.leg, (k % 2) == 0);
-        if (applied.has_at) bc_plant_schedule(pp, ps, applied.leg_at, (double)applied.t_at);
+        const bc_ctrl_out *applied = cfg->delay ? &s->pending : co;
+        bc_plant_set_hold(pp, ps, (double)applied->i_hold, (double)applied->i_hold_at);
+        bc_plant_set_half(pp, ps, applied->leg, (k % 2) == 0);
+        if (applied->has_at) bc_plant_schedule(pp, ps, applied->leg_at, (double)applied->t_at);
+        s->at_time = applied->has_at ? t_k + (double)applied->t_at : -1.0;
+        s->pending = *co; /* after: applied may point to it */
 
         /* torque at the sample instant, inside the metric window */
         if (s->m.state == 1) {
@@ -395,6 +420,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
                 }
             }
             double t_seg = (q + 1 == sub) ? t_next : t_k + th * (double)(q + 1) / (double)sub;
+            if (rows != 0 && s->row_open && s->at_time >= t_row && s->at_time < t_seg) s->row.t_at = s->at_time;
             /* metric bounds inside this segment */
             if (has_window && s->m.state == 0 && cfg->metric_t0 >= ps->t && cfg->metric_t0 < t_seg) {
                 if (cfg->metric_t0 > ps->t) advance_chunk(cfg, s, cfg->metric_t0);

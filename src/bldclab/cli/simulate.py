@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import difflib
 import io
 import json
 import math
 import sys
 import time
+import tomllib
 import warnings
 from dataclasses import asdict, replace
 from pathlib import Path
@@ -19,6 +21,7 @@ from ..analysis.experiments import electrical_period
 from ..control import Control, Sine, SixStep
 from ..control.sixstep import COMMUTATIONS as SIXSTEP_COMMUTATIONS
 from ..control.sixstep import REGULATIONS as SIXSTEP_REGULATIONS
+from ..control.user import UserControl
 from ..errors import BldclabError, PlausibilityError, PlausibilityWarning
 from ..model.units import to_si
 from ..report import plots
@@ -39,7 +42,22 @@ _PROFILE_HELP = ('; or a piecewise-linear profile of "time: value" points, e.g. 
 def configure_command(p: argparse.ArgumentParser) -> None:
     """Arguments of ``bldclab simulate``."""
     p.add_argument("motor", metavar="MOTOR", help="built-in drive name or motor TOML file")
-    p.add_argument("--control", choices=CONTROLS, default="square", help="controller (default square)")
+    p.add_argument("--control", default="square",
+                   help=f"controller: {', '.join(CONTROLS)} (default square), or the path of your controller's "
+                        "library (./my.so, from 'bldclab controller build')")
+    user = p.add_argument_group("your controller (--control ./my.so: bldclab.UserControl, docs/user-controller.md)")
+    user.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                      help="a parameter member by name: a number, a named constant, or comma-separated numbers for "
+                           "an array (repeat for each; 'bldclab controller describe LIB' lists them)")
+    user.add_argument("--params", type=Path, metavar="FILE.toml",
+                      help="parameters from a TOML file (KEY = VALUE lines, tables for nested structs); --param "
+                           "overrides them")
+    user.add_argument("--ref", type=float, help="the reference, in the unit the controller states (default 0)")
+    user.add_argument("--in-process", action="store_true",
+                      help="run it in this process (default: a watched child process, so that a crash or a hang "
+                           "is reported instead of ending bldclab)")
+    user.add_argument("--budget", type=float, default=1.0, metavar="SECONDS",
+                      help="step-time budget: a call into the controller that takes longer is a hang (default 1)")
     p.add_argument("--speed",
                    help='imposed speed (a dynamometer holds the rotor): "0.5 pu", "300 rpm", "31.4 rad/s" '
                         "(default 0.5 pu)" + _PROFILE_HELP.format(u="rpm", v=1000) + "; not with --mechanics")
@@ -153,8 +171,76 @@ def _sine(args: argparse.Namespace, ctl: Control) -> Control:
     return replace(ctl, **kw) if kw else ctl
 
 
+def is_library(control: str) -> bool:
+    """Return whether a ``--control`` value names a user controller's library (a path) rather than a built-in."""
+    return control not in CONTROLS and ("/" in control or "\\" in control or control.endswith((".so", ".dylib",
+                                                                                               ".dll")))
+
+
+def parse_params(items: list[str]) -> dict[str, Any]:
+    """Read ``--param KEY=VALUE`` items: numbers, named constants, comma-separated numbers for arrays."""
+    out: dict[str, Any] = {}
+
+    def one(text: str) -> Any:
+        t = text.strip()
+        for kind in (int, float):
+            try:
+                return kind(t)
+            except ValueError:
+                pass
+        return t
+
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip() or not value.strip():
+            raise BldclabError("--param", f"expected KEY=VALUE (e.g. kp=0.5), got {item!r}")
+        if key.strip() in out:
+            raise BldclabError("--param", f"{key.strip()} given twice")
+        out[key.strip()] = [one(v) for v in value.split(",")] if "," in value else one(value)
+    return out
+
+
+def _user_control(args: argparse.Namespace) -> UserControl:
+    """Return the user controller of ``--control PATH --param ...`` (errors naming the option)."""
+    try:
+        params: dict[str, Any] = {}
+        if args.params is not None:
+            try:
+                params = tomllib.loads(args.params.read_text())
+            except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+                raise BldclabError("--params", f"cannot read {args.params}: {exc}") from None
+        params.update(parse_params(args.param))
+        return UserControl(args.control, params, isolate=not args.in_process, budget=args.budget)
+    except BldclabError as exc:
+        if exc.field.startswith("control.params."):
+            raise BldclabError(f"--param {exc.field.removeprefix('control.params.')}", exc.problem) from None
+        if exc.field.startswith("control.params"):
+            raise BldclabError("--param", exc.problem) from None
+        if exc.field == "control.budget":
+            raise BldclabError("--budget", exc.problem) from None
+        if exc.field.startswith("control.library"):
+            raise BldclabError("--control", f"{args.control}: {exc.problem}") from None
+        raise
+
+
 def _check_options(args: argparse.Namespace) -> None:
     """Refuse option combinations before any work (each error names the option typed)."""
+    user = is_library(args.control)
+    if not user and args.control not in CONTROLS:
+        close = difflib.get_close_matches(args.control, CONTROLS, n=1)
+        near = f": did you mean {close[0]!r}?" if close else ""
+        raise BldclabError("--control", f"invalid choice: {args.control!r}{near} (one of {', '.join(CONTROLS)}, or "
+                           "the path of your controller's library, ./my.so)")
+    for option, given in (("--param", bool(args.param)), ("--params", args.params is not None),
+                          ("--ref", args.ref is not None),
+                          ("--in-process", args.in_process)):
+        if given and not user:
+            raise BldclabError(option, f"is a setting of your own controller: it needs --control ./my.so, got "
+                               f"--control {args.control}")
+    if user:
+        for option, value in (("--torque", args.torque), ("--current", args.current), ("--duty", args.duty)):
+            if value is not None:
+                raise BldclabError(option, "your controller takes its reference with --ref (in the unit it states)")
     for option, value in (("--angle", args.angle), ("--observer", args.observer)):
         if value is not None and args.control != "sine":
             raise BldclabError(option, f"is a sinusoidal setting: it needs --control sine, got --control "
@@ -289,11 +375,17 @@ def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab simulate``."""
     _check_options(args)
     drive = load_drive(args)
-    ctl, default_ref, unit = control_of(args.control, drive)
-    ctl = _sine(args, _sixstep(args, ctl))
-    if isinstance(ctl, SixStep) and ctl.regulation == "duty":  # no current loop: the reference is the duty
-        default_ref, unit = 0.5, "duty"
-    ref = _reference(args, default_ref, unit)
+    if is_library(args.control):
+        ctl: Control = _user_control(args)
+        ref, unit = (0.0 if args.ref is None else args.ref), (ctl.ref_meaning or "-")
+        if not math.isfinite(ref):
+            raise BldclabError("--ref", f"must be finite, got {args.ref}")
+    else:
+        ctl, default_ref, unit = control_of(args.control, drive)
+        ctl = _sine(args, _sixstep(args, ctl))
+        if isinstance(ctl, SixStep) and ctl.regulation == "duty":  # no current loop: the reference is the duty
+            default_ref, unit = 0.5, "duty"
+        ref = _reference(args, default_ref, unit)
     if args.speed_ref is not None and isinstance(ctl, Sine):  # --speed-ref: --control sine, checked above
         ctl = replace(ctl, speed_loop=True)
     sc = _scenario(args, drive, ref)

@@ -16,6 +16,7 @@ from .._files import write_atomic
 from ..errors import BldclabError
 from ..model.catalog import load
 from ..model.motor import Drive
+from ..model.thermal import LOSS_SOURCES
 from .paths import check_out_file
 
 __all__ = ["FIELDS", "configure_command", "run_command", "template"]
@@ -86,6 +87,17 @@ FIELDS: dict[tuple[str, str], str] = {
     ("sensors", "hall_tau"): "s: RC filter time constant on the Hall lines (one value or a, b, c; 0: none)",
     ("sensors", "f_tick"): "Hz: capture-timer frequency time-stamping the Hall edges",
     ("sensors", "seed"): "seed of the noise generator (integer >= 0)",
+    ("thermal", "T_ref"): "degC: temperature at which R, the back-EMF and R_on above are given",
+    ("thermal", "alpha_R"): "1/K: winding resistance coefficient (default copper's 1 / (234.5 + T_ref))",
+    ("thermal", "alpha_k"): "1/K: the magnets' flux coefficient (sintered NdFeB about -0.0012)",
+    ("thermal", "alpha_Ron"): "1/K: the switches' on-resistance coefficient (0: none)",
+    ("thermal", "winding"): "node(s) whose mean temperature sets R",
+    ("thermal", "magnets"): "node whose temperature sets the back-EMF",
+    ("thermal", "switches"): "node(s) whose mean temperature sets R_on",
+    ("thermal", "sensor_winding"): "node a winding temperature sensor reads",
+    ("thermal", "sensor_switch"): "node a switch (heat sink) temperature sensor reads",
+    ("thermal.links", "between"): "the two nodes a thermal resistance joins",
+    ("thermal.links", "R"): "K/W: its thermal resistance",
 }
 
 def _optional(drive: Drive) -> dict[str, list[str]]:
@@ -125,7 +137,7 @@ def _optional(drive: Drive) -> dict[str, list[str]]:
 
 
 _KEY = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)\s*=")
-_TABLE = re.compile(r"^\[([A-Za-z0-9_.]+)\]\s*$")
+_TABLE = re.compile(r"^\[\[?([A-Za-z0-9_.]+)\]\]?\s*$")
 
 HEADER = """\
 # bldclab motor file (format: docs/motor-files.md). Numbers are SI (the unit is in the comment above each field);
@@ -175,6 +187,12 @@ def template(source: str) -> str:
         if k:
             present.add(k.group(1))
             doc = FIELDS.get((table, k.group(1)))
+            if table == "thermal.nodes":
+                doc = ("a node: C J/K heat capacity (none: a boundary, ambient or coolant, held at T), T degC "
+                       "initial or fixed temperature, T_max degC its limit")
+            elif table == "thermal.losses":
+                doc = f"the node(s) that {LOSS_SOURCES.get(k.group(1), ('this loss', ''))[0]} heats (or a table of " \
+                      "fractions)"
             if doc:
                 out.append(f"# {k.group(1)}: {doc}")
         out.append(line)

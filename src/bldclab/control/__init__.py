@@ -9,12 +9,14 @@ from __future__ import annotations
 
 from .base import Control
 from .commission import Commission
+from .derate import TemperatureDerating
 from .hallcal import HallCal, HallCalibration
 from .lu import Lu
 from .openloop import OpenLoop, SixStepVoltage
 from .sensorless import SixStepSensorless
 from .sine import Sine
 from .sixstep import SixStep
+from .user import UserControl
 
 __all__ = ["Commission", "Control", "HallCal", "HallCalibration", "Lu", "OpenLoop", "Sine", "SixStep",
-           "SixStepSensorless", "SixStepVoltage"]
+           "SixStepSensorless", "SixStepVoltage", "TemperatureDerating", "UserControl"]

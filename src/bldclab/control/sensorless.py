@@ -27,14 +27,15 @@ __all__ = ["SixStepSensorless", "integral_to_30", "throttle_rate"]
 _METHOD = {"comparator": "BC_BEMF_COMPARATOR", "adc": "BC_BEMF_ADC", "integration": "BC_BEMF_INTEGRATE"}
 _BLANK = {"fixed": "BC_BEMF_BLANK_FIXED", "demag": "BC_BEMF_BLANK_DEMAG"}
 _CHOP = {"bipolar": "BC_CHOP_BIPOLAR", "high": "BC_CHOP_HIGH", "pwm-on-pwm": "BC_CHOP_PWMPWM", "sync": "BC_CHOP_SYNC"}
-_REFS = ("star", "half-bus")
+_REFS = ("star", "half")  # the spelling of Sensors.bemf_reference
 
 #: fields with a unit (dimension of :func:`bldclab.model.units.to_si`); speeds are mechanical
 _UNITS = {"blank": "angle", "blank_time": "time", "min_pulse": "time", "filter_tau": "time",
           "comparator_delay": "time", "timing": "angle", "timing_time": "time", "timing_max": "angle",
           "stall_speed": "speed", "align_time": "time", "ramp_start_speed": "speed", "ramp_end_speed": "speed",
           "ramp_time": "time", "restart_wait": "time", "restart_max": "time", "current_limit_time": "time",
-          "align_current": "current", "i_max": "current", "current_limit": "current"}
+          "align_current": "current", "i_max": "current", "current_limit": "current",
+          "duty_limit_current": "current"}
 
 _RATE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*%\s*/\s*(ms|s)\s*$")
 
@@ -63,7 +64,7 @@ def throttle_rate(value: float | str, field: str = "control.throttle_rate") -> f
     return v
 
 
-def integral_to_30(drive: Drive, reference: str = "star", n: int = 721) -> float:
+def integral_to_30(drive: Drive, reference: str | None = None, n: int = 721) -> float:
     """Back-EMF integral from the floating phase's zero crossing to 30 degrees after it (V s), per sector, averaged.
 
     What the back-EMF integration method (``method="integration"``) compares its integral with. The sampled signal is
@@ -77,8 +78,8 @@ def integral_to_30(drive: Drive, reference: str = "star", n: int = 721) -> float
     ----------
     drive : Drive
         Its back-EMF shapes (``drive.motor.emf``) and pole pairs.
-    reference : {"star", "half-bus"}
-        The comparators' reference.
+    reference : {"star", "half"}, optional
+        The comparators' and the ADC's reference; default the drive's hardware, ``drive.sensors.bemf_reference``.
     n : int
         Points of the numerical integration per 60 degrees.
 
@@ -88,8 +89,11 @@ def integral_to_30(drive: Drive, reference: str = "star", n: int = 721) -> float
         The mean over the six sectors of the integral from the crossing (the zero of the signal near the sector's
         middle) to 30 electrical degrees after it, V s.
     """
+    if reference is None:
+        reference = drive.sensors.bemf_reference
     if reference not in _REFS:
-        raise BldclabError("control.comparator_reference", f"must be one of {', '.join(_REFS)}, got {reference!r}")
+        raise BldclabError("reference", f"must be one of {', '.join(_REFS)} (as Sensors.bemf_reference), "
+                           f"got {reference!r}")
     m = drive.motor
     pos = (0, 0, 1, 1, 2, 2)
     neg = (1, 2, 2, 0, 0, 1)
@@ -128,17 +132,32 @@ class SixStepSensorless(Control):
     Angles accept strings such as ``"15 deg"``, times ``"20 us"``, speeds ``"3000 rpm"`` (speeds are mechanical,
     rad/s), currents ``"10 A"``.
 
+    The sensing is the drive's hardware (``drive.sensors.bemf_*``, docs/sensing.md): the comparators' reference
+    (virtual star point or half the bus, ``bemf_reference``) is not a setting here (the default ``int_limit`` is
+    computed against it), and the filter time constant and comparator delay the firmware compensates default to
+    ``bemf_tau`` and ``bemf_delay``.
+
     Parameters
     ----------
     method : {"comparator", "adc", "integration"}
         ``comparator``: the crossing is the comparator's edge (``bc_ctrl_in.zc_*``, time-stamped by the capture
         timer); ``adc``: from the ADC samples of the terminal voltage against the reference (once per PWM period),
         interpolated between the last sample before and the first after it; ``integration``: the ADC crossing, then
-        the commutation when the back-EMF integral from it reaches ``int_limit`` (VESC's BLDC mode).
+        the commutation when the back-EMF integral from it reaches ``int_limit`` (VESC's BLDC mode). The comparator
+        method needs the virtual star reference (``drive.sensors.bemf_reference = "star"``); against half the bus
+        it is refused (the comparator would see the PWM), the ADC methods sample in the on-time and run with both.
     chopping : {"sync", "high", "pwm-on-pwm", "bipolar"}
         ``sync``: the positive leg complementary (synchronous rectification, as AM32 and BLHeli_32), the negative
         leg's lower switch on; ``high``: the positive leg's upper switch chops; ``pwm-on-pwm``: the incoming phase
         chops in the first half of the sector, the continuing one in the second; ``bipolar``: both legs chop.
+    fast_demag : bool
+        From each commutation until the floating phase shows the demagnetisation over, the phase that stays in the
+        pair (the continuing one) chops instead of the incoming one (default True; ``sync``, ``high``,
+        ``pwm-on-pwm``): the outgoing current then falls with about ``(2 - d) V_dc / 3`` instead of ``d V_dc / 3``,
+        which keeps the crossing visible at low duty and high current (a throttle step). The closed forms are in
+        docs/sensorless.md. When it chops the negative leg and the drive's comparators have an offset
+        (``drive.sensors.bemf_offset``), the comparator is read in the pair's on-time only until the crossing: the
+        floating phase can clamp to the bus in the off-time, which a comparator with an offset reads as a crossing.
     blanking : {"demag", "fixed"}
         ``demag``: after the fixed blanking the window for the crossing opens at the measured end of the
         demagnetisation (the floating phase shows the pre-crossing level, held at least ``min_pulse``); ``fixed``:
@@ -154,12 +173,12 @@ class SixStepSensorless(Control):
         Comparator: the post level must be held this long after its edge (default ``"1 us"``).
     n_samples : int
         ADC methods: consecutive samples on the post side for a crossing (default 2).
-    filter_tau : float or str
-        Time constant of the terminal voltages' RC filter (default 0); compensated as ``atan(Omega tau) / Omega``.
-    comparator_delay : float or str
-        The comparators' propagation delay (default 0); compensated.
-    comparator_reference : {"star", "half-bus"}
-        The comparators' and the ADC's reference, for the default ``int_limit`` only (:func:`integral_to_30`).
+    filter_tau : float or str, optional
+        Time constant of the terminal voltages' RC filter that the firmware compensates, as ``atan(Omega tau) /
+        Omega``; default the drive's hardware, ``drive.sensors.bemf_tau`` (give it only to study a firmware that
+        believes another value).
+    comparator_delay : float or str, optional
+        The comparators' propagation delay the firmware compensates; default ``drive.sensors.bemf_delay``.
     timing : float or str
         Timing advance (electrical angle, default 0).
     timing_time : float or str
@@ -193,7 +212,8 @@ class SixStepSensorless(Control):
     align_duty : float, optional
         Alignment duty; default ``2 (R + R_on) align_current / V_dc``.
     ramp_start_speed, ramp_end_speed : float or str, optional
-        Forced commutation's speeds (mechanical); defaults ``0.01 Omega_0`` and ``0.1 Omega_0``.
+        Forced commutation's speeds (mechanical); defaults 0 (from standstill at the ramp's acceleration: a start speed
+        above what the rotor reaches in the first sector leaves a light rotor behind) and ``0.1 Omega_0``.
     ramp_time : float or str, optional
         Time of the ramp from start to end speed: the acceleration. Default: the acceleration half the alignment
         current's torque ``2 k_phi align_current`` gives the inertia J, within [10 ms, 10 s].
@@ -222,6 +242,18 @@ class SixStepSensorless(Control):
         Over-current trip; default ``2 I_N``.
     current_limit : float or str, optional
         Current limit (an integrating limiter on the duty); ``None`` (default): none.
+    duty_limit_current : float or str, optional
+        Speed-dependent duty limit in closed loop, as an ESC limits its throttle at low speed without a current
+        sensor: ``d <= 2 (R + R_on) I sqrt(1 + (Omega_e L / (R + R_on))^2) / V_dc + 2 k_phi Omega_e / (p V_dc)`` (the
+        drop of the current ``I`` on the pair's impedance plus the back-EMF's duty at the estimated speed), so that a
+        throttle step at low speed cannot drive the pair's current far beyond ``I`` (an over-current trip). Default
+        ``I_N``; 0: none.
+    demag_limit : float
+        Demagnetisation limiter: the largest share of the window from a commutation to the expected crossing
+        (``30 deg + timing``) that the diode clamp may take before the controller lowers the duty (default 0.6; 0:
+        off). The clamp's length is measured every sector; while it takes more than this share, the duty cap falls
+        (and the current, and the clamp, with it), and it recovers while it takes less: a throttle step then cannot
+        hide the crossing whatever the load does.
     current_limit_time : float or str
         Time constant of the limiter at standstill (default ``"1 ms"``): gain ``2 (R + R_on) / (V_dc t)``.
     delay : int
@@ -231,14 +263,14 @@ class SixStepSensorless(Control):
 
     method: Literal["comparator", "adc", "integration"] = "comparator"
     chopping: Literal["sync", "high", "pwm-on-pwm", "bipolar"] = "sync"
+    fast_demag: bool = True
     blanking: Literal["demag", "fixed"] = "demag"
     blank: float | str = "5 deg"
     blank_time: float | str | None = None
     min_pulse: float | str = "1 us"
     n_samples: int = 2
-    filter_tau: float | str = 0.0
-    comparator_delay: float | str = 0.0
-    comparator_reference: Literal["star", "half-bus"] = "star"
+    filter_tau: float | str | None = None
+    comparator_delay: float | str | None = None
     timing: float | str = 0.0
     timing_time: float | str = 0.0
     timing_demag: float = 0.0
@@ -268,8 +300,11 @@ class SixStepSensorless(Control):
     i_max: float | str | None = None
     current_limit: float | str | None = None
     current_limit_time: float | str = "1 ms"
+    duty_limit_current: float | str | None = None
+    demag_limit: float = 0.6
     delay: int = 1
     c_name: ClassVar[str] = "bemf"
+    needs_bemf_sensing: ClassVar[bool] = True
     ref_meaning: ClassVar[str] = "duty (throttle) in [-1, 1], its sign the direction of rotation"
 
     def __post_init__(self) -> None:
@@ -280,19 +315,20 @@ class SixStepSensorless(Control):
         for name, table in (("method", _METHOD), ("chopping", _CHOP), ("blanking", _BLANK)):
             if getattr(self, name) not in table:
                 raise BldclabError(f"control.{name}", f"must be one of {', '.join(table)}, got {getattr(self, name)!r}")
-        if self.comparator_reference not in _REFS:
-            raise BldclabError("control.comparator_reference",
-                               f"must be one of {', '.join(_REFS)}, got {self.comparator_reference!r}")
-        for name in ("blank", "min_pulse", "filter_tau", "comparator_delay", "timing", "timing_time", "timing_demag",
+        for name in ("blank", "min_pulse", "timing", "timing_time", "timing_demag",
                      "timing_max", "duty_min", "stop_below", "restart_wait", "restart_max"):
             check_number(name, getattr(self, name), allow_zero=True)
         check_number("align_time", self.align_time, allow_zero=True, allow_none=True)
         check_number("ramp_time", self.ramp_time, allow_none=True)
         check_number("ramp_vf", self.ramp_vf, allow_zero=True, allow_none=True)
-        for name in ("blank_time", "int_limit", "stall_speed", "align_current", "ramp_start_speed",
-                     "ramp_end_speed", "i_max", "current_limit"):
-            check_number(name, getattr(self, name), allow_none=True, allow_zero=name in ("blank_time",
-                                                                                          "ramp_start_speed"))
+        for name in ("filter_tau", "comparator_delay", "blank_time", "int_limit", "stall_speed", "align_current",
+                     "ramp_start_speed", "ramp_end_speed", "i_max", "current_limit"):
+            check_number(name, getattr(self, name), allow_none=True, allow_zero=name in (
+                "filter_tau", "comparator_delay", "blank_time", "ramp_start_speed"))
+        check_number("duty_limit_current", self.duty_limit_current, allow_zero=True, allow_none=True)
+        check_number("demag_limit", self.demag_limit, allow_zero=True)
+        if self.demag_limit >= 1.0:
+            raise BldclabError("control.demag_limit", f"must be in [0, 1), got {self.demag_limit!r}")
         for name in ("current_limit_time", "interval_gain", "timeout", "jump"):
             check_number(name, getattr(self, name))
         for name in ("align_duty", "ramp_duty"):
@@ -323,6 +359,8 @@ class SixStepSensorless(Control):
                 raise BldclabError(f"control.{name}", f"must be an integer in [{lo}, {hi}], got {v!r}")
         if self.delay not in (0, 1) or isinstance(self.delay, bool):
             raise BldclabError("control.delay", f"must be 0 or 1 sample, got {self.delay!r}")
+        if not isinstance(self.fast_demag, bool):
+            raise BldclabError("control.fast_demag", f"must be True or False, got {self.fast_demag!r}")
         if not isinstance(self.current_sensing, bool):
             raise BldclabError("control.current_sensing", f"must be True or False, got {self.current_sensing!r}")
         wait, wait_max = float(self.restart_wait), float(self.restart_max)
@@ -337,12 +375,12 @@ class SixStepSensorless(Control):
     def speeds(self, drive: Drive) -> tuple[float, float, float]:
         """Return the stall speed, the ramp's start and end speeds (mechanical rad/s) for ``drive``.
 
-        Defaults: ``0.03``, ``0.01`` and ``0.1 Omega_0``; the end speed must be at least 1.5 times the stall speed
+        Defaults: ``0.03 Omega_0``, 0 and ``0.1 Omega_0``; the end speed must be at least 1.5 times the stall speed
         (the controller hands over only above 1.5 times it).
         """
         w0 = drive.Omega_0
         stall = 0.03 * w0 if self.stall_speed is None else float(self.stall_speed)
-        start = 0.01 * w0 if self.ramp_start_speed is None else float(self.ramp_start_speed)
+        start = 0.0 if self.ramp_start_speed is None else float(self.ramp_start_speed)
         end = 0.1 * w0 if self.ramp_end_speed is None else float(self.ramp_end_speed)
         if end < start:
             raise BldclabError("control.ramp_end_speed", f"must be at least ramp_start_speed ({start:.4g} rad/s), "
@@ -351,6 +389,17 @@ class SixStepSensorless(Control):
             raise BldclabError("control.ramp_end_speed", f"must be at least 1.5 stall_speed ({1.5 * stall:.4g} rad/s: "
                                f"the handover needs it), got {end:.4g} rad/s")
         return stall, start, end
+
+    def delays(self, drive: Drive) -> tuple[float, float]:
+        """Return the filter time constant and the comparator delay (s) the controller compensates for ``drive``.
+
+        The given ``filter_tau`` and ``comparator_delay``, else the drive's sensing hardware, ``drive.sensors``'s
+        ``bemf_tau`` and ``bemf_delay``.
+        """
+        sen = drive.sensors
+        tau = sen.bemf_tau if self.filter_tau is None else float(self.filter_tau)
+        t_comp = sen.bemf_delay if self.comparator_delay is None else float(self.comparator_delay)
+        return tau, t_comp
 
     def start_up(self, drive: Drive) -> dict[str, float]:
         """Return the start-up settings for ``drive``: the given ones, else the defaults derived from it.
@@ -372,7 +421,7 @@ class SixStepSensorless(Control):
         t_ramp = min(max((end - start) / accel, 0.01), 10.0)
         return {
             "align_current": i_al,
-            "align_duty": min(2.0 * r * i_al / v if self.align_duty is None else float(self.align_duty), 1.0),
+            "align_duty": min(1.5 * r * i_al / v if self.align_duty is None else float(self.align_duty), 1.0),
             "align_time": t_align if self.align_time is None else float(self.align_time),
             "ramp_duty": min(2.0 * r * i_al / v if self.ramp_duty is None else float(self.ramp_duty), 1.0),
             "ramp_vf": 2.0 * m.k_phi / (m.p * v) if self.ramp_vf is None else float(self.ramp_vf),
@@ -385,13 +434,19 @@ class SixStepSensorless(Control):
         p = m.p
         su = self.start_up(drive)
         stall, start, end = su["stall_speed"], su["ramp_start_speed"], su["ramp_end_speed"]
-        blank_time = (2.0 * float(self.filter_tau) + float(self.comparator_delay) + 1e-6
-                      if self.blank_time is None else float(self.blank_time))
-        int_limit = (integral_to_30(drive, self.comparator_reference) if self.int_limit is None and
+        if self.method == "comparator" and drive.sensors.bemf_reference == "half":
+            raise BldclabError("control.method", "the comparator method needs the virtual star reference "
+                               "(sensors.bemf_reference = 'star'): against half the bus the comparator sees the PWM "
+                               "and toggles every off-time; use method='adc' or 'integration', which sample in the "
+                               "on-time")
+        tau, t_comp = self.delays(drive)
+        blank_time = 2.0 * tau + t_comp + 1e-6 if self.blank_time is None else float(self.blank_time)
+        int_limit = (integral_to_30(drive) if self.int_limit is None and
                      self.method == "integration" else float(self.int_limit or 0.0))
         i_max = 2.0 * m.I_N if self.i_max is None else float(self.i_max)
         i_limit = 0.0 if self.current_limit is None else float(self.current_limit)
         k_limit = 2.0 * r_total(drive) / (inv.V_dc * float(self.current_limit_time))
+        i_dlim = m.I_N if self.duty_limit_current is None else float(self.duty_limit_current)
         return CParams(core.filled(
             "bc_bemf_params",
             method=core.const(_METHOD[self.method]),
@@ -404,8 +459,8 @@ class SixStepSensorless(Control):
             blank_time=blank_time,
             min_pulse=self.min_pulse,
             n_samples=self.n_samples,
-            tau_filter=self.filter_tau,
-            t_comp=self.comparator_delay,
+            tau_filter=tau,
+            t_comp=t_comp,
             adv_angle=self.timing,
             adv_time=self.timing_time,
             adv_demag=self.timing_demag,
@@ -435,4 +490,10 @@ class SixStepSensorless(Control):
             i_limit=i_limit,
             k_limit=k_limit,
             v_max=2.0 * inv.V_dc,
+            fast_demag=int(self.fast_demag),
+            dlim_d0=min(2.0 * r_total(drive) * i_dlim / inv.V_dc, 1.0),
+            dlim_vf=2.0 * m.k_phi / (p * inv.V_dc) if i_dlim > 0.0 else 0.0,
+            dlim_tau=m.L / r_total(drive),
+            demag_max=self.demag_limit,
+            cmp_gate=int(drive.sensors.bemf_offset != 0.0 and self.fast_demag),
         ))

@@ -21,6 +21,7 @@ from ..model.analytic import i_sN, r_total
 from ..model.design import pi_gains
 from ..model.motor import Drive
 from .base import Control, check_number
+from .derate import TemperatureDerating, derate_record
 from .hall import check_hall_options, hall_record, normalize_table
 from .sixstep import SixStep
 
@@ -170,6 +171,9 @@ class Sine(Control):
         Hall speed below it, or no Hall edge for the time the rotor takes for 60 electrical degrees at that
         speed). For runs that enable the drive on a rotor already turning fast (a dynamometer at imposed speed),
         so that the sine mode takes over after two Hall edges without square-wave braking at high speed.
+    derate : TemperatureDerating, optional
+        Derate the current limit ``I_s,N`` with the temperature inputs (firmware derating,
+        :mod:`bldclab.control.derate`; the square-wave start too, unless ``start`` has its own); ``None``: none.
     """
 
     angle: Literal["hall", "pll", "encoder", "observer"] = "hall"
@@ -203,10 +207,13 @@ class Sine(Control):
     if_align: float | None = None
     lock_tolerance: float = 0.2
     restart_wait: float = 0.1
+    derate: TemperatureDerating | None = None
     c_name: ClassVar[str] = "sine"
     ref_meaning: ClassVar[str] = "torque, N m"
 
     def __post_init__(self) -> None:
+        if self.derate is not None and not isinstance(self.derate, TemperatureDerating):
+            raise BldclabError("control.derate", f"must be a TemperatureDerating, got {type(self.derate).__name__}")
         if self.angle not in _ANGLE:
             raise BldclabError("control.angle", f"must be one of {', '.join(_ANGLE)}, got {self.angle!r}")
         check_hall_options(self.pll_edges)
@@ -375,6 +382,8 @@ class Sine(Control):
         start = self.start if self.start.reference == "torque" else dataclasses.replace(self.start, reference="torque")
         if start.hall_table is None and self.hall_table is not None:
             start = dataclasses.replace(start, hall_table=self.hall_table)
+        if self.derate is not None and start.derate is None:
+            start = dataclasses.replace(start, derate=self.derate)  # the square-wave start derates alike
         six = start.c_record(drive, core, n_samples)
         wb = 2.0 * math.pi * self.speed_bandwidth_hz
         kp_w = drive.mechanics.J * wb if self.speed_kp is None else self.speed_kp
@@ -406,6 +415,7 @@ class Sine(Control):
             omega_min=0.25 * m.p * on * (1.0 - self.handoff_hysteresis),  # Hall speed valid well below omega_off
             theta_offset=0.0,
             **hall_record(core, self.angle == "pll", self.pll_edges, self.hall_table),
+            derate=derate_record(core, self.derate, 0.5 / inv.f_pwm),
             six=six.record[0],
             flying_start=int(self.flying_start),
             speed_loop=int(self.speed_loop),

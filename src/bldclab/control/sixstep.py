@@ -21,6 +21,7 @@ from ..model.design import pi_gains
 from ..model.motor import Drive
 from ..model.units import to_si
 from .base import Control, check_number
+from .derate import TemperatureDerating, derate_record
 from .hall import check_hall_options, hall_record, normalize_table
 
 __all__ = ["CHOPPINGS", "COMMUTATIONS", "REGULATIONS", "SixStep"]
@@ -117,6 +118,9 @@ class SixStep(Control):
         Calibrated Hall edge angles (rad, electrical): 6 (both directions) or 12 (forward, then backward), e.g.
         from :func:`bldclab.sim.hallcal.calibrate`; used for the angle, the speed and (six-step with ``advance``)
         the commutation instant. ``None``: the nominal edges ``pi/6 + j pi/3``.
+    derate : TemperatureDerating, optional
+        Derate the reference's current limit ``i_max`` with the temperature inputs (firmware derating,
+        :mod:`bldclab.control.derate`); ``None``: none.
     """
 
     regulation: Literal["predictive", "pi", "hysteresis", "duty", "ideal"] = "predictive"
@@ -141,6 +145,7 @@ class SixStep(Control):
     hall_angle: Literal["interp", "pll"] = "interp"
     pll_edges: float = 3.0
     hall_table: tuple[float, ...] | None = None
+    derate: TemperatureDerating | None = None
     c_name: ClassVar[str] = "sixstep"
     ref_meaning: ClassVar[str] = "current amplitude, A (or torque, N m)"
 
@@ -172,6 +177,8 @@ class SixStep(Control):
             raise BldclabError("control.theta_offset", f"must be a finite number, got {self.theta_offset!r}")
         check_hall_options(self.pll_edges, self.hall_angle)
         object.__setattr__(self, "hall_table", normalize_table(self.hall_table))
+        if self.derate is not None and not isinstance(self.derate, TemperatureDerating):
+            raise BldclabError("control.derate", f"must be a TemperatureDerating, got {type(self.derate).__name__}")
 
     def gains(self, drive: Drive) -> tuple[float, float]:
         """Return the PI gains ``(k_p, k_i)`` of the line current loop (V/A, V/(A s)).
@@ -226,4 +233,5 @@ class SixStep(Control):
             omega_min=0.01 * m.p * drive.Omega_0 if self.omega_min is None else self.omega_min,
             theta_offset=self.theta_offset,
             **hall_record(core, self.hall_angle == "pll", self.pll_edges, self.hall_table),
+            derate=derate_record(core, self.derate, 0.5 / inv.f_pwm),
         ))

@@ -35,6 +35,7 @@ from .motorfile import (
     wrap,
 )
 from .ratings import KV_CONVENTIONS, RPM_PER_V, emf_for_kv, kv, pole_count_hint, pole_pairs
+from .thermal import Thermal, read_thermal, thermal_tables
 from .units import to_si
 
 __all__ = [
@@ -724,6 +725,10 @@ class Drive:
         Short name (catalog key or file stem).
     description : str
         Free text: where the data come from.
+    thermal : Thermal, optional
+        The thermal model (``[thermal]`` of a motor file, :mod:`bldclab.model.thermal`): network, loss routing and
+        the temperature coefficients of ``R``, the back-EMF and ``R_on``; ``None`` (default): none, the
+        parameters hold at every temperature.
 
     """
 
@@ -733,6 +738,7 @@ class Drive:
     sensors: Sensors = field(default_factory=Sensors)
     name: str = ""
     description: str = ""
+    thermal: Thermal | None = None
 
     def __post_init__(self) -> None:
         parts = (("motor", Motor), ("inverter", Inverter), ("mechanics", Mechanics), ("sensors", Sensors))
@@ -743,6 +749,10 @@ class Drive:
         for key in ("name", "description"):
             if not isinstance(getattr(self, key), str):
                 raise BldclabError(key, f"expected a string, got {getattr(self, key)!r}")
+        if self.thermal is not None:
+            if not isinstance(self.thermal, Thermal):
+                raise BldclabError("thermal", "must be a bldclab.model.thermal.Thermal, got "
+                                   f"{type(self.thermal).__name__}")
         half = 0.5 / self.inverter.f_pwm
         if not -half <= self.sensors.bemf_adc_at < half:
             raise BldclabError("sensors.bemf_adc_at", f"must be within [-T/2, T/2) = [{-half * 1e6:.4g}, "
@@ -776,6 +786,62 @@ class Drive:
         m = self.motor
         motor = dataclasses.replace(m, R=m.R * R, L=m.L * L, emf=m.emf.scaled(emf) if emf != 1.0 else m.emf)
         return dataclasses.replace(self, motor=motor, name=f"{self.name} (estimate)")
+
+    @property
+    def loss_sources(self) -> tuple[str, ...]:
+        """The loss sources (:data:`bldclab.model.thermal.LOSS_SOURCES`) this drive's parameters can produce.
+
+        ``cu`` with ``R > 0``, ``fe`` with iron losses, ``fric`` with ``B`` or ``tau_c``, ``sw`` with ``R_on``,
+        ``diode`` with ``V_f`` or ``r_d``, ``swloss`` with ``E_on`` or ``E_off``, ``rr`` with ``E_rr``, ``Rsrc`` with
+        ``R_src``: a thermal model must route each of them to a node.
+        """
+        m, inv, mech = self.motor, self.inverter, self.mechanics
+        have = {"cu": m.R > 0.0, "fe": m.has_iron_losses, "fric": mech.B > 0.0 or mech.tau_c > 0.0,
+                "sw": inv.R_on > 0.0, "diode": inv.V_f > 0.0 or inv.r_d > 0.0,
+                "swloss": inv.E_on > 0.0 or inv.E_off > 0.0, "rr": inv.E_rr > 0.0, "Rsrc": inv.R_src > 0.0}
+        return tuple(k for k, v in have.items() if v)
+
+    def at_temperature(self, *, winding: float | None = None, magnets: float | None = None,
+                       switches: float | None = None) -> Drive:
+        """Return the drive with ``R``, the back-EMF and ``R_on`` at the given temperatures (the plant when hot).
+
+        The linear laws of :class:`~bldclab.model.thermal.Thermal` (``R (1 + alpha_R (T_w - T_ref))``, the shapes
+        times ``1 + alpha_k (T_m - T_ref)``, ``R_on (1 + alpha_Ron (T_j - T_ref))``); a temperature not given stays
+        at ``T_ref``. A controller configured from the result knows the hot values (a temperature-compensated
+        firmware); pass the cold drive as ``estimate=`` to :func:`bldclab.simulate` for one that does not.
+
+        Parameters
+        ----------
+        winding, magnets, switches : float, optional
+            Temperatures (degC) of the winding, the magnets, the switches.
+
+        Returns
+        -------
+        Drive
+            Named ``<name> (<T> degC)``, with the same thermal model.
+
+        Raises
+        ------
+        BldclabError
+            Without a thermal model, or for a temperature whose factor is not positive.
+        """
+        th = self.thermal
+        if th is None:
+            raise BldclabError("thermal", f"drive {self.name!r} has no thermal model ([thermal] in its motor file)")
+        temps = {n: th.T_ref for n in (*th.winding, *th.switches, *([th.magnets] if th.magnets else []))}
+        mag = (th.magnets,) if th.magnets else ()
+        for names, T in ((th.winding, winding), (th.switches, switches), (mag, magnets)):
+            if T is not None:
+                check_number("temperature", T, lo=-273.15, lo_open=True)
+                temps.update({n: float(T) for n in names})
+        r, k, ron = th.scales(temps)
+        m = self.motor
+        motor = dataclasses.replace(m, R=m.R * r, emf=m.emf.scaled(k) if k != 1.0 else m.emf)
+        inverter = dataclasses.replace(self.inverter, R_on=self.inverter.R_on * ron)
+        label = ", ".join(f"{k_} {v:g} degC" for k_, v in (("winding", winding), ("magnets", magnets),
+                                                           ("switches", switches)) if v is not None)
+        return dataclasses.replace(self, motor=motor, inverter=inverter,
+                                   name=f"{self.name} ({label or 'T_ref'})")
 
     @property
     def Omega_0(self) -> float:
@@ -954,9 +1020,13 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
                 kw[key] = ss.quantity(key, dim)
         sensors = wrap("sensors", Sensors, **kw)
         ss.finish()
+    thermal = None
+    ths = top.sub("thermal")
+    if ths is not None:
+        thermal = read_thermal(ths)
     top.finish()
     return Drive(motor=motor, inverter=inverter, mechanics=mech, sensors=sensors, name=name,
-                 description=description)
+                 description=description, thermal=thermal)
 
 
 #: ``[motor.iron]`` keys of a steel grade given by its data instead of a built-in name (:class:`.iron.SteelGrade`).
@@ -1078,4 +1148,6 @@ def _drive_to_toml(d: Drive) -> str:
         if sen[key] == getattr(defaults, key):
             del sen[key]  # no back-EMF sensing settings (the default): written as before they existed
     out.append(toml_table("sensors", sen))
+    if d.thermal is not None:
+        out += thermal_tables(d.thermal)
     return "\n".join(out)

@@ -26,7 +26,8 @@ from decimal import Decimal, InvalidOperation
 
 from ..errors import BldclabError
 
-__all__ = ["ALIASES", "CASE_PAIRED", "DIMENSIONS", "PREFIXED", "PREFIXES", "per_unit", "to_si", "unit_factor"]
+__all__ = ["ALIASES", "CASE_PAIRED", "DIMENSIONS", "KELVIN", "PREFIXED", "PREFIXES", "per_unit", "to_si",
+           "unit_factor"]
 
 _RPM = 2.0 * math.pi / 60.0
 
@@ -40,7 +41,7 @@ DIMENSIONS: dict[str, dict[str, float]] = {
     "angle": {"rad": 1.0, "mrad": 1e-3, "deg": math.pi / 180.0},
     "speed": {"rad/s": 1.0, "rpm": _RPM, "r/min": _RPM, "krpm": 1e3 * _RPM},
     "frequency": {"Hz": 1.0, "kHz": 1e3, "MHz": 1e6},
-    "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9},
+    "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9, "min": 60.0, "h": 3600.0},
     "torque": {"N m": 1.0, "Nm": 1.0, "N*m": 1.0, "mN m": 1e-3},
     "inertia": {"kg m^2": 1.0, "kg m2": 1.0, "kg*m^2": 1.0, "g cm^2": 1e-7},
     "emf_constant": {"V s/rad": 1.0, "Vs/rad": 1.0, "mV s/rad": 1e-3, "N m/A": 1.0, "Nm/A": 1.0},
@@ -56,8 +57,18 @@ DIMENSIONS: dict[str, dict[str, float]] = {
     "density": {"kg/m^3": 1.0, "kg/dm^3": 1e3, "g/cm^3": 1e3},
     "resistivity": {"Ohm m": 1.0, "uOhm m": 1e-6, "uOhm cm": 1e-8, "Ohm mm^2/m": 1e-6},
     "specific_power": {"W/kg": 1.0},
+    # thermal (docs/thermal.md): absolute temperatures in degC (the datasheets' unit; kelvin through KELVIN below),
+    # differences in K, so a thermal resistance in K/W and in degC/W is the same number
+    "temperature": {"degC": 1.0, "\u00b0C": 1.0},
+    "thermal_resistance": {"K/W": 1.0, "degC/W": 1.0, "\u00b0C/W": 1.0, "mK/W": 1e-3},
+    "heat_capacity": {"J/K": 1.0, "kJ/K": 1e3, "J/degC": 1.0, "W s/K": 1.0, "Ws/K": 1.0},
+    "temperature_coefficient": {"1/K": 1.0, "%/K": 1e-2, "ppm/K": 1e-6, "1/degC": 1.0, "%/degC": 1e-2},
     "dimensionless": {"": 1.0},
 }
+
+#: Absolute temperature in kelvin, the one unit with an offset: ``"298.15 K"`` is 25 degC. Temperatures are held in
+#: degC (the canonical unit of the ``temperature`` dimension: a plain number is degC), so to_si subtracts this.
+KELVIN = 273.15
 
 #: SI prefixes and their powers of ten (``u`` for micro; ``µ`` and ``μ`` are read as ``u``).
 PREFIXES: dict[str, int] = {"Q": 30, "R": 27, "Y": 24, "Z": 21, "E": 18, "P": 15, "T": 12, "G": 9, "M": 6, "k": 3,
@@ -272,7 +283,8 @@ def to_si(value: object, dimension: str, field: str, source: str | None = None) 
     Returns
     -------
     float
-        The value in SI units (may be non-finite only if the input was; callers check ranges).
+        The value in SI units, temperatures in degC (may be non-finite only if the input was; callers check
+        ranges).
 
     Raises
     ------
@@ -293,6 +305,8 @@ def to_si(value: object, dimension: str, field: str, source: str | None = None) 
         number, unit = m.group(1), m.group(2)
         if " ".join(unit.split()) == "" and dimension != "dimensionless":
             return float(number)
+        if dimension == "temperature" and " ".join(unit.split()) == "K":
+            return float(number) - KELVIN
         return _scaled(number, unit_factor(unit, dimension, field, source))
     raise BldclabError(field, f"expected a number or a string like '1.5 {next(iter(units))}', "
                        f"got {type(value).__name__}", source)

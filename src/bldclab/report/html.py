@@ -83,7 +83,8 @@ WAVEFORM_SUB = 4
 #: Files of a results directory the report reads; the others it lists.
 _KNOWN = ("simulated.csv", "analytic.csv", "table1.json", "verdict.txt", "waveforms.csv", "dynamometer.csv",
           "methods.csv", "methods_traces.csv", "methods_compared.svg", "faults.csv", "effmap.csv",
-          "effmap_difference.csv", "effmap_difference.svg", "efficiency.csv", "hall.csv", "hall.svg")
+          "effmap_difference.csv", "effmap_difference.svg", "efficiency.csv", "hall.csv", "hall.svg", "desync.csv",
+          "desync.json", "desync.svg")
 
 _SINE, _SQUARE, _GRAY = "#1f77b4", "#d62728", "#7f7f7f"
 _PHASE = {"a": "#1f77b4", "b": "#ff7f0e", "c": "#2ca02c"}
@@ -312,6 +313,12 @@ class Results:
         ``hall.csv`` of ``bldclab hall`` written into the same directory.
     hall_svg : str or None
         ``hall.svg`` of ``bldclab hall``, made inline-safe.
+    desync : pandas.DataFrame or None
+        ``desync.csv`` of ``bldclab sensorless`` written into the same directory (the desync map's points).
+    desync_summary : dict or None
+        ``desync.json`` of ``bldclab sensorless``: the disturbance, the axes, the table and the summary lines.
+    desync_svg : str or None
+        ``desync.svg`` of ``bldclab sensorless``, made inline-safe.
     files : list of str
         Every file of the directory.
     source : str
@@ -336,6 +343,9 @@ class Results:
     efficiency: pd.DataFrame | None = None
     hall: pd.DataFrame | None = None
     hall_svg: str | None = None
+    desync: pd.DataFrame | None = None
+    desync_summary: dict[str, Any] | None = None
+    desync_svg: str | None = None
     files: list[str] = dataclasses.field(default_factory=list)
     source: str = ""
 
@@ -433,10 +443,27 @@ class Results:
         hsvg = None
         if hall is not None and files.get("hall.svg"):
             hsvg = _clean_svg(files["hall.svg"].decode("utf-8", "replace"))
+        dsync = _csv(files, "desync.csv", ("outcome", "reason", "truth_lost"), source, required=False)
+        dsum: dict[str, Any] | None = None
+        dsvg = None
+        if dsync is not None:
+            dsync["reason"] = dsync["reason"].fillna("")
+            if files.get("desync.json"):
+                try:
+                    dsum = json.loads(files["desync.json"].decode("utf-8"))
+                    if not isinstance(dsum, dict) or not all(isinstance(dsum.get(k), list) for k in ("summary",
+                                                                                                      "table")):
+                        raise ValueError("no summary and table lists")
+                except (UnicodeDecodeError, ValueError) as exc:
+                    raise BldclabError("desync.json", f"is not a desync map summary of bldclab ({exc})",
+                                       source) from None
+            if files.get("desync.svg"):
+                dsvg = _clean_svg(files["desync.svg"].decode("utf-8", "replace"))
         return cls(manifest=manifest, drive=drive, simulated=sim, analytic=an, table1=quantities, verdict=verdict,
                    waveforms=wf, dynamometer=dyno, methods=methods, methods_traces=traces, methods_svg=svg,
                    faults=faults, effmap=emap, effmap_difference=ediff if emap is not None else None,
                    effmap_svg=esvg if emap is not None else None, efficiency=eff, hall=hall, hall_svg=hsvg,
+                   desync=dsync, desync_summary=dsum, desync_svg=dsvg,
                    files=sorted(files), source=source)
 
 
@@ -884,6 +911,36 @@ def _section_hall(r: Results) -> str:
     return "".join(out)
 
 
+def _section_desync(r: Results) -> str:
+    if r.desync is None:
+        return ""
+    sm = r.desync_summary or {}
+    what = f" ({_e(str(sm['motor']))}: {_e(str(sm.get('disturbance', '')))})" if "motor" in sm else ""
+    out = ['<section id="desync"><h2>9. Sensorless drive: the desync map</h2>'
+           "<p>From the files <code>bldclab sensorless ... --out</code> wrote into this directory (desync.csv, "
+           f"desync.json, desync.svg){what}: the sensorless six-step drive (SixStepSensorless) on the switching plant "
+           "with its propeller load, one throttle step (or start-up) per point. <i>sync</i>: held; <i>rec</i>: the "
+           "controller flagged a desync, restarted and is in sync at the end; <i>LOST</i>: not back; <i>UNDET</i>: "
+           "the plant's true rotor angle put a commutation out of sync and the controller flagged nothing; "
+           "<i>nostart</i>: not in closed loop at the step. After the colon the controller's reason (hidden: the "
+           "demagnetisation hid the crossing; timeout, jump, stall, startfail, trip).</p>"]
+    if sm.get("table"):
+        out.append("<pre>" + _e("\n".join(str(x) for x in sm["table"])) + "</pre>")
+    out.append(_verdict_list([str(x) for x in sm.get("summary", [])]))
+    cols = [c for c in ("outcome", "reason", "truth_lost", "t_desync_ms", "angle_max_deg", "demag_deg", "window_deg",
+                        "speed_step_rpm", "speed_end_rpm", "i_peak") if c in r.desync.columns]
+    axes = [str(a["name"]) for a in (sm.get("x"), sm.get("y")) if isinstance(a, dict) and a.get("name") in
+            r.desync.columns]
+    out.append('<details><summary>Every point</summary><div class="scroll">'
+               + _frame_table(r.desync, [*axes, *cols]) + "</div></details>")
+    if r.desync_svg is not None:
+        out.append(f'<figure class="static">{r.desync_svg}<figcaption><b>The desync map</b> (desync.svg, a static '
+                   "figure): the outcome and reason of each point, and the margin between the expected crossing and "
+                   "the end of the demagnetisation after the step.</figcaption></figure>")
+    out.append("</section>")
+    return "".join(out)
+
+
 def _settings_rows(prefix: str, settings: Any) -> list[list[str]]:
     rows: list[list[str]] = []
     if isinstance(settings, dict):
@@ -982,7 +1039,7 @@ def render(results: Results, *, report_command: str, created: str | None = None)
     name = r.drive.name or "(unnamed drive)"
     body = [_section_motor(r, page), _section_table1(r), _section_characteristics(r, page), _section_efficiency(r),
             _section_waveforms(r, page), _section_paper2(r, page), _section_faults(r), _section_effmap(r),
-            _section_hall(r), _section_provenance(r, report_command, created)]
+            _section_hall(r), _section_desync(r), _section_provenance(r, report_command, created)]
     toc = [("verdict", "Verdict"), ("motor", "Motor"), ("table1", "Table I"), ("characteristics", "Characteristics"),
            *([("efficiency", "Efficiency counts")] if r.efficiency is not None else []), ("waveforms", "Waveforms")]
     if r.methods is not None or r.methods_traces is not None or r.methods_svg is not None:
@@ -993,6 +1050,8 @@ def render(results: Results, *, report_command: str, created: str | None = None)
         toc.append(("effmap", "Efficiency maps"))
     if r.hall is not None:
         toc.append(("hall", "Hall errors"))
+    if r.desync is not None:
+        toc.append(("desync", "Desync map"))
     toc.append(("provenance", "How it was produced"))
     nav = "".join(f'<a href="#{k}">{_e(v)}</a>' for k, v in toc)
     n = len(set(r.simulated["Omega_pu"]))

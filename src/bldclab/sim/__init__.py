@@ -20,11 +20,13 @@ from numpy.typing import ArrayLike, NDArray
 from .._core import core
 from .._version import __version__
 from ..control import Control
+from ..control.user import run_isolated
 from ..errors import BldclabError, PlausibilityError
 from ..model.motor import Drive
 from ..model.units import per_unit, to_si
 from . import plausibility as _plaus
 from .results import Metrics, SimResult
+from .thermal import Coupler, ThermalCoupling
 
 __all__ = ["TRACE_LIMIT", "Fault", "PerUnit", "Piecewise", "Scenario", "parse_profile", "simulate", "trace_bytes",
            "trace_rows"]
@@ -577,7 +579,7 @@ def samples_of(drive: Drive, duration: float) -> int:
 
 def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str = "error",
              estimate: Drive | None = None, progress: Callable[[int, int], None] | None = None,
-             max_trace_bytes: int | None = TRACE_LIMIT) -> SimResult:
+             max_trace_bytes: int | None = TRACE_LIMIT, thermal: ThermalCoupling | None = None) -> SimResult:
     """Simulate the drive in closed loop with a C controller.
 
     Plausibility guards (:mod:`bldclab.sim.plausibility`) run before the run (PWM frequency against ``L/R`` and the
@@ -609,6 +611,13 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     max_trace_bytes : int or None
         Refuse (before running) a scenario whose trace would take more memory than this (bytes; default
         :data:`TRACE_LIMIT`, 2 GB; ``None``: no bound). Everything but the trace is bounded whatever the duration.
+    thermal : ThermalCoupling, optional
+        Couple the plant with the drive's thermal network (``[thermal]`` of its motor file): the plant runs in
+        chunks of ``thermal.h`` seconds, each chunk's losses heat the network, the temperatures set ``R``, the
+        back-EMF and ``R_on`` for the next (:mod:`bldclab.sim.thermal`). The result's ``thermal`` attribute holds
+        the :class:`~bldclab.sim.thermal.ThermalTrace`; ``meta["thermal"]`` its summary. The controller is
+        configured from the drive at ``T_ref`` (``estimate`` if given), as a firmware that does not know the
+        temperature.
 
     Returns
     -------
@@ -633,11 +642,32 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     if not isinstance(scenario, Scenario):
         raise BldclabError("scenario", f"expected a bldclab.Scenario, got {type(scenario).__name__}")
     scenario = scenario.resolved(drive)
+    if thermal is not None:
+        if not isinstance(thermal, ThermalCoupling):
+            raise BldclabError("thermal", f"expected a bldclab.sim.thermal.ThermalCoupling, got "
+                               f"{type(thermal).__name__}")
+        if scenario.window is not None and not scenario.trace:
+            raise BldclabError("scenario.window", "a thermal run reads the losses of every chunk, which a run "
+                               "without a trace integrates only inside its metric window: leave window unset")
     need = trace_bytes(drive, scenario)
     if max_trace_bytes is not None and need > max_trace_bytes:
         raise BldclabError("scenario.trace", f"a run of {scenario.duration:.4g} s keeps {trace_rows(drive, scenario)} "
                            f"trace rows, {need / 1e9:.3g} GB (max_trace_bytes {max_trace_bytes / 1e9:.3g} GB): thin "
                            "it with trace_every=N, drop it with trace=False, or raise max_trace_bytes")
+    if control.isolated:  # user code: in a watched child process (bldclab.control.user)
+        result: SimResult = run_isolated(
+            control, lambda watch: _run(drive, control, scenario, check, estimate, None, watch, thermal),
+            0.5 / drive.inverter.f_pwm, progress, samples_of(drive, scenario.duration))
+        return result
+    return _run(drive, control, scenario, check, estimate, progress, None, thermal)
+
+
+def _run(drive: Drive, control: Control, scenario: Scenario, check: str, estimate: Drive | None,
+         progress: Callable[[int, int], None] | None, watch: Any, thermal: ThermalCoupling | None = None) -> SimResult:
+    """Run the simulation of :func:`simulate` after its checks.
+
+    ``watch``: the progress record of an isolated run; ``thermal``: the coupling with the thermal network.
+    """
     c = core()
     control = control.with_delay(scenario.delay)
     keep: list[object] = []
@@ -660,14 +690,9 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         rec["fault"]["t_on"][0, j] = f.t_on
         rec["fault"]["t_off"][0, j] = f.t_off
         rec["fault"]["value"][0, j] = f.value
-    info = c.controllers[control.c_name]
-    cp = control.c_record(drive if estimate is None else estimate, c, n)
-    keep.append(cp)
-    cparams = cp.record
-    cstate = c.opaque(info.state)
-    rc = c.controller_init(info, cparams, cstate)
-    if rc != 0:
-        raise BldclabError(f"control ({type(control).__name__})", "the C controller rejected its parameters")
+    slot = control.c_slot(drive if estimate is None else estimate, c, n, watch=watch)
+    keep.append(slot)
+    cparams = slot.record.record
 
     inputs = c.record("bc_sim_inputs")
     v_dc = drive.inverter.V_dc if scenario.v_dc is None else scenario.v_dc
@@ -689,9 +714,9 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     cfg["plant"] = plant.ctypes.data
     cfg["sensors"] = sensors.ctypes.data
     cfg["sense"] = sense.ctypes.data
-    cfg["ctrl"]["step"] = info.step_ptr
-    cfg["ctrl"]["params"] = cparams.ctypes.data
-    cfg["ctrl"]["state"] = cstate.ctypes.data
+    cfg["ctrl"]["step"] = slot.step
+    cfg["ctrl"]["params"] = slot.params
+    cfg["ctrl"]["state"] = slot.state
     cfg["delay"] = scenario.delay
     cfg["trace_every"] = scenario.trace_every
     cfg["trace_sub"] = scenario.trace_sub
@@ -709,7 +734,15 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     n_rows = trace_rows(drive, scenario)
     rows = np.zeros(n_rows, dtype=c.trace_dtype)
     n_written = 0
-    for j0, j1 in _chunks(n):
+    chunks = _chunks(n)
+    coupler = None
+    if thermal is not None:
+        coupler = Coupler(thermal, drive, c.acc_names)
+        m = max(1, round(thermal.h / t_half))
+        chunks = [(j0, min(n, j0 + m)) for j0 in range(0, n, m)]
+        coupler.start(c.view(state, "bc_sim_state")[0]["plant"]["acc"])
+        coupler.apply(c.lib, cfg, state)
+    for j0, j1 in chunks:
         pieces = []
         for field, prof in profiles.items():
             a = prof.piece(j0, j1)
@@ -717,12 +750,15 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
             inputs[field] = 0 if a is None else a.ctypes.data
         written = ctypes.c_int64(0)
         ptr = rows.ctypes.data + n_written * rows.itemsize if n_rows else None
-        rc = c.lib.bc_sim_run(cfg.ctypes.data, state.ctypes.data, inputs.ctypes.data, j1 - j0, ptr,
-                              n_rows - n_written, ctypes.byref(written))
+        rc = slot.run(c, cfg, state, inputs, j1 - j0, ptr, n_rows - n_written, written)
         if rc != 0:
             raise RuntimeError(f"bc_sim_run failed with code {rc}")  # a bug, not bad input: inputs were validated
         n_written += written.value
-        if progress is not None:
+        if coupler is not None:
+            pst = c.view(state, "bc_sim_state")[0]["plant"]
+            coupler.chunk(float(pst["t"]), pst["acc"])
+            coupler.apply(c.lib, cfg, state)
+        if progress is not None and (coupler is None or j1 == n or j1 % CHUNK < j1 - j0):
             progress(j1, n)
     rows = rows[:n_written]
 
@@ -737,11 +773,11 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     for name, unit, doc in zip(c.trace_names, c.trace_units, c.trace_docs, strict=True):
         out_name = _RENAMED.get(name, name)
         if name.startswith("d") and name[1:].isdigit():
-            label = info.diag[int(name[1:])]
+            label = slot.diag[int(name[1:])]
             if not label:
                 continue
             out_name = label
-            unit = _DIAG_UNITS.get(label, "-")
+            unit = slot.units[int(name[1:])] or _DIAG_UNITS.get(label, "-")
         signals[out_name] = rows[name]  # a strided view of the record array: no copy
         units[out_name] = unit
         docs[out_name] = doc
@@ -770,6 +806,9 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
     except PlausibilityError as exc:  # the inputs' warnings are its cause: they lead the message
         raise _plaus.cause_first(exc, issued) from None
     res.metrics = metrics
+    if coupler is not None:
+        res.thermal = coupler.trace()
+        meta["thermal"] = res.thermal.summary()
     return res
 
 
@@ -832,7 +871,7 @@ def _guards_before(drive: Drive, control: Control, cparams: np.ndarray, imposed:
     names = cparams.dtype.names or ()
     i_limit = float(np.ravel(cparams["i_max"])[0]) if "i_max" in names else None
     findings += _plaus.check_reference(drive, control, peak["ref"], i_limit)
-    return _plaus.apply(findings, check, stacklevel=4)
+    return _plaus.apply(findings, check, stacklevel=5)
 
 
 def _guards_after(drive: Drive, res: SimResult, imposed: bool, check: str) -> list[str]:
@@ -847,7 +886,7 @@ def _guards_after(drive: Drive, res: SimResult, imposed: bool, check: str) -> li
         findings += _plaus.check_pwm(drive, max(w), time_constant=False)
         if res.metrics is not None:
             findings += _plaus.check_steady(drive, res)
-    return _plaus.apply(findings, check, stacklevel=4)
+    return _plaus.apply(findings, check, stacklevel=5)
 
 
 def _omega_integral(st: np.void, scenario: Scenario, imposed: bool, p: int) -> float:

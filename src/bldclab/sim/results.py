@@ -213,6 +213,7 @@ class SimResult:
         self.docs = docs
         self.metrics = metrics
         self.meta = meta
+        self.thermal: Any = None  # the ThermalTrace of a run coupled with its thermal network (bldclab.sim.thermal)
 
     def __getitem__(self, name: str) -> NDArray[np.float64]:
         """Return the signal ``name`` (``"flags"``: the controller flags ``ctrl_flags``, the name before 0.x)."""
@@ -224,7 +225,7 @@ class SimResult:
 
     def __getattr__(self, name: str) -> NDArray[np.float64]:
         """Return the signal ``name`` as an attribute."""
-        if name.startswith("_") or name in ("signals", "units", "docs", "metrics", "meta"):
+        if name.startswith("_") or name in ("signals", "units", "docs", "metrics", "meta", "thermal"):
             raise AttributeError(name)
         try:
             return self[name]

@@ -34,9 +34,10 @@
  *
  *         d_cmd <- d_cmd + clamp(d_ref - d_cmd, -duty_rate T_s, +duty_rate T_s)
  *
- *     and the duty applied is m = min(d_state, d_lim), d_state = align_duty (ALIGN), min(ramp_duty + ramp_vf Omega, 1)
- *     (RAMP, Omega the speed of 5: with ramp_vf = k_e / (p V_dc) the back-EMF is compensated and the current stays
- *     near ramp_duty V_dc / (2 R)), max(d_cmd, duty_min) (CLOSED; d_cmd starts from the ramp's duty at the handover).
+ *     and the duty applied is m = min(d_state, d_lim), d_state = align_duty (ALIGN), min(ramp_duty + ramp_vf
+ *     Omega_ol, 1) (RAMP, Omega_ol the forced speed of 5, not a crossing's: with ramp_vf = k_e / (p V_dc) the back-EMF
+ *     is compensated and the current stays near ramp_duty V_dc / (2 R); a false crossing at start-up cannot raise
+ *     it), max(d_cmd, duty_min) (CLOSED; d_cmd starts from the ramp's duty at the handover).
  *     Current limit (use_current,
  *     i_limit > 0), an integrating limiter on the largest measured phase current (d_lim = 1 at init and after a
  *     safe state; without a limit always 1):
@@ -44,6 +45,20 @@
  *         d_lim <- clamp(d_lim + k_limit (i_limit - max_x |i_x|) T_s, 0, 1)
  *
  *     A current-limited alignment: align_duty = 1 and i_limit the alignment current.
+ *     Speed-dependent duty limit (dlim_d0 > 0; no current sensor needed, as an ESC's low-speed throttle limit): in
+ *     CLOSED m <= dlim_d0 sqrt(1 + (Omega dlim_tau)^2) + dlim_vf Omega, Omega the speed estimate of 7. With
+ *     dlim_vf = 2 k_phi / (p V_dc) (the back-EMF's duty), dlim_d0 = 2 (R + R_on) I / V_dc and dlim_tau = L / (R +
+ *     R_on) (the pair's impedance at the electrical speed) the pair's current stays near I whatever the throttle
+ *     does: a throttle step cannot trip the drive at low speed.
+ *     Demagnetisation limiter (demag_max > 0), at each crossing in CLOSED whose sector's demagnetisation was
+ *     measured (6): r = Omega t_demag / (pi/6 + adv), the share of the window from the commutation to the crossing
+ *     that the clamp took; the duty cap
+ *
+ *         d_dm <- clamp(min(d_dm, m + 0.05) + 0.2 (demag_max - r), 0, 1)       (m: the duty applied)
+ *
+ *     falls while the clamp takes more than demag_max of the window (the current, and with it the clamp, falls
+ *     with the duty) and recovers while it takes less; m <= d_dm in CLOSED. A blind commutation (9) scales d_dm by
+ *     0.7. This keeps the crossing visible through a throttle step whatever the load does (docs/sensorless.md).
  *
  *  3. States. STOP (all legs off, coasting: not the safe state, no BC_FLAG_SAFE) -> ALIGN (align_time > 0) or RAMP
  *     (direct start, align_time = 0) -> CLOSED; a desync, |ref| <= ref_stop or a change of sign of ref goes back to
@@ -52,9 +67,13 @@
  *     lasted restart_wait, or STOP has lasted restart_max: a rotor still turning after a desync or a stop coasts down
  *     before a new start, and a reverse (sign change) is a stop followed by a start the other way.
  *
- *  4. ALIGN: the pair of sector 0 driven forward (a+, b-) at align_duty for align_time. The rotor settles where the
- *     pair's torque is zero and restoring: theta_e = 5 pi/6, the boundary between sectors 1 and 2. RAMP then
- *     commands sector 2 (forward: the rotor at its start) or 1 (backward: the rotor at its end) from t_a.
+ *  4. ALIGN at align_duty for align_time, all three legs driven with the pattern chop (two phases in parallel against
+ *     the third, so that the motion induces a current in the parallel pair's loop that damps the rotor: a drone
+ *     rotor has almost no friction, and a pair alone, whose loop sees no back-EMF at its own equilibrium, leaves it
+ *     swinging): for the first third a+ and b+ against c- (the rotor to theta_e = 4 pi/3), then a+ against b- and
+ *     c- (to theta_e = pi, the middle of sector 2; its dead point 0 is not where the first step leaves the rotor).
+ *     RAMP then commands sector 2 from t_a in either direction, for the open-loop time of 30 degrees. A direct start
+ *     (align_time = 0) commands sector 2 (forward) or 1 (backward) for a whole sector.
  *
  *  5. RAMP (forced commutation). The open-loop speed Omega_ol(t) = min(ramp_w0 + ramp_accel t, ramp_w1) (electrical
  *     rad/s, t since the ramp began); a forced sector begun at t_c with Omega_ol = w ends when the open-loop angle
@@ -149,6 +168,20 @@
  *     voltage m, pos and neg swapped backward. BC_CHOP_PWMPWM chops the incoming phase (the one that entered the
  *     pair at the last commutation) during the first half of the sector (Omega (t_a - t_c) < pi/6) and the
  *     continuing one after; the other patterns chop pos.
+ *     Fast demagnetisation (fast_demag = 1; BC_CHOP_SYNC, _HIGH, _PWMPWM; not in a start's first sector, which
+ *     has no outgoing phase): from a commutation until the detector
+ *     has seen the demagnetisation over (the pre level, 6) or a crossing, the continuing phase (in both pairs) chops
+ *     instead: as BC_LEG_PWM with its average at the same pair voltage m (sync), else its own switch at m. The
+ *     outgoing phase's current, averaged over the PWM, then falls with (2 - m) V_dc / 3 plus the back-EMF term
+ *     instead of m V_dc / 3 when the pattern would chop the incoming phase (docs/sensorless.md, the closed forms):
+ *     at low duty and high current the difference between a visible crossing and a hidden one.
+ *     When it chops the negative leg, the pair's off-time holds both its terminals at V_dc, and between the clamp's
+ *     end and the sample that sees it the floating phase (still on its pre side, e_F > 0) can clamp to V_dc in the
+ *     off-times, where a comparator with an offset reads the post level: in such a sector (cmp_gate = 1; with a
+ *     comparator of no offset the clamp reads exactly the reference and changes nothing) the comparator is read
+ *     only at the samples in the pair's on-time (an active switch state is centred at the carrier peak: the
+ *     valleys for the complementary negative leg of BC_CHOP_SYNC, the peaks for a lower switch chopping; the
+ *     first sample is taken to be at a valley) until the crossing.
  *
  *  9. Timeout (CLOSED). No crossing accepted by t_zc,prev + zc_timeout T60 (zc_timeout = 1.5: when the next
  *     commutation would be due without advance): with fewer than miss_max misses in a row, a blind commutation at
@@ -244,6 +277,12 @@ typedef struct {
     float i_limit;       /* current limit, A (>= 0; 0: none) */
     float k_limit;       /* current limiter gain, 1/(A s) (>= 0) */
     float v_max;         /* largest plausible DC-bus measurement, V (> 0) */
+    int32_t fast_demag;  /* 1: the continuing phase chops until the demagnetisation is seen over (8); 0: never */
+    float dlim_d0;       /* speed-dependent duty limit (2), CLOSED: m <= dlim_d0 + dlim_vf Omega; 0: none, [0, 1] */
+    float dlim_vf;       /* its slope, 1/(rad/s) electrical (>= 0) */
+    float dlim_tau;      /* the inductive part: dlim_d0 sqrt(1 + (Omega dlim_tau)^2), s (>= 0) */
+    float demag_max;     /* demagnetisation limiter (2): largest demagnetisation angle / (pi/6 + adv), [0, 1); 0: off */
+    int32_t cmp_gate;    /* 1: in a fast-demagnetisation sector on the negative leg, the comparator in the on-time only */
 } bc_bemf_params;
 
 typedef struct {
@@ -261,6 +300,9 @@ typedef struct {
     /* commutation */
     int32_t sector;        /* sector in force at the end of the last output's interval, -1 none */
     int32_t incoming;      /* phase that entered the pair at the last commutation, -1 none */
+    int32_t outgoing;      /* phase that left the pair at the last commutation, -1 none (a start's first sector) */
+    int32_t fd_neg;        /* fast demagnetisation chops the negative leg in this sector (its off-time at V_dc) */
+    uint32_t k_samp;       /* samples since init (even: carrier valley, odd: carrier peak) */
     uint32_t t_c;          /* tick of the commutation that began the sector */
     int32_t pending;       /* a commutation is scheduled at t_next */
     uint32_t t_next;       /* tick of the scheduled commutation */
@@ -277,6 +319,8 @@ typedef struct {
     int32_t misses;        /* blind commutations in a row */
     float t_demag;         /* last measured demagnetisation, s */
     float err;             /* last commutation error, rad */
+    float d_dm;            /* duty cap of the demagnetisation limiter */
+    float m_app;           /* duty applied at the last sample */
     /* open loop */
     float w_ol;            /* open-loop speed at the start of the forced sector, electrical rad/s */
     float tau_ol;          /* duration of the forced sector, s */

@@ -31,11 +31,12 @@ static inline int bc_inv_slopes(const float u[3], const float a[3], const float 
                                 float slope[3])
 {
     int n = 0;
-    float sum = 0.0f;
+    float sum = 0.0f, w[3]; /* w = (u - a) - b, once per phase */
     for (int x = 0; x < 3; ++x) {
+        w[x] = u[x] - a[x] - b[x];
         if (conn[x]) {
             ++n;
-            sum += u[x] - a[x] - b[x];
+            sum += w[x];
         }
     }
     if (n < 2) {
@@ -43,7 +44,7 @@ static inline int bc_inv_slopes(const float u[3], const float a[3], const float 
         return BC_INV_NO_PATH;
     }
     float vn = sum / (float)n;
-    for (int x = 0; x < 3; ++x) slope[x] = conn[x] ? (u[x] - a[x] - b[x] - vn) / L : 0.0f;
+    for (int x = 0; x < 3; ++x) slope[x] = conn[x] ? (w[x] - vn) / L : 0.0f;
     return n;
 }
 

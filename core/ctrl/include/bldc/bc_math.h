@@ -13,8 +13,9 @@
  *                         g(d) < 0 replaces a, else b. The end that stays has its g halved, so the bracket
  *                         shrinks from both sides instead of regula falsi's one-sided crawl: BC_ROOT_ILLINOIS
  *                         halves it when the same end stayed twice in a row (the Illinois method, superlinear),
- *                         BC_ROOT_HALVE every time it stays (bc_sixstep's predictive solve has always used it;
- *                         kept so its duties stay bit for bit what they were; slower on a smooth root).
+ *                         BC_ROOT_HALVE every time it stays (slower on a smooth root: bc_sixstep's predictive
+ *                         solve used it until its worst closed-loop step, 7,748 instructions with up to 12
+ *                         evaluations of the prediction, came down to 4,782 with BC_ROOT_ILLINOIS).
  *                         Stops when |g(d)| <= tol, b - a < width, g(d) is not finite, or after max_it
  *                         evaluations; returns the last d
  *                         (evaluated, or the next estimate when max_it ran out), clamped to the final bracket

@@ -225,6 +225,7 @@
 
 #include <stdint.h>
 
+#include "bldc/bc_derate.h"
 #include "bldc/bc_fluxobs.h"
 #include "bldc/bc_guard.h"
 #include "bldc/bc_hall.h"
@@ -319,6 +320,8 @@ typedef struct {
     float restart_wait; /* legs off after a failed start or a lost lock, s (>= 0) */
     float if_damp;      /* swing damping of ALIGN, A/V (>= 0) */
     float t_dead;       /* the inverter's dead time, s (0 <= t_dead < ts): the observer's voltage is corrected */
+    bc_derate_params derate; /* temperature derating of the current limit i_s_max (bc_derate.h) from in->temp; no
+                                channel enabled (all zero): none. The start controller derates by six.derate. */
 } bc_sine_params;
 
 typedef struct {
@@ -334,6 +337,9 @@ typedef struct {
     bc_guard_state guard;    /* input guard: the over-current latch (bc_guard.h) */
     int32_t six_run; /* start mode: the square-wave controller runs (0: coasting, flying_start) */
     int32_t n_quiet; /* samples since the last Hall edge while coasting */
+    bc_derate_state derate; /* the derating's filter */
+    int32_t derate_on;      /* a derating channel is enabled */
+    float derate_f;         /* its factor at the last sample (1 without) */
     /* shape-aware speed limit (5.), filled by bc_sine_init */
     int32_t lim_shape; /* 1: the table below is used; 0: (23) with R */
     float lim_w_top;   /* w_top: the table spans |omega_e| < w_top, electrical rad/s */

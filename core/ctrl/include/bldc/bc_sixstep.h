@@ -132,6 +132,7 @@
 
 #include <stdint.h>
 
+#include "bldc/bc_derate.h"
 #include "bldc/bc_guard.h"
 #include "bldc/bc_hall.h"
 #include "bldc/bc_pi.h"
@@ -185,6 +186,8 @@ typedef struct {
     int32_t hall_mode;       /* Hall angle: BC_HALL_INTERP (46) or BC_HALL_PLL (bc_hall.h) */
     float hall_pll_edges;    /* BC_HALL_PLL: loop time constant in edges (1 .. 1000) */
     bc_hall_table hall_table; /* calibrated edge angles (set = 0: nominal; bc_hallcal.h) */
+    bc_derate_params derate;  /* temperature derating of the current reference's limit i_max (bc_derate.h) from
+                                 in->temp; no channel enabled (all zero): none */
 } bc_sixstep_params;
 
 typedef struct {
@@ -201,6 +204,9 @@ typedef struct {
     int32_t hyst_on;       /* hysteresis: 1 switch on */
     bc_guard_params guard_p; /* derived in init: i_max, v_max */
     bc_guard_state guard;    /* input guard: the over-current latch (bc_guard.h) */
+    bc_derate_state derate;  /* the derating's filter */
+    int32_t derate_on;       /* a derating channel is enabled */
+    float derate_f;          /* its factor at the last sample (1 without) */
 } bc_sixstep_state;
 
 /* Validate the parameters (finite, in range) and reset the state. BC_OK or BC_ERR_PARAM. */

@@ -90,6 +90,8 @@ typedef struct {
     float v_neutral;      /* ADC sample of the comparators' reference (virtual star point or half the bus), V */
     uint32_t n_adc;       /* ADC conversions since start (wraps): a new one when it changes */
     uint32_t tick_adc;    /* capture-timer tick of the last conversion's sampling instant */
+    float temp[2];        /* temperature sensors, degC: [0] the winding's, [1] the switches' (heat sink or board);
+                             NaN where none is fitted (a controller's derating then reads a sensor fault) */
 } bc_ctrl_in;
 
 /* What a controller returns at one sample. The legs apply to the next half period (with the runner's one-sample

@@ -329,6 +329,11 @@ typedef struct {
                                    updates the derivative and the power flows from them) */
     bc_plant_aux a[2];
     int32_t cur;                /* which of the double buffers w, f, fd, a is current; the other takes a step's end */
+    int32_t out_ok;             /* 1: a[cur] is what core() computes at the stored state (not only at the same
+                                   instant: the angle's wrap by 2 pi changes the rounding), for bc_plant_output */
+    int32_t th_ok;              /* 1: th_next holds the next angle bound in the direction of motion */
+    double th_next;             /* the nearest bound of the back-EMF pieces and Hall intervals ahead, rad (kept
+                                   while the pieces and intervals are; an angle event recomputes it) */
 } bc_plant_work;
 
 typedef struct {

@@ -36,6 +36,9 @@ typedef struct {
     uint64_t rng;       /* xorshift64* state */
     int32_t has_spare;  /* Box-Muller keeps one normal variate */
     double spare;
+    double edge_t;      /* the last Hall edge time converted to a capture tick (NaN: none yet), s */
+    double edge_f;      /* ... at this timer frequency, Hz */
+    uint32_t edge_tick; /* ... its tick (an edge is rare: the conversion is kept) */
 } bc_sensor_state;
 
 int bc_sensor_init(const bc_sensor_params *p, bc_sensor_state *s);

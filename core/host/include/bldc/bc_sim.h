@@ -76,7 +76,8 @@
     X(d6, "-", "controller diagnostic 6")                                                           \
     X(d7, "-", "controller diagnostic 7")                                                           \
     X(flags, "-", "controller flags")                                                               \
-    X(hw_trip, "-", "1 once the inverter's hardware over-current trip has switched it off")
+    X(hw_trip, "-", "1 once the inverter's hardware over-current trip has switched it off")          \
+    X(t_at, "s", "instant of the commutation timer's leg change in the row (bc_ctrl_out.has_at); -1: none")
 
 typedef struct {
 #define BC_TRACE_MEMBER(name, unit, doc) double name;
@@ -179,8 +180,10 @@ typedef struct {
     int32_t half_in;           /* current half period started inside the window */
     int32_t row_open;          /* a trace row is being accumulated */
     bc_trace_row row;          /* the row being accumulated */
+    double at_time;            /* instant of the timed leg change applied in the current sample, s (-1: none) */
     double row_acc0[BC_ACC_N];
     double row_tmin, row_tmax;
+    float temp[2];             /* what the temperature sensors read (bc_ctrl_in.temp), degC; NaN: none */
 } bc_sim_state;
 
 /* Validate the configuration and start: plant at t = 0 with the given angle, speed, currents and source voltage;
@@ -191,6 +194,10 @@ int bc_sim_init(const bc_sim_config *cfg, bc_sim_state *s, double theta0, double
 /* Temperature between chunks of a run (bc_plant_set_thermal on the run's plant): R r_scale, k_scale times the
  * back-EMF, R_on ron_scale from the next sample on. BC_ERR_PARAM for a scale that is not finite and > 0. */
 int bc_sim_set_thermal(const bc_sim_config *cfg, bc_sim_state *s, double r_scale, double k_scale, double ron_scale);
+
+/* What the controller's temperature sensors read from the next sample on (bc_ctrl_in.temp: [0] winding, [1]
+ * switches), degC; NaN: no sensor (the value after init). A thermal model calls it between chunks of a run. */
+int bc_sim_set_temperatures(const bc_sim_config *cfg, bc_sim_state *s, double T_winding, double T_switches);
 
 /* Run n samples. Writes complete trace rows into rows[0 .. rows_cap) and their count into *rows_written.
  * Returns BC_OK, BC_ERR_PARAM (bad config/inputs) or BC_ERR_SIZE (rows_cap too small; rows beyond it dropped). */

@@ -1,0 +1,153 @@
+"""bldclab.analysis.sensorless against physics: the commutation measurement against a drive that commutates at the
+exact angles, the sensorless drive's commutation angle error and its torque and efficiency beside Hall six-step,
+the slowest speed against the closed form of a comparator offset, and the demagnetisation time against the circuit's
+closed forms."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+import bldclab as bl
+from bldclab.analysis import sensorless as sl
+from bldclab.errors import BldclabError
+
+
+def test_commutation_measurement_against_exact_commutation():
+    """Six-step commutating at the encoder's exact angles with the commutation timer: every commutation the
+    measurement finds is at the Hall-exact angle within 0.02 electrical degree, and timed."""
+    d = bl.load("htm-48v")
+    ctl = bl.SixStep(regulation="duty", commutation="encoder", timed=True)
+    res, t0 = sl.run_locked(d, 0.5, 0.6, periods=4, control=ctl)
+    c = sl.commutations(res)
+    c = c[c["t"] >= t0]
+    assert len(c) >= 23
+    assert np.max(np.abs(np.degrees(c["error"]))) < 0.02
+    assert c["timed"].all()
+    assert list(np.diff(c["sector"]) % 6) == [1] * (len(c) - 1)
+
+
+@pytest.mark.parametrize(("name", "speeds", "rms", "worst"), [
+    ("htm-48v", (0.2, 0.5, 0.9), 0.5, 1.0),
+    ("mn3110-780kv", (0.2, 0.5, 0.9), 2.0, 6.0),
+    ("f60prov-2550kv", (0.2, 0.5, 0.9), 4.0, 12.0),
+])
+def test_angle_error_against_the_true_crossing(name, speeds, rms, worst):
+    """The sensorless drive's commutations against the plant's true angle, 30 degrees after the floating phase's
+    back-EMF zero crossing: rms and worst error (electrical degrees) at the speeds. htm-48v within half a degree;
+    the drone motors (f60prov-2550kv: 1.8 PWM periods per sector at 0.9 Omega_0) within a few degrees: the floating
+    phase's terminal is clamped in the off-time near its crossing (docs/sensing.md), which moves the crossing the
+    comparator sees by up to an off-time."""
+    r = sl.angle_error(bl.load(name), speeds)
+    df = r.to_pandas()
+    assert df["in_sync"].all() and (df["count"] >= 100).all()
+    assert (df["rms_deg"] < rms).all(), df
+    assert (df["worst_deg"] < worst).all(), df
+
+
+def test_angle_error_with_advance():
+    """With a 10-degree advance the commutations come 10 degrees before the Hall-exact instant: the error against
+    the intended instant stays under a degree."""
+    r = sl.angle_error(bl.load("htm-48v"), (0.5,), timing="10 deg")
+    assert r.advance == pytest.approx(math.radians(10))
+    assert r.worst[0] < 1.0 and r.in_sync[0]
+    with pytest.raises(BldclabError, match="control"):
+        sl.angle_error(bl.load("htm-48v"), (0.5,), timing_demag=1.0)
+
+
+def test_versus_hall_equal_duty():
+    """At equal duty and imposed speed the sensorless drive and Hall six-step give the same mean torque within 1 %
+    (the issue's goal above 0.2 Omega_0), the same efficiency within 0.5 percentage point and current ripple within
+    a tenth of Hall's (htm-48v, 0.2 and 0.5 Omega_0). Without fast demagnetisation, so that both drives chop the
+    same leg: with it the sensorless drive's commutation is shorter and its torque 1.0 % higher at 0.5 Omega_0."""
+    r = sl.versus_hall(bl.load("htm-48v"), (0.2, 0.5), fast_demag=False)
+    df = r.to_pandas()
+    assert df["in_sync"].all()
+    assert np.allclose(df["duty_applied"], df["duties"], atol=1e-6)  # equal duty indeed: no limit acted
+    assert (df["torque_rel"].abs() < 0.01).all(), df
+    assert (np.abs(df["efficiency_sl"] - df["efficiency_hall"]) < 0.005).all(), df
+    assert (np.abs(df["ripple_sl"] - df["ripple_hall"]) < 0.1 * df["ripple_hall"] + 0.01).all(), df
+
+
+def test_min_speed_search_with_ideal_sensing():
+    """With ideal sensing (no comparator offset, hysteresis or noise) nothing in the sensing limits htm-48v's closed
+    loop down to 0.01 Omega_0 (the controller's stall limit is a fifth of the speed tried): the search reports the
+    bottom of its range, after trying both ends; a range whose top does not hold is refused by name."""
+    d = bl.load("htm-48v")
+    r = sl.min_sensorless_speed(d, lo=0.01, hi=0.2)
+    assert r.speed == 0.01 and math.isnan(r.lost)
+    assert [h for _, h in r.tried] == [True, True]
+    with pytest.raises(BldclabError, match="lo"):
+        sl.min_sensorless_speed(d, lo=0.2, hi=0.1)
+
+
+def test_min_speed_against_the_comparator_offset_closed_form():
+    """A comparator offset V_off moves the rising and the falling crossings the other way by V_off / (du/dtheta)
+    (``u`` the comparator's input, its slope proportional to the speed); the crossing intervals alternate, and below
+    the speed where their ratio reaches ``jump`` (2: a 10-degree shift) the controller declares a false crossing.
+    The bisection finds the slowest speed that holds within 5 % of that closed form (htm-48v, ideal trapezoid:
+    ``omega_m = 4.5 V_off / k_phi``; measured 0.0573 against 0.0563 p.u. for 0.3 V)."""
+    d = bl.load("htm-48v")
+    off = 0.3
+    d = d.replace(sensors=dataclasses.replace(d.sensors, bemf_offset=off))
+    w_cf = sl.offset_limit_speed(d, off)
+    assert w_cf * d.Omega_0 == pytest.approx(4.5 * off / d.motor.k_phi, rel=1e-3)
+    r = sl.min_sensorless_speed(d, lo=0.3 * w_cf, hi=3.0 * w_cf, rel_tol=0.05)
+    assert r.speed == pytest.approx(w_cf, rel=0.05), (r.speed, w_cf, r.tried)
+    assert r.lost < r.speed
+    held = dict(r.tried)
+    assert held[3.0 * w_cf] and not held[0.3 * w_cf]
+
+
+@pytest.mark.parametrize(("chop", "fast"), [("sync", False), ("sync", True), ("high", False), ("pwm-on-pwm", False),
+                                            ("pwm-on-pwm", True), ("bipolar", False)])
+def test_demag_time_against_closed_forms_averaged_inverter(chop, fast):
+    """htm-48v at 0.5 Omega_0, the averaged inverter (the closed forms' premise: PWM-averaged leg voltages): after
+    every commutation the outgoing current's fall time is the closed form that integrates the outgoing phase's law
+    with R and the moving back-EMF within 1 %, and ``3 L |I| / (S + 2 E)`` within 6 % (it neglects R i and the
+    back-EMF's fall). The demagnetisation voltage S per pattern and sign: slow (``d V``) after a positive outgoing
+    current with the positive leg chopping, fast (``(2 - d) V``) after a negative one or with fast demagnetisation,
+    ``V`` bipolar; the measured times stand in the ratio of the closed forms."""
+    d = bl.load("htm-48v")
+    d = d.replace(inverter=dataclasses.replace(d.inverter, model="average"))
+    duty = 0.85 if chop == "bipolar" else 0.7
+    res, t0 = sl.run_locked(d, 0.5, duty, periods=2, trace_sub=8, chopping=chop, fast_demag=fast)
+    tab = sl.demag_times(res, d, chopping=chop, fast_demag=fast, after=t0).to_pandas()
+    assert len(tab) >= 10 and set(tab["sign"]) == {-1, 1}
+    assert np.max(np.abs(tab["closed"] / tab["measured"] - 1)) < 0.01, tab
+    assert np.max(np.abs(tab["simple"] / tab["measured"] - 1)) < 0.06, tab
+    assert tab["tau_ratio"].max() < 0.2  # the premise R i << S: well inside L / R
+    pos, neg = tab[tab["sign"] > 0]["measured"].mean(), tab[tab["sign"] < 0]["measured"].mean()
+    s_pos = sl.demag_voltage(chop, tab["duty"].mean(), 1, fast)
+    s_neg = sl.demag_voltage(chop, tab["duty"].mean(), -1, fast)
+    assert (pos > 1.3 * neg) == (s_pos < 0.8 * s_neg)
+
+
+def test_demag_time_on_the_switching_plant():
+    """The switching plant at 70 kHz (the demagnetisation lasts 9 to 15 PWM periods): the closed form within 2 %
+    for the patterns without fast demagnetisation (at 14 kHz, 1.7 to 3 periods, it is off by up to 9 %: the PWM
+    averaging premise fails)."""
+    d = bl.load("htm-48v")
+    d = d.replace(inverter=dataclasses.replace(d.inverter, f_pwm=70e3))
+    res, t0 = sl.run_locked(d, 0.5, 0.7, periods=2, trace_sub=8, chopping="sync", fast_demag=False)
+    tab = sl.demag_times(res, d, chopping="sync", fast_demag=False, after=t0).to_pandas()
+    assert len(tab) >= 10
+    assert np.max(np.abs(tab["closed"] / tab["measured"] - 1)) < 0.02, tab
+
+
+def test_demag_voltage_table_and_errors():
+    """S / V_dc per pattern: sync and high d (positive) and 2 - d (negative); pwm-on-pwm d; fast 2 - d; bipolar 1."""
+    assert sl.demag_voltage("sync", 0.3, 1, False) == pytest.approx(0.3)
+    assert sl.demag_voltage("high", 0.3, -1, False) == pytest.approx(1.7)
+    assert sl.demag_voltage("pwm-on-pwm", 0.3, -1, False) == pytest.approx(0.3)
+    assert sl.demag_voltage("sync", 0.3, 1, True) == pytest.approx(1.7)
+    assert sl.demag_voltage("bipolar", 0.3, 1, False) == 1.0
+    with pytest.raises(BldclabError, match="chopping"):
+        sl.demag_voltage("low", 0.3, 1, False)
+    with pytest.raises(BldclabError, match="duty"):
+        sl.run_locked(bl.load("htm-48v"), 0.5, 1.5)
+    with pytest.raises(BldclabError, match="offset"):
+        sl.offset_limit_speed(bl.load("htm-48v"), 0.0)
