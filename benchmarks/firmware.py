@@ -216,6 +216,25 @@ def _bemf_runs(scale: float) -> list[tuple[str, Any, Any, Any]]:
     return [(START, d, bl.SixStepSensorless(), bl.Scenario(duration=scale * T_START, ref=0.5, trace=False))]
 
 
+def _sine_obs_runs(scale: float) -> list[tuple[str, Any, Any, Any]]:
+    """The sensorless Sine (flux observer) from standstill (rotor free) on its speed loop to 0.5 Omega_0: alignment,
+    the I/f ramp, the hand-off and the observer's closed loop."""
+    import bldclab as bl
+
+    d = bl.load("htm-48v")
+    ctl = bl.Sine(angle="observer", speed_loop=True)
+    return [(START, d, ctl, bl.Scenario(duration=scale * 1.0, omega_ref=0.5 * d.Omega_0, trace=False))]
+
+
+def _commission_runs(scale: float) -> list[tuple[str, Any, Any, Any]]:
+    """The whole self-commissioning routine on htm-48v (rotor free at rest)."""
+    import bldclab as bl
+
+    d = bl.load("htm-48v")
+    ctl = bl.control.Commission()
+    return [(START, d, ctl, bl.Scenario(duration=scale * 1.02 * ctl.duration(d), trace=False))]
+
+
 def _sine_ref(d: Any) -> float:
     return 18.0 / (math.sqrt(3.0) * math.pi**2) * d.T_N  # T_s,N, paper 1 (12)
 
@@ -246,6 +265,8 @@ CLOSED_LOOP: dict[str, ClosedLoop] = {c.name: c for c in (
     ClosedLoop("hallcal", "hallcal", "bc_hallcal_step", _hallcal_runs),
     ClosedLoop("hallcal_speed", "hallcal", "bc_hallcal_step", _hallcal_speed_runs),
     ClosedLoop("bemf", "bemf", "bc_bemf_step", _bemf_runs),
+    ClosedLoop("sine_obs", "sine", "bc_sine_step", _sine_obs_runs),
+    ClosedLoop("commission", "commission", "bc_commission_step", _commission_runs),
 )}
 
 

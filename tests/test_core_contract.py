@@ -22,9 +22,11 @@ CONTROLS = {
     "sixv": [bl.SixStepVoltage(chopping=c) for c in ("high", "low", "bipolar", "sync")],
     "sixstep": [bl.SixStep(regulation=r, chopping=c) for r in ("predictive", "pi", "hysteresis")
                 for c in ("pwm-on-pwm", "bipolar", "high", "sync")],
-    "sine": [bl.Sine(), bl.Sine(angle="encoder", limit="circle"), bl.Sine(angle="pll")],
+    "sine": [bl.Sine(), bl.Sine(angle="encoder", limit="circle"), bl.Sine(angle="pll"), bl.Sine(angle="observer"),
+             bl.Sine(angle="observer", observer="reduced", speed_loop=True)],
     "lu": [bl.Lu(method=m) for m in ("lu", "lu-no-do", "rect")] + [bl.Lu(hall_angle="pll")],
     "hallcal": [bl.HallCal(), bl.HallCal(method="open-loop")],
+    "commission": [bl.control.Commission()],
     "bemf": [bl.SixStepSensorless(method=m, chopping=c, blanking=b)
              for m, c, b in (("comparator", "sync", "demag"), ("adc", "high", "fixed"),
                              ("integration", "pwm-on-pwm", "demag"), ("comparator", "bipolar", "fixed"))],

@@ -66,12 +66,46 @@ static const bc_sine_params P = HTM_SINE_PARAMS;
 static bc_sine_state S;
 #define INIT() bc_sine_init(&P, &S)
 #define STEP(in, out) bc_sine_step(&P, &S, in, out)
+#elif defined(BC_FW_SINE_OBS)
+#include "params.h"
+static bc_sine_params P = HTM_SINE_PARAMS;
+static bc_sine_state S;
+#define INIT() (htm_sine_observer(&P), bc_sine_init(&P, &S))
+#define STEP(in, out) bc_sine_step(&P, &S, in, out)
+#elif defined(BC_FW_COMMISSION)
+#include "params.h"
+static const bc_commission_params P = HTM_COMMISSION_PARAMS;
+static bc_commission_state S;
+#define INIT() bc_commission_init(&P, &S)
+#define STEP(in, out) bc_commission_step(&P, &S, in, out)
 #elif defined(BC_FW_LU)
 #include "params.h"
 static const bc_lu_params P = LU4KW_LU_PARAMS;
 static bc_lu_state S;
 #define INIT() bc_lu_init(&P, &S)
 #define STEP(in, out) bc_lu_step(&P, &S, in, out)
+#elif defined(BC_FW_FLUXOBS)
+#include "bldc/bc_fluxobs.h"
+#include "params.h"
+static const bc_fluxobs_params P = HTM_FLUXOBS_PARAMS;
+static bc_fluxobs_state S;
+static bc_obs_in OI;
+static bc_obs_out OO;
+#define INIT() bc_fluxobs_init(&P, &S)
+#define STEP(in, out)                                                                                             \
+    (OI.u = (bc_ab){(in)->ref, (in)->omega_ref}, OI.i = (bc_ab){(in)->i_abc[0], (in)->i_abc[1]},                 \
+     bc_fluxobs_step(&P, &S, &OI, &OO), (out)->diag[0] = OO.theta)
+#elif defined(BC_FW_REDOBS)
+#include "bldc/bc_redobs.h"
+#include "params.h"
+static const bc_redobs_params P = HTM_REDOBS_PARAMS;
+static bc_redobs_state S;
+static bc_obs_in OI;
+static bc_obs_out OO;
+#define INIT() bc_redobs_init(&P, &S)
+#define STEP(in, out)                                                                                             \
+    (OI.u = (bc_ab){(in)->ref, (in)->omega_ref}, OI.i = (bc_ab){(in)->i_abc[0], (in)->i_abc[1]},                 \
+     bc_redobs_step(&P, &S, &OI, &OO), (out)->diag[0] = OO.theta)
 #elif defined(BC_FW_BEMF)
 #include "params.h"
 static const bc_bemf_params P = HTM_BEMF_PARAMS;

@@ -7,10 +7,13 @@
 #define BC_FW_PARAMS_H
 
 #include "bldc/bc_bemf.h"
+#include "bldc/bc_commission.h"
 #include "bldc/bc_commutation.h"
+#include "bldc/bc_fluxobs.h"
 #include "bldc/bc_hall.h"
 #include "bldc/bc_hallcal.h"
 #include "bldc/bc_lu.h"
+#include "bldc/bc_redobs.h"
 #include "bldc/bc_sine.h"
 #include "bldc/bc_sixstep.h"
 
@@ -60,6 +63,15 @@ static const float LU_F_12[12] = {0.0f, 0.4f, 0.4f, 0.4f, 0.4f, 0.4f, 0.0f, -0.4
      .v_align = 0.0f, .v_emf = 0.0f, .omega_ol = 0.0f, .t_align = 0.0f, .lag_max = 0.0f, .i_max = 0.0f,           \
      .v_max = 0.0f}
 
+/* The rotor-angle observers on htm-48v (psi_f = k_1 / p = 0.389 / 8 V s), with bldclab.control.observer's defaults
+ * for the drive: lambda = 2 omega_on (omega_on = 0.1 Omega_0 p = 60 rad/s), omega_p = alpha_o = sqrt(p T_s,N / (J
+ * 1 deg)) = 556 rad/s; sigma_0 = R / (2 L), zeta_inf = 0.2. */
+#define HTM_FLUXOBS_PARAMS                                                                                        \
+    {.R = 0.05f, .L = 75e-6f, .psi = 0.0486f, .ts = HTM_TS, .gain = 120.0f, .pll_bw = 556.0f, .i_max = 100.0f,   \
+     .v_max = 96.0f}
+#define HTM_REDOBS_PARAMS                                                                                         \
+    {.R = 0.05f, .L = 75e-6f, .psi = 0.0486f, .ts = HTM_TS, .alpha_o = 556.0f, .sigma0 = 333.3f, .zeta_inf = 0.2f, \
+     .i_max = 100.0f, .v_max = 96.0f}
 /* bc_bemf (sensorless six-step) on htm-48v: the record bldclab.SixStepSensorless() builds for the drive (comparator,
  * synchronous chopping, demagnetisation blanking 5 deg / 1 us; alignment at 0.5 I_N through R for three periods of
  * the rotor's oscillation with J = 0.05 kg m^2, 0.38 s; V/f ramp 0.01 to 0.1 Omega_0 at half the alignment torque's
@@ -75,5 +87,32 @@ static const float LU_F_12[12] = {0.0f, 0.4f, 0.4f, 0.4f, 0.4f, 0.4f, 0.0f, -0.4
      .n_handover = 6, .duty_min = 0.0f, .duty_rate = 0.0f, .ref_stop = 0.0f, .restart_wait = 0.05f,              \
      .restart_max = 1.0f, .use_current = 1, .i_max = 100.0f, .i_limit = 0.0f, .k_limit = 2.083333f, .v_max = 96.0f, \
      .fast_demag = 1, .dlim_d0 = 0.05208333f, .dlim_vf = 0.001666667f, .dlim_tau = 1.5e-3f, .demag_max = 0.6f, .cmp_gate = 0}
+
+/* The sensorless Sine on htm-48v: HTM_SINE_PARAMS with the angle from the flux observer (HTM_FLUXOBS_PARAMS with
+ * Sine(angle="observer")'s defaults for the drive: lambda = 2 omega_on = 107 rad/s) and its I/f start-up (0.5 I_s,N,
+ * align 0.363 s, ramp 278 rad/s^2, lock 46.6 ms within 0.2, hold 1.17 s, restart after 0.1 s). */
+static inline void htm_sine_observer(bc_sine_params *p)
+{
+    const bc_fluxobs_params f = HTM_FLUXOBS_PARAMS;
+    p->angle = BC_SINE_ANGLE_OBSERVER;
+    p->observer = BC_SINE_OBS_FLUX;
+    p->fobs = f;
+    p->fobs.gain = 107.2f;
+    p->if_current = 28.87f;
+    p->if_align = 0.363f;
+    p->if_accel = 278.4f;
+    p->if_hold = 1.172f;
+    p->lock_time = 0.0466f;
+    p->lock_tol = 0.2f;
+    p->restart_wait = 0.1f;
+    p->if_damp = 11.43f;
+}
+
+/* Self-commissioning on htm-48v: the record bldclab.control.Commission() builds for the drive. */
+#define HTM_COMMISSION_PARAMS                                                                                     \
+    {.ts = HTM_TS, .kp = 0.09425f, .ki = 62.83f, .i_test = 28.87f, .t_ramp = 0.3631f, .t_settle = 0.2595f,        \
+     .t_window = 0.2420f, .v_pulse = 1.516f, .n_pulse = 8, .pulse_len = 10, .i_if = 28.87f, .if_accel = 167.0f,    \
+     .w_spin = 160.8f, .t_spin = 0.6051f, .psi_min = 0.01216f, .tol_move = 0.05f, .tol_follow = 0.3f,             \
+     .k_damp = 11.43f, .i_max = 100.0f, .v_max = 96.0f}
 
 #endif /* BC_FW_PARAMS_H */

@@ -21,6 +21,7 @@
 #include <valgrind/callgrind.h>
 
 #include "bldc/bc_bemf.h"
+#include "bldc/bc_commission.h"
 #include "bldc/bc_hallcal.h"
 #include "bldc/bc_lu.h"
 #include "bldc/bc_openloop.h"
@@ -49,10 +50,11 @@ TARGET(lu, lu)
 TARGET(sixv, sixv)
 TARGET(hallcal, hallcal)
 TARGET(bemf, bemf)
+TARGET(commission, commission)
 
 #define ENTRY(NAME) {#NAME, init_##NAME, step_##NAME, sizeof(bc_##NAME##_params), sizeof(bc_##NAME##_state)}
 static const replay_target TARGETS[] = {ENTRY(sixstep), ENTRY(sine), ENTRY(lu), ENTRY(sixv), ENTRY(hallcal),
-                                        ENTRY(bemf)};
+                                        ENTRY(bemf), ENTRY(commission)};
 
 static const replay_target *find(const char *name)
 {

@@ -3,10 +3,12 @@
 
 #include <math.h>
 
+#include "bldc/bc_fluxobs.h"
 #include "bldc/bc_hall.h"
 #include "bldc/bc_hallcal.h"
 #include "bldc/bc_openloop.h"
 #include "bldc/bc_pi.h"
+#include "bldc/bc_redobs.h"
 #include "params.h"
 
 /* The host tools call each target through a pointer: keep the steps out of line so they are measurable. */
@@ -82,11 +84,66 @@ static bc_sine_state sine_s;
 static int sine_init(void) { return bc_sine_init(&sine_p, &sine_s); }
 STEP_FN sine_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sine_step(&sine_p, &sine_s, in, out); }
 
+/* the sensorless Sine (flux observer, I/f start-up) and the self-commissioning routine, on htm-48v */
+static bc_sine_params sine_obs_p = HTM_SINE_PARAMS;
+static bc_sine_state sine_obs_s;
+static int sine_obs_init(void)
+{
+    htm_sine_observer(&sine_obs_p);
+    return bc_sine_init(&sine_obs_p, &sine_obs_s);
+}
+STEP_FN sine_obs_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sine_step(&sine_obs_p, &sine_obs_s, in, out); }
+
+static const bc_commission_params comm_p = HTM_COMMISSION_PARAMS;
+static bc_commission_state comm_s;
+static int commission_init(void) { return bc_commission_init(&comm_p, &comm_s); }
+STEP_FN commission_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_commission_step(&comm_p, &comm_s, in, out); }
+
 static const bc_lu_params lu_p = LU4KW_LU_PARAMS;
 static bc_lu_state lu_s;
 static int lu_init(void) { return bc_lu_init(&lu_p, &lu_s); }
 STEP_FN lu_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_lu_step(&lu_p, &lu_s, in, out); }
 
+/* The observers as blocks: the phase currents (Clarke of i_abc, the two measured phases of i_mask when only two are)
+ * and a stator voltage carried in (ref, omega_ref) as (u_alpha, u_beta); diag: angle, speed, flux, error signal,
+ * valid. */
+static bc_obs_in obs_input(const bc_ctrl_in *in)
+{
+    bc_abc i = {in->i_abc[0], in->i_abc[1], -(in->i_abc[0] + in->i_abc[1])};
+    bc_obs_in o = {{in->ref, in->omega_ref}, bc_clarke(i)};
+    return o;
+}
+
+static void obs_diag(const bc_obs_out *o, bc_ctrl_out *out)
+{
+    out->diag[0] = o->theta;
+    out->diag[1] = o->omega_e;
+    out->diag[2] = o->flux;
+    out->diag[3] = o->err;
+    out->diag[4] = (float)o->valid;
+}
+
+static const bc_fluxobs_params fluxobs_p = HTM_FLUXOBS_PARAMS;
+static bc_fluxobs_state fluxobs_s;
+static int fluxobs_init(void) { return bc_fluxobs_init(&fluxobs_p, &fluxobs_s); }
+STEP_FN fluxobs_step(const bc_ctrl_in *in, bc_ctrl_out *out)
+{
+    bc_obs_in oi = obs_input(in);
+    bc_obs_out oo;
+    bc_fluxobs_step(&fluxobs_p, &fluxobs_s, &oi, &oo);
+    obs_diag(&oo, out);
+}
+
+static const bc_redobs_params redobs_p = HTM_REDOBS_PARAMS;
+static bc_redobs_state redobs_s;
+static int redobs_init(void) { return bc_redobs_init(&redobs_p, &redobs_s); }
+STEP_FN redobs_step(const bc_ctrl_in *in, bc_ctrl_out *out)
+{
+    bc_obs_in oi = obs_input(in);
+    bc_obs_out oo;
+    bc_redobs_step(&redobs_p, &redobs_s, &oi, &oo);
+    obs_diag(&oo, out);
+}
 /* the sensorless controller: as configured for htm-48v (its start-up from standstill), and locked to the cost
  * harness's turning motor (a direct start at its speed, 40 samples per sector: closed loop within a few sectors),
  * with the back-EMF integration method and a timing advance */
@@ -131,12 +188,16 @@ const bc_fw_target bc_fw_targets[] = {
     {"sixstep_timed", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sixstep_timed_init, sixstep_timed_step, 48.0f,
      50.0f, 50.0f, 357.0f},
     {"sine", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, sine_init, sine_step, 48.0f, 57.7f, 33.7f, 357.0f},
+    {"sine_obs", BC_USES_CURRENT | BC_USES_VDC, sine_obs_init, sine_obs_step, 48.0f, 57.7f, 33.7f, 357.0f},
+    {"commission", BC_USES_CURRENT | BC_USES_VDC, commission_init, commission_step, 48.0f, 57.7f, 0.0f, 357.0f},
     {"lu", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, lu_init, lu_step, 300.0f, 15.9f, 12.7f, 1000.0f},
     {"hall", BC_IS_BLOCK, hall_init, hall_step, 48.0f, 50.0f, 0.0f, 357.0f},
     {"hall_pll", BC_IS_BLOCK, hall_pll_init, hall_pll_step, 48.0f, 50.0f, 0.0f, 357.0f},
     {"hallcal", BC_USES_HALL | BC_USES_CURRENT | BC_USES_VDC, hallcal_init, hallcal_step, 48.0f, 50.0f, 0.0f, 357.0f},
     {"hallcal_speed", BC_USES_HALL, hallcal_speed_init, hallcal_speed_step, 48.0f, 50.0f, 0.0f, 357.0f},
     {"pi", BC_IS_BLOCK, pi_init, pi_step, 48.0f, 50.0f, 10.0f, 357.0f},
+    {"fluxobs", BC_IS_BLOCK, fluxobs_init, fluxobs_step, 48.0f, 50.0f, 10.0f, 357.0f},
+    {"redobs", BC_IS_BLOCK, redobs_init, redobs_step, 48.0f, 50.0f, 10.0f, 357.0f},
     {"bemf", BC_USES_CURRENT | BC_USES_VDC, bemf_init, bemf_step, 48.0f, 50.0f, 0.5f, 357.0f},
     {"bemf_int", BC_USES_CURRENT | BC_USES_VDC, bemf_int_init, bemf_int_step, 48.0f, 50.0f, 0.5f, 357.0f},
 };

@@ -79,10 +79,10 @@ int main(void)
             bits |= v;
         }
     }
-    CHECK(n_flag == 13 && bits == (BC_FLAG_SAFE | BC_FLAG_HALL_INVALID | BC_FLAG_OVERCURRENT | BC_FLAG_BAD_INPUT |
+    CHECK(n_flag == 14 && bits == (BC_FLAG_SAFE | BC_FLAG_HALL_INVALID | BC_FLAG_OVERCURRENT | BC_FLAG_BAD_INPUT |
                                    BC_FLAG_SATURATED | BC_FLAG_DESYNC | BC_FLAG_ZC_TIMEOUT | BC_FLAG_ZC_HIDDEN |
                                    BC_FLAG_ZC_JUMP | BC_FLAG_STALL | BC_FLAG_START_FAIL | BC_FLAG_OPEN_LOOP |
-                                   BC_FLAG_COMM_LATE), "every controller flag listed");
+                                   BC_FLAG_COMM_LATE | BC_FLAG_LOCK_LOST), "every controller flag listed");
     CHECK(bits < (1u << BC_SIM_NFLAG), "every flag bit counted by the runner (BC_SIM_NFLAG)");
     return bc_test_summary("test_layout");
 }

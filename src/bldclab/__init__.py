@@ -17,6 +17,7 @@ from .errors import BldclabError
 if TYPE_CHECKING:  # the same names, for type checkers and readers; at run time they are imported on first use
     from ._core import decode_flags, flag
     from .analysis import experiments
+    from .analysis.commission import Estimate, commission
     from .control import (
         Control,
         HallCal,
@@ -45,6 +46,7 @@ LAZY: Lazy = {
     "decode_flags": ("bldclab._core", "decode_flags"),
     "flag": ("bldclab._core", "flag"),
     "experiments": ("bldclab.analysis.experiments", None),
+    **{name: ("bldclab.analysis.commission", name) for name in ("Estimate", "commission")},
     **{name: ("bldclab.control", name) for name in ("Control", "HallCal", "HallCalibration", "Lu", "OpenLoop",
                                                     "Sine", "SixStep", "SixStepSensorless", "SixStepVoltage",
                                                     "UserControl")},
@@ -69,6 +71,7 @@ __all__ = [
     "Cogging",
     "Control",
     "Drive",
+    "Estimate",
     "Fault",
     "Fourier",
     "HallCal",
@@ -94,6 +97,7 @@ __all__ = [
     "__version__",
     "calibrate_hall",
     "catalog",
+    "commission",
     "decode_flags",
     "experiments",
     "flag",

@@ -300,7 +300,22 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
         return BC_ERR_PARAM;
     if (!(isfinite(p->advance) && p->advance >= 0.0f && p->advance <= 4.0f)) return BC_ERR_PARAM;
     if (p->limit != BC_SINE_LIMIT_HEX && p->limit != BC_SINE_LIMIT_CIRCLE) return BC_ERR_PARAM;
-    if (p->angle != BC_SINE_ANGLE_HALL && p->angle != BC_SINE_ANGLE_ENCODER) return BC_ERR_PARAM;
+    if (p->angle != BC_SINE_ANGLE_HALL && p->angle != BC_SINE_ANGLE_ENCODER && p->angle != BC_SINE_ANGLE_OBSERVER)
+        return BC_ERR_PARAM;
+    if (p->angle == BC_SINE_ANGLE_OBSERVER) {
+        if (p->observer == BC_SINE_OBS_FLUX) {
+            if (p->fobs.ts != p->ts || bc_fluxobs_init(&p->fobs, &s->fobs) != BC_OK) return BC_ERR_PARAM;
+        } else if (p->observer == BC_SINE_OBS_REDUCED) {
+            if (p->robs.ts != p->ts || bc_redobs_init(&p->robs, &s->robs) != BC_OK) return BC_ERR_PARAM;
+        } else {
+            return BC_ERR_PARAM;
+        }
+        if (!finite_pos(p->if_current) || p->if_current > p->i_s_max || !finite_nonneg(p->if_align) ||
+            !finite_pos(p->if_accel) || !finite_pos(p->if_hold) || !finite_pos(p->lock_time) ||
+            !finite_pos(p->lock_tol) || p->lock_tol >= 1.0f || !finite_nonneg(p->restart_wait) || !finite_nonneg(p->if_damp) ||
+            !finite_nonneg(p->t_dead) || p->t_dead >= p->ts)
+            return BC_ERR_PARAM;
+    }
     if (p->emf_ff) {
         if (p->emf_n < 3 || p->emf_n > BC_SINE_EMF_N_MAX) return BC_ERR_PARAM;
         for (int x = 0; x < 3; ++x) {
@@ -333,6 +348,12 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
     s->six_run = !p->flying_start;
     s->n_quiet = 0;
+    s->sl_phase = BC_SINE_SL_IDLE;
+    s->sl_dir = 1;
+    s->if_theta = s->if_omega = s->sl_t = s->n_lock = s->omega_f = 0.0f;
+    s->u_hist[0][0] = s->u_hist[0][1] = s->u_hist[1][0] = s->u_hist[1][1] = 0.0f;
+    s->u_ok[0] = s->u_ok[1] = 0;
+    s->n_restart = 0u;
     s->derate_on = p->derate.enabled[0] != 0 || p->derate.enabled[1] != 0;
     s->derate_f = 1.0f;
     if (s->derate_on && bc_derate_init(&p->derate, &s->derate) != BC_OK) return BC_ERR_PARAM;
@@ -473,6 +494,11 @@ static void reset_to_start(const bc_sine_params *p, bc_sine_state *s)
     (void)bc_sixstep_init(&p->six, &s->six); /* validated in bc_sine_init */
     bc_pi_reset(&s->pi_p, &s->pi_d, 0.0f);
     bc_pi_reset(&s->pi_p, &s->pi_q, 0.0f);
+    s->sl_phase = BC_SINE_SL_IDLE;
+    s->sl_t = 0.0f;
+    s->n_lock = 0.0f;
+    s->omega_f = 0.0f;
+    s->u_ok[0] = s->u_ok[1] = 0;
 }
 
 static void go_safe(const bc_sine_params *p, bc_sine_state *s, bc_ctrl_out *out, uint32_t why)
@@ -480,6 +506,282 @@ static void go_safe(const bc_sine_params *p, bc_sine_state *s, bc_ctrl_out *out,
     reset_to_start(p, s);
     bc_legs_off(out);
     out->flags |= why | BC_FLAG_SAFE;
+}
+
+/* Steps 6 to 10 (bc_sine.h): the current PIs on (id_ref, iq_ref) in the frame of theta, the voltage angle, the
+ * back-EMF feed-forward if emf_ff, the linear-modulation limit and SVM; with handoff the integrators are set first
+ * (bumpless hand-off). Writes the legs, BC_FLAG_SATURATED, diag 2 to 4. */
+static void current_loops(const bc_sine_params *p, bc_sine_state *s, bc_dq idq, float id_ref, float iq_ref,
+                          float theta, float omega_e, float v_dc, int32_t emf_ff, int handoff, bc_ctrl_out *out)
+{
+    float omega_m = omega_e / (float)p->p;
+    /* 6. current PIs with the R-L feed-forward */
+    float ff_d = 0.0f, ff_q = 0.0f;
+    if (p->decouple) {
+        /* the rotational voltage from the measured currents: it cancels the plant's d,q cross-coupling, so each
+         * PI sees R + s L (a feed-forward from the references would leave it in the error dynamics) */
+        ff_d = p->R * id_ref - omega_e * p->L * idq.q; /* ff_d = R i_d,ref - omega_e L i_q */
+        ff_q = p->R * iq_ref + omega_e * p->L * idq.d; /* ff_q = R i_q,ref + omega_e L i_d */
+    }
+    if (handoff) {
+        /* bumpless hand-off: integrators from the voltage the present state needs */
+        float e_q1 = omega_m * p->k_1; /* back-EMF fundamental on q */
+        float x_d = p->R * idq.d - omega_e * p->L * idq.q - ff_d;
+        float x_q = p->R * idq.q + omega_e * p->L * idq.d + e_q1 - ff_q - (emf_ff ? e_q1 : 0.0f);
+        bc_pi_reset(&s->pi_p, &s->pi_d, x_d);
+        bc_pi_reset(&s->pi_p, &s->pi_q, x_q);
+    }
+    float e_d = id_ref - idq.d, e_q = iq_ref - idq.q;
+    bc_dq u;
+    u.d = bc_pi_output(&s->pi_p, &s->pi_d, e_d, ff_d); /* u_d = k_p e_d + x_d + ff_d */
+    u.q = bc_pi_output(&s->pi_p, &s->pi_q, e_q, ff_q); /* u_q = k_p e_q + x_q + ff_q */
+
+    /* 7. voltage angle advanced by the loop delay: theta_v = theta + advance Omega_e T_s */
+    float theta_v = bc_wrap_2pi(theta + p->advance * omega_e * p->ts);
+    float sv = -sinf(theta_v), cv = -cosf(theta_v);
+    /* the two axes' voltages separately: the limit fits the d axis first (d-axis priority) */
+    bc_abc g_d = bc_clarke_inv(bc_park_inv((bc_dq){u.d, 0.0f}, sv, cv));
+    bc_abc g_q = bc_clarke_inv(bc_park_inv((bc_dq){0.0f, u.q}, sv, cv));
+    float gd[3] = {g_d.a, g_d.b, g_d.c}, gq[3] = {g_q.a, g_q.b, g_q.c};
+
+    /* 8. back-EMF feed-forward f_x = omega_m k_x(theta_v - x 2 pi/3) */
+    float f[3] = {0.0f, 0.0f, 0.0f};
+    if (emf_ff) {
+        for (int x = 0; x < 3; ++x) {
+            f[x] = omega_m * table_k(p->emf_k[x], p->emf_n, theta_v - (float)x * (BC_TWO_PI_F / 3.0f));
+        }
+    }
+
+    /* 9. linear-modulation limit: v = f + k_d u_d + k_q u_q, d axis first */
+    float k_d = 1.0f, k_q = 1.0f;
+    if (!p->overmod) {
+        if (p->limit == BC_SINE_LIMIT_HEX) {
+            float sf = spread(f);
+            if (sf > v_dc) {
+                for (int x = 0; x < 3; ++x) f[x] *= v_dc / sf;
+            }
+            k_d = hex_scale(f, gd, v_dc);
+            float f2[3] = {f[0] + k_d * gd[0], f[1] + k_d * gd[1], f[2] + k_d * gd[2]};
+            k_q = hex_scale(f2, gq, v_dc);
+        } else {
+            float r = v_dc * BC_INV_SQRT3_F;
+            bc_abc fa = {f[0], f[1], f[2]};
+            bc_ab F = bc_clarke(fa), Gd = bc_clarke(g_d), Gq = bc_clarke(g_q);
+            float nf = sqrtf(F.alpha * F.alpha + F.beta * F.beta);
+            if (nf > r) {
+                for (int x = 0; x < 3; ++x) f[x] *= r / nf;
+                F = bc_clarke((bc_abc){f[0], f[1], f[2]});
+            }
+            k_d = circle_scale(F, Gd, r);
+            bc_ab F2 = {F.alpha + k_d * Gd.alpha, F.beta + k_d * Gd.beta};
+            k_q = circle_scale(F2, Gq, r);
+        }
+    }
+    bc_abc v = {f[0] + k_d * gd[0] + k_q * gq[0], f[1] + k_d * gd[1] + k_q * gq[1],
+                f[2] + k_d * gd[2] + k_q * gq[2]};
+
+    /* 10. SVM */
+    float duty[3];
+    int clipped = bc_svm(v, v_dc, duty);
+    bc_dq ur = {k_d * u.d, k_q * u.q};
+    if (clipped && p->overmod) {
+        /* realised voltage from the clipped duties, minus the feed-forward, in the frame of theta_v */
+        bc_abc va = {duty[0] * v_dc - f[0], duty[1] * v_dc - f[1], duty[2] * v_dc - f[2]};
+        ur = bc_park(bc_clarke(va), sv, cv);
+    }
+    bc_pi_update(&s->pi_p, &s->pi_d, e_d, u.d, ur.d);
+    bc_pi_update(&s->pi_p, &s->pi_q, e_q, u.q, ur.q);
+    if (k_d < 1.0f || k_q < 1.0f || clipped) out->flags |= BC_FLAG_SATURATED;
+
+    for (int x = 0; x < 3; ++x) {
+        out->leg[x].mode = BC_LEG_PWM;
+        out->leg[x].duty = duty[x];
+    }
+    bc_dq vdq = bc_park(bc_clarke(v), sv, cv);
+    out->diag[2] = iq_ref;
+    out->diag[3] = vdq.d;
+    out->diag[4] = vdq.q;
+}
+
+/* The observer chosen by p->observer: reset (seed) and one step. */
+static void obs_reset(const bc_sine_params *p, bc_sine_state *s, float theta_e, float omega_e, bc_ab i)
+{
+    if (p->observer == BC_SINE_OBS_FLUX) {
+        bc_fluxobs_reset(&p->fobs, &s->fobs, theta_e, omega_e, i);
+    } else {
+        bc_redobs_reset(&p->robs, &s->robs, theta_e, omega_e, i);
+    }
+}
+
+static void obs_run(const bc_sine_params *p, bc_sine_state *s, const bc_obs_in *in, bc_obs_out *o)
+{
+    if (p->observer == BC_SINE_OBS_FLUX) {
+        bc_fluxobs_step(&p->fobs, &s->fobs, in, o);
+    } else {
+        bc_redobs_step(&p->robs, &s->robs, in, o);
+    }
+}
+
+/* Legs off in the sensorless start (IDLE, WAIT): the voltage of the coming samples is not known. */
+static void sl_off(bc_sine_state *s, bc_ctrl_out *out)
+{
+    bc_legs_off(out);
+    s->u_ok[0] = 0;
+}
+
+/* Failed start or lost lock: legs off, the flags, WAIT. */
+static void sl_desync(const bc_sine_params *p, bc_sine_state *s, bc_ctrl_out *out, uint32_t why)
+{
+    reset_to_start(p, s);
+    s->sl_phase = BC_SINE_SL_WAIT;
+    s->n_restart++;
+    sl_off(s, out);
+    out->flags |= why | BC_FLAG_DESYNC;
+}
+
+/* Sensorless sample (bc_sine.h, "Sensorless"): observer, I/f start-up, handover, loss of lock. */
+static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *in, bc_abc i,
+                            bc_ctrl_out *out)
+{
+    /* the observer, with the voltage commanded two samples ago (applied over [t_k-1, t_k]) */
+    bc_obs_out o = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0};
+    bc_ab i_ab = bc_clarke(i);
+    if (s->u_ok[1]) {
+        bc_obs_in oi = {{s->u_hist[1][0], s->u_hist[1][1]}, i_ab};
+        obs_run(p, s, &oi, &o);
+    } else {
+        obs_reset(p, s, s->if_theta, 0.0f, i_ab); /* nothing known to integrate: held at the I/f angle */
+        o.theta = s->if_theta;
+    }
+    s->u_hist[1][0] = s->u_hist[0][0];
+    s->u_hist[1][1] = s->u_hist[0][1];
+    s->u_ok[1] = s->u_ok[0];
+    s->u_ok[0] = 0;
+    float psi = p->observer == BC_SINE_OBS_FLUX ? p->fobs.psi : p->robs.psi;
+    int flux_ok = fabsf(o.flux / psi - 1.0f) <= p->lock_tol;
+    /* the observer's speed through a first-order low-pass of time constant lock_time (the rotor's I/f swing out) */
+    s->omega_f += bc_clampf(p->ts / p->lock_time, 0.0f, 1.0f) * (o.omega_e - s->omega_f);
+
+    float tau, tau_u = 0.0f, e_w = 0.0f, ref = p->speed_loop ? in->omega_ref : in->ref;
+    int was = s->mode;
+    float theta = o.theta, omega_e = o.omega_e;
+
+    if (s->mode == BC_SINE_MODE_SINE) {
+        s->n_lock = flux_ok ? 0.0f : s->n_lock + p->ts;
+        if (fabsf(s->omega_f) < p->omega_off) {
+            sl_desync(p, s, out, BC_FLAG_STALL);
+        } else if (s->n_lock >= p->lock_time) {
+            sl_desync(p, s, out, BC_FLAG_LOCK_LOST);
+        }
+    } else {
+        if (s->sl_phase == BC_SINE_SL_WAIT) {
+            s->sl_t += p->ts;
+            if (s->sl_t >= p->restart_wait) {
+                s->sl_phase = BC_SINE_SL_IDLE;
+                s->sl_t = 0.0f;
+            }
+        }
+        if (s->sl_phase == BC_SINE_SL_IDLE && ref != 0.0f) {
+            s->sl_phase = BC_SINE_SL_ALIGN;
+            s->sl_dir = ref < 0.0f ? -1 : 1;
+            s->sl_t = 0.0f;
+            s->if_theta = 0.0f;
+            s->if_omega = 0.0f;
+            s->n_lock = 0.0f;
+            bc_pi_reset(&s->pi_p, &s->pi_d, 0.0f);
+            bc_pi_reset(&s->pi_p, &s->pi_q, 0.0f);
+        }
+        float dir = (float)s->sl_dir;
+        if (s->sl_phase == BC_SINE_SL_ALIGN) {
+            s->sl_t += p->ts;
+            if (s->sl_t >= p->if_align) {
+                /* the unloaded rotor's q axis is pi/2 behind the vector's (dir < 0: ahead): seed the observer */
+                obs_reset(p, s, s->if_theta + dir * 0.5f * BC_PI_F, 0.0f, i_ab);
+                s->sl_phase = BC_SINE_SL_RAMP;
+                s->sl_t = 0.0f;
+            }
+        } else if (s->sl_phase == BC_SINE_SL_RAMP) {
+            /* omega_if += dir a T_s up to omega_on; theta_if += omega_if T_s */
+            float w = fabsf(s->if_omega) + p->if_accel * p->ts;
+            int at_top = w >= p->omega_on;
+            s->if_omega = dir * (at_top ? p->omega_on : w);
+            s->if_theta = bc_wrap_2pi(s->if_theta + s->if_omega * p->ts);
+            if (at_top) {
+                s->sl_t += p->ts;
+                int lock = flux_ok && fabsf(o.err) <= p->lock_tol && s->omega_f * dir >= p->omega_off;
+                s->n_lock = lock ? s->n_lock + p->ts : 0.0f;
+                if (s->n_lock >= p->lock_time) {
+                    s->mode = BC_SINE_MODE_SINE;
+                    s->n_lock = 0.0f;
+                    s->sl_t = 0.0f;
+                } else if (s->sl_t >= p->if_hold) {
+                    sl_desync(p, s, out, BC_FLAG_START_FAIL);
+                }
+            }
+        }
+    }
+    out->diag[5] = o.theta;
+    out->diag[6] = o.omega_e;
+    out->diag[7] = (float)s->mode;
+    if (s->mode == BC_SINE_MODE_START && (s->sl_phase == BC_SINE_SL_IDLE || s->sl_phase == BC_SINE_SL_WAIT)) {
+        if (!(out->flags & BC_FLAG_DESYNC)) sl_off(s, out);
+        if (p->speed_loop) bc_pi_reset(&s->piw_p, &s->pi_w, 0.0f);
+        return;
+    }
+
+    float id_ref = 0.0f, iq_ref;
+    int handoff = 0;
+    if (s->mode == BC_SINE_MODE_START) {
+        /* I/f: the current vector on the q axis of theta_if */
+        theta = s->if_theta;
+        omega_e = s->if_omega;
+        iq_ref = (float)s->sl_dir * p->if_current * s->derate_f; /* derated like the current limit */
+        if (s->sl_phase == BC_SINE_SL_ALIGN) {
+            /* the current rises over a tenth of if_align (enough holding torque early against an active load), and
+             * the rotor's swing is braked: its back-EMF lies on d of theta_if (the rotor's q axis there, either
+             * direction), seen in the d integrator; i_d,ref = -if_damp (x_d - R i_d) */
+            if (p->if_align > 0.0f) iq_ref *= bc_clampf(10.0f * s->sl_t / p->if_align, 0.0f, 1.0f);
+            float sd1 = -sinf(theta), cd1 = -cosf(theta);
+            bc_dq idq1 = bc_park(bc_clarke(i), sd1, cd1);
+            id_ref = bc_clampf(-p->if_damp * (s->pi_d.x - p->R * idq1.d), -0.5f * p->if_current,
+                               0.5f * p->if_current);
+        }
+        out->flags |= BC_FLAG_OPEN_LOOP;
+    } else {
+        handoff = was == BC_SINE_MODE_START;
+        float sd0 = -sinf(theta), cd0 = -cosf(theta);
+        bc_dq idq0 = bc_park(bc_clarke(i), sd0, cd0);
+        if (handoff && p->speed_loop) bc_pi_reset(&s->piw_p, &s->pi_w, 1.5f * p->k_1 * idq0.q);
+        float omega_m = omega_e / (float)p->p;
+        if (p->speed_loop) {
+            e_w = in->omega_ref - omega_m;
+            tau_u = bc_pi_output(&s->piw_p, &s->pi_w, e_w, 0.0f); /* tau = PI_w(omega_ref - omega_m) */
+            tau = bc_pi_limit(&s->piw_p, tau_u);
+        } else {
+            tau = in->ref;
+        }
+        float i_lim = s->derate_f * bc_sine_i_limit(p, s, in->v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f);
+        iq_ref = bc_clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
+        if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, 1.5f * p->k_1 * iq_ref);
+    }
+    float sd = -sinf(theta), cd = -cosf(theta);
+    bc_dq idq = bc_park(bc_clarke(i), sd, cd);
+    out->diag[0] = idq.d;
+    out->diag[1] = idq.q;
+    current_loops(p, s, idq, id_ref, iq_ref, theta, omega_e, in->v_dc,
+                  s->mode == BC_SINE_MODE_SINE ? p->emf_ff : 0, handoff, out);
+    /* the voltage these duties apply: Clarke(d_x v_dc - dead-time error), the zero sequence removed. A phase whose
+     * current flows into the motor loses v_dc t_dead at each turn-on of its upper switch (its lower diode holds
+     * the terminal low meanwhile), one per PWM period: -sgn(i_x) v_dc t_dead / (2 T_s) on average, sgn linear
+     * within +-2 % of i_s_max */
+    float vd = in->v_dc * p->t_dead / (2.0f * p->ts), band = 0.02f * p->i_s_max;
+    float i3v[3] = {i.a, i.b, i.c}, vx[3];
+    for (int x = 0; x < 3; ++x) vx[x] = out->leg[x].duty * in->v_dc - vd * bc_clampf(i3v[x] / band, -1.0f, 1.0f);
+    bc_abc va = {vx[0], vx[1], vx[2]};
+    bc_ab ua = bc_clarke(va);
+    s->u_hist[0][0] = ua.alpha;
+    s->u_hist[0][1] = ua.beta;
+    s->u_ok[0] = 1;
 }
 
 void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *in, bc_ctrl_out *out)
@@ -497,7 +799,7 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     if (s->derate_on) s->derate_f = bc_derate_step(&p->derate, &s->derate, in->temp); /* in [0, 1] */
     float i3[3];
     uint32_t why = bc_guard_step(&s->guard_p, &s->guard, in, i3);
-    if (!h.valid) why |= BC_FLAG_HALL_INVALID;
+    if (!h.valid && p->angle != BC_SINE_ANGLE_OBSERVER) why |= BC_FLAG_HALL_INVALID;
     if (p->angle == BC_SINE_ANGLE_ENCODER && !isfinite(in->theta_enc)) why |= BC_FLAG_BAD_INPUT;
     if (p->speed_loop ? !isfinite(in->omega_ref) : !isfinite(in->ref)) why |= BC_FLAG_BAD_INPUT;
     if (why) {
@@ -505,6 +807,10 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
         return;
     }
     bc_abc i = {i3[0], i3[1], i3[2]};
+    if (p->angle == BC_SINE_ANGLE_OBSERVER) {
+        sensorless_step(p, s, in, i, out);
+        return;
+    }
 
     /* 2. angle and speed */
     float theta = (p->angle == BC_SINE_ANGLE_ENCODER) ? bc_wrap_2pi(in->theta_enc) : h.theta;
@@ -561,93 +867,6 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     /* 5. current references (45), (8), I_s,sat from the table or (23) with R */
     float i_lim = s->derate_f * bc_sine_i_limit(p, s, v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f);
     float iq_ref = bc_clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
-    float id_ref = 0.0f;
     if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, 1.5f * p->k_1 * iq_ref);
-
-    /* 6. current PIs with the R-L feed-forward */
-    float ff_d = 0.0f, ff_q = 0.0f;
-    if (p->decouple) {
-        /* the rotational voltage from the measured currents: it cancels the plant's d,q cross-coupling, so each
-         * PI sees R + s L (a feed-forward from the references would leave it in the error dynamics) */
-        ff_d = p->R * id_ref - omega_e * p->L * idq.q; /* ff_d = R i_d,ref - omega_e L i_q */
-        ff_q = p->R * iq_ref + omega_e * p->L * idq.d; /* ff_q = R i_q,ref + omega_e L i_d */
-    }
-    if (was == BC_SINE_MODE_START) {
-        /* bumpless hand-off: integrators from the voltage the present state needs */
-        float e_q1 = omega_m * p->k_1; /* back-EMF fundamental on q */
-        float x_d = p->R * idq.d - omega_e * p->L * idq.q - ff_d;
-        float x_q = p->R * idq.q + omega_e * p->L * idq.d + e_q1 - ff_q - (p->emf_ff ? e_q1 : 0.0f);
-        bc_pi_reset(&s->pi_p, &s->pi_d, x_d);
-        bc_pi_reset(&s->pi_p, &s->pi_q, x_q);
-    }
-    float e_d = id_ref - idq.d, e_q = iq_ref - idq.q;
-    bc_dq u;
-    u.d = bc_pi_output(&s->pi_p, &s->pi_d, e_d, ff_d); /* u_d = k_p e_d + x_d + ff_d */
-    u.q = bc_pi_output(&s->pi_p, &s->pi_q, e_q, ff_q); /* u_q = k_p e_q + x_q + ff_q */
-
-    /* 7. voltage angle advanced by the loop delay: theta_v = theta + advance Omega_e T_s */
-    float theta_v = bc_wrap_2pi(theta + p->advance * omega_e * p->ts);
-    float sv = -sinf(theta_v), cv = -cosf(theta_v);
-    /* the two axes' voltages separately: the limit fits the d axis first (d-axis priority) */
-    bc_abc g_d = bc_clarke_inv(bc_park_inv((bc_dq){u.d, 0.0f}, sv, cv));
-    bc_abc g_q = bc_clarke_inv(bc_park_inv((bc_dq){0.0f, u.q}, sv, cv));
-    float gd[3] = {g_d.a, g_d.b, g_d.c}, gq[3] = {g_q.a, g_q.b, g_q.c};
-
-    /* 8. back-EMF feed-forward f_x = omega_m k_x(theta_v - x 2 pi/3) */
-    float f[3] = {0.0f, 0.0f, 0.0f};
-    if (p->emf_ff) {
-        for (int x = 0; x < 3; ++x) {
-            f[x] = omega_m * table_k(p->emf_k[x], p->emf_n, theta_v - (float)x * (BC_TWO_PI_F / 3.0f));
-        }
-    }
-
-    /* 9. linear-modulation limit: v = f + k_d u_d + k_q u_q, d axis first */
-    float k_d = 1.0f, k_q = 1.0f;
-    if (!p->overmod) {
-        if (p->limit == BC_SINE_LIMIT_HEX) {
-            float sf = spread(f);
-            if (sf > v_dc) {
-                for (int x = 0; x < 3; ++x) f[x] *= v_dc / sf;
-            }
-            k_d = hex_scale(f, gd, v_dc);
-            float f2[3] = {f[0] + k_d * gd[0], f[1] + k_d * gd[1], f[2] + k_d * gd[2]};
-            k_q = hex_scale(f2, gq, v_dc);
-        } else {
-            float r = v_dc * BC_INV_SQRT3_F;
-            bc_abc fa = {f[0], f[1], f[2]};
-            bc_ab F = bc_clarke(fa), Gd = bc_clarke(g_d), Gq = bc_clarke(g_q);
-            float nf = sqrtf(F.alpha * F.alpha + F.beta * F.beta);
-            if (nf > r) {
-                for (int x = 0; x < 3; ++x) f[x] *= r / nf;
-                F = bc_clarke((bc_abc){f[0], f[1], f[2]});
-            }
-            k_d = circle_scale(F, Gd, r);
-            bc_ab F2 = {F.alpha + k_d * Gd.alpha, F.beta + k_d * Gd.beta};
-            k_q = circle_scale(F2, Gq, r);
-        }
-    }
-    bc_abc v = {f[0] + k_d * gd[0] + k_q * gq[0], f[1] + k_d * gd[1] + k_q * gq[1],
-                f[2] + k_d * gd[2] + k_q * gq[2]};
-
-    /* 10. SVM */
-    float duty[3];
-    int clipped = bc_svm(v, v_dc, duty);
-    bc_dq ur = {k_d * u.d, k_q * u.q};
-    if (clipped && p->overmod) {
-        /* realised voltage from the clipped duties, minus the feed-forward, in the frame of theta_v */
-        bc_abc va = {duty[0] * v_dc - f[0], duty[1] * v_dc - f[1], duty[2] * v_dc - f[2]};
-        ur = bc_park(bc_clarke(va), sv, cv);
-    }
-    bc_pi_update(&s->pi_p, &s->pi_d, e_d, u.d, ur.d);
-    bc_pi_update(&s->pi_p, &s->pi_q, e_q, u.q, ur.q);
-    if (k_d < 1.0f || k_q < 1.0f || clipped) out->flags |= BC_FLAG_SATURATED;
-
-    for (int x = 0; x < 3; ++x) {
-        out->leg[x].mode = BC_LEG_PWM;
-        out->leg[x].duty = duty[x];
-    }
-    bc_dq vdq = bc_park(bc_clarke(v), sv, cv);
-    out->diag[2] = iq_ref;
-    out->diag[3] = vdq.d;
-    out->diag[4] = vdq.q;
+    current_loops(p, s, idq, 0.0f, iq_ref, theta, omega_e, v_dc, p->emf_ff, was == BC_SINE_MODE_START, out);
 }

@@ -291,7 +291,7 @@ static const bc_const_desc CONSTS[] = {
     K("flag", BC_FLAG_BAD_INPUT),    K("flag", BC_FLAG_SATURATED),        K("flag", BC_FLAG_DESYNC),
     K("flag", BC_FLAG_ZC_TIMEOUT),   K("flag", BC_FLAG_ZC_HIDDEN),        K("flag", BC_FLAG_ZC_JUMP),
     K("flag", BC_FLAG_STALL),        K("flag", BC_FLAG_START_FAIL),       K("flag", BC_FLAG_OPEN_LOOP),
-    K("flag", BC_FLAG_COMM_LATE),
+    K("flag", BC_FLAG_COMM_LATE),    K("flag", BC_FLAG_LOCK_LOST),
     K("chop", BC_CHOP_BIPOLAR),      K("chop", BC_CHOP_HIGH),             K("chop", BC_CHOP_PWMPWM),
     K("chop", BC_CHOP_SYNC),
     K("leg", BC_LEG_OFF),            K("leg", BC_LEG_PWM),                K("leg", BC_LEG_HIGH),
@@ -321,6 +321,7 @@ extern const bc_bind_provider bc_bind_sine;
 extern const bc_bind_provider bc_bind_lu;
 extern const bc_bind_provider bc_bind_hallcal;
 extern const bc_bind_provider bc_bind_bemf;
+extern const bc_bind_provider bc_bind_commission;
 
 static const bc_bind_provider *const PROVIDERS[] = {
     &bc_bind_openloop_table,
@@ -330,6 +331,7 @@ static const bc_bind_provider *const PROVIDERS[] = {
     &bc_bind_lu,
     &bc_bind_hallcal,
     &bc_bind_bemf,
+    &bc_bind_commission,
 };
 
 #define N_PROVIDERS ((int32_t)(sizeof PROVIDERS / sizeof PROVIDERS[0]))

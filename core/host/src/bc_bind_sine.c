@@ -39,18 +39,50 @@ static const bc_field_desc SINE_FIELDS[] = {
     F(bc_sine_params, kp_w, "f4"),
     F(bc_sine_params, ki_w, "f4"),
     F(bc_sine_params, tau_max, "f4"),
+    F(bc_sine_params, observer, "i4"),
+    F(bc_sine_params, fobs, "bc_fluxobs_params"),
+    F(bc_sine_params, robs, "bc_redobs_params"),
+    F(bc_sine_params, if_current, "f4"),
+    F(bc_sine_params, if_align, "f4"),
+    F(bc_sine_params, if_accel, "f4"),
+    F(bc_sine_params, if_hold, "f4"),
+    F(bc_sine_params, lock_time, "f4"),
+    F(bc_sine_params, lock_tol, "f4"),
+    F(bc_sine_params, restart_wait, "f4"),
+    F(bc_sine_params, if_damp, "f4"),
+    F(bc_sine_params, t_dead, "f4"),
     F(bc_sine_params, derate, "bc_derate_params"),
+    F(bc_fluxobs_params, R, "f4"),
+    F(bc_fluxobs_params, L, "f4"),
+    F(bc_fluxobs_params, psi, "f4"),
+    F(bc_fluxobs_params, ts, "f4"),
+    F(bc_fluxobs_params, gain, "f4"),
+    F(bc_fluxobs_params, pll_bw, "f4"),
+    F(bc_fluxobs_params, i_max, "f4"),
+    F(bc_fluxobs_params, v_max, "f4"),
+    F(bc_redobs_params, R, "f4"),
+    F(bc_redobs_params, L, "f4"),
+    F(bc_redobs_params, psi, "f4"),
+    F(bc_redobs_params, ts, "f4"),
+    F(bc_redobs_params, alpha_o, "f4"),
+    F(bc_redobs_params, sigma0, "f4"),
+    F(bc_redobs_params, zeta_inf, "f4"),
+    F(bc_redobs_params, i_max, "f4"),
+    F(bc_redobs_params, v_max, "f4"),
 };
-static const bc_struct_desc SINE_STRUCTS[] = {BC_BIND_STRUCT(bc_sine_params), BC_BIND_STRUCT(bc_sine_state)};
+static const bc_struct_desc SINE_STRUCTS[] = {BC_BIND_STRUCT(bc_sine_params), BC_BIND_STRUCT(bc_sine_state),
+                                              BC_BIND_STRUCT(bc_fluxobs_params), BC_BIND_STRUCT(bc_redobs_params)};
 static int sine_init(const void *p, void *s) { return bc_sine_init(p, s); }
 static void sine_step(const void *p, void *s, const bc_ctrl_in *in, bc_ctrl_out *out) { bc_sine_step(p, s, in, out); }
 static const bc_ctrl_info SINE_INFO = {"sine", "bc_sine_params", "bc_sine_state", sine_init, sine_step,
                                        {"i_d", "i_q", "i_q_ref", "v_d", "v_q", "theta", "omega_e", "mode"}};
 static const bc_const_desc SINE_CONSTS[] = {
     BC_BIND_CONST("sine_angle", BC_SINE_ANGLE_HALL), BC_BIND_CONST("sine_angle", BC_SINE_ANGLE_ENCODER),
+    BC_BIND_CONST("sine_angle", BC_SINE_ANGLE_OBSERVER), BC_BIND_CONST("sine_observer", BC_SINE_OBS_FLUX),
+    BC_BIND_CONST("sine_observer", BC_SINE_OBS_REDUCED),
     BC_BIND_CONST("sine_limit", BC_SINE_LIMIT_HEX),  BC_BIND_CONST("sine_limit", BC_SINE_LIMIT_CIRCLE),
     BC_BIND_CONST("sine_mode", BC_SINE_MODE_START),  BC_BIND_CONST("sine_mode", BC_SINE_MODE_SINE),
 };
 const bc_bind_provider bc_bind_sine = {SINE_FIELDS, (int32_t)(sizeof SINE_FIELDS / sizeof SINE_FIELDS[0]),
-                                       SINE_STRUCTS, 2, &SINE_INFO, SINE_CONSTS,
+                                       SINE_STRUCTS, 4, &SINE_INFO, SINE_CONSTS,
                                        (int32_t)(sizeof SINE_CONSTS / sizeof SINE_CONSTS[0])};

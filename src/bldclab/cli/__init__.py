@@ -119,6 +119,8 @@ COMMANDS: tuple[Command, ...] = (
             "each point in sync, desynced (with the reason), recovered or not started", "sensorless"),
     Command("torque-control", "paper 2's torque control vs its baselines over a load x speed grid",
             "torque_control"),
+    Command("commission", "self-commissioning on the plant: R, L and flux linkage measured by the controller",
+            "commission"),
     Command("thermal", "a load profile (hill climb, duty cycle) through the drive and its thermal network",
             "thermal"),
     Command("faults", "inject sensor, bus and phase faults: detection, time to safe state, peak current",

@@ -83,6 +83,14 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     six.add_argument("--commutation", choices=SIXSTEP_COMMUTATIONS,
                      help="where the commutation instants come from (default hall; encoder: the exact angle, the "
                           "ideal commutation)")
+    sine = p.add_argument_group("sinusoidal settings (--control sine: bldclab.Sine, docs/sine.md, "
+                                "docs/sensorless-sine.md)")
+    sine.add_argument("--angle", choices=("hall", "pll", "encoder", "observer"),
+                      help="angle of the d,q transforms (default hall); observer: sensorless, a rotor-angle observer "
+                           "with an I/f start-up (use with --mechanics and --speed-ref)")
+    sine.add_argument("--observer", choices=("flux", "reduced"),
+                      help="with --angle observer: the nonlinear flux observer with a PLL (default flux) or the "
+                           "reduced-order observer")
     p.add_argument("--speed-ref",
                    help='speed reference for a speed loop (--control sine with --mechanics; the loop sets the '
                         'torque): "1000 rpm", "0.5 pu"' + _PROFILE_HELP.format(u="rpm", v=1000))
@@ -149,6 +157,18 @@ def _sixstep(args: argparse.Namespace, ctl: Control) -> Control:
     except BldclabError as exc:  # SixStep's own check (an advance above 30 deg, ...): name the option
         option = next((o for o, a in _SIXSTEP_OPTIONS if exc.field == f"control.{a}"), exc.field)
         raise BldclabError(option, exc.problem) from None
+
+
+def _sine(args: argparse.Namespace, ctl: Control) -> Control:
+    """Return ``Sine`` with the sinusoidal settings of the command line."""
+    if not isinstance(ctl, Sine):
+        return ctl
+    kw: dict[str, Any] = {}
+    if args.angle is not None:
+        kw["angle"] = args.angle
+    if args.observer is not None:
+        kw["observer"] = args.observer
+    return replace(ctl, **kw) if kw else ctl
 
 
 def is_library(control: str) -> bool:
@@ -221,6 +241,12 @@ def _check_options(args: argparse.Namespace) -> None:
         for option, value in (("--torque", args.torque), ("--current", args.current), ("--duty", args.duty)):
             if value is not None:
                 raise BldclabError(option, "your controller takes its reference with --ref (in the unit it states)")
+    for option, value in (("--angle", args.angle), ("--observer", args.observer)):
+        if value is not None and args.control != "sine":
+            raise BldclabError(option, f"is a sinusoidal setting: it needs --control sine, got --control "
+                               f"{args.control}")
+    if args.observer is not None and args.angle != "observer":
+        raise BldclabError("--observer", "chooses the rotor-angle observer: it needs --angle observer")
     for option, attr in _SIXSTEP_OPTIONS:
         if getattr(args, attr) not in (None, False) and args.control != "square":
             raise BldclabError(option, f"is a six-step setting: it needs --control square, got --control "
@@ -356,7 +382,7 @@ def run_command(args: argparse.Namespace) -> int:
             raise BldclabError("--ref", f"must be finite, got {args.ref}")
     else:
         ctl, default_ref, unit = control_of(args.control, drive)
-        ctl = _sixstep(args, ctl)
+        ctl = _sine(args, _sixstep(args, ctl))
         if isinstance(ctl, SixStep) and ctl.regulation == "duty":  # no current loop: the reference is the duty
             default_ref, unit = 0.5, "duty"
         ref = _reference(args, default_ref, unit)

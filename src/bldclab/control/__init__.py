@@ -8,6 +8,7 @@ controller family; adding one: a module here with a :class:`Control` subclass, a
 from __future__ import annotations
 
 from .base import Control
+from .commission import Commission
 from .derate import TemperatureDerating
 from .hallcal import HallCal, HallCalibration
 from .lu import Lu
@@ -17,5 +18,5 @@ from .sine import Sine
 from .sixstep import SixStep
 from .user import UserControl
 
-__all__ = ["Control", "HallCal", "HallCalibration", "Lu", "OpenLoop", "Sine", "SixStep", "SixStepSensorless",
-           "SixStepVoltage", "TemperatureDerating", "UserControl"]
+__all__ = ["Commission", "Control", "HallCal", "HallCalibration", "Lu", "OpenLoop", "Sine", "SixStep",
+           "SixStepSensorless", "SixStepVoltage", "TemperatureDerating", "UserControl"]

@@ -28,7 +28,10 @@ from .sixstep import SixStep
 __all__ = ["Sine", "fundamental_k1"]
 
 # the settings' C constants (values read from the library: bldclab._core)
-_ANGLE = {"hall": "BC_SINE_ANGLE_HALL", "pll": "BC_SINE_ANGLE_HALL", "encoder": "BC_SINE_ANGLE_ENCODER"}
+_ANGLE = {"hall": "BC_SINE_ANGLE_HALL", "pll": "BC_SINE_ANGLE_HALL", "encoder": "BC_SINE_ANGLE_ENCODER",
+          "observer": "BC_SINE_ANGLE_OBSERVER"}
+_OBSERVER = {"flux": "BC_SINE_OBS_FLUX", "reduced": "BC_SINE_OBS_REDUCED"}
+OBSERVER_ANGLE_ERROR = math.radians(1.0)  # the PLL's lag at the rated acceleration the default bandwidth allows
 _LIMIT = {"hexagon": "BC_SINE_LIMIT_HEX", "circle": "BC_SINE_LIMIT_CIRCLE"}
 PAPER1_BANDWIDTH_HZ = 1000.0  # paper 1's current-loop crossover (Hz)
 
@@ -68,11 +71,38 @@ class Sine(Control):
 
     Parameters
     ----------
-    angle : {"hall", "pll", "encoder"}
+    angle : {"hall", "pll", "encoder", "observer"}
         Angle for the d,q transforms: the Hall-interpolated angle (paper 1 (46)), a tracking loop on the Hall edges
         (``pll``: averages the edge errors of misplaced sensors, time constant ``pll_edges`` edges; its speed is
-        used too, ``docs/hall-calibration.md``), or the encoder (an ideal reference for comparison; the speed then
-        comes from the Hall sensors).
+        used too, ``docs/hall-calibration.md``), the encoder (an ideal reference for comparison; the speed then
+        comes from the Hall sensors), or a rotor-angle observer without any position sensor (``observer``: angle
+        and speed from the voltages and currents, I/f start-up instead of the square wave, ``docs/sensorless-sine.md``).
+    observer : {"flux", "reduced"}
+        With ``angle="observer"``: the nonlinear flux observer with a PLL of Lee, Hong, Nam, Ortega, Praly and
+        Astolfi (IEEE TPEL 2010; ``bc_fluxobs.h``), or the reduced-order observer of Hinkkanen et al. (IEEE TIA
+        2018; ``bc_redobs.h``).
+    observer_gain : float, optional
+        Flux observer: radial convergence rate ``lambda`` (rad/s). Default ``2 omega_on`` (twice the electrical
+        hand-off speed, at most ``0.05 / T_s``).
+    observer_bandwidth : float, optional
+        Bandwidth of the observer's speed tracking (the flux observer's PLL ``omega_p``, the reduced observer's
+        ``alpha_o``), rad/s. Default: the angle lags a constant acceleration by ``a / omega_p^2``; the bandwidth that
+        keeps this lag at 1 deg electrical for the rated torque accelerating the drive's inertia alone,
+        ``sqrt(p T_s,N / (J 1 deg))``, within ``[4 omega_on, 0.05 / T_s]``.
+    if_current : float, optional
+        Current amplitude of the I/f start-up (A), default ``0.5 I_s,N``; at most ``I_s,N``.
+    if_accel : float, optional
+        Mechanical acceleration of the I/f ramp (rad/s^2). Default: half the I/f torque ``1.5 k_1 if_current``
+        accelerating the inertia ``J``, but at most the acceleration whose start and end excite a swing of the rotor
+        about the current vector of 10 % of the hand-off speed (``0.1 omega_on omega_n``, ``omega_n`` below).
+    if_align : float, optional
+        Time the I/f current vector is held still before the ramp (s). Default three periods of the rotor's
+        oscillation about the vector, ``2 pi / sqrt(p 1.5 k_1 if_current / J)`` each.
+    lock_tolerance : float
+        Band of the lock criterion (-), in (0, 1): the observer's flux within it of ``psi_f`` (relative) and its
+        tracking error within it (rad) for the hand-off; its flux out of it too long is a lost lock.
+    restart_wait : float
+        Legs off after a failed start or a lost lock before the next start (s).
     pll_edges : float
         Time constant of the tracking loop in Hall edges (1 .. 1000).
     hall_table : sequence of float, optional
@@ -146,7 +176,7 @@ class Sine(Control):
         :mod:`bldclab.control.derate`; the square-wave start too, unless ``start`` has its own); ``None``: none.
     """
 
-    angle: Literal["hall", "pll", "encoder"] = "hall"
+    angle: Literal["hall", "pll", "encoder", "observer"] = "hall"
     pll_edges: float = 3.0
     hall_table: tuple[float, ...] | None = None
     emf_feedforward: bool = True
@@ -169,6 +199,14 @@ class Sine(Control):
     tau_max: float | None = None
     start: SixStep = field(default_factory=lambda: SixStep(reference="torque"))
     flying_start: bool = False
+    observer: Literal["flux", "reduced"] = "flux"
+    observer_gain: float | None = None
+    observer_bandwidth: float | None = None
+    if_current: float | None = None
+    if_accel: float | None = None
+    if_align: float | None = None
+    lock_tolerance: float = 0.2
+    restart_wait: float = 0.1
     derate: TemperatureDerating | None = None
     c_name: ClassVar[str] = "sine"
     ref_meaning: ClassVar[str] = "torque, N m"
@@ -204,6 +242,15 @@ class Sine(Control):
         if not isinstance(self.start, SixStep):
             raise BldclabError("control.start", f"must be a bldclab.SixStep, got {type(self.start).__name__}")
         check_number("speed_bandwidth_hz", self.speed_bandwidth_hz)
+        if self.observer not in _OBSERVER:
+            raise BldclabError("control.observer", f"must be one of {', '.join(_OBSERVER)}, got {self.observer!r}")
+        for name in ("observer_gain", "observer_bandwidth", "if_current", "if_accel", "if_align"):
+            if getattr(self, name) is not None:
+                check_number(name, getattr(self, name), allow_zero=name == "if_align")
+        check_number("lock_tolerance", self.lock_tolerance)
+        if self.lock_tolerance >= 1:
+            raise BldclabError("control.lock_tolerance", f"must be in (0, 1), got {self.lock_tolerance!r}")
+        check_number("restart_wait", self.restart_wait, allow_zero=True)
         for name in ("speed_kp", "speed_ki"):
             if getattr(self, name) is not None:
                 check_number(name, getattr(self, name), allow_zero=True)
@@ -249,6 +296,66 @@ class Sine(Control):
         """
         return 1.5 * fundamental_k1(drive) * i_sN(drive) if self.tau_max is None else float(self.tau_max)
 
+    def handoff(self, drive: Drive) -> float:
+        """Return the hand-off speed (mechanical rad/s): ``handoff_speed``, default ``0.1 Omega_N``."""
+        return 0.1 * drive.motor.Omega_nominal if self.handoff_speed is None else float(self.handoff_speed)
+
+    def sensorless_settings(self, drive: Drive) -> dict[str, float]:
+        """Return the observer's and the I/f start-up's settings for a drive, defaults filled in.
+
+        Parameters
+        ----------
+        drive : Drive
+            The drive the controller believes in (its estimate): its R, L, back-EMF fundamental, inertia, rated
+            current and carrier.
+
+        Returns
+        -------
+        dict of str to float
+            ``psi`` (V s, ``k_1 / p``), ``gain`` (``lambda``, rad/s), ``bandwidth`` (rad/s), ``sigma0`` (rad/s),
+            ``if_current`` (A), ``if_accel`` (electrical rad/s^2), ``if_align`` (s), ``if_damp`` (A/V, the
+            alignment's swing damping ``omega_n J / (1.5 p^2 psi_f^2)``), ``lock_time`` (s) and ``if_hold`` (s).
+        """
+        m = drive.motor
+        ts = 0.5 / drive.inverter.f_pwm
+        k1 = fundamental_k1(drive)
+        w_on = m.p * self.handoff(drive)
+        w_hi = 0.05 / ts
+        gain = min(2.0 * w_on, w_hi) if self.observer_gain is None else float(self.observer_gain)
+        accel = m.p * 1.5 * k1 * i_sN(drive) / drive.mechanics.J  # electrical rad/s^2 at T_s,N
+        bw = (min(max(math.sqrt(accel / OBSERVER_ANGLE_ERROR), 4.0 * w_on), w_hi)
+              if self.observer_bandwidth is None else float(self.observer_bandwidth))
+        i_if = 0.5 * i_sN(drive) if self.if_current is None else float(self.if_current)
+        tau_if = 1.5 * k1 * i_if
+        w_n = math.sqrt(m.p * tau_if / drive.mechanics.J)
+        a_if = (min(m.p * 0.5 * tau_if / drive.mechanics.J, 0.1 * w_on * w_n) if self.if_accel is None
+                else m.p * float(self.if_accel))
+        align = 3.0 * 2.0 * math.pi / w_n if self.if_align is None else float(self.if_align)
+        lock_time = 5.0 / min(gain, bw)
+        # i_d = -k u_d brakes the alignment swing at the rate 1.5 p^2 psi^2 k / J: made w_n (near critical damping)
+        damp = w_n * drive.mechanics.J / (1.5 * m.p**2 * (k1 / m.p) ** 2)
+        return {"psi": k1 / m.p, "gain": gain, "bandwidth": bw,
+                "sigma0": min(r_total(drive) / (2.0 * m.L), 0.2 / ts), "if_current": i_if, "if_accel": a_if,
+                "if_align": align, "if_damp": damp, "lock_time": lock_time,
+                "if_hold": max(20.0 * lock_time, 10.0 * 2 * math.pi / w_on)}
+
+    def _observer_records(self, drive: Drive, core: Core, i_max: float) -> dict[str, object]:
+        """Return the sensorless members of ``bc_sine_params``."""
+        m, inv = drive.motor, drive.inverter
+        ts = 0.5 / inv.f_pwm
+        st = self.sensorless_settings(drive)
+        if self.angle == "observer" and st["if_current"] > i_sN(drive):
+            raise BldclabError("control.if_current", f"must be at most I_s,N = {i_sN(drive):.4g} A, got "
+                               f"{st['if_current']:.4g} A")
+        common = {"R": r_total(drive), "L": m.L, "psi": st["psi"], "ts": ts, "i_max": i_max, "v_max": 2.0 * inv.V_dc}
+        fobs = core.filled("bc_fluxobs_params", gain=st["gain"], pll_bw=st["bandwidth"], **common)
+        robs = core.filled("bc_redobs_params", alpha_o=st["bandwidth"], sigma0=st["sigma0"], zeta_inf=0.2, **common)
+        return {"observer": core.const(_OBSERVER[self.observer]), "fobs": fobs[0], "robs": robs[0],
+                "if_current": st["if_current"], "if_align": st["if_align"],
+                "if_accel": st["if_accel"], "if_hold": st["if_hold"], "lock_time": st["lock_time"],
+                "lock_tol": self.lock_tolerance, "restart_wait": self.restart_wait, "if_damp": st["if_damp"],
+                "t_dead": inv.t_dead}
+
     def _r_design(self, drive: Drive, scale: float) -> float:
         """Design resistance of a loop of ``scale`` phases in series (Ohm)."""
         if self.R_design is not None:
@@ -270,7 +377,8 @@ class Sine(Control):
         k1 = fundamental_k1(drive)
         th = np.arange(self.emf_points) * (2.0 * math.pi / self.emf_points)
         tabs = [np.ascontiguousarray(shape(th), dtype=np.float32) for shape in m.emf.shapes]
-        on = 0.1 * m.Omega_nominal if self.handoff_speed is None else float(self.handoff_speed)
+        on = self.handoff(drive)
+        i_max = 2.0 * m.I_N if self.i_max is None else self.i_max
         start = self.start if self.start.reference == "torque" else dataclasses.replace(self.start, reference="torque")
         if start.hall_table is None and self.hall_table is not None:
             start = dataclasses.replace(start, hall_table=self.hall_table)
@@ -291,7 +399,7 @@ class Sine(Control):
             ki=ki,
             v_max=2.0 * inv.V_dc,
             i_s_max=i_sN(drive),
-            i_max=2.0 * m.I_N if self.i_max is None else self.i_max,
+            i_max=i_max,
             speed_limit=int(self.speed_limit),
             decouple=int(self.decoupling),
             advance=self.advance,
@@ -314,5 +422,6 @@ class Sine(Control):
             kp_w=kp_w,
             ki_w=kp_w * wb / 4.0 if self.speed_ki is None else self.speed_ki,
             tau_max=self.torque_limit(drive),
+            **self._observer_records(drive, core, i_max),
         )
         return CParams(rec, [*tabs, six])

@@ -178,6 +178,44 @@
  *         x_d = R i_d - omega_e L i_q - ff_d
  *         x_q = R i_q + omega_e L i_d + omega_m k_1 - ff_q - [emf_ff] omega_m k_1
  *
+ * Sensorless (angle = BC_SINE_ANGLE_OBSERVER; docs/sensorless-sine.md). No Hall sensor is read (its code is not
+ * checked); the angle and the speed come from an observer (observer = BC_SINE_OBS_FLUX: bc_fluxobs.h, or
+ * BC_SINE_OBS_REDUCED: bc_redobs.h) fed, at sample k, with the current measured at t_k and the voltage commanded
+ * at sample k-2, the one applied over [t_k-1, t_k]: u = Clarke(d_x v_dc - sgn(i_x) v_dc t_dead / (2 T_s)) of its
+ * duties and the currents measured when they were computed (the half-period mean of centre-aligned PWM, less the
+ * dead time's mean loss: one turn-on delay per PWM period against the current's sign; sgn linear within +-2 % of
+ * i_s_max; device drops are not in it). The start mode is I/f, in phases:
+ *
+ *   IDLE   the reference (tau, or omega_ref with the speed loop) is 0: legs off. Otherwise dir = its sign, ALIGN.
+ *   ALIGN  the current vector i_q,ref = dir if_current, i_d,ref = 0 in the frame of theta_if = 0 (the same PIs,
+ *          decoupling with omega_if, no back-EMF feed-forward) for if_align, its amplitude rising linearly over the
+ *          first tenth of it (holding torque early, against an active load). A current-fed rotor has no damping of
+ *          its own and would swing about the vector; its swing's back-EMF lies on d of theta_if (the rotor's q axis
+ *          there, for either dir), and i_d,ref = -if_damp (x_d - R i_d) (x_d the d PI's integrator, clamped to
+ *          +-if_current / 2) brakes it. An unloaded rotor settles with its q axis pi/2 behind the vector's (dir =
+ *          -1: ahead); the observer is seeded there: theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP.
+ *   RAMP   omega_if += dir if_accel T_s up to |omega_if| = omega_on, theta_if += omega_if T_s. The rotor follows
+ *          with the load angle its torque needs (I/f is self-stabilising for any torque below 1.5 k_1 if_current).
+ *          At omega_on the lock is checked every sample: |flux / psi_f - 1| <= lock_tol (the observer's flux
+ *          output, bc_obs.h), |err| <= lock_tol (its tracking loop's error: rad, or the sine of the angle error)
+ *          and dir omega_f >= omega_off (omega_f: omega^ through a low-pass of time constant lock_time). The
+ *          observer's own consistency, not its speed against omega_if: a current-
+ *          fed rotor has no damping and swings about the turning vector at sqrt(p 1.5 k_1 if_current / J) (the
+ *          plant's friction aside), and the observer follows the swing. When the lock has held for lock_time
+ *          the drive hands over to the sine mode on the observer's angle: the d,q integrators as in the Hall
+ *          hand-off below (from the current measured in the observer's frame), the speed PI's integrator at the
+ *          torque 1.5 k_1 i_q that current makes. Not locked within if_hold at omega_on: BC_FLAG_START_FAIL |
+ *          BC_FLAG_DESYNC, WAIT.
+ *   WAIT   legs off for restart_wait, then IDLE (and a new ALIGN).
+ *
+ * In the sine mode the lock is checked every sample with the same band (the speed against itself: only the flux
+ * magnitude); violated for lock_time (BC_FLAG_LOCK_LOST), or |omega_f| < omega_off (BC_FLAG_STALL):
+ * BC_FLAG_DESYNC,
+ * legs off, WAIT, then a new start (n_restart counts them). A rotor still turning when the next ALIGN comes is
+ * pulled to the aligned angle (no flying restart).
+ * diag in this mode: 0 i_d, 1 i_q (A, in the frame used: theta_if in the start mode), 2 i_q,ref (A), 3 v_d, 4 v_q
+ * (V), 5 the observer's angle (rad), 6 its speed (electrical rad/s), 7 mode (0 start, 1 sine).
+ *
  * diag: 0 i_d (A), 1 i_q (A), 2 i_q,ref (A; in the start mode the sine current of the same torque), 3 v_d (V),
  *       4 v_q (V) (the applied voltage in the frame of theta_v; 0 in the start mode), 5 theta (rad, the angle
  *       used), 6 omega_e (rad/s, Hall), 7 mode (0 square start, 1 sine).
@@ -188,15 +226,26 @@
 #include <stdint.h>
 
 #include "bldc/bc_derate.h"
+#include "bldc/bc_fluxobs.h"
 #include "bldc/bc_guard.h"
 #include "bldc/bc_hall.h"
 #include "bldc/bc_pi.h"
+#include "bldc/bc_redobs.h"
 #include "bldc/bc_sixstep.h"
 #include "bldc/bc_transform.h"
 #include "bldc/bc_types.h"
 
 #define BC_SINE_ANGLE_HALL 0    /* bc_hall's interpolated angle (46) */
 #define BC_SINE_ANGLE_ENCODER 1 /* in->theta_enc (reference sensor) */
+#define BC_SINE_ANGLE_OBSERVER 2 /* a rotor-angle observer (sensorless), I/f start-up */
+
+#define BC_SINE_OBS_FLUX 0    /* bc_fluxobs.h: Lee et al. 2010 nonlinear flux observer with a PLL */
+#define BC_SINE_OBS_REDUCED 1 /* bc_redobs.h: Hinkkanen et al. 2018 reduced-order observer */
+
+#define BC_SINE_SL_IDLE 0  /* sensorless start: zero reference, legs off */
+#define BC_SINE_SL_ALIGN 1 /* the I/f current vector held at its start angle */
+#define BC_SINE_SL_RAMP 2  /* the I/f vector turning, its speed ramped to omega_on, then held for the lock */
+#define BC_SINE_SL_WAIT 3  /* legs off after a failed start or a lost lock, before the next start */
 
 #define BC_SINE_LIMIT_HEX 0    /* max - min of the phase references <= v_dc */
 #define BC_SINE_LIMIT_CIRCLE 1 /* |v_alpha,beta| <= v_dc / sqrt(3) */
@@ -258,6 +307,19 @@ typedef struct {
     float kp_w;         /* N m / (rad/s) (>= 0) */
     float ki_w;         /* N m / rad (>= 0) */
     float tau_max;      /* torque limit of the speed loop, N m (> 0 when speed_loop) */
+    /* sensorless (angle = BC_SINE_ANGLE_OBSERVER; section "Sensorless" above) */
+    int32_t observer;          /* BC_SINE_OBS_* */
+    bc_fluxobs_params fobs;    /* the flux observer's parameters (observer = BC_SINE_OBS_FLUX; ts must equal ts) */
+    bc_redobs_params robs;     /* the reduced-order observer's (observer = BC_SINE_OBS_REDUCED) */
+    float if_current; /* I/f current amplitude, A (0 < if_current <= i_s_max) */
+    float if_align;   /* time the vector is held at its start angle, s (>= 0) */
+    float if_accel;   /* I/f ramp's electrical acceleration, rad/s^2 (> 0) */
+    float if_hold;    /* longest time at omega_on waiting for the lock, s (> 0) */
+    float lock_time;  /* the lock criterion must hold this long for the handover, its violation for a loss, s (> 0) */
+    float lock_tol;   /* relative band of the lock criterion, - (0 .. 1) */
+    float restart_wait; /* legs off after a failed start or a lost lock, s (>= 0) */
+    float if_damp;      /* swing damping of ALIGN, A/V (>= 0) */
+    float t_dead;       /* the inverter's dead time, s (0 <= t_dead < ts): the observer's voltage is corrected */
     bc_derate_params derate; /* temperature derating of the current limit i_s_max (bc_derate.h) from in->temp; no
                                 channel enabled (all zero): none. The start controller derates by six.derate. */
 } bc_sine_params;
@@ -288,6 +350,19 @@ typedef struct {
     float lim_q[BC_SINE_LIM_W + 1];    /* q_n: volts per count of row n, V */
     uint16_t lim_tab[BC_SINE_LIM_W + 1][2 * BC_SINE_LIM_J + 1]; /* v_req(omega_n, J_m) ~ b_n + q_n tab (rounded
                                                                     up); column BC_SINE_LIM_J + m is J_m */
+    /* sensorless */
+    bc_fluxobs_state fobs;
+    bc_redobs_state robs;
+    int32_t sl_phase;  /* BC_SINE_SL_* (start mode) */
+    int32_t sl_dir;    /* +1 / -1: direction of the start */
+    float if_theta;    /* I/f angle, rad in [0, 2 pi) */
+    float if_omega;    /* I/f electrical speed, rad/s */
+    float sl_t;        /* time in the present phase (RAMP: at omega_on; sine mode: below omega_off), s */
+    float n_lock;      /* time the lock criterion has held (start) or failed (sine), s */
+    float omega_f;     /* the observer's speed low-passed (time constant lock_time), electrical rad/s */
+    float u_hist[2][2]; /* alpha-beta voltage commanded one and two samples ago, V */
+    int32_t u_ok[2];    /* 1: that voltage was applied by PWM on every leg */
+    uint32_t n_restart; /* failed starts and lost locks since init */
 } bc_sine_state;
 
 /* Validate the parameters (BC_ERR_PARAM) and reset the state: start mode, integrators 0, trip cleared. */

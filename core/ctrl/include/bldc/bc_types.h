@@ -65,6 +65,7 @@ typedef struct {
 #define BC_FLAG_START_FAIL 0x400u /* reason: the open-loop ramp ended without the crossings for a handover */
 #define BC_FLAG_OPEN_LOOP 0x800u /* aligning or commutating open loop (start-up) */
 #define BC_FLAG_COMM_LATE 0x1000u /* a commutation instant already past: commutated at once */
+#define BC_FLAG_LOCK_LOST 0x2000u /* reason: the rotor-angle observer's flux left its band (sensorless sine) */
 
 /* Measurements presented to a controller at one sample. */
 typedef struct {

@@ -1,0 +1,133 @@
+/*
+ * bc_commission.h - motor self-commissioning ("motor detection", float): the stator resistance, the inductance and
+ * the PM flux linkage measured by the controller from its own voltages and currents, pole pairs given.
+ * docs/sensorless-sine.md, "Self-commissioning", has the measurements against the plant.
+ *
+ * Frames: amplitude-invariant alpha-beta (bc_transform.h). The controller drives a current vector i_ref e^(j phi)
+ * with two PIs in the frame of phi (the same gains for both axes), the voltage rotated back with the loop's delay
+ * compensated (phi + 1.5 omega_phi T_s) and min-max SVM. The voltage of sample k-2 (the one applied over [t_k-1,
+ * t_k], as in bc_obs.h) is taken back from its duties: u = Clarke(d_x v_dc). Phases, in order:
+ *
+ *  1. ALIGN   phi = pi/2, i_ref rising linearly 0 -> i_test over t_ramp (the rotor's d axis pulled onto the vector
+ *             slowly, so that it is left with little swing), then phi turned linearly to 0 over t_ramp (a rotor at
+ *             the unstable point of one angle, its d axis opposite the current, is pulled off it by the other).
+ *             In ALIGN and the R test the rotor's swing about the current (a current-fed rotor has no damping of
+ *             its own) is braked: i_q,ref = -k_damp (x_q - R i_q), x_q the q PI's integrator (the low-frequency q
+ *             voltage: the swing's back-EMF omega_e psi_f when the d axis is on the current; R = 0 before it is
+ *             measured), clamped to +-i_test / 2. The integrator and not the applied voltage: through k_p the loop
+ *             gain k_p k_damp would exceed 1 and chatter; on x_q it is a pole at -k_i k_damp.
+ *  2. R_HI    t_settle, then t_window at i_test: means V_2 = <u_alpha>, I_2 = <i_alpha>; over it the spread of u_alpha and the
+ *             largest |u_beta| (a turning rotor's back-EMF).
+ *  3. R_LO    t_settle, then t_window at i_test / 2: V_1, I_1, likewise. Two levels cancel the inverter's voltage
+ *             error (diode drops, dead time), constant at a constant current sign:
+ *
+ *                 R = (V_2 - V_1) / (I_2 - I_1)          (the resistance in series with a phase: R + R_on)
+ *
+ *  4. L       n_pulse pairs of voltage pulses on alpha, +v_pulse then -v_pulse for pulse_len samples each, added to
+ *             the PIs' output at I_1 (held, the PIs paused), then 2 samples of that output alone. Over the pulses,
+ *             the sign s of each:
+ *
+ *                 L = sum s (u_alpha - V_1 - R ((i_k-1 + i_k)/2 - I_1)) T_s / sum s (i_k - i_k-1)
+ *
+ *             (u - V_1 - R (i - I_1) is what the inductance takes, the inverter's error cancelled by V_1 - R I_1).
+ *             Then t_settle with the PIs at I_1 again.
+ *  5. SPIN    I/f: i_ref rising to i_if over t_ramp with the vector still, then the vector turning, omega_phi
+ *             ramped by if_accel to w_spin (electrical rad/s), t_settle there, then t_spin of the back-EMF in the frame of phi,
+ *
+ *                 e' = u' - R i' - j omega_phi L i'      (u' the applied voltage in the frame at the
+ *                                                    interval's middle, 1.5 samples after its command's angle)
+ *
+ *             and psi_f = sum |e'| T_s / (n w_spin T_s + sum d arg e'): |e'| = |omega_r| psi_f, and the rotor's
+ *             travel is the vector's plus the change of the angle of e' (the rotor's q axis in the frame of phi),
+ *             so the swing of a current-fed rotor about the vector (undamped) leaves no error.
+ *  6. DONE    legs off; the results stay in the state.
+ *
+ * Statuses (status, diag 7): RUNNING until DONE; a failure turns the legs off for good and names its cause:
+ *   ROTOR_MOVING   in R_HI or R_LO, the largest |u_beta| or the spread of u_alpha exceeds tol_move |V| (a rotor
+ *                  turned by its load or a dynamometer: back-EMF where a standing rotor has none)
+ *   NO_CURRENT     |I_2| < i_test / 2 at the end of R_HI, or the duties clipped with |i_d| < i_ref / 2 (an open
+ *                  phase: the PI winds up against no current)
+ *   SATURATED      the duties clipped with the current there (the test voltage or the spin's back-EMF above the
+ *                  bus)
+ *   NOT_FOLLOWING  in SPIN, the spread (standard deviation) of |e'| exceeds tol_follow <|e'|>, or <|e'|> is below
+ *                  w_spin psi_min: the rotor does not turn with the vector
+ *   FAULT          the input guard (over-current, bus, fault pin, non-finite measurement; bc_guard.h)
+ *
+ * diag: 0 phase (BC_COMM_PH_*), 1 R (Ohm), 2 L (H), 3 psi_f (V s), 4 i' real (A), 5 i' imaginary (A), 6 phi (rad),
+ * 7 status (BC_COMM_*).
+ */
+#ifndef BC_COMMISSION_H
+#define BC_COMMISSION_H
+
+#include <stdint.h>
+
+#include "bldc/bc_guard.h"
+#include "bldc/bc_pi.h"
+#include "bldc/bc_types.h"
+
+#define BC_COMM_RUNNING 0
+#define BC_COMM_DONE 1
+#define BC_COMM_ROTOR_MOVING 2
+#define BC_COMM_NO_CURRENT 3
+#define BC_COMM_SATURATED 4
+#define BC_COMM_NOT_FOLLOWING 5
+#define BC_COMM_FAULT 6
+
+#define BC_COMM_PH_ALIGN 0
+#define BC_COMM_PH_R_HI 1
+#define BC_COMM_PH_R_LO 2
+#define BC_COMM_PH_L 3
+#define BC_COMM_PH_SPIN 4
+#define BC_COMM_PH_DONE 5
+
+typedef struct {
+    float ts;         /* sampling period, s (> 0) */
+    float kp, ki;     /* current PI gains, V/A and V/(A s) (>= 0) */
+    float i_test;     /* DC test current, A (> 0, < i_max) */
+    float t_ramp;     /* alignment ramp, s (>= 0) */
+    float t_settle;   /* settling time before each window, s (>= 0) */
+    float t_window;   /* averaging window of the R test, s (> 0) */
+    float v_pulse;    /* inductance pulse voltage, V (> 0) */
+    int32_t n_pulse;  /* pulse pairs (1 .. 1000) */
+    int32_t pulse_len; /* samples per pulse (1 .. 1000) */
+    float i_if;       /* I/f current of the spin, A (> 0, < i_max) */
+    float if_accel;   /* spin ramp, electrical rad/s^2 (> 0) */
+    float w_spin;     /* spin speed, electrical rad/s (> 0) */
+    float t_spin;     /* averaging window of the spin, s (> 0) */
+    float psi_min;    /* smallest plausible flux linkage, V s (> 0) */
+    float tol_move;   /* ROTOR_MOVING threshold, - (> 0) */
+    float tol_follow; /* NOT_FOLLOWING threshold, - (> 0) */
+    float k_damp;     /* swing damping of ALIGN and the R test, A/V (>= 0) */
+    float i_max;      /* over-current trip, A (> 0) */
+    float v_max;      /* bound of the PI outputs and of a plausible bus, V (> 0) */
+} bc_commission_params;
+
+typedef struct {
+    bc_guard_params guard_p;
+    bc_guard_state guard;
+    bc_pi_params pi_p;
+    bc_pi_state pi_d, pi_q;
+    int32_t phase, status;
+    float t;               /* time in the phase, s */
+    int32_t k;             /* samples in the phase */
+    float phi, w_phi;      /* vector angle (rad) and speed (rad/s) */
+    float u_hist[2][2];    /* alpha-beta voltage commanded 1 and 2 samples ago, V */
+    float phi_hist[2];     /* the vector angle of those samples, rad */
+    float i_prev[2];       /* current of the previous sample, A */
+    float u_hold[2];       /* the PIs' output (frame of phi) held during the pulses, V */
+    float n, s_v, s_i, s_vb, v_lo, v_hi; /* window sums: count, u_alpha, i_alpha, max |u_beta|, u_alpha range */
+    float s_e, s_e2;      /* spin: sum |e'|, |e'|^2 */
+    float s_dd, e_ang;    /* spin: the rotor's travel against the vector (sum of the steps of arg e'), last arg e' */
+    float l_num, l_den;   /* inductance sums */
+    float V1, I1, V2, I2;
+    float R, L, psi;       /* results (0 until measured) */
+} bc_commission_state;
+
+/* Validate (BC_ERR_PARAM) and reset: ALIGN, RUNNING. */
+int bc_commission_init(const bc_commission_params *p, bc_commission_state *s);
+
+/* One sample. */
+void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, const bc_ctrl_in *in,
+                        bc_ctrl_out *out);
+
+#endif /* BC_COMMISSION_H */

@@ -1,0 +1,291 @@
+/* bc_commission.c - motor self-commissioning: R, L, psi_f. Phases, laws and statuses in bc_commission.h. */
+#include "bldc/bc_commission.h"
+
+#include <math.h>
+
+#include "bldc/bc_math.h"
+#include "bldc/bc_transform.h"
+
+static int finite_pos(float v) { return isfinite(v) && v > 0.0f; }
+static int finite_nonneg(float v) { return isfinite(v) && v >= 0.0f; }
+
+int bc_commission_init(const bc_commission_params *p, bc_commission_state *s)
+{
+    if (p == 0 || s == 0) return BC_ERR_PARAM;
+    if (!finite_pos(p->ts) || !finite_nonneg(p->kp) || !finite_nonneg(p->ki) || !finite_pos(p->i_test) ||
+        !finite_nonneg(p->t_ramp) || !finite_nonneg(p->t_settle) || !finite_pos(p->t_window) ||
+        !finite_pos(p->v_pulse) || !finite_pos(p->i_if) || !finite_pos(p->if_accel) || !finite_pos(p->w_spin) ||
+        !finite_pos(p->t_spin) || !finite_pos(p->psi_min) || !finite_pos(p->tol_move) ||
+        !finite_pos(p->tol_follow) || !finite_pos(p->i_max) || !finite_pos(p->v_max) || !finite_nonneg(p->k_damp))
+        return BC_ERR_PARAM;
+    if (p->n_pulse < 1 || p->n_pulse > 1000 || p->pulse_len < 1 || p->pulse_len > 1000) return BC_ERR_PARAM;
+    if (p->i_test >= p->i_max || p->i_if >= p->i_max) return BC_ERR_PARAM;
+    s->guard_p = (bc_guard_params){.i_max = p->i_max, .v_max = p->v_max};
+    if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
+    s->pi_p = (bc_pi_params){.kp = p->kp, .ki = p->ki, .ts = p->ts, .u_min = -p->v_max, .u_max = p->v_max};
+    if (bc_pi_init(&s->pi_p, &s->pi_d) != BC_OK || bc_pi_init(&s->pi_p, &s->pi_q) != BC_OK) return BC_ERR_PARAM;
+    s->phase = BC_COMM_PH_ALIGN;
+    s->status = BC_COMM_RUNNING;
+    s->t = 0.0f;
+    s->k = 0;
+    s->phi = s->w_phi = 0.0f;
+    for (int j = 0; j < 2; ++j) {
+        s->u_hist[j][0] = s->u_hist[j][1] = 0.0f;
+        s->phi_hist[j] = 0.0f;
+        s->i_prev[j] = 0.0f;
+        s->u_hold[j] = 0.0f;
+    }
+    s->n = s->s_v = s->s_i = s->s_vb = s->v_lo = s->v_hi = s->s_e = s->s_e2 = s->s_dd = s->e_ang = 0.0f;
+    s->l_num = s->l_den = 0.0f;
+    s->V1 = s->I1 = s->V2 = s->I2 = 0.0f;
+    s->R = s->L = s->psi = 0.0f;
+    return BC_OK;
+}
+
+static void next_phase(bc_commission_state *s, int32_t phase)
+{
+    s->phase = phase;
+    s->t = 0.0f;
+    s->k = 0;
+    s->n = s->s_v = s->s_i = s->s_vb = s->s_e = s->s_e2 = s->s_dd = s->e_ang = 0.0f;
+    s->v_lo = 3.0e38f;
+    s->v_hi = -3.0e38f;
+}
+
+static void stop(bc_commission_state *s, int32_t status)
+{
+    s->status = status;
+    s->phase = BC_COMM_PH_DONE;
+}
+
+/* A window sample of the R test: the voltage over [t_k-1, t_k] and the current at t_k. */
+static void r_sample(bc_commission_state *s, bc_ab u, bc_ab i)
+{
+    s->n += 1.0f;
+    s->s_v += u.alpha;
+    s->s_i += i.alpha;
+    s->s_vb = fmaxf(s->s_vb, fabsf(u.beta));
+    s->v_lo = fminf(s->v_lo, u.alpha);
+    s->v_hi = fmaxf(s->v_hi, u.alpha);
+}
+
+/* End of an R window: the means, and ROTOR_MOVING if the rotor's back-EMF shows. Returns 1 if it may go on. */
+static int r_end(const bc_commission_params *p, bc_commission_state *s, float *V, float *I)
+{
+    *V = s->s_v / s->n;
+    *I = s->s_i / s->n;
+    float lim = p->tol_move * fabsf(*V);
+    if (s->s_vb > lim || s->v_hi - s->v_lo > lim) {
+        stop(s, BC_COMM_ROTOR_MOVING);
+        return 0;
+    }
+    return 1;
+}
+
+void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, const bc_ctrl_in *in,
+                        bc_ctrl_out *out)
+{
+    for (int j = 0; j < BC_DIAG_N; ++j) out->diag[j] = 0.0f;
+    out->flags = 0u;
+    bc_legs_off(out);
+    float i3[3];
+    uint32_t why = bc_guard_step(&s->guard_p, &s->guard, in, i3);
+    if (why && s->phase != BC_COMM_PH_DONE) stop(s, BC_COMM_FAULT);
+    out->flags |= why;
+    if (s->phase == BC_COMM_PH_DONE) {
+        out->flags |= BC_FLAG_SAFE;
+        out->diag[0] = (float)s->phase;
+        out->diag[1] = s->R;
+        out->diag[2] = s->L;
+        out->diag[3] = s->psi;
+        out->diag[7] = (float)s->status;
+        return;
+    }
+    bc_ab i = bc_clarke((bc_abc){i3[0], i3[1], i3[2]});
+    bc_ab u = {s->u_hist[1][0], s->u_hist[1][1]}; /* applied over [t_k-1, t_k] */
+    float phi_u = s->phi_hist[1];                /* its vector angle */
+    float ts = p->ts;
+    s->t += ts;
+    s->k++;
+
+    float i_ref = p->i_test;
+    int pulse = 0;     /* 1: open loop, u_hold + the pulse */
+    float v_add = 0.0f;
+    switch (s->phase) {
+    case BC_COMM_PH_ALIGN:
+        /* at pi/2 with the current rising over t_ramp, then turned slowly to 0 over t_ramp (a rotor that sat at the
+         * unstable point of one angle is pulled off it by the other) */
+        if (p->t_ramp > 0.0f) {
+            i_ref *= bc_clampf(s->t / p->t_ramp, 0.0f, 1.0f);
+            s->phi = 0.5f * BC_PI_F * bc_clampf(2.0f - s->t / p->t_ramp, 0.0f, 1.0f);
+        }
+        if (s->t >= 2.0f * p->t_ramp) {
+            s->phi = 0.0f;
+            next_phase(s, BC_COMM_PH_R_HI);
+        }
+        break;
+    case BC_COMM_PH_R_HI:
+        if (s->t > p->t_settle) r_sample(s, u, i);
+        if (s->t >= p->t_settle + p->t_window) {
+            if (!r_end(p, s, &s->V2, &s->I2)) break;
+            if (fabsf(s->I2) < 0.5f * p->i_test) {
+                stop(s, BC_COMM_NO_CURRENT);
+                break;
+            }
+            next_phase(s, BC_COMM_PH_R_LO);
+        }
+        break;
+    case BC_COMM_PH_R_LO:
+        i_ref = 0.5f * p->i_test;
+        if (s->t > p->t_settle) r_sample(s, u, i);
+        if (s->t >= p->t_settle + p->t_window) {
+            if (!r_end(p, s, &s->V1, &s->I1)) break;
+            s->R = (s->V2 - s->V1) / (s->I2 - s->I1); /* R = (V_2 - V_1) / (I_2 - I_1) */
+            if (!isfinite(s->R)) s->R = 0.0f;
+            s->u_hold[0] = s->pi_d.x;
+            s->u_hold[1] = s->pi_q.x;
+            s->l_num = s->l_den = 0.0f;
+            next_phase(s, BC_COMM_PH_L);
+        }
+        break;
+    case BC_COMM_PH_L: {
+        i_ref = 0.5f * p->i_test;
+        int32_t n_cmd = 2 * p->n_pulse * p->pulse_len; /* commands of the pulse train */
+        int32_t c = s->k - 1;                          /* this sample's command index in the phase */
+        /* measurement: the interval [t_k-1, t_k] carries the command of two samples ago, c - 2 */
+        int32_t cm = c - 2;
+        if (cm >= 0 && cm < n_cmd) {
+            float sg = ((cm / p->pulse_len) % 2 == 0) ? 1.0f : -1.0f;
+            float im = 0.5f * (s->i_prev[0] + i.alpha);
+            /* L = sum s (u - V_1 - R (i_mean - I_1)) T_s / sum s (i_k - i_k-1) */
+            s->l_num += sg * (u.alpha - s->V1 - s->R * (im - s->I1)) * ts;
+            s->l_den += sg * (i.alpha - s->i_prev[0]);
+        }
+        if (c < n_cmd) {
+            pulse = 1;
+            v_add = ((c / p->pulse_len) % 2 == 0) ? p->v_pulse : -p->v_pulse;
+        } else if (c < n_cmd + 2) {
+            pulse = 1;
+        } else {
+            s->L = (s->l_den != 0.0f) ? s->l_num / s->l_den : 0.0f;
+            if (!isfinite(s->L)) s->L = 0.0f;
+            if (s->t >= (float)(n_cmd + 2) * ts + p->t_settle) next_phase(s, BC_COMM_PH_SPIN);
+        }
+        break;
+    }
+    case BC_COMM_PH_SPIN: {
+        /* the current rises from i_test/2 to i_if over the first t_ramp (the vector still), then it turns with the
+         * ramp: the whole I/f torque is there before the acceleration asks for its share */
+        float a = p->t_ramp > 0.0f ? bc_clampf(s->t / p->t_ramp, 0.0f, 1.0f) : 1.0f;
+        i_ref = 0.5f * p->i_test + a * (p->i_if - 0.5f * p->i_test);
+        if (s->t > p->t_ramp) s->w_phi = fminf(s->w_phi + p->if_accel * ts, p->w_spin);
+        float t_top = p->t_ramp + p->w_spin / p->if_accel + p->t_settle;
+        if (s->t > t_top) {
+            /* e' = u' - R i' - j omega L i' (u' at the interval's mid-angle, i' at phi_k) */
+            float pm = phi_u + 1.5f * s->w_phi * ts; /* the interval [t_k-1, t_k]: 1.5 samples after its command */
+            float cu = cosf(pm), su = sinf(pm), ci = cosf(s->phi), si = sinf(s->phi);
+            float ud = cu * u.alpha + su * u.beta, uq = -su * u.alpha + cu * u.beta;
+            float id = ci * i.alpha + si * i.beta, iq = -si * i.alpha + ci * i.beta;
+            float ed = ud - s->R * id + s->w_phi * s->L * iq;
+            float eq = uq - s->R * iq - s->w_phi * s->L * id;
+            float e = sqrtf(ed * ed + eq * eq);
+            /* the rotor's travel against the vector: the angle of e' (q of the rotor) advances by dd */
+            float ang = atan2f(eq, ed);
+            if (s->n > 0.0f) {
+                float dd = ang - s->e_ang;
+                dd = dd > BC_PI_F ? dd - BC_TWO_PI_F : (dd < -BC_PI_F ? dd + BC_TWO_PI_F : dd);
+                s->s_dd += dd;
+            }
+            s->e_ang = ang;
+            s->n += 1.0f;
+            s->s_e += e;
+            s->s_e2 += e * e;
+        }
+        if (s->t >= t_top + p->t_spin) {
+            float m = s->s_e / s->n;
+            float var = fmaxf(s->s_e2 / s->n - m * m, 0.0f);
+            /* psi_f = sum |e'| T_s / (rotor travel) = sum |e'| T_s / (n w_spin T_s + sum dd) */
+            float travel = s->n * p->w_spin * ts + s->s_dd;
+            s->psi = travel > 0.0f ? s->s_e * ts / travel : 0.0f;
+            if (!(sqrtf(var) <= p->tol_follow * m) || !(m >= p->w_spin * p->psi_min)) {
+                stop(s, BC_COMM_NOT_FOLLOWING);
+            } else {
+                stop(s, BC_COMM_DONE);
+            }
+        }
+        break;
+    }
+    default:
+        stop(s, BC_COMM_FAULT);
+        break;
+    }
+    s->i_prev[0] = i.alpha;
+    s->i_prev[1] = i.beta;
+    if (s->phase == BC_COMM_PH_DONE) {
+        out->flags |= BC_FLAG_SAFE;
+        out->diag[0] = (float)s->phase;
+        out->diag[1] = s->R;
+        out->diag[2] = s->L;
+        out->diag[3] = s->psi;
+        out->diag[7] = (float)s->status;
+        s->u_hist[1][0] = s->u_hist[0][0];
+        s->u_hist[1][1] = s->u_hist[0][1];
+        return;
+    }
+
+    /* the current vector: PIs in the frame of phi, the voltage rotated back at phi + 1.5 omega T_s */
+    float c = cosf(s->phi), sn = sinf(s->phi);
+    float id = c * i.alpha + sn * i.beta, iq = -sn * i.alpha + c * i.beta;
+    float iq_ref = 0.0f;
+    if (s->phase == BC_COMM_PH_ALIGN || s->phase == BC_COMM_PH_R_HI || s->phase == BC_COMM_PH_R_LO) {
+        /* damping: the q PI's integrator, less the resistive drop, is the swinging rotor's back-EMF omega_e psi_f
+         * (d on the current); i_q,ref = -k_damp (x_q - R i_q) brakes it. The integrator, not the applied voltage:
+         * through the proportional gain the loop -k_p k_damp would chatter (k_p k_damp > 1) */
+        iq_ref = bc_clampf(-p->k_damp * (s->pi_q.x - s->R * iq), -0.5f * p->i_test, 0.5f * p->i_test);
+    }
+    float e_d = i_ref - id, e_q = iq_ref - iq;
+    float ud, uq;
+    if (pulse) {
+        ud = s->u_hold[0] + v_add;
+        uq = s->u_hold[1];
+    } else {
+        ud = bc_pi_output(&s->pi_p, &s->pi_d, e_d, 0.0f);
+        uq = bc_pi_output(&s->pi_p, &s->pi_q, e_q, 0.0f);
+        ud = bc_pi_limit(&s->pi_p, ud);
+        uq = bc_pi_limit(&s->pi_p, uq);
+        bc_pi_update(&s->pi_p, &s->pi_d, e_d, ud, ud);
+        bc_pi_update(&s->pi_p, &s->pi_q, e_q, uq, uq);
+    }
+    float pv = s->phi + 1.5f * s->w_phi * ts;
+    float cv = cosf(pv), sv = sinf(pv);
+    bc_ab uab = {cv * ud - sv * uq, sv * ud + cv * uq};
+    float duty[3];
+    int clipped = bc_svm(bc_clarke_inv(uab), in->v_dc, duty);
+    if (clipped) {
+        /* the bus is not enough: with less than half the current it drives, the circuit is open */
+        stop(s, fabsf(id) < 0.5f * fabsf(i_ref) ? BC_COMM_NO_CURRENT : BC_COMM_SATURATED);
+        out->flags |= BC_FLAG_SAFE | BC_FLAG_SATURATED;
+        out->diag[7] = (float)s->status;
+        return;
+    }
+    for (int x = 0; x < 3; ++x) {
+        out->leg[x].mode = BC_LEG_PWM;
+        out->leg[x].duty = duty[x];
+    }
+    bc_ab ua = bc_clarke((bc_abc){duty[0] * in->v_dc, duty[1] * in->v_dc, duty[2] * in->v_dc});
+    s->u_hist[1][0] = s->u_hist[0][0];
+    s->u_hist[1][1] = s->u_hist[0][1];
+    s->phi_hist[1] = s->phi_hist[0];
+    s->u_hist[0][0] = ua.alpha;
+    s->u_hist[0][1] = ua.beta;
+    s->phi_hist[0] = s->phi;
+    s->phi = bc_wrap_2pi(s->phi + s->w_phi * ts);
+    out->diag[0] = (float)s->phase;
+    out->diag[1] = s->R;
+    out->diag[2] = s->L;
+    out->diag[3] = s->psi;
+    out->diag[4] = id;
+    out->diag[5] = iq;
+    out->diag[6] = s->phi;
+    out->diag[7] = (float)s->status;
+}

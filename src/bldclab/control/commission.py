@@ -1,0 +1,118 @@
+"""Motor self-commissioning (``core/ctrl/include/bldc/bc_commission.h``).
+
+R, L and the PM flux linkage measured by the controller; :func:`bldclab.analysis.commission.commission` runs it and
+builds the estimated drive.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+from .._core import Core, CParams
+from ..errors import BldclabError
+from ..model.analytic import i_sN, r_total
+from ..model.design import pi_gains
+from ..model.motor import Drive
+from .base import Control, check_number
+from .sine import fundamental_k1
+
+__all__ = ["Commission"]
+
+
+@dataclass(frozen=True)
+class Commission(Control):
+    """Self-commissioning: DC injection at two currents (R), voltage pulses (L), an I/f spin (flux linkage).
+
+    The drive given to :meth:`c_record` is the controller's *nominal* data (a motor file's values, which may be
+    wrong): they set only the test's currents, timing and PI gains, never the results. The phases and the statuses
+    are in ``bc_commission.h`` and ``docs/sensorless-sine.md``.
+
+    Parameters
+    ----------
+    test_current : float, optional
+        DC test current (A) of the R and L tests; default ``0.5 I_s,N``.
+    spin_speed : float, optional
+        Mechanical speed of the I/f spin (rad/s); default ``0.3 Omega_N`` (the rated speed, a nameplate value).
+    spin_current : float, optional
+        Current of the spin (A); default the test current.
+    pulse_samples : int
+        Samples per inductance pulse.
+    pulses : int
+        Pulse pairs (+, -).
+    tol_move, tol_follow : float
+        Thresholds of the ROTOR_MOVING and NOT_FOLLOWING statuses (-).
+    """
+
+    test_current: float | None = None
+    spin_speed: float | None = None
+    spin_current: float | None = None
+    pulse_samples: int = 10
+    pulses: int = 8
+    tol_move: float = 0.05
+    tol_follow: float = 0.3
+    c_name: ClassVar[str] = "commission"
+    ref_meaning: ClassVar[str] = "unused"
+
+    def __post_init__(self) -> None:
+        for name in ("test_current", "spin_speed", "spin_current"):
+            if getattr(self, name) is not None:
+                check_number(name, getattr(self, name))
+        for name in ("pulse_samples", "pulses"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 1000:
+                raise BldclabError(f"control.{name}", f"must be an integer in [1, 1000], got {v!r}")
+        check_number("tol_move", self.tol_move)
+        check_number("tol_follow", self.tol_follow)
+
+    def settings(self, drive: Drive) -> dict[str, float]:
+        """Return the routine's settings for a drive's nominal data (currents A, times s, speeds rad/s, V).
+
+        Parameters
+        ----------
+        drive : Drive
+            The nominal data.
+        """
+        m, inv, J = drive.motor, drive.inverter, drive.mechanics.J
+        ts = 0.5 / inv.f_pwm
+        k1 = fundamental_k1(drive)
+        i_t = 0.5 * i_sN(drive) if self.test_current is None else float(self.test_current)
+        i_if = i_t if self.spin_current is None else float(self.spin_current)
+        w_n = math.sqrt(m.p * 1.5 * k1 * i_t / J)  # the rotor's swing about the test current (rad/s)
+        w_spin = m.p * (0.3 * m.Omega_nominal if self.spin_speed is None else float(self.spin_speed))
+        w_nif = math.sqrt(m.p * 1.5 * k1 * i_if / J)
+        tau_el = m.L / r_total(drive)
+        swing = 2 * math.pi / w_n
+        return {
+            "ts": ts, "i_test": i_t, "i_if": i_if,
+            "t_ramp": 3 * swing, "t_settle": 5 * tau_el + 0.01 + 2 * swing, "t_window": max(0.05, 2 * swing),
+            "v_pulse": 0.25 * i_t * m.L / (self.pulse_samples * ts),
+            "if_accel": min(m.p * 0.5 * 1.5 * k1 * i_if / J, 0.02 * w_spin * w_nif), "w_spin": w_spin,
+            "t_spin": max(10 * 2 * math.pi / w_spin, 5 * 2 * math.pi / w_nif), "psi_min": 0.25 * k1 / m.p,
+            # i_q = -k u_q brakes the swing at the rate 1.5 p^2 psi^2 k / J: made w_n (near critical damping)
+            "k_damp": w_n * J / (1.5 * m.p**2 * (k1 / m.p) ** 2),
+        }
+
+    def duration(self, drive: Drive) -> float:
+        """Return the routine's length for a drive's nominal data (s)."""
+        st = self.settings(drive)
+        return (2 * st["t_ramp"] + st["t_settle"] + st["t_window"] + st["t_settle"] + st["t_window"]
+                + (2 * self.pulses * self.pulse_samples + 2) * st["ts"] + st["t_settle"]
+                + st["t_ramp"] + st["w_spin"] / st["if_accel"] + st["t_settle"] + st["t_spin"])
+
+    def c_record(self, drive: Drive, core: Core, n_samples: int) -> CParams:  # noqa: D102
+        st = self.settings(drive)
+        i_max = 2.0 * drive.motor.I_N
+        for name in ("i_test", "i_if"):
+            if st[name] >= i_max:
+                raise BldclabError(f"control.{'test_current' if name == 'i_test' else 'spin_current'}",
+                                   f"must be below the trip 2 I_N = {i_max:.4g} A, got {st[name]:.4g} A")
+        bw = 2 * math.pi * min(200.0, drive.inverter.f_pwm / 50.0)
+        kp, ki = pi_gains(max(r_total(drive), bw * drive.motor.L / 10), drive.motor.L, bw / (2 * math.pi), 90.0)
+        rec = core.filled(
+            "bc_commission_params", kp=kp, ki=ki, n_pulse=self.pulses, pulse_len=self.pulse_samples,
+            tol_move=self.tol_move, tol_follow=self.tol_follow, i_max=i_max, v_max=2.0 * drive.inverter.V_dc,
+            **{k: st[k] for k in ("ts", "i_test", "t_ramp", "t_settle", "t_window", "v_pulse", "i_if", "if_accel",
+                                  "w_spin", "t_spin", "psi_min", "k_damp")})
+        return CParams(rec, [])
