@@ -464,6 +464,24 @@ def _sixv(seconds: float, trace: bool):
     return build
 
 
+def _sensorless(seconds: float):
+    def build(scale: float) -> tuple[Any, Any, Any]:
+        import bldclab as bl
+
+        d = _htm()  # rotor free from standstill: alignment, forced ramp, handover, closed loop on the crossings
+        return d, bl.SixStepSensorless(), bl.Scenario(duration=seconds * scale, ref=0.5)
+    return build
+
+
+def _sine_observer(seconds: float):
+    def build(scale: float) -> tuple[Any, Any, Any]:
+        import bldclab as bl
+
+        d = _htm()  # rotor free from standstill: I/f start, hand-off to the flux observer at about 0.61 s
+        return d, bl.Sine(angle="observer"), bl.Scenario(duration=seconds * scale, ref=0.5 * d.T_N)
+    return build
+
+
 def _speed_loop(seconds: float):
     def build(scale: float) -> tuple[Any, Any, Any]:
         mc = _sibling("motulator_case")
@@ -504,6 +522,10 @@ SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
              _sixstep(0.2, False, drive="htm-48v-losses")),
     Scenario("speed-loop", "motulator's shared case: sinusoidal EMF, rotor dynamics, Sine speed loop, 0.2 s",
              _speed_loop(0.2), "bc_sine_step"),
+    Scenario("sensorless", "SixStepSensorless, duty 0.5, htm-48v from standstill (start-up and closed loop), 0.6 s",
+             _sensorless(0.6), "bc_bemf_step"),
+    Scenario("sine-observer", "Sine on the flux observer, T_N/2, htm-48v from standstill (I/f, hand-off), 1 s",
+             _sine_observer(1.0), "bc_sine_step"),
 )}
 
 
