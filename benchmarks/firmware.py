@@ -207,13 +207,12 @@ def _hallcal_speed_runs(scale: float) -> list[tuple[str, Any, Any, Any]]:
 
 
 def _bemf_runs(scale: float) -> list[tuple[str, Any, Any, Any]]:
-    """The sensorless start-up from standstill (rotor free): alignment, then the forced ramp. Until the plant's back-EMF
-    sensing exists (issue 24) the controller sees no crossing, so this measures the start-up path only (alignment, the
-    forced ramp, its desync and the wait); the closed-loop runs come with the sensing."""
+    """The sensorless six-step from standstill (rotor free, duty 0.5) on the plant's back-EMF sensing: alignment, the
+    forced ramp, the handover at about 0.49 s and closed loop on the comparators' crossings to 0.6 s."""
     import bldclab as bl
 
     d = bl.load("htm-48v")
-    return [(START, d, bl.SixStepSensorless(), bl.Scenario(duration=scale * T_START, ref=0.5, trace=False))]
+    return [(START, d, bl.SixStepSensorless(), bl.Scenario(duration=scale * 0.6, ref=0.5, trace=False))]
 
 
 def _sine_obs_runs(scale: float) -> list[tuple[str, Any, Any, Any]]:
