@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pandas.testing as pd_testing
 import pytest
 
 import bldclab as bl
@@ -440,7 +441,6 @@ def test_an_efficiency_map_of_a_user_controller_on_processes_is_the_builtins(lib
     b = efficiency_map(HTM, torques, speeds, workers=2, controls={"square": user}, **kw)
     cols = [c for c in a.points.columns if c != "wall_s"]
     assert len(a.points) == 4
-    pd_testing = pytest.importorskip("pandas.testing")
     pd_testing.assert_frame_equal(a.points[cols], b.points[cols], check_exact=True)
 
 
