@@ -364,8 +364,11 @@ def test_alignment_ramp_and_handover_on_the_plant():
     ramp = st == STATE["ramp"]
     assert np.any(ramp)
     duty = res.signals["duty"][ramp]
-    top = su["ramp_duty"] + su["ramp_vf"] * p * su["ramp_end_speed"]
+    w1 = p * su["ramp_end_speed"]
+    top = su["ramp_duty"] * math.sqrt(1.0 + (w1 * su["ramp_tau"]) ** 2) + su["ramp_vf"] * w1  # |R + j w L|, V/f
+    assert su["ramp_tau"] == pytest.approx(d.motor.L / d.motor.R)
     assert np.all(duty >= su["ramp_duty"] - 1e-6) and np.all(duty <= top + 1e-6)
+    assert duty.max() == pytest.approx(top, rel=1e-4)
     assert np.all(np.diff(duty) >= -1e-6)  # the forced speed never falls
     closed = st == STATE["closed"]
     j_h = int(np.argmax(closed))

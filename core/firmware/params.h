@@ -83,7 +83,8 @@ static const float LU_F_12[12] = {0.0f, 0.4f, 0.4f, 0.4f, 0.4f, 0.4f, 0.0f, -0.4
      .tau_filter = 0.0f, .t_comp = 0.0f, .adv_angle = 0.0f, .adv_time = 0.0f, .adv_demag = 0.0f,                  \
      .adv_max = 0.5235982f, .t60_gain = 0.5f, .int_limit = 0.006981317f, .zc_timeout = 1.5f, .jump_max = 2.0f,    \
      .miss_max = 0, .omega_stall = 18.0f, .align_time = 0.3812374f, .align_duty = 0.05208333f, .ramp_w0 = 6.0f,   \
-     .ramp_w1 = 60.0f, .ramp_accel = 1280.0f, .ramp_duty = 0.05208333f, .ramp_vf = 0.001666667f, .ramp_hold = 12, \
+     .ramp_w1 = 60.0f, .ramp_accel = 1280.0f, .ramp_duty = 0.05208333f, .ramp_vf = 0.001666667f,                 \
+     .ramp_tau = 1.5e-3f, .ramp_hold = 12,                                                                         \
      .n_handover = 6, .duty_min = 0.0f, .duty_rate = 0.0f, .ref_stop = 0.0f, .restart_wait = 0.05f,              \
      .restart_max = 1.0f, .use_current = 1, .i_max = 100.0f, .i_limit = 0.0f, .k_limit = 2.083333f, .v_max = 96.0f, \
      .fast_demag = 1, .dlim_d0 = 0.05208333f, .dlim_vf = 0.001666667f, .dlim_tau = 1.5e-3f, .demag_max = 0.6f, .cmp_gate = 0}

@@ -8,6 +8,7 @@
 
 #define PI3_F (BC_PI_F / 3.0f)
 #define PI6_F (BC_PI_F / 6.0f)
+#define RAMP_W_MAX 3.0f /* RAMP: a crossing interval giving more than this times the forced speed is no rotor's */
 
 static int fin(float v) { return isfinite(v) ? 1 : 0; }
 
@@ -53,7 +54,7 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
         return BC_ERR_PARAM;
     if (!nonneg(p->align_time) || !in01(p->align_duty) || !nonneg(p->ramp_w0) || !(fin(p->ramp_w1) && p->ramp_w1 > 0.0f) ||
         p->ramp_w1 < p->ramp_w0 || !nonneg(p->ramp_accel) || (p->ramp_w0 == 0.0f && !(p->ramp_accel > 0.0f)) ||
-        !in01(p->ramp_duty) || !nonneg(p->ramp_vf) || p->ramp_hold < 1 || p->n_handover < 2 || p->n_handover > 1000)
+        !in01(p->ramp_duty) || !nonneg(p->ramp_vf) || !nonneg(p->ramp_tau) || p->ramp_hold < 1 || p->n_handover < 2 || p->n_handover > 1000)
         return BC_ERR_PARAM;
     if (!in01(p->duty_min) || !nonneg(p->duty_rate) || !(fin(p->ref_stop) && p->ref_stop >= 0.0f && p->ref_stop < 1.0f) ||
         !nonneg(p->restart_wait) || !(fin(p->restart_max) && p->restart_max >= p->restart_wait))
@@ -124,6 +125,14 @@ static float advance_of(const bc_bemf_params *p, const bc_bemf_state *s, float w
     return fin(a) ? bc_clampf(a, 0.0f, p->adv_max) : p->adv_max;
 }
 
+/* the forced ramp's duty at electrical speed w: ramp_duty sqrt(1 + (w ramp_tau)^2) + ramp_vf w, in [0, 1] */
+static float ramp_duty_at(const bc_bemf_params *p, float w)
+{
+    float x = w * p->ramp_tau;
+    float d = p->ramp_duty * sqrtf(1.0f + x * x) + p->ramp_vf * w;
+    return fin(d) ? bc_clampf(d, 0.0f, 1.0f) : 0.0f;
+}
+
 /* Open-loop time to an angle: w tau + a tau^2 / 2 (w + a tau capped at w1) reaches ang. */
 static float angle_time(float w, float a, float w1, float ang)
 {
@@ -139,9 +148,10 @@ static float angle_time(float w, float a, float w1, float ang)
 static float sector_time(float w, float a, float w1) { return angle_time(w, a, w1, PI3_F); }
 
 /* A new sector: the phase that entered the pair (the incoming phase), the detector reset for the commutation at tc. */
-static void enter_sector(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, int sector, uint32_t tc)
+static void enter_sector(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, int sector, uint32_t tc,
+                         int out_first)
 {
-    int inc = -1, outp = -1;
+    int inc = -1, outp = out_first;
     int pn, nn;
     (void)bc_sector_phases(sector, &pn, &nn);
     if (s->sector >= 0) {
@@ -229,7 +239,9 @@ static void begin_ramp(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_
     s->w_ol = p->ramp_w0;
     s->w_zc = 0.0f;
     s->tau_ol = sector_time(s->w_ol, p->ramp_accel, p->ramp_w1);
-    enter_sector(p, s, in, aligned ? 2 : (s->dir > 0 ? 2 : 1), n->ta);
+    /* after the alignment phase a (sector 2's floating phase) still carries the alignment current: the first
+     * sector's outgoing phase, its clamp as after any commutation */
+    enter_sector(p, s, in, aligned ? 2 : (s->dir > 0 ? 2 : 1), n->ta, aligned ? 0 : -1);
     float first = aligned ? angle_time(s->w_ol, p->ramp_accel, p->ramp_w1, PI6_F) : s->tau_ol;
     s->t_next = tadd(n->ta, first * p->f_tick);
     s->pending = 1;
@@ -392,12 +404,18 @@ static float integrate_predict(const bc_bemf_params *p, const bc_bemf_state *s, 
 /* ------------------------------------------------------------------------------------------------------------ */
 
 /* 5 and 7: an accepted crossing at x_e (s relative to t_k). */
-static void on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, float x_e)
+static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, float x_e)
 {
     float w0 = omega_of(p, s);
     float x_zc = x_e - filter_delay(p, w0) - (p->method == BC_BEMF_COMPARATOR ? p->t_comp : 0.0f);
     float T = s->have_zc ? x_zc - tdiff(s->t_zc, n->tk) * s->inv_tick : 0.0f;
     if (!(fin(T) && T > 0.0f)) T = 0.0f;
+    if (s->mode == BC_BEMF_RAMP) { /* noise on a back-EMF too small to read, or a speed the rotor cannot have */
+        float into = x_zc - tdiff(s->t_c, n->tk) * s->inv_tick;
+        float wf = fminf(s->w_ol + p->ramp_accel * fmaxf(into, 0.0f), p->ramp_w1);
+        if (!(wf >= 0.5f * p->omega_stall)) return 0;
+        if (T > 0.0f && PI3_F / T > RAMP_W_MAX * wf) return 0;
+    }
     s->det = 2;
     if (s->mode == BC_BEMF_RAMP) {
         s->sector_ok = 1;
@@ -405,20 +423,25 @@ static void on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, 
         s->t_zc = tadd(n->tk, x_zc * p->f_tick);
         s->have_zc = 1;
         if (!(s->valid >= p->n_handover && T > 0.0f && PI3_F / T >= 1.5f * p->omega_stall)) {
-            /* not yet: the crossing commutates the forced sector 30 degrees after it, if that comes before
-             * the forced instant (speed from the crossing interval, else from the 30 degrees between the sector's
-             * start and its crossing) */
-            float into = x_zc - tdiff(s->t_c, n->tk) * s->inv_tick; /* from the sector's start to the crossing */
-            float wc = T > 0.0f ? PI3_F / T : (into > 0.0f ? PI6_F / into : s->w_ol);
+            /* not yet: the crossing commutates the forced sector 30 degrees after it, if that comes before the
+             * forced instant, at the speed from the crossing interval (two crossings in a row), else from the 30
+             * degrees between the sector's start and its crossing, at most twice the forced speed: a rotor that
+             * leads the forced field by phi crosses (30 deg - phi) after the sector's start, which overstates its
+             * speed, and a commutation that comes early leaves it lagging, where the pair's torque falls
+             * (docs/sensorless.md, section 8); a rotor started from rest under the pair's best torque (twice the
+             * default ramp's acceleration) is at most twice as fast as the ramp */
+            float into = x_zc - tdiff(s->t_c, n->tk) * s->inv_tick;
+            float wf = fminf(s->w_ol + p->ramp_accel * fmaxf(into, 0.0f), p->ramp_w1);
+            float wc = T > 0.0f ? PI3_F / T : (into > 0.0f ? fminf(PI6_F / into, 2.0f * wf) : wf);
             s->w_zc = fin(wc) && wc > 0.0f ? wc : 0.0f;
             if (wc > 0.0f && fin(wc)) {
                 uint32_t tn = tadd(n->tk, (x_zc + PI6_F / wc) * p->f_tick);
                 if (tdiff(tn, s->t_next) < 0.0f) s->t_next = tn;
             }
-            return;
+            return 1;
         }
         /* handover: the throttle ramp starts from the duty the forced ramp applied */
-        s->d_cmd = bc_clampf(p->ramp_duty + p->ramp_vf * omega_of(p, s), 0.0f, 1.0f);
+        s->d_cmd = ramp_duty_at(p, omega_of(p, s));
         s->mode = BC_BEMF_CLOSED;
         s->t_in = 0.0f;
         s->t60 = T;
@@ -438,7 +461,7 @@ static void on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, 
             float ratio = T / s->t_last;
             if (!(ratio <= p->jump_max && ratio * p->jump_max >= 1.0f)) {
                 desync(s, n, BC_BEMF_REASON_JUMP);
-                return;
+                return 1;
             }
         }
         if (T > 0.0f && !s->virt) {
@@ -455,7 +478,7 @@ static void on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, 
     float w = omega_of(p, s);
     if (!(w >= p->omega_stall)) {
         desync(s, n, BC_BEMF_REASON_STALL);
-        return;
+        return 1;
     }
     s->adv = advance_of(p, s, w);
     float x_n;
@@ -468,6 +491,7 @@ static void on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, 
     }
     s->t_next = tadd(n->tk, x_n * p->f_tick);
     s->pending = 1;
+    return 1;
 }
 
 /* ------------------------------------------------------------------------------------------------------------ */
@@ -510,7 +534,7 @@ static float duty_of(const bc_bemf_params *p, const bc_bemf_state *s)
 {
     float m = 0.0f;
     if (s->mode == BC_BEMF_ALIGN) m = p->align_duty;
-    else if (s->mode == BC_BEMF_RAMP) m = fminf(p->ramp_duty + p->ramp_vf * s->w_ol, 1.0f); /* forced speed */
+    else if (s->mode == BC_BEMF_RAMP) m = ramp_duty_at(p, s->w_now); /* at the forced speed now */
     else if (s->mode == BC_BEMF_CLOSED) {
         m = fmaxf(s->d_cmd, p->duty_min);
         if (p->demag_max > 0.0f) m = fminf(m, s->d_dm);
@@ -625,7 +649,14 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
             int got = p->method == BC_BEMF_COMPARATOR ? detect_comparator(p, s, in, &n, &x_e)
                                                       : detect_adc(p, s, in, &n, &x_e);
             if (got) {
-                on_crossing(p, s, &n, x_e);
+                if (!on_crossing(p, s, &n, x_e)) { /* rejected: wait for a new pre level and edge; the post level
+                                                     * from here to half the forced sector is a rotor that leads */
+                    s->det = 1;
+                    s->cnt_open = in->zc_count[floating(s->sector)];
+                    s->pre_seen = 0;
+                    s->post_open = 1;
+                    s->n_post = 0;
+                }
             } else if (s->mode == BC_BEMF_RAMP && s->post_open && tdiff(n.tk, s->t_c) >= 0.5f * s->tau_ol * p->f_tick) {
                 /* start-up: the post level since the window opened and still at half the forced sector: not a clamp
                  * but a rotor leading the forced field (its crossing came before the window). The forced sector is
@@ -689,6 +720,11 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
     } else {
         float w = omega_of(p, s);
         int now = s->pending && tdiff(s->t_next, n.ta) < s->ts_tick;
+        if (s->mode == BC_BEMF_RAMP) { /* the forced speed at the output's interval, w_ol + accel (t_a - t_c) */
+            float el = tdiff(n.ta, s->t_c) * s->inv_tick;
+            s->w_now = fminf(s->w_ol + p->ramp_accel * fmaxf(el, 0.0f), p->ramp_w1);
+            if (!fin(s->w_now)) s->w_now = p->ramp_w1;
+        }
         if (now && s->mode == BC_BEMF_RAMP) { /* a forced commutation: the next sector's speed; give up? */
             if (!s->sector_ok) {
                 s->valid = 0;
@@ -719,14 +755,14 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
                 legs_of(p, s, s->sector, m, travel, demag_now(s), out->leg);
                 shown = s->sector;
                 uint32_t tc = s->t_next;
-                enter_sector(p, s, in, next, tc);
+                enter_sector(p, s, in, next, tc, -1);
                 legs_of(p, s, next, m, 0.0f, 1, out->leg_at);
                 out->has_at = 1u;
                 out->t_at = bc_clampf(dn * s->inv_tick, 0.0f, p->ts * 0.999999f);
                 s->adv_prev = s->adv;
             } else if (now) { /* already past: at once, from t_a */
                 n.flags |= BC_FLAG_COMM_LATE;
-                enter_sector(p, s, in, next, n.ta);
+                enter_sector(p, s, in, next, n.ta, -1);
                 legs_of(p, s, next, m, 0.0f, 1, out->leg);
                 shown = next;
                 s->adv_prev = s->adv;

@@ -20,7 +20,7 @@ static const bc_field_desc BEMF_FIELDS[] = {
     F(bc_bemf_params, align_time, "f4"),   F(bc_bemf_params, align_duty, "f4"),
     F(bc_bemf_params, ramp_w0, "f4"),      F(bc_bemf_params, ramp_w1, "f4"),
     F(bc_bemf_params, ramp_accel, "f4"),   F(bc_bemf_params, ramp_duty, "f4"),
-    F(bc_bemf_params, ramp_vf, "f4"),
+    F(bc_bemf_params, ramp_vf, "f4"),      F(bc_bemf_params, ramp_tau, "f4"),
     F(bc_bemf_params, ramp_hold, "i4"),    F(bc_bemf_params, n_handover, "i4"),
     F(bc_bemf_params, duty_min, "f4"),     F(bc_bemf_params, duty_rate, "f4"),
     F(bc_bemf_params, ref_stop, "f4"),     F(bc_bemf_params, restart_wait, "f4"),

@@ -38,7 +38,7 @@ from .experiments import map_points
 __all__ = ["START_FAILURES", "AngleErrorResult", "DemagResult", "MinSpeedResult", "StartupGridResult",
            "VersusHallResult", "angle_error", "commutations", "demag_closed_form", "demag_times", "demag_voltage",
            "fixed_start", "locked", "min_sensorless_speed", "offset_limit_speed", "pair_torque_constant", "run_locked",
-           "startup_grid", "startup_load_bound", "versus_hall"]
+           "ramp_current", "ramp_duty_at", "startup_grid", "startup_load_bound", "versus_hall"]
 
 _POS = (0, 0, 1, 1, 2, 2)  # phase driven positive in sector s (bc_commutation.h)
 _NEG = (1, 2, 2, 0, 0, 1)
@@ -695,8 +695,8 @@ def demag_times(res: SimResult, drive: Drive, *, chopping: str, fast_demag: bool
 
 #: The controller's flags that name a failed start (bc_types.h), in the order a tie is named.
 START_FAILURES = ("START_FAIL", "STALL", "DESYNC", "ZC_TIMEOUT", "ZC_JUMP", "ZC_HIDDEN", "OVERCURRENT", "SAFE")
-_START_KEYS = ("align_current", "align_duty", "align_time", "ramp_duty", "ramp_vf", "ramp_time", "stall_speed",
-               "ramp_start_speed", "ramp_end_speed")
+_START_KEYS = ("align_current", "align_duty", "align_time", "ramp_duty", "ramp_vf", "ramp_tau", "ramp_time",
+               "stall_speed", "ramp_start_speed", "ramp_end_speed")
 
 
 def fixed_start(drive: Drive, control: SixStepSensorless | None = None) -> SixStepSensorless:
@@ -728,21 +728,49 @@ def pair_torque_constant(drive: Drive, n: int = 721) -> float:
     return best
 
 
-def startup_load_bound(drive: Drive, control: SixStepSensorless, inertia: float | None = None,
-                       lag: float = math.pi / 3.0) -> float:
-    """Return the largest added load torque (N m) the forced start-up can carry (a closed-form estimate).
+def ramp_duty_at(start_up: dict[str, float], omega_e: float) -> float:
+    """Return the forced ramp's duty at the electrical speed ``omega_e`` (rad/s) for the settings ``start_up``.
 
-    In step with the forced commutation at the ramp's end speed ``Omega_end``, the ramp's duty holds
-    ``I = d_ramp V_dc / (2 (R + R_on))`` in the pair (its V/f term cancels the back-EMF at the forced speed), whose
-    best torque is ``k_pair I`` (:func:`pair_torque_constant`; ``2 k_phi I`` for the ideal trapezoid). The rotor
-    must reach ``Omega_end`` from rest without falling more than ``lag`` (electrical) behind the forced angle, and
-    before the hold at the end speed (``ramp_hold`` sectors, ``t_hold``) ends. Accelerating uniformly at ``a`` it
-    lags most where its speed reaches ``Omega_end``, by ``p Omega_end (Omega_end / a - t_ramp) / 2`` (forced ramp
-    from rest), so it needs ``a >= Omega_end / (t_ramp + min(t_hold, 2 lag / (p Omega_end)))``, which takes ``J a``;
-    the drive's friction and propeller take ``tau_c + B Omega_end + k_q Omega_end^2``. What is left is the bound.
-    It is an estimate: while the rotor lags the V/f term drives more than ``I`` (up to ``d_end V_dc / (2 (R +
-    R_on))`` at rest), and the rotor swings about the forced angle once it has caught up (a swing the friction does
-    not damp may slip a pole); docs/sensorless.md shows where it holds.
+    ``ramp_duty sqrt(1 + (omega_e ramp_tau)^2) + ramp_vf omega_e``, at most 1 (``bc_bemf.h``, law 2), with the
+    settings of :meth:`~bldclab.control.sensorless.SixStepSensorless.start_up`.
+    """
+    x = omega_e * start_up["ramp_tau"]
+    return min(1.0, start_up["ramp_duty"] * math.sqrt(1.0 + x * x) + start_up["ramp_vf"] * omega_e)
+
+
+def ramp_current(drive: Drive, control: SixStepSensorless, omega_m: float) -> float:
+    """Return the current (A) the forced ramp's duty drives in the pair at the mechanical speed ``omega_m``, in step.
+
+    The rotor in step with the forced commutation at ``omega_m``: the pair's back-EMF is ``k_pair omega_m``
+    (:func:`pair_torque_constant`), and the duty's excess over it drives the current through the pair's impedance at
+    the electrical speed ``omega_e = p omega_m`` (its fundamental, ``2 |R + R_on + j omega_e L|``)::
+
+        I = (d(omega_e) V_dc - k_pair omega_m) / (2 (R + R_on) sqrt(1 + (omega_e L / (R + R_on))^2))
+
+    with ``d`` :func:`ramp_duty_at`. With the defaults (``ramp_vf = 2 k_phi / (p V_dc)``, ``ramp_tau = L / (R +
+    R_on)``) the back-EMF and the impedance cancel for the trapezoid and ``I`` is the alignment current at every
+    speed; with ``ramp_tau = 0`` it falls as ``1 / sqrt(1 + (omega_e L / (R + R_on))^2)``.
+    """
+    su = control.start_up(drive)
+    m, r = drive.motor, r_total(drive)
+    w_e = m.p * omega_m
+    x = w_e * m.L / r
+    v = ramp_duty_at(su, w_e) * drive.inverter.V_dc - pair_torque_constant(drive) * omega_m
+    return max(v, 0.0) / (2.0 * r * math.sqrt(1.0 + x * x))
+
+
+def startup_load_bound(drive: Drive, control: SixStepSensorless, inertia: float | None = None) -> float:
+    """Return the largest added load torque (N m) the forced start-up can carry (a closed form).
+
+    The forced pair's torque, averaged over a sector, is largest when the rotor is in step with the forced
+    commutation (the Hall-exact instant), ``k_pair I`` (:func:`pair_torque_constant`; ``2 k_phi I`` for the ideal
+    trapezoid), and falls on either side; for the trapezoid with a rotor lagging ``delta`` (electrical) it is ``k_pair
+    I (1 - delta^2 / (2 (pi/3)^2))``. A rotor that lags therefore gets less torque and lags more: it must follow the
+    ramp's acceleration ``a = (Omega_end - Omega_start) / t_ramp`` in step, which takes ``J a``; friction and
+    propeller take ``tau_c + B Omega_end + k_q Omega_end^2`` (their largest, at the end speed). The current is the
+    smaller of :func:`ramp_current` at the ramp's start and end speeds (the inductance counted: ``|R + j Omega_e
+    L|``). What is left is the bound. It neglects the extra current the V/f term drives while the rotor lags (which
+    helps) and the current's dip at each commutation (the commutation interval, which takes some of the torque).
 
     Parameters
     ----------
@@ -752,9 +780,6 @@ def startup_load_bound(drive: Drive, control: SixStepSensorless, inertia: float 
         The controller (its start-up settings, :meth:`~bldclab.control.sensorless.SixStepSensorless.start_up`).
     inertia : float, optional
         The plant's inertia (kg m^2), if not the drive's.
-    lag : float
-        The largest lag behind the forced angle (electrical rad) at which the pair still gives its best torque:
-        60 degrees, the width of a sector.
 
     Returns
     -------
@@ -764,12 +789,10 @@ def startup_load_bound(drive: Drive, control: SixStepSensorless, inertia: float 
     su = control.start_up(drive)
     mech = drive.mechanics
     j = mech.J if inertia is None else float(inertia)
-    i_ramp = su["ramp_duty"] * drive.inverter.V_dc / (2.0 * r_total(drive))
-    w_end = su["ramp_end_speed"]
-    w_e = drive.motor.p * w_end
-    t_hold = control.ramp_hold * (math.pi / 3.0) / w_e
-    accel = (w_end - su["ramp_start_speed"]) / (su["ramp_time"] + min(t_hold, 2.0 * lag / w_e))
-    return (pair_torque_constant(drive) * i_ramp - j * accel - mech.tau_c - mech.B * w_end
+    w0, w_end = su["ramp_start_speed"], su["ramp_end_speed"]
+    i_min = min(ramp_current(drive, control, w0), ramp_current(drive, control, w_end))
+    accel = (w_end - w0) / su["ramp_time"]
+    return (pair_torque_constant(drive) * i_min - j * accel - mech.tau_c - mech.B * w_end
             - mech.k_q * w_end * w_end)
 
 
@@ -887,7 +910,7 @@ def startup_grid(drive: Drive, load_torques: Sequence[float], inertias: Sequence
     ctl = fixed_start(drive, control)
     su = ctl.start_up(drive)
     if throttle is None:
-        throttle = min(1.0, su["ramp_duty"] + su["ramp_vf"] * drive.motor.p * su["ramp_end_speed"])
+        throttle = ramp_duty_at(su, drive.motor.p * su["ramp_end_speed"])
     if not 0.0 < throttle <= 1.0:
         raise BldclabError("throttle", f"must be in (0, 1], got {throttle!r}")
     sector = (math.pi / 3.0) / (drive.motor.p * su["ramp_end_speed"])

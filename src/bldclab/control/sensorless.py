@@ -33,7 +33,8 @@ _REFS = ("star", "half")  # the spelling of Sensors.bemf_reference
 _UNITS = {"blank": "angle", "blank_time": "time", "min_pulse": "time", "filter_tau": "time",
           "comparator_delay": "time", "timing": "angle", "timing_time": "time", "timing_max": "angle",
           "stall_speed": "speed", "align_time": "time", "ramp_start_speed": "speed", "ramp_end_speed": "speed",
-          "ramp_time": "time", "restart_wait": "time", "restart_max": "time", "current_limit_time": "time",
+          "ramp_time": "time", "ramp_tau": "time", "restart_wait": "time", "restart_max": "time",
+          "current_limit_time": "time",
           "align_current": "current", "i_max": "current", "current_limit": "current",
           "duty_limit_current": "current"}
 
@@ -205,7 +206,9 @@ class SixStepSensorless(Control):
         Rotor alignment before the ramp; 0: a direct start (no alignment), as drone firmware does. Default three
         periods of the rotor's oscillation about the aligned position, ``3 x 2 pi sqrt(J / K)`` with the stiffness
         of the aligning pair ``K = (6/pi) p k_phi align_current`` (the 120-degree trapezoid's slope; J from
-        ``drive.mechanics``), within [10 ms, 3 s].
+        ``drive.mechanics``), or, if longer, six time constants ``D / K`` of an overdamped rotor, ``D = 2 k_phi^2 /
+        (R + R_on)`` the damping of the loop the motion drives through the two phases in parallel (lu-4kw: 2.7 s),
+        within [10 ms, 3 s].
     align_current : float or str, optional
         Current the alignment duty drives through the line resistance at standstill, and the forced ramp's current;
         default ``0.5 I_N``.
@@ -222,6 +225,11 @@ class SixStepSensorless(Control):
     ramp_vf : float, optional
         Added ramp duty per electrical rad/s of the speed (V/f), so that the current stays near ``align_current``
         as the back-EMF grows; default ``2 k_phi / (p V_dc)``.
+    ramp_tau : float or str, optional
+        The ramp's first term is ``ramp_duty sqrt(1 + (Omega_e ramp_tau)^2)`` at the forced electrical speed
+        ``Omega_e``: the drop of the ramp current on the pair's impedance ``|R + j Omega_e L|``, so that the
+        inductance does not take the current (and the torque) as the ramp speeds up. Default ``L / (R + R_on)``;
+        0: the resistive drop only.
     ramp_hold : int
         Forced sectors at the end speed before the start fails (default 12).
     handover : int
@@ -289,6 +297,7 @@ class SixStepSensorless(Control):
     ramp_time: float | str | None = None
     ramp_duty: float | None = None
     ramp_vf: float | None = None
+    ramp_tau: float | str | None = None
     ramp_hold: int = 12
     handover: int = 6
     duty_min: float = 0.0
@@ -321,6 +330,7 @@ class SixStepSensorless(Control):
         check_number("align_time", self.align_time, allow_zero=True, allow_none=True)
         check_number("ramp_time", self.ramp_time, allow_none=True)
         check_number("ramp_vf", self.ramp_vf, allow_zero=True, allow_none=True)
+        check_number("ramp_tau", self.ramp_tau, allow_zero=True, allow_none=True)
         for name in ("filter_tau", "comparator_delay", "blank_time", "int_limit", "stall_speed", "align_current",
                      "ramp_start_speed", "ramp_end_speed", "i_max", "current_limit"):
             check_number(name, getattr(self, name), allow_none=True, allow_zero=name in (
@@ -408,15 +418,16 @@ class SixStepSensorless(Control):
         -------
         dict
             ``align_current`` (A), ``align_duty``, ``align_time`` (s), ``ramp_duty``, ``ramp_vf`` (per electrical
-            rad/s), ``ramp_time`` (s), and the speeds of :meth:`speeds` (mechanical rad/s): ``stall_speed``,
-            ``ramp_start_speed``, ``ramp_end_speed``.
+            rad/s), ``ramp_tau`` (s), ``ramp_time`` (s), and the speeds of :meth:`speeds` (mechanical rad/s):
+            ``stall_speed``, ``ramp_start_speed``, ``ramp_end_speed``.
         """
         m, v, j = drive.motor, drive.inverter.V_dc, drive.mechanics.J
         i_al = 0.5 * m.I_N if self.align_current is None else float(self.align_current)
         r = r_total(drive)
         stall, start, end = self.speeds(drive)
         k = 6.0 / math.pi * m.p * m.k_phi * i_al  # stiffness of the aligning pair, N m/rad (mechanical)
-        t_align = min(max(3.0 * 2.0 * math.pi * math.sqrt(j / k), 0.01), 3.0)
+        damp = 2.0 * m.k_phi ** 2 / r  # the parallel pair's loop: (2 k_phi)^2 / (2 (R + R_on)), N m s/rad
+        t_align = min(max(3.0 * 2.0 * math.pi * math.sqrt(j / k), 6.0 * damp / k, 0.01), 3.0)
         accel = 0.5 * 2.0 * m.k_phi * i_al / j  # mechanical rad/s^2
         t_ramp = min(max((end - start) / accel, 0.01), 10.0)
         return {
@@ -425,6 +436,7 @@ class SixStepSensorless(Control):
             "align_time": t_align if self.align_time is None else float(self.align_time),
             "ramp_duty": min(2.0 * r * i_al / v if self.ramp_duty is None else float(self.ramp_duty), 1.0),
             "ramp_vf": 2.0 * m.k_phi / (m.p * v) if self.ramp_vf is None else float(self.ramp_vf),
+            "ramp_tau": m.L / r if self.ramp_tau is None else float(self.ramp_tau),
             "ramp_time": t_ramp if self.ramp_time is None else float(self.ramp_time),
             "stall_speed": stall, "ramp_start_speed": start, "ramp_end_speed": end,
         }
@@ -478,6 +490,7 @@ class SixStepSensorless(Control):
             ramp_accel=p * (end - start) / su["ramp_time"],
             ramp_duty=su["ramp_duty"],
             ramp_vf=su["ramp_vf"],
+            ramp_tau=su["ramp_tau"],
             ramp_hold=self.ramp_hold,
             n_handover=self.handover,
             duty_min=self.duty_min,

@@ -35,9 +35,15 @@
  *         d_cmd <- d_cmd + clamp(d_ref - d_cmd, -duty_rate T_s, +duty_rate T_s)
  *
  *     and the duty applied is m = min(d_state, d_lim), d_state = align_duty (ALIGN), min(ramp_duty + ramp_vf
- *     Omega_ol, 1) (RAMP, Omega_ol the forced speed of 5, not a crossing's: with ramp_vf = k_e / (p V_dc) the back-EMF
+ *     Omega_ol, 1) (RAMP, Omega_ol the forced speed of 5 at the start of the output's interval, not a crossing's;
+ *     it follows the forced speed within the sector: a voltage-driven rotor runs near the speed whose back-EMF the
+ *     duty balances, pulled there with the time constant J 2 (R + R_on) / k_pair^2, a millisecond on a low-R
+ *     motor of large k_phi such as lu-4kw: a duty held at the sector's start speed holds the rotor there and
+ *     the next sector's duty then drives the back-EMF it does not have; with ramp_vf = k_e / (p V_dc) the back-EMF
  *     is compensated and the current stays near ramp_duty V_dc / (2 R); a false crossing at start-up cannot raise
- *     it), max(d_cmd, duty_min) (CLOSED; d_cmd starts from the ramp's duty at the handover).
+ *     it; with ramp_tau = L / (R + R_on) the first term is ramp_duty sqrt(1 + (Omega_ol ramp_tau)^2), the drop of
+ *     that current on the pair's impedance |R + j Omega L| at the forced speed, so that the inductance does not
+ *     take the current as the ramp speeds up), max(d_cmd, duty_min) (CLOSED; d_cmd starts from the ramp's duty at the handover).
  *     Current limit (use_current,
  *     i_limit > 0), an integrating limiter on the largest measured phase current (d_lim = 1 at init and after a
  *     safe state; without a limit always 1):
@@ -265,6 +271,7 @@ typedef struct {
     float ramp_accel;    /* open-loop acceleration, electrical rad/s^2 (>= 0; > 0 if ramp_w0 = 0) */
     float ramp_duty;     /* duty of the forced commutation at standstill, [0, 1] */
     float ramp_vf;       /* ... plus ramp_vf per electrical rad/s of the speed estimate (V/f), 1/(rad/s) (>= 0) */
+    float ramp_tau;      /* the pair's L / (R + R_on): ramp_duty sqrt(1 + (Omega_ol ramp_tau)^2) + ..., s (>= 0) */
     int32_t ramp_hold;   /* forced sectors at ramp_w1 before the start fails (>= 1) */
     int32_t n_handover;  /* consecutive valid crossings for the handover (2 .. 1000) */
     float duty_min;      /* smallest duty in closed loop, [0, 1] */
@@ -323,6 +330,7 @@ typedef struct {
     float m_app;           /* duty applied at the last sample */
     /* open loop */
     float w_ol;            /* open-loop speed at the start of the forced sector, electrical rad/s */
+    float w_now;           /* open-loop speed at the start of the output's interval, electrical rad/s */
     float tau_ol;          /* duration of the forced sector, s */
     float w_zc;            /* speed from the last forced sector's crossing, electrical rad/s (0: none) */
     int32_t valid;         /* consecutive forced sectors with a crossing */
