@@ -62,7 +62,7 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
     if (!(fin(p->i_max) && p->i_max > 0.0f) || !nonneg(p->i_limit) || !nonneg(p->k_limit) ||
         !(fin(p->v_max) && p->v_max > 0.0f) || (p->fast_demag != 0 && p->fast_demag != 1) || !in01(p->dlim_d0) ||
         !nonneg(p->dlim_vf) || !nonneg(p->dlim_tau) || !(fin(p->demag_max) && p->demag_max >= 0.0f && p->demag_max < 1.0f) ||
-        (p->cmp_gate != 0 && p->cmp_gate != 1))
+        (p->cmp_gate != 0 && p->cmp_gate != 1) || !nonneg(p->i_start))
         return BC_ERR_PARAM;
     *s = (bc_bemf_state){0};
     s->ts_tick = p->ts * p->f_tick;
@@ -175,6 +175,7 @@ static void enter_sector(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctr
         int cont = inc == pp ? qq : pp;
         s->fd_neg = p->fast_demag && outp >= 0 && p->chop != BC_CHOP_BIPOLAR && inc >= 0 && cont == qq;
     }
+    s->first = 0;
     s->sector = sector;
     s->t_c = tc;
     float w = omega_of(p, s);
@@ -242,6 +243,7 @@ static void begin_ramp(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_
     /* after the alignment phase a (sector 2's floating phase) still carries the alignment current: the first
      * sector's outgoing phase, its clamp as after any commutation */
     enter_sector(p, s, in, aligned ? 2 : (s->dir > 0 ? 2 : 1), n->ta, aligned ? 0 : -1);
+    s->first = aligned;
     float first = aligned ? angle_time(s->w_ol, p->ramp_accel, p->ramp_w1, PI6_F) : s->tau_ol;
     s->t_next = tadd(n->ta, first * p->f_tick);
     s->pending = 1;
@@ -410,10 +412,9 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
     float x_zc = x_e - filter_delay(p, w0) - (p->method == BC_BEMF_COMPARATOR ? p->t_comp : 0.0f);
     float T = s->have_zc ? x_zc - tdiff(s->t_zc, n->tk) * s->inv_tick : 0.0f;
     if (!(fin(T) && T > 0.0f)) T = 0.0f;
-    if (s->mode == BC_BEMF_RAMP) { /* noise on a back-EMF too small to read, or a speed the rotor cannot have */
+    if (s->mode == BC_BEMF_RAMP) { /* a crossing interval the rotor cannot have (noise on a small back-EMF) */
         float into = x_zc - tdiff(s->t_c, n->tk) * s->inv_tick;
         float wf = fminf(s->w_ol + p->ramp_accel * fmaxf(into, 0.0f), p->ramp_w1);
-        if (!(wf >= 0.5f * p->omega_stall)) return 0;
         if (T > 0.0f && PI3_F / T > RAMP_W_MAX * wf) return 0;
     }
     s->det = 2;
@@ -625,8 +626,8 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
     } else {
         s->d_cmd = d_ref;
     }
+    float i_pk = fmaxf(fabsf(i[0]), fmaxf(fabsf(i[1]), fabsf(i[2])));
     if (p->use_current && p->i_limit > 0.0f) {
-        float i_pk = fmaxf(fabsf(i[0]), fmaxf(fabsf(i[1]), fabsf(i[2])));
         float d = s->d_lim + p->k_limit * (p->i_limit - i_pk) * p->ts;
         s->d_lim = fin(d) ? bc_clampf(d, 0.0f, 1.0f) : 0.0f;
     } else {
@@ -645,16 +646,18 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
     /* 5-9. detection, commutation schedule, timeout */
     if (s->mode == BC_BEMF_RAMP || s->mode == BC_BEMF_CLOSED) {
         float x_e = 0.0f;
-        if (s->det < 2) {
+        if (s->mode == BC_BEMF_RAMP && s->first) {
+            /* the first forced sector after the alignment: the rotor starts at rest at its crossing (pi), where the
+             * floating phase reads the reference within noise; nothing it shows is a crossing */
+        } else if (s->det < 2) {
             int got = p->method == BC_BEMF_COMPARATOR ? detect_comparator(p, s, in, &n, &x_e)
                                                       : detect_adc(p, s, in, &n, &x_e);
             if (got) {
-                if (!on_crossing(p, s, &n, x_e)) { /* rejected: wait for a new pre level and edge; the post level
-                                                     * from here to half the forced sector is a rotor that leads */
+                if (!on_crossing(p, s, &n, x_e)) { /* rejected: wait for a new pre level and edge */
                     s->det = 1;
                     s->cnt_open = in->zc_count[floating(s->sector)];
                     s->pre_seen = 0;
-                    s->post_open = 1;
+                    s->post_open = 0;
                     s->n_post = 0;
                 }
             } else if (s->mode == BC_BEMF_RAMP && s->post_open && tdiff(n.tk, s->t_c) >= 0.5f * s->tau_ol * p->f_tick) {
@@ -781,6 +784,14 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
         out->has_at = 0u;
         shown = -1;
         m = 0.0f;
+    } else if ((s->mode == BC_BEMF_ALIGN || s->mode == BC_BEMF_RAMP) && p->use_current && p->i_start > 0.0f &&
+               i_pk > p->i_start) {
+        /* the start-up's cycle-by-cycle current limit: every switch off over the interval, the current returns to
+         * the bus through the diodes (a zero vector would short the back-EMF of a moving rotor); the commutation
+         * schedule goes on */
+        coast(out);
+        m = 0.0f;
+        n.flags |= BC_FLAG_SATURATED;
     }
     for (int j = 0; j < 3; ++j) { /* never pass on a bad duty */
         if (!in01(out->leg[j].duty)) out->leg[j].duty = 0.0f;

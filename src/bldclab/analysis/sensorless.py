@@ -696,7 +696,7 @@ def demag_times(res: SimResult, drive: Drive, *, chopping: str, fast_demag: bool
 #: The controller's flags that name a failed start (bc_types.h), in the order a tie is named.
 START_FAILURES = ("START_FAIL", "STALL", "DESYNC", "ZC_TIMEOUT", "ZC_JUMP", "ZC_HIDDEN", "OVERCURRENT", "SAFE")
 _START_KEYS = ("align_current", "align_duty", "align_time", "ramp_duty", "ramp_vf", "ramp_tau", "ramp_time",
-               "stall_speed", "ramp_start_speed", "ramp_end_speed")
+               "start_current_limit", "stall_speed", "ramp_start_speed", "ramp_end_speed")
 
 
 def fixed_start(drive: Drive, control: SixStepSensorless | None = None) -> SixStepSensorless:

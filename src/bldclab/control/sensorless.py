@@ -36,7 +36,7 @@ _UNITS = {"blank": "angle", "blank_time": "time", "min_pulse": "time", "filter_t
           "ramp_time": "time", "ramp_tau": "time", "restart_wait": "time", "restart_max": "time",
           "current_limit_time": "time",
           "align_current": "current", "i_max": "current", "current_limit": "current",
-          "duty_limit_current": "current"}
+          "duty_limit_current": "current", "start_current_limit": "current"}
 
 _RATE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*%\s*/\s*(ms|s)\s*$")
 
@@ -262,6 +262,12 @@ class SixStepSensorless(Control):
         off). The clamp's length is measured every sector; while it takes more than this share, the duty cap falls
         (and the current, and the clamp, with it), and it recovers while it takes less: a throttle step then cannot
         hide the crossing whatever the load does.
+    start_current_limit : float or str, optional
+        Start-up current limit, cycle by cycle, as an ESC's (with ``current_sensing``): in the alignment and the
+        forced ramp an output interval after a sample whose largest phase current exceeds it applies duty 0. The
+        ramp's V/f duty assumes a rotor that follows it; a rotor held by its load or left behind would draw the
+        current of a back-EMF it does not have up to the over-current trip, and with the limit the start fails by
+        its hold (``START_FAIL``) instead, or the field pulls the rotor round. Default ``2 align_current``; 0: none.
     current_limit_time : float or str
         Time constant of the limiter at standstill (default ``"1 ms"``): gain ``2 (R + R_on) / (V_dc t)``.
     delay : int
@@ -310,6 +316,7 @@ class SixStepSensorless(Control):
     current_limit: float | str | None = None
     current_limit_time: float | str = "1 ms"
     duty_limit_current: float | str | None = None
+    start_current_limit: float | str | None = None
     demag_limit: float = 0.6
     delay: int = 1
     c_name: ClassVar[str] = "bemf"
@@ -336,6 +343,7 @@ class SixStepSensorless(Control):
             check_number(name, getattr(self, name), allow_none=True, allow_zero=name in (
                 "filter_tau", "comparator_delay", "blank_time", "ramp_start_speed"))
         check_number("duty_limit_current", self.duty_limit_current, allow_zero=True, allow_none=True)
+        check_number("start_current_limit", self.start_current_limit, allow_zero=True, allow_none=True)
         check_number("demag_limit", self.demag_limit, allow_zero=True)
         if self.demag_limit >= 1.0:
             raise BldclabError("control.demag_limit", f"must be in [0, 1), got {self.demag_limit!r}")
@@ -418,8 +426,8 @@ class SixStepSensorless(Control):
         -------
         dict
             ``align_current`` (A), ``align_duty``, ``align_time`` (s), ``ramp_duty``, ``ramp_vf`` (per electrical
-            rad/s), ``ramp_tau`` (s), ``ramp_time`` (s), and the speeds of :meth:`speeds` (mechanical rad/s):
-            ``stall_speed``, ``ramp_start_speed``, ``ramp_end_speed``.
+            rad/s), ``ramp_tau`` (s), ``ramp_time`` (s), ``start_current_limit`` (A), and the speeds of
+            :meth:`speeds` (mechanical rad/s): ``stall_speed``, ``ramp_start_speed``, ``ramp_end_speed``.
         """
         m, v, j = drive.motor, drive.inverter.V_dc, drive.mechanics.J
         i_al = 0.5 * m.I_N if self.align_current is None else float(self.align_current)
@@ -437,6 +445,8 @@ class SixStepSensorless(Control):
             "ramp_duty": min(2.0 * r * i_al / v if self.ramp_duty is None else float(self.ramp_duty), 1.0),
             "ramp_vf": 2.0 * m.k_phi / (m.p * v) if self.ramp_vf is None else float(self.ramp_vf),
             "ramp_tau": m.L / r if self.ramp_tau is None else float(self.ramp_tau),
+            "start_current_limit": (2.0 * i_al if self.start_current_limit is None
+                                    else float(self.start_current_limit)),
             "ramp_time": t_ramp if self.ramp_time is None else float(self.ramp_time),
             "stall_speed": stall, "ramp_start_speed": start, "ramp_end_speed": end,
         }
@@ -509,4 +519,5 @@ class SixStepSensorless(Control):
             dlim_tau=m.L / r_total(drive),
             demag_max=self.demag_limit,
             cmp_gate=int(drive.sensors.bemf_offset != 0.0 and self.fast_demag),
+            i_start=su["start_current_limit"] if self.current_sensing else 0.0,
         ))

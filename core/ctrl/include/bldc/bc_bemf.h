@@ -44,6 +44,13 @@
  *     it; with ramp_tau = L / (R + R_on) the first term is ramp_duty sqrt(1 + (Omega_ol ramp_tau)^2), the drop of
  *     that current on the pair's impedance |R + j Omega L| at the forced speed, so that the inductance does not
  *     take the current as the ramp speeds up), max(d_cmd, duty_min) (CLOSED; d_cmd starts from the ramp's duty at the handover).
+ *     Start-up current limit (use_current, i_start > 0; as an ESC's cycle-by-cycle limit): in ALIGN and RAMP a
+ *     sample whose largest measured phase current exceeds i_start turns every switch off over the output's interval
+ *     (the current returns to the bus through the diodes; a zero vector would short the back-EMF of a moving rotor;
+ *     BC_FLAG_SATURATED, the commutation schedule goes on). The ramp's V/f duty assumes a rotor that follows: a rotor held by its
+ *     load, or left behind, would see the duty of a back-EMF it does not have, and the current would rise to the
+ *     over-current trip (lu-4kw: 6.8 A per mechanical rad/s of lag); limited, the start fails by its hold
+ *     (START_FAIL) instead, or the field pulls the rotor when it comes round.
  *     Current limit (use_current,
  *     i_limit > 0), an integrating limiter on the largest measured phase current (d_lim = 1 at init and after a
  *     safe state; without a limit always 1):
@@ -290,6 +297,7 @@ typedef struct {
     float dlim_tau;      /* the inductive part: dlim_d0 sqrt(1 + (Omega dlim_tau)^2), s (>= 0) */
     float demag_max;     /* demagnetisation limiter (2): largest demagnetisation angle / (pi/6 + adv), [0, 1); 0: off */
     int32_t cmp_gate;    /* 1: in a fast-demagnetisation sector on the negative leg, the comparator in the on-time only */
+    float i_start;       /* start-up current limit (ALIGN, RAMP; use_current), cycle by cycle, A (>= 0; 0: none) */
 } bc_bemf_params;
 
 typedef struct {
@@ -336,6 +344,7 @@ typedef struct {
     int32_t valid;         /* consecutive forced sectors with a crossing */
     int32_t hold;          /* forced sectors at ramp_w1 */
     int32_t sector_ok;     /* the current forced sector had a crossing */
+    int32_t first;         /* the first forced sector after an alignment (no crossing read) */
     /* detector of the current sector */
     int32_t det;           /* 0 before the window, 1 in it, 2 crossing found (commutation pending) */
     int32_t pre_seen;      /* the pre level was in the window */
