@@ -58,18 +58,24 @@ def test_angle_error_with_advance():
         sl.angle_error(bl.load("htm-48v"), (0.5,), timing_demag=1.0)
 
 
-def test_versus_hall_equal_duty():
-    """At equal duty and imposed speed the sensorless drive and Hall six-step give the same mean torque within 1 %
-    (the issue's goal above 0.2 Omega_0), the same efficiency within 0.5 percentage point and current ripple within
-    a tenth of Hall's (htm-48v, 0.2 and 0.5 Omega_0). Without fast demagnetisation, so that both drives chop the
-    same leg: with it the sensorless drive's commutation is shorter and its torque 1.0 % higher at 0.5 Omega_0."""
-    r = sl.versus_hall(bl.load("htm-48v"), (0.2, 0.5), fast_demag=False)
+@pytest.mark.parametrize("name", ["htm-48v", "servo-2k2"])
+def test_versus_hall_equal_duty(name):
+    """At equal duty and imposed speed the sensorless drive (default settings) and Hall six-step give the same mean
+    torque within 1 % (the issue's goal above 0.2 Omega_0), the same efficiency within 0.5 percentage point and
+    current ripple within a tenth of Hall's (0.2 and 0.5 Omega_0). The clamp takes less than 0.3 of the window
+    there, so the fast demagnetisation never engages and both drives chop the same leg; engaged from every
+    commutation (``fast_demag_after=0``) the outgoing current falls faster and the torque differs by more than 1 %
+    (servo-2k2 at 0.2 Omega_0: -1.6 %)."""
+    r = sl.versus_hall(bl.load(name), (0.2, 0.5))
     df = r.to_pandas()
     assert df["in_sync"].all()
     assert np.allclose(df["duty_applied"], df["duties"], atol=1e-6)  # equal duty indeed: no limit acted
     assert (df["torque_rel"].abs() < 0.01).all(), df
     assert (np.abs(df["efficiency_sl"] - df["efficiency_hall"]) < 0.005).all(), df
     assert (np.abs(df["ripple_sl"] - df["ripple_hall"]) < 0.1 * df["ripple_hall"] + 0.01).all(), df
+    if name == "servo-2k2":
+        always = sl.versus_hall(bl.load(name), (0.2,), fast_demag_after=0.0).to_pandas()
+        assert always["torque_rel"].iloc[0] < -0.01, always
 
 
 def test_min_speed_search_with_ideal_sensing():
@@ -114,7 +120,8 @@ def test_demag_time_against_closed_forms_averaged_inverter(chop, fast):
     d = bl.load("htm-48v")
     d = d.replace(inverter=dataclasses.replace(d.inverter, model="average"))
     duty = 0.85 if chop == "bipolar" else 0.7
-    res, t0 = sl.run_locked(d, 0.5, duty, periods=2, trace_sub=8, chopping=chop, fast_demag=fast)
+    after = {"fast_demag_after": 0.0} if fast else {}  # the fast pattern from the commutation: the closed form's
+    res, t0 = sl.run_locked(d, 0.5, duty, periods=2, trace_sub=8, chopping=chop, fast_demag=fast, **after)
     tab = sl.demag_times(res, d, chopping=chop, fast_demag=fast, after=t0).to_pandas()
     assert len(tab) >= 10 and set(tab["sign"]) == {-1, 1}
     assert np.max(np.abs(tab["closed"] / tab["measured"] - 1)) < 0.01, tab
