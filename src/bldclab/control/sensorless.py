@@ -64,34 +64,36 @@ def throttle_rate(value: float | str, field: str = "control.throttle_rate") -> f
     return v
 
 
-def fast_demag_after(drive: Drive, share: float = 0.3, min_samples: float = 4.0) -> float:
+def fast_demag_after(drive: Drive, share: float = 0.45, min_samples: float = 4.0) -> float:
     """Return the default share of the window after which the fast demagnetisation engages.
-
-    The window from a commutation to the expected crossing is 30 electrical degrees; at ``Omega_0`` it lasts
-    ``pi / (6 p Omega_0)``. The controller changes the pattern at its outputs, every sampling period ``1 / (2 f_pwm)``,
-    so a share of the window can only be waited for where the window spans several samples.
 
     Parameters
     ----------
     drive : Drive
     share : float
-        Share of the window after which the pattern engages where that is possible.
+        Share of the window from the commutation to the expected crossing (``30 deg + timing``) after which the fast
+        pattern engages: 0.45, below the demagnetisation limiter's default set point (0.6), so that a clamp growing
+        with the current meets the fast pattern first and the duty limit only if that is not enough.
     min_samples : float
-        Samples the window must span at ``Omega_0`` for it.
+        See below.
 
     Returns
     -------
     float
-        ``share``, or 0 (from the commutation) where the window at ``Omega_0`` spans fewer than ``min_samples``
-        samples, or where the comparators have an offset (``drive.sensors.bemf_offset``): the fast pattern's
-        sectors read the comparator in the pair's on-time only, which keeps the offset's effect on the slowest
-        closed-loop speed to its closed form (htm-48v with 0.3 V: 0.057 p.u. against 0.056; with the plain pattern
-        0.074).
+        ``share``; 0 (from the commutation) where the comparators have an offset (``drive.sensors.bemf_offset``:
+        the fast pattern's sectors read the comparator in the pair's on-time only, which keeps the offset's effect
+        on the slowest closed-loop speed to its closed form; htm-48v with 0.3 V: 0.057 p.u. against 0.056, with the
+        plain pattern 0.074), and where the inverter's diodes are ideal (``V_f = 0``) and the window at ``Omega_0``
+        spans fewer than ``min_samples`` samples: an ideal diode lets the floating phase conduct in the PWM
+        off-times before a rising crossing, and on such a drive (f60prov-2550kv: 1.6 samples) only the fast
+        pattern from the commutation keeps the crossing at 0.9 ``Omega_0`` (docs/sensorless.md section 6).
     """
     if drive.sensors.bemf_offset != 0.0:
         return 0.0
     window = math.pi / (6.0 * drive.motor.p * drive.Omega_0)
-    return share if window * 2.0 * drive.inverter.f_pwm >= min_samples else 0.0
+    if drive.inverter.V_f == 0.0 and window * 2.0 * drive.inverter.f_pwm < min_samples:
+        return 0.0
+    return share
 
 
 def integral_to_30(drive: Drive, reference: str | None = None, n: int = 721) -> float:
@@ -193,8 +195,8 @@ class SixStepSensorless(Control):
         expected crossing (``30 deg + timing``), at the output whose interval reaches it; 0: from the commutation.
         A clamp that ends sooner never sees the pattern change, so at light load the drive's torque is that of the
         plain pattern (the fast fall of the outgoing current dips the torque in every commutation: 1-2 % of the mean
-        on the catalog's servo and outrunner motors at 0.2 ``Omega_0``). Default :func:`fast_demag_after`: 0.3 where
-        the window at ``Omega_0`` spans at least four samples and the comparators have no offset, else 0.
+        on the catalog's servo and outrunner motors at 0.2 ``Omega_0``). Default :func:`fast_demag_after`: 0.45, or 0
+        where the comparators have an offset or where ideal diodes meet a window of under four samples.
     blanking : {"demag", "fixed"}
         ``demag``: after the fixed blanking the window for the crossing opens at the measured end of the
         demagnetisation (the floating phase shows the pre-crossing level, held at least ``min_pulse``); ``fixed``:
