@@ -287,18 +287,40 @@ def test_a_dask_cluster_gives_the_same_map(f60):
 
 @pytest.mark.slow  # four steps on the plant
 def test_a_punch_on_the_5_inch_motor_holds_sync_with_the_protections_and_loses_it_without():
-    """f60prov-2550kv, 0.25 -> 0.9 at once, no advance: the controller's defaults keep every commutation within a
-    few degrees of its true angle and the crossing visible; without fast demagnetisation and the limiter the crossing
-    is hidden (ZC_HIDDEN), and the plant's demagnetisation ends within a few degrees of the crossing or after it."""
+    """f60prov-2550kv, 0.25 -> 0.9 at once, no advance and 10 degrees, from three initial rotor angles (each start
+    leaves the closed loop in another state at the step): the controller's defaults keep every commutation within a
+    few degrees of its true angle and the crossing visible at five of the six points (the margin is thin: at the
+    sixth the controller takes a crossing the plant shows 4 degrees clear of the clamp for hidden and stops,
+    ZC_HIDDEN); without fast demagnetisation and the limiter the crossing is hidden (ZC_HIDDEN) at every point, and
+    the plant's demagnetisation ends within a few degrees of the crossing or after it."""
     drive = bl.load("f60prov-2550kv")
     step = ThrottleStep(0.25, 0.9, observe=0.15)
-    ok = desync_map(drive, Axis("timing", (0.0, 10.0)), step=step, workers=1).points
-    assert list(ok.outcome) == ["sync", "sync"] and not ok.truth_lost.any()
-    assert (ok.angle_max_deg < 15.0).all() and (ok.margin_deg > 1.0).all()
-    raw = desync_map(drive, Axis("timing", (0.0, 10.0)), step=step, workers=1,
+    angles = Axis("theta0", (0.0, 120.0, 240.0))
+    ok = desync_map(drive, Axis("timing", (0.0, 10.0)), angles, step=step, workers=1).points
+    held = ok[ok.outcome == "sync"]
+    assert len(held) >= 5 and set(ok.outcome) <= {"sync", "desync"} and not ok.truth_lost.any(), ok
+    assert set(ok[ok.outcome != "sync"].reason) <= {"ZC_HIDDEN"}
+    assert (held.angle_max_deg < 15.0).all() and (held.margin_deg > 1.0).all()
+    raw = desync_map(drive, Axis("timing", (0.0, 10.0)), angles, step=step, workers=1,
                      control=bl.SixStepSensorless(fast_demag=False, demag_limit=0.0)).points
-    assert list(raw.outcome) == ["desync", "desync"] and list(raw.reason) == ["ZC_HIDDEN", "ZC_HIDDEN"]
+    assert (raw.outcome == "desync").all() and (raw.reason == "ZC_HIDDEN").all()
     assert (raw.margin_deg < 3.0).all() and not raw.truth_lost.any()  # the controller gave up before any drift
+
+
+@pytest.mark.slow  # one step through a restart, about 1.4 s of the plant
+def test_a_desync_that_the_restart_recovers_is_classified_recovered(f60):
+    """f60prov-2550kv, the default step 0.25 -> 0.8 at once, no advance, with the fast demagnetisation engaged only
+    once the clamp has taken 0.45 of the window: the step's clamp hides a crossing (ZC_HIDDEN), the controller stops,
+    restarts and is back in closed loop and in sync to the end; the plant's truth never left sync before the flag.
+    The default (engaged from the commutation, 0) keeps the step in sync from two of three initial rotor angles and
+    recovers the third: it never loses the drive."""
+    pts = desync_map(f60, Axis("timing", (0.0,)), workers=1,
+                     control=bl.SixStepSensorless(fast_demag_after=0.45)).points
+    row = pts.iloc[0]
+    assert (row.outcome, row.reason, int(row.restarts)) == ("recovered", "ZC_HIDDEN", 1), row
+    assert not row.truth_lost and row.t_desync_ms > 0.0
+    ok = desync_map(f60, Axis("theta0", (0.0, 120.0, 240.0)), workers=1).points
+    assert set(ok.outcome) <= {"sync", "recovered"} and (ok.outcome == "sync").sum() >= 2, ok
 
 
 def test_the_map_on_a_tiny_grid(f60):
