@@ -11,10 +11,11 @@ Per drive (``bldclab drives``), all with the default :class:`~bldclab.control.se
   the default duty: back-EMF plus the drop of half ``I_N``);
 - ``dT@x``: mean torque of the sensorless drive over Hall six-step's at equal duty and speed, minus one (%), and
   ``eta@x`` both efficiencies (sensorless / Hall, %) (:func:`versus_hall`, same points and periods);
-- ``start``: successes / attempts over a small start-up grid (:func:`startup_grid`): added load 0, half the
-  closed-form bound and 1.3 times the static bound (the ramp current's best torque), inertia 1 and 2 times the
-  drive's, initial angle 0.3, 2.5 and 4.4 rad (18 starts); ``in bound``: successes / attempts among the points
-  within their bound; ``fail``: the failures' names; ``t_cl``: median time to closed loop (ms).
+- ``start``: successes / attempts over a small start-up grid (:func:`startup_grid`): added load 0, 0.5 and 0.9
+  times the closed-form bound at the drive's inertia (:func:`startup_load_bound`) and 1.3 times the static torque
+  (the ramp current's best torque, ``k_pair I``), inertia 1 and 2 times the drive's, initial angle 0.3, 2.5 and
+  4.4 rad (24 starts); ``in bound``: successes / attempts among the points within their bound (at their inertia);
+  ``fail``: the failures' names; ``t_cl``: median time to closed loop (ms).
 
 Short durations and few points, so that it runs in minutes on a loaded 2-core machine; an entry that cannot run
 says why. Run: ``PYTHONPATH=src python benchmarks/sensorless_catalog.py [--drives a,b] [--workers N]``.
@@ -38,7 +39,6 @@ from bldclab.analysis.sensorless import (
     startup_load_bound,
     versus_hall,
 )
-from bldclab.model.analytic import r_total
 from bldclab.model.catalog import names
 
 SPEEDS = (0.2, 0.5, 0.9)
@@ -74,10 +74,9 @@ def row(name: str, workers: int) -> dict[str, Any]:
     try:
         ctl = fixed_start(d)
         su = ctl.start_up(d)
-        i_ramp = su["ramp_duty"] * d.inverter.V_dc / (2.0 * r_total(d))
-        static = pair_torque_constant(d) * i_ramp
+        static = pair_torque_constant(d) * su["align_current"]
         b0 = startup_load_bound(d, ctl)
-        loads = (0.0, max(0.5 * b0, 0.0), 1.3 * static)
+        loads = (0.0, max(0.5 * b0, 0.0), max(0.9 * b0, 0.0), 1.3 * static)
         j = d.mechanics.J
         g = startup_grid(d, loads, (j, 2 * j), (0.3, 2.5, 4.4), workers=workers)
         df = g.to_pandas()

@@ -245,9 +245,10 @@ class SixStepSensorless(Control):
         Rotor alignment before the ramp; 0: a direct start (no alignment), as drone firmware does. Default three
         periods of the rotor's oscillation about the aligned position, ``3 x 2 pi sqrt(J / K)`` with the stiffness
         of the aligning pair ``K = (6/pi) p k_phi align_current`` (the 120-degree trapezoid's slope; J from
-        ``drive.mechanics``), or, if longer, six time constants ``D / K`` of an overdamped rotor, ``D = 2 k_phi^2 /
-        (R + R_on)`` the damping of the loop the motion drives through the two phases in parallel (lu-4kw: 2.7 s),
-        within [10 ms, 3 s].
+        ``drive.mechanics``), or, if longer, twelve time constants ``D / K`` of an overdamped rotor, ``D = 2
+        k_phi^2 / (R + R_on)`` the damping of the loop the motion drives through the two phases in parallel: six
+        unloaded, twice that against a load up to half the static torque, the most the default ramp leaves for a
+        load (lu-4kw: 5.4 s), within [10 ms, 6 s].
     align_current : float or str, optional
         Current the alignment duty drives through the line resistance at standstill, and the forced ramp's current;
         default ``0.5 I_N``.
@@ -478,7 +479,9 @@ class SixStepSensorless(Control):
         stall, start, end = self.speeds(drive)
         k = 6.0 / math.pi * m.p * m.k_phi * i_al  # stiffness of the aligning pair, N m/rad (mechanical)
         damp = 2.0 * m.k_phi ** 2 / r  # the parallel pair's loop: (2 k_phi)^2 / (2 (R + R_on)), N m s/rad
-        t_align = min(max(3.0 * 2.0 * math.pi * math.sqrt(j / k), 6.0 * damp / k, 0.01), 3.0)
+        # overdamped: the rotor creeps at (torque - load) / D; against a load up to half the static torque (the most
+        # the default ramp leaves for a load) twice as slowly as unloaded: 2 x 6 time constants D / K
+        t_align = min(max(3.0 * 2.0 * math.pi * math.sqrt(j / k), 12.0 * damp / k, 0.01), 6.0)
         accel = 0.5 * 2.0 * m.k_phi * i_al / j  # mechanical rad/s^2
         t_ramp = min(max((end - start) / accel, 0.01), 10.0)
         return {
