@@ -218,7 +218,8 @@ def test_units_and_defaults_from_the_drive():
     assert su["ramp_vf"] == pytest.approx(2 * m.k_phi / (m.p * d.inverter.V_dc))
     k = 6 / math.pi * m.p * m.k_phi * 0.5 * m.I_N
     damp = 2 * m.k_phi**2 / r  # the parallel pair's damping: htm-48v is near critical (zeta = 0.83)
-    assert su["align_time"] == pytest.approx(max(3 * TWO_PI * math.sqrt(d.mechanics.J / k), 12 * damp / k))
+    assert su["align_time"] == pytest.approx(max(3 * TWO_PI * math.sqrt(d.mechanics.J / k), 12 * damp / k,
+                                                 5 * d.mechanics.J / (damp + d.mechanics.B)))
     lu = bl.load("lu-4kw")  # overdamped (zeta = 11): twelve time constants D / K
     k_lu = 6 / math.pi * lu.motor.p * lu.motor.k_phi * 0.5 * lu.motor.I_N
     d_lu = 2 * lu.motor.k_phi**2 / (lu.motor.R + lu.inverter.R_on)
@@ -402,11 +403,11 @@ def _final_speed(res: bl.SimResult, share: float = 0.1) -> float:
     ("htm-48v", 0.5, 1.5, "sync", "comparator", 0.0, 0.005),
     ("htm-48v", 0.6, 2.0, "high", "comparator", 0.3, 0.005),
     ("htm-48v", 0.5, 1.5, "sync", "adc", 0.0, 0.005),
-    ("mn3110-780kv", 0.5, 1.0, "sync", "comparator", 0.0, 0.02),
-    ("mn3110-780kv", 0.5, 1.0, "high", "comparator", 0.0, 0.02),
-    ("mn3110-780kv", 0.5, 1.0, "pwm-on-pwm", "comparator", 0.0, 0.02),
-    ("mn3110-780kv", 0.5, 1.0, "bipolar", "comparator", 0.0, 0.02),
-    ("mn3110-780kv", 0.5, 1.0, "sync", "adc", 0.0, 0.02),
+    ("mn3110-780kv", 0.5, 1.4, "sync", "comparator", 0.0, 0.02),
+    ("mn3110-780kv", 0.5, 1.4, "high", "comparator", 0.0, 0.02),
+    ("mn3110-780kv", 0.5, 1.4, "pwm-on-pwm", "comparator", 0.0, 0.02),
+    ("mn3110-780kv", 0.5, 1.4, "bipolar", "comparator", 0.0, 0.02),
+    ("mn3110-780kv", 0.5, 1.4, "sync", "adc", 0.0, 0.02),
     ("f60prov-2550kv", 0.3, 0.6, "sync", "comparator", 0.0, 0.02),
     ("f60prov-2550kv", 0.3, 0.6, "high", "comparator", 0.0, 0.02),
     ("f60prov-2550kv", 0.3, 0.6, "pwm-on-pwm", "comparator", 0.0, 0.02),
@@ -443,10 +444,11 @@ def test_steady_speed_matches_hall_six_step_at_equal_duty(name, duty, dur, chop,
 
 def test_hard_throttle_step_on_the_drone_stays_in_sync():
     """f60prov-2550kv with its propeller, default settings (no throttle ramp): at 0.3 s the throttle steps from 0.25
-    to 1 in one sample, from six initial rotor angles (each start leaves the closed loop in another state at the
-    step). The drive stays in closed loop, without a desync or a trip, and accelerates to above 0.45 Omega_0 from
-    five of them (the margin at this step is thin: from one in six, 1.0 rad here, the clamp hides a crossing and the
-    drive restarts): the speed-dependent duty limit holds the current near I_N and the demagnetisation limiter keeps
+    to 1 in one sample, from fifteen initial rotor angles (each start leaves the closed loop in another state at the
+    step). The drive stays in closed loop, without a desync or a trip, and accelerates to above 0.45 Omega_0 from at
+    least ten of them (the margin at this step is thin: measured 11 of 15, and 12 of 15 before the start-up work,
+    which changes the state at the step; elsewhere the clamp hides a crossing, ZC_HIDDEN, and the drive restarts,
+    never a trip): the speed-dependent duty limit holds the current near I_N and the demagnetisation limiter keeps
     the clamp at 0.6 of the window on average (measured 0.59, the duty then 0.72). Without the two limits and the
     fast demagnetisation the same step hides the crossing behind the clamp (ZC_HIDDEN) within 40 ms."""
     d = bl.load("f60prov-2550kv")
@@ -455,7 +457,7 @@ def test_hard_throttle_step_on_the_drone_stays_in_sync():
     t = np.arange(n) * 0.5 / d.inverter.f_pwm
     ref = np.where(t < t_step, 0.25, 1.0)
     held = 0
-    for theta0 in (0.2, 1.0, 1.8, 2.6, 3.4, 4.2):
+    for theta0 in np.arange(0.2, 6.0, 0.4):
         res = bl.simulate(d, bl.SixStepSensorless(), bl.Scenario(duration=dur, ref=ref, theta0=theta0), check="warn")
         flags = res.meta["flags"]
         assert not {"SAFE", "OVERCURRENT"} & set(flags), flags
@@ -471,7 +473,7 @@ def test_hard_throttle_step_on_the_drone_stays_in_sync():
         late = res.t > dur - 0.1
         share = np.abs(res.signals["omega_e"][late]) * res.signals["demag"][late] / (math.pi / 6)
         assert np.mean(share) == pytest.approx(0.6, abs=0.05) and np.max(res.signals["duty"][late]) < 0.9
-    assert held >= 5, held
+    assert held >= 10, held
     bare = bl.SixStepSensorless(fast_demag=False, demag_limit=0.0, duty_limit_current=0.0, throttle_rate="0.65 %/ms")
     res = bl.simulate(d, bare, bl.Scenario(duration=dur, ref=ref, theta0=1.8), check="warn")
     flags = res.meta["flags"]
