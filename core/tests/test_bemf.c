@@ -985,6 +985,65 @@ static void test_throttle_and_limit(void)
           (double)o.diag[6]);
 }
 
+/* the start-up's cycle-by-cycle current limit (i_start) and the ramp's duty law with ramp_tau */
+static void test_start_current_limit(void)
+{
+    bc_bemf_params p = start_params(BC_BEMF_COMPARATOR);
+    p.use_current = 1;
+    p.i_start = 10.0f;
+    p.ramp_tau = 2e-3f;
+    p.ramp_vf = 1e-4f;
+    bc_bemf_state s;
+    CHECK(bc_bemf_init(&p, &s) == BC_OK, "init with i_start and ramp_tau");
+    bc_ctrl_in in;
+    memset(&in, 0, sizeof in);
+    in.v_dc = 12.0f;
+    in.i_mask = 3u;
+    in.ref = 0.5f;
+    bc_ctrl_out o;
+    long off_hi = 0, on_lo = 0, sat_hi = 0, n_hi = 0, n_lo = 0, bad_ramp = 0, n_ramp = 0;
+    double m_prev = 0.0;
+    long k_end = (long)((double)p.align_time / TS) + 400;
+    for (long k = 0; k < k_end; ++k) {
+        int hi = (int)((k / 7) % 2); /* alternately above and below the limit, in ALIGN and then in RAMP */
+        in.i_abc[0] = hi ? 12.0f : 8.0f;
+        in.i_abc[1] = -in.i_abc[0];
+        in.tick_now = (uint32_t)(k * 250);
+        memset(&o, 0, sizeof o);
+        bc_bemf_step(&p, &s, &in, &o);
+        if (o.diag[0] != (float)BC_BEMF_ALIGN && o.diag[0] != (float)BC_BEMF_RAMP) continue;
+        if (hi) {
+            ++n_hi;
+            off_hi += all_off(&o) && o.has_at == 0u;
+            sat_hi += (o.flags & BC_FLAG_SATURATED) != 0u;
+        } else {
+            ++n_lo;
+            on_lo += !all_off(&o) && (o.flags & BC_FLAG_SATURATED) == 0u;
+            if (o.diag[0] == (float)BC_BEMF_RAMP) { /* m = ramp_duty sqrt(1 + (w ramp_tau)^2) + ramp_vf w, w in
+                                                      * [w0, w1] = [30, 150] rad/s, the forced speed never falling */
+                ++n_ramp;
+                double lo = 0.3 * sqrt(1.0 + 0.06 * 0.06) + 1e-4 * 30.0;
+                double top = 0.3 * sqrt(1.0 + 0.3 * 0.3) + 1e-4 * 150.0;
+                double m = (double)o.diag[6];
+                if (!(m >= lo - 1e-6 && m <= top + 1e-6 && m >= m_prev - 1e-6)) ++bad_ramp;
+                m_prev = m;
+            }
+        }
+    }
+    CHECK(n_hi > 100 && off_hi == n_hi && sat_hi == n_hi,
+          "start-up current limit: every switch off and SATURATED in %ld and %ld of %ld samples above i_start", off_hi,
+          sat_hi, n_hi);
+    CHECK(n_lo > 100 && on_lo == n_lo, "below i_start the legs driven in %ld of %ld samples", on_lo, n_lo);
+    CHECK(n_ramp > 50 && bad_ramp == 0 && m_prev > 0.3 * sqrt(1.0 + 0.06 * 0.06) + 3e-3 + 1e-3,
+          "ramp duty ramp_duty sqrt(1 + (w ramp_tau)^2) + ramp_vf w, rising within the sector: %ld of %ld, last %.4f",
+          n_ramp - bad_ramp, n_ramp, m_prev);
+    p.ramp_tau = -1e-3f;
+    CHECK(bc_bemf_init(&p, &s) == BC_ERR_PARAM, "ramp_tau < 0 refused");
+    p.ramp_tau = 0.0f;
+    p.i_start = NAN;
+    CHECK(bc_bemf_init(&p, &s) == BC_ERR_PARAM, "i_start NaN refused");
+}
+
 /* fast demagnetisation and the demagnetisation limiter on the kinematic rotor (300 Hz, 22 samples a sector) */
 static void test_fast_demag_and_limiter(void)
 {
@@ -1132,6 +1191,7 @@ int main(void)
     test_start_up();
     test_stop_and_reverse();
     test_throttle_and_limit();
+    test_start_current_limit();
     test_fast_demag_and_limiter();
     return bc_test_summary("test_bemf");
 }
