@@ -35,10 +35,30 @@ from ..model.motor import Drive
 from ..sim import Scenario, SimResult, simulate
 from .experiments import map_points
 
-__all__ = ["START_FAILURES", "AngleErrorResult", "DemagResult", "MinSpeedResult", "StartupGridResult",
-           "VersusHallResult", "angle_error", "commutations", "demag_closed_form", "demag_times", "demag_voltage",
-           "fixed_start", "locked", "min_sensorless_speed", "offset_limit_speed", "pair_torque_constant", "run_locked",
-           "ramp_current", "ramp_duty_at", "startup_grid", "startup_load_bound", "versus_hall"]
+__all__ = [
+    "START_FAILURES",
+    "AngleErrorResult",
+    "DemagResult",
+    "MinSpeedResult",
+    "StartupGridResult",
+    "VersusHallResult",
+    "angle_error",
+    "commutations",
+    "demag_closed_form",
+    "demag_times",
+    "demag_voltage",
+    "fixed_start",
+    "locked",
+    "min_sensorless_speed",
+    "offset_limit_speed",
+    "pair_torque_constant",
+    "ramp_current",
+    "ramp_duty_at",
+    "run_locked",
+    "startup_grid",
+    "startup_load_bound",
+    "versus_hall",
+]
 
 _POS = (0, 0, 1, 1, 2, 2)  # phase driven positive in sector s (bc_commutation.h)
 _NEG = (1, 2, 2, 0, 0, 1)
