@@ -240,6 +240,7 @@ static void test_params(void)
     BAD(q.ki = INFINITY, "ki inf");
     BAD(q.i_s_max = 0.0f, "i_s_max = 0");
     BAD(q.i_max = NAN, "i_max NaN");
+    BAD(q.i_s_max = 1.01f * q.i_max, "i_s_max > i_max (the trip would cut the limit off)");
     BAD(q.v_max = 0.0f, "v_max = 0");
     BAD(q.decouple = 2, "decouple = 2");
     BAD(q.advance = 5.0f, "advance = 5");

@@ -295,6 +295,8 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     if (!finite_pos(p->ts) || !finite_nonneg(p->kp) || !finite_nonneg(p->ki) || !finite_pos(p->v_max) ||
         !finite_pos(p->i_s_max) || !finite_pos(p->i_max))
         return BC_ERR_PARAM;
+    /* a current limit the over-current trip cuts off is a misconfiguration: i_s_max <= i_max */
+    if (p->i_s_max > p->i_max) return BC_ERR_PARAM;
     if (!is_flag(p->speed_limit) || !is_flag(p->decouple) || !is_flag(p->overmod) || !is_flag(p->emf_ff) ||
         !is_flag(p->speed_loop))
         return BC_ERR_PARAM;

@@ -274,7 +274,7 @@ typedef struct {
     float ki;       /* d,q PI integral gain, V/(A s) (>= 0) */
     float v_max;    /* bound of the d,q PI integrators and largest plausible DC-bus measurement, V (> 0); sets
                        the speed range of the speed limit's table (5.) */
-    float i_s_max;  /* I_s,N: limit of |i_q,ref|, A (> 0) */
+    float i_s_max;  /* current limit of |i_q,ref|, A (0 < i_s_max <= i_max); paper 1: I_s,N */
     float i_max;    /* over-current trip, A (> 0) */
     int32_t speed_limit; /* 1: |i_q,ref| <= I_s,sat above base speed (from the shape tables if given, else (23)
                             with R); 0: off */
