@@ -91,7 +91,7 @@ def hot(drive: Drive, text: str) -> Drive:
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab effmap``."""
     drive = load_drive(args)
-    name = drive.name
+    name, T_N, Omega_0 = drive.name, drive.T_N, drive.Omega_0  # the grid: the drive's bases at T_ref
     suffix = ""
     if args.temperature is not None:
         drive = hot(drive, args.temperature)
@@ -107,8 +107,8 @@ def run_command(args: argparse.Namespace) -> int:
     out = args.out if args.out is not None else Path("out") / f"{name}-effmap{suffix}"
     check_out_dir(out)  # before the simulations: a bad --out fails in a second, not after the whole run
     sign = -1.0 if args.generating else 1.0
-    torques = sign * np.linspace(args.min_torque, args.max_torque, args.torques) * drive.T_N
-    speeds = np.linspace(args.min_speed, args.max_speed, args.speeds) * drive.Omega_0
+    torques = sign * np.linspace(args.min_torque, args.max_torque, args.torques) * T_N
+    speeds = np.linspace(args.min_speed, args.max_speed, args.speeds) * Omega_0
     controls = map_controls(drive, float(np.min(speeds)), args.chopping)
     workers = workers_of(args.workers)
     load_matplotlib()  # before the pool starts: its workers draw the figures with it already loaded
