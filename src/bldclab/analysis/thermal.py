@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 
 from .._core import core
 from .._files import read_toml
-from ..control import Control
+from ..control import Control, Sine, SixStep
 from ..errors import BldclabError, PlausibilityError
 from ..model._checks import check_number
 from ..model.motor import Drive
@@ -529,7 +529,6 @@ def envelope_controls(drive: Drive, lowest_speed: float, i_limit: float | None =
     dict
         ``{"square": SixStep, "sine": Sine}``, both taking a torque reference (N m).
     """
-    from ..control import Sine, SixStep
 
     i_lim = 2.0 * drive.motor.I_N if i_limit is None else i_limit
     check_number("i_limit", i_lim)
