@@ -529,7 +529,6 @@ def envelope_controls(drive: Drive, lowest_speed: float, i_limit: float | None =
     dict
         ``{"square": SixStep, "sine": Sine}``, both taking a torque reference (N m).
     """
-
     i_lim = 2.0 * drive.motor.I_N if i_limit is None else i_limit
     check_number("i_limit", i_lim)
     return {"square": SixStep(reference="torque", i_max=i_lim),
