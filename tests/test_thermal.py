@@ -589,3 +589,74 @@ def test_effmap_at_temperature_cli(tmp_path, capsys) -> None:  # type: ignore[no
     assert main(["effmap", "outrunner-24v", "--temperature", "80 degC", "--out", str(tmp_path / "bad")]) == 2
     assert "[thermal]" in capsys.readouterr().err
     assert not (tmp_path / "bad").exists()
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# the winding resistance during operation (bc_rest.h in bc_sine)
+
+def test_resistance_estimate_feeds_the_derating_without_a_sensor() -> None:
+    """No winding sensor: without the estimate the derating reads a fault (f_fault); with the d-axis injection the
+    controller's resistance estimate gives the winding temperature, and the derating holds the winding in its band,
+    as with a sensor (htm-48v, capacities / 100, 40 N m at 40 rad/s)."""
+    import dataclasses
+
+    import bldclab as bl
+    from bldclab.control import ResistanceEstimate, Sine, TemperatureDerating
+    from bldclab.sim.thermal import ThermalCoupling
+
+    d = _fast_network("htm-48v", 100.0)
+    d = dataclasses.replace(d, thermal=dataclasses.replace(d.thermal, sensor_winding=None))  # type: ignore[arg-type]
+    der = TemperatureDerating(winding=(60.0, 80.0), f_fault=0.3)
+    sc = bl.Scenario(duration=30.0, speed=40.0, ref=40.0, trace=False)
+    blind = bl.simulate(d, Sine(handoff_speed=10.0, derate=der), sc, thermal=ThermalCoupling(h=0.1)).thermal
+    est = bl.simulate(d, Sine(handoff_speed=10.0, derate=der, r_estimate=ResistanceEstimate(current=5.0)), sc,
+                      thermal=ThermalCoupling(h=0.1)).thermal
+    # blind: f_fault of the current limit from the first sample, the winding stays cool
+    assert blind.extra["tau"][-1] == pytest.approx(0.3 * 1.5 * _k1(d) * _isn(d), rel=0.02)
+    assert blind.T["winding"].max() < 50.0
+    # the estimate: the full current limit (1.5 k_1 I_s,N, 34 N m) while cold, then derated, the winding in the band
+    Tw = est.T["winding"]
+    assert est.extra["tau"][5] == pytest.approx(1.5 * _k1(d) * _isn(d), rel=0.02)
+    assert est.extra["tau"][-1] < 0.6 * est.extra["tau"][5]
+    assert 60.0 < Tw[-1] < 80.0 and Tw.max() < 82.0
+
+
+def _k1(d: Drive) -> float:
+    from bldclab.control.sine import fundamental_k1
+
+    return fundamental_k1(d)
+
+
+def _isn(d: Drive) -> float:
+    from bldclab.model.analytic import i_sN
+
+    return i_sN(d)
+
+
+def test_resistance_injection_costs_its_copper_loss_not_torque() -> None:
+    """The d-axis square wave leaves the torque (non-salient: 3/2 k_1 i_q) and adds its copper loss, 3/2 R i_inj^2
+    (the square wave's rms is its amplitude); bad settings name the field."""
+    import bldclab as bl
+    from bldclab.control import ResistanceEstimate, Sine
+
+    d = catalog.load("htm-48v")
+    sc = bl.Scenario(duration=0.5, speed=40.0, ref=20.0, window=(0.1, 0.5), trace=False)
+    base = bl.simulate(d, Sine(handoff_speed=10.0), sc).metrics
+    inj = bl.simulate(d, Sine(handoff_speed=10.0, r_estimate=ResistanceEstimate(current=5.0)), sc).metrics
+    assert base is not None and inj is not None
+    assert inj.tau_mean == pytest.approx(base.tau_mean, rel=2e-3)
+    assert inj.p_cu - base.p_cu == pytest.approx(1.5 * d.motor.R * 5.0**2, rel=0.1)
+    for kw, field in (({"current": 0.0}, "r_estimate.current"), ({"current": 5.0, "period": -1.0},
+                                                                  "r_estimate.period"),
+                      ({"current": 5.0, "filter": 1.5}, "r_estimate.filter")):
+        with pytest.raises(BldclabError) as exc:
+            ResistanceEstimate(**kw)  # type: ignore[arg-type]
+        assert exc.value.field == field
+    for est, field in ((ResistanceEstimate(current=200.0), "control.r_estimate.current"),
+                       (ResistanceEstimate(current=5.0, period=1e-4), "control.r_estimate.period")):
+        with pytest.raises(BldclabError) as exc:
+            bl.simulate(d, Sine(r_estimate=est), bl.Scenario(duration=0.01, speed=40.0, ref=5.0))
+        assert exc.value.field == field
+    with pytest.raises(BldclabError) as exc:
+        Sine(r_estimate=5.0)  # type: ignore[arg-type]
+    assert exc.value.field == "control.r_estimate"

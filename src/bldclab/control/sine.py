@@ -21,7 +21,7 @@ from ..model.analytic import i_sN, r_total
 from ..model.design import pi_gains
 from ..model.motor import Drive
 from .base import Control, check_number
-from .derate import TemperatureDerating, derate_record
+from .derate import ResistanceEstimate, TemperatureDerating, derate_record, rest_record
 from .hall import check_hall_options, hall_record, normalize_table
 from .sixstep import SixStep
 
@@ -180,6 +180,10 @@ class Sine(Control):
     derate : TemperatureDerating, optional
         Derate the current limit ``I_s,N`` with the temperature inputs (firmware derating,
         :mod:`bldclab.control.derate`; the square-wave start too, unless ``start`` has its own); ``None``: none.
+    r_estimate : ResistanceEstimate, optional
+        Measure the winding resistance during operation by a square wave of d-axis current in the sine mode
+        (:class:`~bldclab.control.derate.ResistanceEstimate`, ``bc_rest.h``); without a winding sensor its
+        temperature is the derating's winding input. ``None``: no injection (``i_d,ref = 0``).
     """
 
     angle: Literal["hall", "pll", "encoder", "observer"] = "hall"
@@ -215,12 +219,16 @@ class Sine(Control):
     lock_tolerance: float = 0.2
     restart_wait: float = 0.1
     derate: TemperatureDerating | None = None
+    r_estimate: ResistanceEstimate | None = None
     c_name: ClassVar[str] = "sine"
     ref_meaning: ClassVar[str] = "torque, N m"
 
     def __post_init__(self) -> None:
         if self.derate is not None and not isinstance(self.derate, TemperatureDerating):
             raise BldclabError("control.derate", f"must be a TemperatureDerating, got {type(self.derate).__name__}")
+        if self.r_estimate is not None and not isinstance(self.r_estimate, ResistanceEstimate):
+            raise BldclabError("control.r_estimate", f"must be a ResistanceEstimate, got "
+                               f"{type(self.r_estimate).__name__}")
         if self.angle not in _ANGLE:
             raise BldclabError("control.angle", f"must be one of {', '.join(_ANGLE)}, got {self.angle!r}")
         check_hall_options(self.pll_edges)
@@ -442,6 +450,8 @@ class Sine(Control):
             theta_offset=0.0,
             **hall_record(core, self.angle == "pll", self.pll_edges, self.hall_table),
             derate=derate_record(core, self.derate, 0.5 / inv.f_pwm),
+            rest=rest_record(core, self.r_estimate, 0.5 / inv.f_pwm, r_total(drive),
+                             drive.thermal.T_ref if drive.thermal is not None else 25.0, self.current_limit(drive)),
             six=six.record[0],
             flying_start=int(self.flying_start),
             speed_loop=int(self.speed_loop),
