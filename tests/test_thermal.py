@@ -660,3 +660,27 @@ def test_resistance_injection_costs_its_copper_loss_not_torque() -> None:
     with pytest.raises(BldclabError) as exc:
         Sine(r_estimate=5.0)  # type: ignore[arg-type]
     assert exc.value.field == "control.r_estimate"
+
+
+def test_cli_envelope_current_limit(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    """``bldclab thermal --envelope --current-limit``: the 60 s envelope of servo-2k2 at 500 rpm is the sinusoidal
+    supply's 1.5 k_1 i_limit (no node near its limit in 60 s); bad values exit 2 and write nothing."""
+    import pandas as pd
+
+    from bldclab.cli import main
+
+    d = catalog.load("servo-2k2")
+    out = tmp_path / "env.csv"
+    assert main(["thermal", "servo-2k2", "--envelope", "--speeds", "500 rpm", "--durations", "60 s",
+                 "--current-limit", "8 A", "--out", str(out)]) == 0
+    assert "8 A peak" in capsys.readouterr().out
+    env = pd.read_csv(out)
+    assert float(env["sine 60 s"][0]) == pytest.approx(1.5 * _k1(d) * 8.0, rel=0.01)
+    assert env["sine 60 s limit"][0] == "delivery"
+    for args, words in ((["--envelope", "--current-limit", "-2 A"], "must be a current > 0"),
+                        (["--envelope", "--current-limit", "2 V"], "--current-limit"),
+                        (["--profile", "examples/profiles/hill-climb.toml", "--current-limit", "2 A"],
+                         "option of --envelope")):
+        assert main(["thermal", "servo-2k2", *args, "--out", str(tmp_path / "bad.csv")]) == 2
+        assert words in capsys.readouterr().err
+    assert not (tmp_path / "bad.csv").exists()
