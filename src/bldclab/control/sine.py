@@ -21,7 +21,7 @@ from ..model.analytic import i_sN, r_total
 from ..model.design import pi_gains
 from ..model.motor import Drive
 from .base import Control, check_number
-from .derate import TemperatureDerating, derate_record
+from .derate import ResistanceEstimate, TemperatureDerating, derate_record, rest_record
 from .hall import check_hall_options, hall_record, normalize_table
 from .sixstep import SixStep
 
@@ -151,6 +151,12 @@ class Sine(Control):
         Fraction of ``handoff_speed`` below it at which the drive returns to the square-wave start (-), in [0, 1).
     i_max : float, optional
         Over-current trip (A); default ``2 I_N``.
+    i_s_max : float, optional
+        Current limit: the largest current amplitude the controller asks for (A), default paper 1's
+        ``I_s,N = 2/sqrt(3) I_N`` (8), the amplitude of a sinusoid with the rated square wave's rms. A drive's short-
+        time rating (a 60 s envelope, :func:`bldclab.analysis.thermal.envelope`) raises it; at most ``i_max`` (the
+        trip would cut it off). The speed limit, the speed loop's default ``tau_max`` and the square-wave start's
+        torque clamp follow it.
     emf_points : int
         Points per back-EMF table (uniform over one electrical period; a multiple of 12 holds the corners of a
         120-degree trapezoid).
@@ -174,6 +180,10 @@ class Sine(Control):
     derate : TemperatureDerating, optional
         Derate the current limit ``I_s,N`` with the temperature inputs (firmware derating,
         :mod:`bldclab.control.derate`; the square-wave start too, unless ``start`` has its own); ``None``: none.
+    r_estimate : ResistanceEstimate, optional
+        Measure the winding resistance during operation by a square wave of d-axis current in the sine mode
+        (:class:`~bldclab.control.derate.ResistanceEstimate`, ``bc_rest.h``); without a winding sensor its
+        temperature is the derating's winding input. ``None``: no injection (``i_d,ref = 0``).
     """
 
     angle: Literal["hall", "pll", "encoder", "observer"] = "hall"
@@ -191,6 +201,7 @@ class Sine(Control):
     handoff_speed: float | None = None
     handoff_hysteresis: float = 0.2
     i_max: float | None = None
+    i_s_max: float | None = None
     emf_points: int = 360
     speed_loop: bool = False
     speed_bandwidth_hz: float = 5.0
@@ -208,12 +219,16 @@ class Sine(Control):
     lock_tolerance: float = 0.2
     restart_wait: float = 0.1
     derate: TemperatureDerating | None = None
+    r_estimate: ResistanceEstimate | None = None
     c_name: ClassVar[str] = "sine"
     ref_meaning: ClassVar[str] = "torque, N m"
 
     def __post_init__(self) -> None:
         if self.derate is not None and not isinstance(self.derate, TemperatureDerating):
             raise BldclabError("control.derate", f"must be a TemperatureDerating, got {type(self.derate).__name__}")
+        if self.r_estimate is not None and not isinstance(self.r_estimate, ResistanceEstimate):
+            raise BldclabError("control.r_estimate", f"must be a ResistanceEstimate, got "
+                               f"{type(self.r_estimate).__name__}")
         if self.angle not in _ANGLE:
             raise BldclabError("control.angle", f"must be one of {', '.join(_ANGLE)}, got {self.angle!r}")
         check_hall_options(self.pll_edges)
@@ -229,7 +244,7 @@ class Sine(Control):
         if self.bandwidth_hz is not None:
             check_number("bandwidth_hz", self.bandwidth_hz)
         check_number("phase_margin_deg", self.phase_margin_deg)
-        for name in ("R_design", "handoff_speed", "i_max", "tau_max"):
+        for name in ("R_design", "handoff_speed", "i_max", "i_s_max", "tau_max"):
             v = getattr(self, name)
             if v is not None:
                 check_number(name, v, allow_zero=name == "R_design")
@@ -288,13 +303,32 @@ class Sine(Control):
         return min(PAPER1_BANDWIDTH_HZ, drive.inverter.f_pwm / 10.0)
 
     def torque_limit(self, drive: Drive) -> float:
-        """Return the speed loop's torque limit (N m): ``tau_max``, default ``T_s,N = 1.5 k_1 I_s,N`` (paper 1 (12)).
+        """Return the speed loop's torque limit (N m): ``tau_max``, default ``1.5 k_1 i_s_max`` (paper 1 (12)).
 
         Parameters
         ----------
         drive : Drive
         """
-        return 1.5 * fundamental_k1(drive) * i_sN(drive) if self.tau_max is None else float(self.tau_max)
+        return 1.5 * fundamental_k1(drive) * self.current_limit(drive) if self.tau_max is None else float(self.tau_max)
+
+    def current_limit(self, drive: Drive) -> float:
+        """Return the current limit (A): ``i_s_max``, default ``I_s,N = 2/sqrt(3) I_N`` (paper 1 (8)).
+
+        Parameters
+        ----------
+        drive : Drive
+
+        Raises
+        ------
+        BldclabError
+            ``control.i_s_max`` above the over-current trip ``i_max``.
+        """
+        i_s = i_sN(drive) if self.i_s_max is None else float(self.i_s_max)
+        trip = 2.0 * drive.motor.I_N if self.i_max is None else float(self.i_max)
+        if i_s > trip:
+            raise BldclabError("control.i_s_max", f"must be at most the over-current trip i_max = {trip:.4g} A "
+                               f"(raise i_max with it), got {i_s:.4g} A")
+        return i_s
 
     def handoff(self, drive: Drive) -> float:
         """Return the hand-off speed (mechanical rad/s): ``handoff_speed``, default ``0.1 Omega_N``."""
@@ -344,9 +378,9 @@ class Sine(Control):
         m, inv = drive.motor, drive.inverter
         ts = 0.5 / inv.f_pwm
         st = self.sensorless_settings(drive)
-        if self.angle == "observer" and st["if_current"] > i_sN(drive):
-            raise BldclabError("control.if_current", f"must be at most I_s,N = {i_sN(drive):.4g} A, got "
-                               f"{st['if_current']:.4g} A")
+        if self.angle == "observer" and st["if_current"] > self.current_limit(drive):
+            raise BldclabError("control.if_current", f"must be at most the current limit i_s_max = "
+                               f"{self.current_limit(drive):.4g} A, got {st['if_current']:.4g} A")
         common = {"R": r_total(drive), "L": m.L, "psi": st["psi"], "ts": ts, "i_max": i_max, "v_max": 2.0 * inv.V_dc}
         fobs = core.filled("bc_fluxobs_params", gain=st["gain"], pll_bw=st["bandwidth"], **common)
         robs = core.filled("bc_redobs_params", alpha_o=st["bandwidth"], sigma0=st["sigma0"], zeta_inf=0.2, **common)
@@ -398,7 +432,7 @@ class Sine(Control):
             kp=kp,
             ki=ki,
             v_max=2.0 * inv.V_dc,
-            i_s_max=i_sN(drive),
+            i_s_max=self.current_limit(drive),
             i_max=i_max,
             speed_limit=int(self.speed_limit),
             decouple=int(self.decoupling),
@@ -416,6 +450,8 @@ class Sine(Control):
             theta_offset=0.0,
             **hall_record(core, self.angle == "pll", self.pll_edges, self.hall_table),
             derate=derate_record(core, self.derate, 0.5 / inv.f_pwm),
+            rest=rest_record(core, self.r_estimate, 0.5 / inv.f_pwm, r_total(drive),
+                             drive.thermal.T_ref if drive.thermal is not None else 25.0, self.current_limit(drive)),
             six=six.record[0],
             flying_start=int(self.flying_start),
             speed_loop=int(self.speed_loop),
