@@ -794,10 +794,18 @@ def startup_load_bound(drive: Drive, control: SixStepSensorless, inertia: float 
     trapezoid), and falls on either side; for the trapezoid with a rotor lagging ``delta`` (electrical) it is ``k_pair
     I (1 - delta^2 / (2 (pi/3)^2))``. A rotor that lags therefore gets less torque and lags more: it must follow the
     ramp's acceleration ``a = (Omega_end - Omega_start) / t_ramp`` in step, which takes ``J a``; friction and
-    propeller take ``tau_c + B Omega_end + k_q Omega_end^2`` (their largest, at the end speed). The current is the
-    smaller of :func:`ramp_current` at the ramp's start and end speeds (the inductance counted: ``|R + j Omega_e
-    L|``). What is left is the bound. It neglects the extra current the V/f term drives while the rotor lags (which
-    helps) and the current's dip at each commutation (the commutation interval, which takes some of the torque).
+    propeller take ``tau_c + B Omega_end + k_q Omega_end^2`` (their largest, at the end speed). A Coulomb load
+    ``tau_L`` (with the drive's ``tau_c``) stops the aligning rotor where the alignment's torque ``K delta_m`` meets
+    it, ``K = (6/pi) p k_phi I_align`` (the trapezoid's slope): the ramp starts with the rotor up to ``delta = p
+    (tau_L + tau_c) / K`` (electrical, at most a sector) behind. The current is the smaller of :func:`ramp_current`
+    at the ramp's start and end speeds (the inductance counted: ``|R + j Omega_e L|``). The bound is the load that
+    leaves nothing over::
+
+        k_pair I (1 - delta(tau_L)^2 / (2 (pi/3)^2)) - J a - tau_c - B Omega_end - k_q Omega_end^2 = tau_L
+
+    (``delta`` grows with the load: solved by bisection). It neglects the extra current the V/f term drives while
+    the rotor lags (which helps) and the current's dip at each commutation (the commutation interval, which takes
+    some of the torque).
 
     Parameters
     ----------
@@ -814,13 +822,29 @@ def startup_load_bound(drive: Drive, control: SixStepSensorless, inertia: float 
         The bound (N m); negative: the ramp cannot be followed even unloaded.
     """
     su = control.start_up(drive)
-    mech = drive.mechanics
+    mech, m = drive.mechanics, drive.motor
     j = mech.J if inertia is None else float(inertia)
     w0, w_end = su["ramp_start_speed"], su["ramp_end_speed"]
     i_min = min(ramp_current(drive, control, w0), ramp_current(drive, control, w_end))
     accel = (w_end - w0) / su["ramp_time"]
-    return (pair_torque_constant(drive) * i_min - j * accel - mech.tau_c - mech.B * w_end
-            - mech.k_q * w_end * w_end)
+    rest = j * accel + mech.tau_c + mech.B * w_end + mech.k_q * w_end * w_end
+    top = pair_torque_constant(drive) * i_min
+    k_align = 6.0 / math.pi * m.p * m.k_phi * su["align_current"]  # N m per mechanical rad
+    sector = math.pi / 3.0
+
+    def spare(load: float) -> float:
+        """Torque left over with ``load`` added: the pair's, less for a rotor the load leaves behind the aligned
+        angle, minus what the ramp and the drive take and the load itself."""
+        lag = min(m.p * (load + mech.tau_c) / k_align, sector) if k_align > 0.0 else sector
+        return top * (1.0 - lag * lag / (2.0 * sector * sector)) - rest - load
+
+    if spare(0.0) <= 0.0:
+        return spare(0.0)
+    lo, hi = 0.0, top
+    for _ in range(60):  # spare() falls with the load: bisection to its zero
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if spare(mid) > 0.0 else (lo, mid)
+    return lo
 
 
 @dataclass(frozen=True)
