@@ -833,8 +833,11 @@ def startup_load_bound(drive: Drive, control: SixStepSensorless, inertia: float 
     sector = math.pi / 3.0
 
     def spare(load: float) -> float:
-        """Torque left over with ``load`` added: the pair's, less for a rotor the load leaves behind the aligned
-        angle, minus what the ramp and the drive take and the load itself."""
+        """Return the torque left over with ``load`` added (N m).
+
+        The pair's, less for a rotor the load leaves behind the aligned angle, minus what the ramp and the drive
+        take and the load itself.
+        """
         lag = min(m.p * (load + mech.tau_c) / k_align, sector) if k_align > 0.0 else sector
         return top * (1.0 - lag * lag / (2.0 * sector * sector)) - rest - load
 
