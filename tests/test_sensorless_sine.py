@@ -270,6 +270,18 @@ def test_settings_and_errors() -> None:
     with pytest.raises(BldclabError) as e:
         simulate(d, bl.Sine(angle="observer", if_current=10 * i_sN(d)), Scenario(duration=0.01, speed=1.0))
     assert e.value.field == "control.if_current"
+    assert st["if_align_current"] == pytest.approx(0.9 * i_sN(d))
+    assert st["if_accel_min"] == pytest.approx(st["if_accel"] / 20)
+    with pytest.raises(BldclabError) as e:
+        simulate(d, bl.Sine(angle="observer", if_align_current=1.1 * i_sN(d)), Scenario(duration=0.01, speed=1.0))
+    assert e.value.field == "control.if_align_current"
+    with pytest.raises(BldclabError) as e:
+        simulate(d, bl.Sine(angle="observer", if_accel_min=2 * st["if_accel"] / d.motor.p),
+                 Scenario(duration=0.01, speed=1.0))
+    assert e.value.field == "control.if_accel_min"
+    with pytest.raises(BldclabError) as e:
+        bl.Sine(angle="observer", if_accel_min=-1.0)
+    assert e.value.field == "control.if_accel_min"
 
 
 def test_cli_angle_observer(capsys: pytest.CaptureFixture[str]) -> None:

@@ -365,12 +365,12 @@ class Sine(Control):
         if self.angle == "observer" and st["if_accel_min"] > st["if_accel"] * (1.0 + 1e-9):
             raise BldclabError("control.if_accel_min", f"must be at most if_accel = {st['if_accel'] / m.p:.4g} "
                                f"rad/s^2, got {st['if_accel_min'] / m.p:.4g} rad/s^2")
-        if self.angle == "observer" and st["if_align_current"] > i_sN(drive) * (1.0 + 1e-9):
-            raise BldclabError("control.if_align_current", f"must be at most I_s,N = {i_sN(drive):.4g} A, got "
-                               f"{st['if_align_current']:.4g} A")
         if self.angle == "observer" and st["if_current"] > i_sN(drive):
             raise BldclabError("control.if_current", f"must be at most I_s,N = {i_sN(drive):.4g} A, got "
                                f"{st['if_current']:.4g} A")
+        if self.angle == "observer" and st["if_align_current"] > i_sN(drive) * (1.0 + 1e-9):
+            raise BldclabError("control.if_align_current", f"must be at most I_s,N = {i_sN(drive):.4g} A, got "
+                               f"{st['if_align_current']:.4g} A")
         common = {"R": r_total(drive), "L": m.L, "psi": st["psi"], "ts": ts, "i_max": i_max, "v_max": 2.0 * inv.V_dc}
         fobs = core.filled("bc_fluxobs_params", gain=st["gain"], pll_bw=st["bandwidth"], **common)
         robs = core.filled("bc_redobs_params", alpha_o=st["bandwidth"], sigma0=st["sigma0"], zeta_inf=0.2, **common)
