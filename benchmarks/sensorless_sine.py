@@ -12,6 +12,10 @@ Then, on each drive at 0.5 Omega_0 (flux observer), the sensitivity: the control
 linkage off by +-25 %, R by +-50 %, L by +-30 %, and again from what self-commissioning measured starting from that
 wrong data; and the commissioning accuracy (R, L, psi_f against the plant's) with the time it takes.
 
+Then the current-sensor errors (``--sensors [DRIVE ...]`` alone): an offset on phase a and white noise on the
+measured phases, the controller unaware of them. And the start-up map (``--startup [DRIVE ...]`` alone): load kind x
+load x inertia x initial angle, with the design bound of the load-adaptive ramp.
+
 Run: ``PYTHONPATH=src python benchmarks/sensorless_sine.py [DRIVE ...]``.
 """
 
@@ -48,6 +52,7 @@ def angle_error(drive: bl.Drive, control: bl.Sine, speed: float, torque: float, 
     err = np.degrees(np.angle(np.exp(1j * (r["theta"] - r["theta_e"]))))[on]
     m = r.metrics
     return {"rms": float(np.sqrt(np.mean(err**2))) if err.size else math.nan,
+            "mean": float(np.mean(err)) if err.size else math.nan,
             "worst": float(np.max(np.abs(err))) if err.size else math.nan,
             "sine": float(on.sum() / max(last.sum(), 1)), "tau": m.tau_mean, "eff": m.efficiency}
 
@@ -84,6 +89,45 @@ STARTUP_J = (0.5, 1.0, 2.0, 5.0)  # the plant's inertia over the nominal the con
 STARTUP_ANGLES = (0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi + 0.05)  # rotor at t = 0 (rad, electrical): the
 # vector's own q axis, the aligned rest angle (pi/2 ahead), a quarter turn off, next to the unstable point
 STARTUP_KINDS = ("passive", "brake", "active")
+
+
+SENSOR_CASES = (("none", 0.0, 0.0), ("offset 1 %", 0.01, 0.0), ("offset 2 %", 0.02, 0.0), ("noise 0.5 %", 0.0, 0.005),
+                ("noise 1 %", 0.0, 0.01))  # phase a's offset and every phase's noise (std), of I_s,N
+
+
+def sensor_errors(names: list[str], speeds: tuple[float, ...] = (0.1, 0.5)) -> None:
+    """Print the angle error and torque with current-sensor errors: an offset on phase a, white noise on each
+    measured phase (``Sensors.current_offset``, ``current_noise``), at a fraction of ``Omega_0`` under half the
+    rated load (as :func:`main`), both observers, the controller unaware of them.
+
+    An offset ``D`` on phase a, with phases a and b measured, is the constant vector ``D (1 + j / sqrt(3))`` in
+    alpha-beta: the observers integrate ``R D`` as a voltage and subtract ``L D`` from the flux, so the angle error
+    gets a ripple at the electrical frequency and the current loops drive the true current off by the offset (a torque
+    ripple at the electrical frequency, zero mean). Noise enters the observers' flux through ``L i`` and the PLL.
+    """
+    print(f"\n{'drive':16s} {'obs':8s} {'speed':>6s} {'sensor error':14s} {'rms deg':>8s} {'worst':>8s} "
+          f"{'mean':>8s} {'tau':>9s}")
+    for name in names:
+        d = bl.load(name)
+        torque = 0.5 * 1.5 * bl.control.sine.fundamental_k1(d) * i_sN(d)
+        for frac in speeds:
+            w = frac * d.Omega_0
+            on = min(0.1 * d.motor.Omega_nominal, 0.5 * w)
+            ctl = bl.Sine(angle="observer", handoff_speed=on, handoff_hysteresis=0.5)
+            st = ctl.sensorless_settings(d)
+            t_load = st["if_align"] + d.motor.p * on / st["if_accel"] + 2 * st["lock_time"] \
+                + d.mechanics.J * w / torque + 0.3
+            wb = 2 * math.pi * ctl.speed_bandwidth_hz
+            t_ramp = max(0.3, torque / (d.mechanics.J * wb**2 / 4 * 0.2 * w))
+            dur = t_load + t_ramp + 0.3 + 20 * 2 * math.pi / (d.motor.p * w)
+            for label, off, noise in SENSOR_CASES:
+                plant = d.replace(sensors__current_offset=(off * i_sN(d), 0.0, 0.0),
+                                  sensors__current_noise=noise * i_sN(d))
+                for obs in ("flux", "reduced"):
+                    a = angle_error(plant, dataclasses.replace(ctl, observer=obs), w, torque, t_load, t_ramp, dur,
+                                    estimate=d)
+                    print(f"{name:16s} {obs:8s} {frac:6.2f} {label:14s} {a['rms']:8.3f} {a['worst']:8.3f} "
+                          f"{a['mean']:8.3f} {a['tau']:9.4g}", flush=True)
 
 
 RHO_LO, RHO_HI = 0.6, 0.95  # bc_sine.h: the load-adaptive ramp's band (BC_SINE_RHO_LO, BC_SINE_RHO_HI)
@@ -199,6 +243,9 @@ def main(names: list[str]) -> None:
 
 
 if __name__ == "__main__":
+    if len(sys.argv) > 1 and sys.argv[1] == "--sensors":
+        sensor_errors(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v"])
+        raise SystemExit(0)
     if len(sys.argv) > 1 and sys.argv[1] == "--startup":
         startup_map(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v"])
         raise SystemExit(0)

@@ -710,24 +710,27 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 s->if_trust = 0;
             }
         } else if (s->sl_phase == BC_SINE_SL_RAMP) {
-            /* the torque's share of the I/f torque, cos(theta^ - theta_if), low-passed; the load-adaptive
-             * acceleration a = if_accel clamp((RHO_HI - rho_f) / (RHO_HI - RHO_LO), -1, 1): full while the torque
-             * is at most RHO_LO of the I/f torque, none at RHO_HI, and past it the vector slows (waits for the
-             * rotor) */
+            /* the load-adaptive ramp (if_accel_min < if_accel; otherwise the fixed ramp at if_accel): the
+             * torque's share of the I/f torque rho = cos(theta^ - theta_if) sets the acceleration
+             * a = if_accel clamp((RHO_HI - rho) / (RHO_HI - RHO_LO), -1, 1): full while the torque is at most
+             * RHO_LO of the I/f torque, none at RHO_HI, and past it the vector slows (waits for the rotor) */
+            int adaptive = p->if_accel_min < p->if_accel;
             s->rho_f = cosf(o.theta - s->if_theta);
-            float a = p->if_accel * bc_clampf((BC_SINE_RHO_HI - s->rho_f) / (BC_SINE_RHO_HI - BC_SINE_RHO_LO),
-                                              -1.0f, 1.0f);
+            float a = p->if_accel;
+            /* the observer is trusted when it sees the rotor move (at least 5 % of omega_on): at rest it holds its
+             * seed, which a load holding the rotor leaves off. Not trusted: the vector creeps (below) at
+             * if_accel_min at least, the swing is not braked */
+            int moving = fabsf(o.omega_e) >= 0.05f * p->omega_on;
+            s->if_trust = adaptive && moving;
+            if (adaptive) {
+                a *= bc_clampf((BC_SINE_RHO_HI - s->rho_f) / (BC_SINE_RHO_HI - BC_SINE_RHO_LO), -1.0f, 1.0f);
+                if (!moving) a = fmaxf(a, p->if_accel_min);
+            }
             /* omega_if += dir a T_s within dir [-omega_on, omega_on] (a rotor pushed back by an active load is
              * followed back); theta_if += omega_if T_s */
-            /* the observer is trusted when it sees the rotor move (at least 5 % of omega_on) and is consistent
-             * (the lock criterion's flux and error bands): at rest it holds its seed, which a load holding the
-             * rotor leaves off. Not trusted: the vector turns at if_accel_min, the swing is not braked */
-            int moving = fabsf(o.omega_e) >= 0.05f * p->omega_on;
-            s->if_trust = moving;
-            if (!moving) a = fmaxf(a, p->if_accel_min);
             float w = fmaxf(dir * s->if_omega + a * p->ts, -p->omega_on);
             /* a rotor at rest is passed slowly (it breaks away where the torque is largest): at most a creep */
-            if (!moving) w = fminf(w, 0.05f * p->omega_on);
+            if (adaptive && !moving) w = fminf(w, 0.05f * p->omega_on);
             /* at the top of the band the vector does not outrun the rotor (the observer's speed) */
             if (s->if_trust && s->rho_f >= BC_SINE_RHO_HI) w = fminf(w, fmaxf(dir * o.omega_e, -p->omega_on));
             int at_top = w >= p->omega_on;
@@ -736,7 +739,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             if (!at_top) {
                 /* below omega_on for longer than the slowest ramp takes: the load is beyond the I/f torque */
                 s->if_t += p->ts;
-                if (s->if_t >= p->omega_on / p->if_accel_min) sl_desync(p, s, out, BC_FLAG_START_FAIL);
+                if (adaptive && s->if_t >= p->omega_on / p->if_accel_min) sl_desync(p, s, out, BC_FLAG_START_FAIL);
             }
             if (at_top) {
                 s->sl_t += p->ts;
