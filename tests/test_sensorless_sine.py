@@ -350,9 +350,9 @@ def test_current_sensor_offset_and_noise() -> None:
 def test_fixed_ramp_with_a_wrong_resistance() -> None:
     """htm-48v configured with R 50 % high (0.5 Omega_0, half the rated load): the load-adaptive ramp reads the
     observer from standstill, where the wrong ``R i`` outweighs the back-EMF, and the drive is still in its I/f
-    start (flagged OPEN_LOOP, never in the sine mode on a wrong angle) when the window comes; the fixed ramp with the one-current alignment (``if_accel_min = if_accel``,
-    ``if_align_current = if_current``) hands over and runs with about 1 deg of angle error (docs/sensorless-sine.md,
-    sensitivity)."""
+    start (flagged OPEN_LOOP, never in the sine mode on a wrong angle) when the window comes; the fixed ramp with
+    the one-current alignment (``if_accel_min = if_accel``, ``if_align_current = if_current``) hands over and runs
+    with about 1 deg of angle error (docs/sensorless-sine.md, sensitivity)."""
     d = bl.load("htm-48v")
     wrong = d.scaled(R=1.5)
     r, m = run_point(d, observer(d, 0.5), 0.5, estimate=wrong)
