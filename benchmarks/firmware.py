@@ -215,6 +215,22 @@ def _bemf_runs(scale: float) -> list[tuple[str, Any, Any, Any]]:
     return [(START, d, bl.SixStepSensorless(), bl.Scenario(duration=scale * 0.6, ref=0.5, trace=False))]
 
 
+def _bemf_drone_runs(scale: float) -> list[tuple[str, Any, Any, Any]]:
+    """The sensorless six-step on the 5-inch drone motor with its propeller (f60prov-2550kv, 48 kHz, 1.6 samples per
+    30 degrees at Omega_0): from standstill at throttle 0.5 through the start (closed loop after about 80 ms) into
+    the steady state at about 0.5 Omega_0, and a step to full throttle at 0.25 s (the fast demagnetisation and the
+    demagnetisation limiter at work), to 0.4 s."""
+    import numpy as np
+
+    import bldclab as bl
+
+    d = bl.load("f60prov-2550kv")
+    dur = scale * 0.4
+    t = np.arange(bl.sim.samples_of(d, dur)) * 0.5 / d.inverter.f_pwm
+    ref = np.where(t < scale * 0.25, 0.5, 1.0)
+    return [(START, d, bl.SixStepSensorless(), bl.Scenario(duration=dur, ref=ref, trace=False))]
+
+
 def _sine_obs_runs(scale: float) -> list[tuple[str, Any, Any, Any]]:
     """The sensorless Sine (flux observer) from standstill (rotor free) on its speed loop to 0.5 Omega_0: alignment,
     the I/f ramp, the hand-off and the observer's closed loop."""
@@ -264,6 +280,7 @@ CLOSED_LOOP: dict[str, ClosedLoop] = {c.name: c for c in (
     ClosedLoop("hallcal", "hallcal", "bc_hallcal_step", _hallcal_runs),
     ClosedLoop("hallcal_speed", "hallcal", "bc_hallcal_step", _hallcal_speed_runs),
     ClosedLoop("bemf", "bemf", "bc_bemf_step", _bemf_runs),
+    ClosedLoop("bemf_drone", "bemf", "bc_bemf_step", _bemf_drone_runs),
     ClosedLoop("sine_obs", "sine", "bc_sine_step", _sine_obs_runs),
     ClosedLoop("commission", "commission", "bc_commission_step", _commission_runs),
 )}

@@ -43,7 +43,7 @@ def hot_and_cold() -> None:
     assert th is not None
     w40 = 40.0
     env = envelope(d, [w40], supply="sine", tol=0.002)
-    q = float(env.torque[0])
+    q = float(env.reference[0])
     hot_run = run_profile(d, LoadProfile(times=(0.0, 10000.0), speed=(w40, w40), torque=(q, q)), h=50.0,
                           compensated=True)
     T = hot_run.trace.final()

@@ -58,18 +58,24 @@ def test_angle_error_with_advance():
         sl.angle_error(bl.load("htm-48v"), (0.5,), timing_demag=1.0)
 
 
-def test_versus_hall_equal_duty():
-    """At equal duty and imposed speed the sensorless drive and Hall six-step give the same mean torque within 1 %
-    (the issue's goal above 0.2 Omega_0), the same efficiency within 0.5 percentage point and current ripple within
-    a tenth of Hall's (htm-48v, 0.2 and 0.5 Omega_0). Without fast demagnetisation, so that both drives chop the
-    same leg: with it the sensorless drive's commutation is shorter and its torque 1.0 % higher at 0.5 Omega_0."""
-    r = sl.versus_hall(bl.load("htm-48v"), (0.2, 0.5), fast_demag=False)
+@pytest.mark.parametrize("name", ["htm-48v", "servo-2k2"])
+def test_versus_hall_equal_duty(name):
+    """At equal duty and imposed speed the sensorless drive (default settings) and Hall six-step give the same mean
+    torque within 1 % (the issue's goal above 0.2 Omega_0), the same efficiency within 0.5 percentage point and
+    current ripple within a tenth of Hall's (0.2 and 0.5 Omega_0). The clamp takes less than 0.45 of the window
+    there, so the fast demagnetisation never engages and both drives chop the same leg; engaged from every
+    commutation (``fast_demag_after=0``) the outgoing current falls faster and the torque differs by more than 1 %
+    (servo-2k2 at 0.2 Omega_0: -1.6 %)."""
+    r = sl.versus_hall(bl.load(name), (0.2, 0.5))
     df = r.to_pandas()
     assert df["in_sync"].all()
     assert np.allclose(df["duty_applied"], df["duties"], atol=1e-6)  # equal duty indeed: no limit acted
     assert (df["torque_rel"].abs() < 0.01).all(), df
     assert (np.abs(df["efficiency_sl"] - df["efficiency_hall"]) < 0.005).all(), df
     assert (np.abs(df["ripple_sl"] - df["ripple_hall"]) < 0.1 * df["ripple_hall"] + 0.01).all(), df
+    if name == "servo-2k2":
+        always = sl.versus_hall(bl.load(name), (0.2,), fast_demag_after=0.0).to_pandas()
+        assert always["torque_rel"].iloc[0] < -0.01, always
 
 
 def test_min_speed_search_with_ideal_sensing():
@@ -102,6 +108,27 @@ def test_min_speed_against_the_comparator_offset_closed_form():
     assert held[3.0 * w_cf] and not held[0.3 * w_cf]
 
 
+def test_fast_demag_default_and_the_ideal_diode_on_the_drone():
+    """``fast_demag_after``: 0.45 of the window by default; 0 (from the commutation) with a comparator offset, and
+    where ideal diodes meet a window of under four samples at Omega_0 (f60prov-2550kv: 1.6). The reason, measured:
+    with ideal diodes the f60's floating phase conducts in the off-times before a rising crossing and its
+    commutations come 1-3 degrees late on average at 0.2 Omega_0 although its sensing is ideal, its torque 3 % above
+    Hall six-step's; with 0.7 V body diodes the commutations are within 0.1 degree and the torque (default
+    settings, 0.45) within 1 % of Hall six-step at 0.2, 0.5 and 0.9 Omega_0, in sync."""
+    from bldclab.control.sensorless import fast_demag_after
+
+    f60 = bl.load("f60prov-2550kv")
+    real = f60.replace(inverter=dataclasses.replace(f60.inverter, V_f=0.7))
+    htm = bl.load("htm-48v")
+    assert fast_demag_after(htm) == 0.45 and fast_demag_after(f60) == 0.0 and fast_demag_after(real) == 0.45
+    assert fast_demag_after(htm.replace(sensors=dataclasses.replace(htm.sensors, bemf_offset=0.1))) == 0.0
+    ideal = sl.angle_error(f60, (0.2,))
+    diode = sl.angle_error(real, (0.2,))
+    assert ideal.mean[0] > 1.0 and diode.mean[0] < 0.1 and diode.worst[0] < 0.1, (ideal, diode)
+    r = sl.versus_hall(real, (0.2, 0.5, 0.9)).to_pandas()
+    assert r["in_sync"].all() and (r["torque_rel"].abs() < 0.01).all(), r
+
+
 @pytest.mark.parametrize(("chop", "fast"), [("sync", False), ("sync", True), ("high", False), ("pwm-on-pwm", False),
                                             ("pwm-on-pwm", True), ("bipolar", False)])
 def test_demag_time_against_closed_forms_averaged_inverter(chop, fast):
@@ -114,7 +141,8 @@ def test_demag_time_against_closed_forms_averaged_inverter(chop, fast):
     d = bl.load("htm-48v")
     d = d.replace(inverter=dataclasses.replace(d.inverter, model="average"))
     duty = 0.85 if chop == "bipolar" else 0.7
-    res, t0 = sl.run_locked(d, 0.5, duty, periods=2, trace_sub=8, chopping=chop, fast_demag=fast)
+    after = {"fast_demag_after": 0.0} if fast else {}  # the fast pattern from the commutation: the closed form's
+    res, t0 = sl.run_locked(d, 0.5, duty, periods=2, trace_sub=8, chopping=chop, fast_demag=fast, **after)
     tab = sl.demag_times(res, d, chopping=chop, fast_demag=fast, after=t0).to_pandas()
     assert len(tab) >= 10 and set(tab["sign"]) == {-1, 1}
     assert np.max(np.abs(tab["closed"] / tab["measured"] - 1)) < 0.01, tab

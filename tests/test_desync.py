@@ -301,6 +301,21 @@ def test_a_punch_on_the_5_inch_motor_holds_sync_with_the_protections_and_loses_i
     assert (raw.margin_deg < 3.0).all() and not raw.truth_lost.any()  # the controller gave up before any drift
 
 
+@pytest.mark.slow  # one step through a restart, about 1.4 s of the plant
+def test_a_desync_that_the_restart_recovers_is_classified_recovered(f60):
+    """f60prov-2550kv, the default step 0.25 -> 0.8 at once, no advance, with the fast demagnetisation engaged only
+    once the clamp has taken 0.45 of the window (its default from the commutation, 0, keeps this point in sync): the
+    step's clamp hides a crossing (ZC_HIDDEN), the controller stops, restarts and is back in closed loop and in sync
+    to the end; the plant's truth never left sync before the flag."""
+    pts = desync_map(f60, Axis("timing", (0.0,)), workers=1,
+                     control=bl.SixStepSensorless(fast_demag_after=0.45)).points
+    row = pts.iloc[0]
+    assert (row.outcome, row.reason, int(row.restarts)) == ("recovered", "ZC_HIDDEN", 1), row
+    assert not row.truth_lost and row.t_desync_ms > 0.0
+    ok = desync_map(f60, Axis("timing", (0.0,)), workers=1).points
+    assert list(ok.outcome) == ["sync"]
+
+
 def test_the_map_on_a_tiny_grid(f60):
     res = _tiny(f60, 1, bl.SixStepSensorless(align_time=0.0))
     p = res.points

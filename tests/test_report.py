@@ -426,3 +426,35 @@ def test_sweep_plot_picks_a_varying_result_and_names_a_text_axis() -> None:
     assert [s.name for s in series] == ["ref = 0.4", "ref = 0.8"]
     assert list(series[0].x) == [0.0, 1.0] and list(series[1].y) == [3.0, 4.0]
     assert sweep._sweep_plot(df.drop(columns=["tau_mean", "ref"]), ["motor.L"]) is None  # no result varies
+
+
+def test_heat_section_with_the_motor_files_network_and_the_envelope_file(results_dir: Path, tmp_path: Path) -> None:
+    """htm-48v has [thermal]: section 10 lists its nodes and links; thermal_envelope.csv of ``bldclab thermal
+    --envelope`` in the directory adds its rows; a drive without [thermal] has no heat section."""
+    th = bl.load("htm-48v").thermal
+    assert th is not None
+    page = Page((results_dir / "report.html").read_text(encoding="utf-8"))
+    rows = page.rows["heat"]
+    names = [r[0] for r in rows if len(r) == 6][1:]
+    assert names == [n.name for n in th.nodes]
+    assert sum(1 for r in rows if len(r) == 3) == len(th.links) + 1  # header and one row per link
+    assert "bldclab thermal MOTOR --envelope --out" in page.all_text
+    d = tmp_path / "res"
+    d.mkdir()
+    for p in results_dir.iterdir():
+        (d / p.name).write_bytes(p.read_bytes())
+    assert main(["thermal", "htm-48v", "--envelope", "--speeds", "200 rpm", "--durations", "60 s",
+                 "--out", str(d / "thermal_envelope.csv")]) == 0
+    out = tmp_path / "r.html"
+    assert main(["report", str(d), "--out", str(out)]) == 0
+    env = pd.read_csv(d / "thermal_envelope.csv")
+    pg = Page(out.read_text(encoding="utf-8"))
+    (row,) = [r for r in pg.rows["heat"] if len(r) == len(env.columns) + 1 and r[0] != "speed"]
+    assert float(row[1]) == pytest.approx(200.0, rel=1e-3)
+    assert float(row[env.columns.get_loc("sine cont") + 1]) == pytest.approx(float(env["sine cont"][0]), rel=1e-3)
+    # without [thermal]: no section
+    files = {p.name: p.read_bytes() for p in results_dir.iterdir()}
+    res = report.Results.from_files(files, str(results_dir))
+    cold = dataclasses.replace(res, drive=dataclasses.replace(res.drive, thermal=None))
+    text = report.render(cold, report_command="test")
+    assert 'id="heat"' not in text and 'id="heat"' in report.render(res, report_command="test")

@@ -474,3 +474,213 @@ def test_controller_derating_without_a_sensor_reads_a_fault() -> None:
     with pytest.raises(BldclabError) as exc:
         TemperatureDerating()
     assert exc.value.field == "derate"
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# the second catalog drive with a network (servo-2k2), the sine controller's current limit, maps at temperature
+
+def test_servo_network_meets_its_stated_calibration() -> None:
+    """servo-2k2's file: the rated 4.3 A rms held at 40 degC ambient puts the winding at 140 degC (the 100 K rating
+    its comments calibrate to), with R at the winding's temperature (closed form of the steady network)."""
+    d = catalog.load("servo-2k2")
+    th = d.thermal
+    assert th is not None
+    net = th.with_ambient(40.0).network()
+    P_cu = 3 * d.motor.R * (1 + th.alpha_R_value * (140.0 - th.T_ref)) * 4.3**2
+    T = net.temps(net.steady(net.heat({"cu": P_cu})[0]))
+    assert T["winding"] == pytest.approx(140.0, abs=0.5)
+    assert 15 * 60 < float(net.time_constants[0]) < 60 * 60  # a self-cooled servo's tens of minutes
+
+
+@pytest.mark.parametrize("supply", ["sine", "square"])
+def test_servo_continuous_envelope_brackets_the_winding_limit(supply: str) -> None:
+    """servo-2k2 at 500 rpm: the continuous reference held for ten of the network's longest time constants keeps
+    the winding at or below 155 degC, one resolution step more exceeds it; the delivered torque is the reference's
+    (within the controller's torque-per-reference factor)."""
+    from bldclab.analysis.thermal import LoadProfile, envelope, envelope_controls, run_profile
+
+    d = catalog.load("servo-2k2")
+    w, tol = 500 * math.pi / 30, 0.002
+    env = envelope(d, [w], supply=supply, tol=tol)
+    assert env.limiting == ["winding"]
+    q = float(env.reference[0])
+    assert 0.5 * d.T_N < q < 2 * d.T_N and 0.93 * q < env.torque[0] <= 1.001 * q
+    tmax = 10 * float(d.thermal.network().time_constants[0])  # type: ignore[union-attr]
+    peaks = []
+    for torque in (q, q + 2 * tol * d.T_N):
+        run = run_profile(d, LoadProfile(times=(0.0, tmax), speed=(w, w), torque=(torque, torque)), h=60.0,
+                          control=envelope_controls(d, w)[supply], compensated=True)
+        peaks.append(float(run.trace.T["winding"].max()))
+    assert 145.0 < peaks[0] <= 155.0 < peaks[1]
+
+
+def test_sixty_second_envelope_is_the_current_limit_given() -> None:
+    """Within 60 s from cold no node of servo-2k2 reaches its limit at 500 rpm: the envelope is the controllers'
+    current limit ``i_limit``, torque 1.5 k_1 i_limit for the sinusoidal supply (the magnets barely warm), and it
+    scales with the limit given."""
+    from bldclab.analysis.thermal import envelope
+    from bldclab.control.sine import fundamental_k1
+
+    d = catalog.load("servo-2k2")
+    w = 500 * math.pi / 30
+    k1 = fundamental_k1(d)
+    for i_lim in (2.0 * d.motor.I_N, 1.5 * d.motor.I_N):
+        env = envelope(d, [w], supply="sine", duration=60.0, i_limit=i_lim, tol=0.002)
+        assert env.limiting == ["delivery"] and env.i_limit == i_lim
+        assert float(env.torque[0]) == pytest.approx(1.5 * k1 * i_lim, rel=0.01)
+
+
+def test_sine_current_limit_setting() -> None:
+    """Sine(i_s_max=...) is the amplitude the controller regulates to: the mean torque at a saturating reference is
+    1.5 k_1 i_s_max (paper 1 (45)); a bad value or one above the trip names the field."""
+    from bldclab.analysis.experiments import steady_state
+    from bldclab.control import Sine
+    from bldclab.control.sine import fundamental_k1
+    from bldclab.model.analytic import i_sN
+
+    d = catalog.load("servo-2k2")
+    w = 500 * math.pi / 30
+    k1 = fundamental_k1(d)
+    for i_s in (None, 1.8 * d.motor.I_N):
+        c = Sine(handoff_speed=0.5 * w, i_s_max=i_s, i_max=2.5 * d.motor.I_N)
+        point, _ = steady_state(d, c, w, 2.0 * d.T_N)
+        expect = 1.5 * k1 * (i_sN(d) if i_s is None else i_s)
+        assert point.tau_mean == pytest.approx(expect, rel=0.01)
+    for bad in (0.0, -1.0, math.nan, "5 A"):
+        with pytest.raises(BldclabError) as exc:
+            Sine(i_s_max=bad)  # type: ignore[arg-type]
+        assert exc.value.field == "control.i_s_max"
+    with pytest.raises(BldclabError) as exc:
+        steady_state(d, Sine(handoff_speed=0.5 * w, i_s_max=2.5 * d.motor.I_N), w, d.T_N)  # trip 2 I_N below it
+    assert exc.value.field == "control.i_s_max" and "i_max" in exc.value.problem
+
+
+def test_effmap_at_temperature_cli(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    """``bldclab effmap MOTOR --temperature``: servo-2k2's only loss is copper, so at every point the hot map's
+    copper loss is the cold one's times R(T)/R(T_ref) over the flux factor squared (the current for a torque rises
+    as the magnets weaken), and its efficiency is lower. Bad values exit 2 and write nothing."""
+    import pandas as pd
+
+    from bldclab.cli import main
+
+    d = catalog.load("servo-2k2")
+    th = d.thermal
+    assert th is not None
+    maps = {}
+    for key, extra in (("cold", []), ("hot", ["--temperature", "120 degC"])):
+        out = tmp_path / key
+        assert main(["effmap", "servo-2k2", "--torques", "2", "--speeds", "2", "--min-torque", "0.3",
+                     "--max-torque", "0.8", "--min-speed", "0.3", "--max-speed", "0.6", "--no-store", "--workers",
+                     "1", "--out", str(out), *extra]) == 0
+        maps[key] = pd.read_csv(out / "effmap.csv")
+    r, k, _ = th.scales({"winding": 120.0, "rotor": 120.0})
+    cold, hot = maps["cold"], maps["hot"]
+    assert len(cold) == len(hot) == 8
+    assert np.allclose(cold.torque_ref, hot.torque_ref) and np.allclose(cold.speed, hot.speed)  # the same grid
+    both = cold.feasible & hot.feasible
+    assert both[cold.supply == "sine"].all() and both.sum() >= 6
+    ratio = hot.p_cu[both] / cold.p_cu[both]
+    assert np.allclose(ratio, r / k**2, rtol=0.01), (ratio.tolist(), r / k**2)
+    assert (hot.efficiency[both] < cold.efficiency[both]).all()
+    capsys.readouterr()
+    for bad, words in (("120 V", "--temperature"), ("-300 degC", "absolute zero")):
+        assert main(["effmap", "servo-2k2", "--temperature", bad, "--out", str(tmp_path / "bad")]) == 2
+        assert words in capsys.readouterr().err
+    assert main(["effmap", "outrunner-24v", "--temperature", "80 degC", "--out", str(tmp_path / "bad")]) == 2
+    assert "[thermal]" in capsys.readouterr().err
+    assert not (tmp_path / "bad").exists()
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# the winding resistance during operation (bc_rest.h in bc_sine)
+
+def test_resistance_estimate_feeds_the_derating_without_a_sensor() -> None:
+    """No winding sensor: without the estimate the derating reads a fault (f_fault); with the d-axis injection the
+    controller's resistance estimate gives the winding temperature, and the derating holds the winding in its band,
+    as with a sensor (htm-48v, capacities / 100, 40 N m at 40 rad/s)."""
+    import dataclasses
+
+    import bldclab as bl
+    from bldclab.control import ResistanceEstimate, Sine, TemperatureDerating
+    from bldclab.sim.thermal import ThermalCoupling
+
+    d = _fast_network("htm-48v", 100.0)
+    d = dataclasses.replace(d, thermal=dataclasses.replace(d.thermal, sensor_winding=None))  # type: ignore[arg-type]
+    der = TemperatureDerating(winding=(60.0, 80.0), f_fault=0.3)
+    sc = bl.Scenario(duration=30.0, speed=40.0, ref=40.0, trace=False)
+    blind = bl.simulate(d, Sine(handoff_speed=10.0, derate=der), sc, thermal=ThermalCoupling(h=0.1)).thermal
+    est = bl.simulate(d, Sine(handoff_speed=10.0, derate=der, r_estimate=ResistanceEstimate(current=5.0)), sc,
+                      thermal=ThermalCoupling(h=0.1)).thermal
+    # blind: f_fault of the current limit from the first sample, the winding stays cool
+    assert blind.extra["tau"][-1] == pytest.approx(0.3 * 1.5 * _k1(d) * _isn(d), rel=0.02)
+    assert blind.T["winding"].max() < 50.0
+    # the estimate: the full current limit (1.5 k_1 I_s,N, 34 N m) while cold, then derated, the winding in the band
+    Tw = est.T["winding"]
+    assert est.extra["tau"][5] == pytest.approx(1.5 * _k1(d) * _isn(d), rel=0.02)
+    assert est.extra["tau"][-1] < 0.6 * est.extra["tau"][5]
+    assert 60.0 < Tw[-1] < 80.0 and Tw.max() < 82.0
+
+
+def _k1(d: Drive) -> float:
+    from bldclab.control.sine import fundamental_k1
+
+    return fundamental_k1(d)
+
+
+def _isn(d: Drive) -> float:
+    from bldclab.model.analytic import i_sN
+
+    return i_sN(d)
+
+
+def test_resistance_injection_costs_its_copper_loss_not_torque() -> None:
+    """The d-axis square wave leaves the torque (non-salient: 3/2 k_1 i_q) and adds its copper loss, 3/2 R i_inj^2
+    (the square wave's rms is its amplitude); bad settings name the field."""
+    import bldclab as bl
+    from bldclab.control import ResistanceEstimate, Sine
+
+    d = catalog.load("htm-48v")
+    sc = bl.Scenario(duration=0.5, speed=40.0, ref=20.0, window=(0.1, 0.5), trace=False)
+    base = bl.simulate(d, Sine(handoff_speed=10.0), sc).metrics
+    inj = bl.simulate(d, Sine(handoff_speed=10.0, r_estimate=ResistanceEstimate(current=5.0)), sc).metrics
+    assert base is not None and inj is not None
+    assert inj.tau_mean == pytest.approx(base.tau_mean, rel=2e-3)
+    assert inj.p_cu - base.p_cu == pytest.approx(1.5 * d.motor.R * 5.0**2, rel=0.1)
+    for kw, field in (({"current": 0.0}, "r_estimate.current"), ({"current": 5.0, "period": -1.0},
+                                                                  "r_estimate.period"),
+                      ({"current": 5.0, "filter": 1.5}, "r_estimate.filter")):
+        with pytest.raises(BldclabError) as exc:
+            ResistanceEstimate(**kw)  # type: ignore[arg-type]
+        assert exc.value.field == field
+    for est, field in ((ResistanceEstimate(current=200.0), "control.r_estimate.current"),
+                       (ResistanceEstimate(current=5.0, period=1e-4), "control.r_estimate.period")):
+        with pytest.raises(BldclabError) as exc:
+            bl.simulate(d, Sine(r_estimate=est), bl.Scenario(duration=0.01, speed=40.0, ref=5.0))
+        assert exc.value.field == field
+    with pytest.raises(BldclabError) as exc:
+        Sine(r_estimate=5.0)  # type: ignore[arg-type]
+    assert exc.value.field == "control.r_estimate"
+
+
+def test_cli_envelope_current_limit(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    """``bldclab thermal --envelope --current-limit``: the 60 s envelope of servo-2k2 at 500 rpm is the sinusoidal
+    supply's 1.5 k_1 i_limit (no node near its limit in 60 s); bad values exit 2 and write nothing."""
+    import pandas as pd
+
+    from bldclab.cli import main
+
+    d = catalog.load("servo-2k2")
+    out = tmp_path / "env.csv"
+    assert main(["thermal", "servo-2k2", "--envelope", "--speeds", "500 rpm", "--durations", "60 s",
+                 "--current-limit", "8 A", "--out", str(out)]) == 0
+    assert "8 A peak" in capsys.readouterr().out
+    env = pd.read_csv(out)
+    assert float(env["sine 60 s"][0]) == pytest.approx(1.5 * _k1(d) * 8.0, rel=0.01)
+    assert env["sine 60 s limit"][0] == "delivery"
+    for args, words in ((["--envelope", "--current-limit", "-2 A"], "must be a current > 0"),
+                        (["--envelope", "--current-limit", "2 V"], "--current-limit"),
+                        (["--profile", "examples/profiles/hill-climb.toml", "--current-limit", "2 A"],
+                         "option of --envelope")):
+        assert main(["thermal", "servo-2k2", *args, "--out", str(tmp_path / "bad.csv")]) == 2
+        assert words in capsys.readouterr().err
+    assert not (tmp_path / "bad.csv").exists()

@@ -1034,6 +1034,43 @@ static void test_fast_demag_and_limiter(void)
     double per = (double)n_fast / ((double)n_closed * TS * 300.0 * 3.0); /* per positive-outgoing commutation */
     CHECK(n_bad == 0 && per >= 3.0 && per <= 5.0, "fast demagnetisation: %ld samples of %ld (%.2f per commutation), "
           "%ld with wrong legs", n_fast, n_closed, per, n_bad);
+    /* fd_after = 0.5: a clamp of 60 us (0.22 of the 278 us window) never sees the fast pattern; a clamp of 0.8 of
+     * the window sees it from the output whose interval reaches half the window (5.55 samples after the
+     * commutation: from about 4.6) until the clamp's end is seen (8.9 samples, seen 1 to 2.5 samples later, as in the
+     * fd_after = 0 case above): 4.5 to 7 samples per positive-outgoing commutation */
+    for (int longer = 0; longer <= 1; ++longer) {
+        p = locked(BC_BEMF_COMPARATOR, w);
+        p.chop = BC_CHOP_SYNC;
+        p.fast_demag = 1;
+        p.fd_after = 0.5f;
+        sb_init(&g, TS, F_TICK, 1);
+        kin_rotor(&g, w, 1, 0.0);
+        g.demag = longer ? 0.8 * (BC_PI / 6.0) / w : 60e-6;
+        CHECK(bc_bemf_init(&p, &s) == BC_OK, "init");
+        long nf = 0, nc = 0, nsync = 0;
+        for (long k = 0; k < 2400; ++k) {
+            bc_ctrl_in in;
+            sb_sample(&g, k, &in);
+            in.ref = 0.5f;
+            bc_ctrl_out o;
+            memset(&o, 0, sizeof o);
+            bc_bemf_step(&p, &s, &in, &o);
+            sb_apply(&g, k, &o);
+            if (o.diag[0] != (float)BC_BEMF_CLOSED || o.has_at) continue;
+            ++nc;
+            nsync += !(o.flags & BC_FLAG_DESYNC);
+            int pos, neg;
+            double m;
+            sb_legs_pair(o.leg, &pos, &neg, &m);
+            if (pos >= 0 && o.leg[neg].mode == BC_LEG_PWM) ++nf;
+        }
+        double per = (double)nf / ((double)nc * TS * 300.0 * 3.0);
+        CHECK(nc > 1000 && nsync == nc && (longer ? (per >= 4.5 && per <= 7.0) : nf == 0),
+              "fd_after 0.5, clamp %s: %ld fast samples of %ld (%.2f per commutation)", longer ? "0.8 window" : "60 us",
+              nf, nc, per);
+    }
+    p.fd_after = 1.0f;
+    CHECK(bc_bemf_init(&p, &s) != BC_OK, "fd_after 1 refused");
     /* the demagnetisation limiter: a clamp of 0.7 of the window (30 degrees: 278 us) against demag_max 0.6 lowers
      * the duty cap by 0.2 x 0.1 per crossing once it is below the duty plus 0.05; with a clamp of 0.3 the duty
      * stays at the throttle */

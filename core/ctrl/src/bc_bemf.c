@@ -59,7 +59,8 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
         !nonneg(p->restart_wait) || !(fin(p->restart_max) && p->restart_max >= p->restart_wait))
         return BC_ERR_PARAM;
     if (!(fin(p->i_max) && p->i_max > 0.0f) || !nonneg(p->i_limit) || !nonneg(p->k_limit) ||
-        !(fin(p->v_max) && p->v_max > 0.0f) || (p->fast_demag != 0 && p->fast_demag != 1) || !in01(p->dlim_d0) ||
+        !(fin(p->v_max) && p->v_max > 0.0f) || (p->fast_demag != 0 && p->fast_demag != 1) ||
+        !(fin(p->fd_after) && p->fd_after >= 0.0f && p->fd_after < 1.0f) || !in01(p->dlim_d0) ||
         !nonneg(p->dlim_vf) || !nonneg(p->dlim_tau) || !(fin(p->demag_max) && p->demag_max >= 0.0f && p->demag_max < 1.0f) ||
         (p->cmp_gate != 0 && p->cmp_gate != 1))
         return BC_ERR_PARAM;
@@ -165,6 +166,7 @@ static void enter_sector(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctr
         int cont = inc == pp ? qq : pp;
         s->fd_neg = p->fast_demag && outp >= 0 && p->chop != BC_CHOP_BIPOLAR && inc >= 0 && cont == qq;
     }
+    s->fd_on = 0;
     s->sector = sector;
     s->t_c = tc;
     float w = omega_of(p, s);
@@ -278,7 +280,7 @@ static int detect_comparator(const bc_bemf_params *p, bc_bemf_state *s, const bc
     int lvl = (int)((in->zc_state >> f) & 1u);
     /* fast demagnetisation on the negative leg: the comparator only in the pair's on-time, centred at the carrier
      * peak (odd samples) when the leg chops with its lower switch, at the valley when it is complementary (sync) */
-    if (p->cmp_gate && s->fd_neg && (s->k_samp & 1u) == (p->chop == BC_CHOP_SYNC ? 1u : 0u)) return 0;
+    if (p->cmp_gate && s->fd_neg && s->fd_on && (s->k_samp & 1u) == (p->chop == BC_CHOP_SYNC ? 1u : 0u)) return 0;
     if (tdiff(n->tk, s->t_c) < 0.0f) s->cnt_c = cnt;
     int opening = 0;
     if (s->det == 0) {
@@ -487,7 +489,7 @@ static void legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector,
     int cont = inc == pos ? neg : pos;
     int chop_leg = pos;
     if (p->chop == BC_CHOP_PWMPWM) chop_leg = travel < PI6_F ? inc : cont;
-    if (demag && p->fast_demag && p->chop != BC_CHOP_BIPOLAR && s->incoming >= 0 && s->outgoing >= 0) {
+    if (demag && s->fd_on && p->chop != BC_CHOP_BIPOLAR && s->incoming >= 0 && s->outgoing >= 0) {
         if (p->chop == BC_CHOP_SYNC && cont == neg) { /* neg complementary at the average (1 - m) V, pos on */
             bc_pair_legs(BC_CHOP_PWMPWM, pos, neg, neg, m, c);
             c[neg].mode = BC_LEG_PWM;
@@ -504,6 +506,16 @@ static void legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector,
 
 /* the demagnetisation of the sector's commutation not yet seen over (no pre level, no crossing) */
 static int demag_now(const bc_bemf_state *s) { return s->det < 2 && !s->dm_known && !s->pre_seen; }
+
+/* fast demagnetisation (8): engaged from the output whose interval ends with the clamp on for fd_after of the window
+ * (travel_end: the electrical angle from the commutation to the interval's end); it stays engaged until the clamp is
+ * seen over. Where one sample spans that share of the window, it is engaged from the commutation. */
+static int fd_engage(const bc_bemf_params *p, bc_bemf_state *s, float travel_end)
+{
+    int dm = demag_now(s);
+    if (p->fast_demag && dm && !s->fd_on && !(travel_end < p->fd_after * (PI6_F + s->adv_prev))) s->fd_on = 1;
+    return dm;
+}
 
 /* 2. the duty applied: the state's, limited by the current limiter */
 static float duty_of(const bc_bemf_params *p, const bc_bemf_state *s)
@@ -716,22 +728,22 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
             float travel = w * tdiff(n.ta, s->t_c) * s->inv_tick;
             if (!fin(travel)) travel = 0.0f;
             if (now && dn >= 0.0f) { /* inside the interval: the commutation timer */
-                legs_of(p, s, s->sector, m, travel, demag_now(s), out->leg);
+                legs_of(p, s, s->sector, m, travel, fd_engage(p, s, travel + w * p->ts), out->leg);
                 shown = s->sector;
                 uint32_t tc = s->t_next;
                 enter_sector(p, s, in, next, tc);
-                legs_of(p, s, next, m, 0.0f, 1, out->leg_at);
+                legs_of(p, s, next, m, 0.0f, fd_engage(p, s, w * (p->ts - dn * s->inv_tick)), out->leg_at);
                 out->has_at = 1u;
                 out->t_at = bc_clampf(dn * s->inv_tick, 0.0f, p->ts * 0.999999f);
                 s->adv_prev = s->adv;
             } else if (now) { /* already past: at once, from t_a */
                 n.flags |= BC_FLAG_COMM_LATE;
                 enter_sector(p, s, in, next, n.ta);
-                legs_of(p, s, next, m, 0.0f, 1, out->leg);
+                legs_of(p, s, next, m, 0.0f, fd_engage(p, s, w * p->ts), out->leg);
                 shown = next;
                 s->adv_prev = s->adv;
             } else {
-                legs_of(p, s, s->sector, m, travel, demag_now(s), out->leg);
+                legs_of(p, s, s->sector, m, travel, fd_engage(p, s, travel + w * p->ts), out->leg);
                 shown = s->sector;
             }
             if (now && s->mode == BC_BEMF_RAMP) { /* the next forced commutation */

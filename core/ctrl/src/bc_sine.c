@@ -1,5 +1,6 @@
 /* bc_sine.c - sinusoidal current supply with square-wave start. Laws and their order in bc_sine.h. */
 #include "bldc/bc_sine.h"
+#include "bldc/bc_rest.h"
 
 #include <math.h>
 
@@ -295,6 +296,8 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     if (!finite_pos(p->ts) || !finite_nonneg(p->kp) || !finite_nonneg(p->ki) || !finite_pos(p->v_max) ||
         !finite_pos(p->i_s_max) || !finite_pos(p->i_max))
         return BC_ERR_PARAM;
+    /* a current limit the over-current trip cuts off is a misconfiguration: i_s_max <= i_max */
+    if (p->i_s_max > p->i_max) return BC_ERR_PARAM;
     if (!is_flag(p->speed_limit) || !is_flag(p->decouple) || !is_flag(p->overmod) || !is_flag(p->emf_ff) ||
         !is_flag(p->speed_loop))
         return BC_ERR_PARAM;
@@ -360,6 +363,8 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->derate_on = p->derate.enabled[0] != 0 || p->derate.enabled[1] != 0;
     s->derate_f = 1.0f;
     if (s->derate_on && bc_derate_init(&p->derate, &s->derate) != BC_OK) return BC_ERR_PARAM;
+    s->rest_on = p->rest.i_inj != 0.0f;
+    if (s->rest_on && (bc_rest_init(&p->rest, &s->rest) != BC_OK || p->rest.i_inj > p->i_s_max)) return BC_ERR_PARAM;
     s->lim_shape = 0;
     if (p->speed_limit && p->emf_k[0] != 0 && p->emf_k[1] != 0 && p->emf_k[2] != 0) {
         if (p->emf_n < 3 || p->emf_n > BC_SINE_EMF_N_MAX) return BC_ERR_PARAM;
@@ -502,6 +507,7 @@ static void reset_to_start(const bc_sine_params *p, bc_sine_state *s)
     s->n_lock = 0.0f;
     s->omega_f = 0.0f;
     s->u_ok[0] = s->u_ok[1] = 0;
+    if (s->rest_on) bc_rest_restart(&s->rest);
 }
 
 static void go_safe(const bc_sine_params *p, bc_sine_state *s, bc_ctrl_out *out, uint32_t why)
@@ -816,8 +822,17 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
     bc_dq idq = bc_park(bc_clarke(i), sd, cd);
     out->diag[0] = idq.d;
     out->diag[1] = idq.q;
+    if (s->mode == BC_SINE_MODE_SINE && s->rest_on) id_ref = bc_rest_ref(&p->rest, &s->rest);
     current_loops(p, s, idq, id_ref, iq_ref, theta, omega_e, in->v_dc,
                   s->mode == BC_SINE_MODE_SINE ? p->emf_ff : 0, handoff, out);
+    if (s->rest_on) {
+        if (s->mode == BC_SINE_MODE_SINE) {
+            int32_t ok = !handoff && !(out->flags & BC_FLAG_SATURATED);
+            bc_rest_step(&p->rest, &s->rest, out->diag[3], idq.d, ok);
+        } else {
+            bc_rest_restart(&s->rest);
+        }
+    }
     /* the voltage these duties apply: Clarke(d_x v_dc - dead-time error), the zero sequence removed. A phase whose
      * current flows into the motor loses v_dc t_dead at each turn-on of its upper switch (its lower diode holds
      * the terminal low meanwhile), one per PWM period: -sgn(i_x) v_dc t_dead / (2 T_s) on average, sgn linear
@@ -844,7 +859,13 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     /* 1. safety: the input guard (bc_guard.h), the Hall code, the reference and the encoder angle if used */
     bc_hall_out h;
     bc_hall_step(&s->hall_p, &s->hall, in, &h); /* keeps the edge bookkeeping even when the output is safe */
-    if (s->derate_on) s->derate_f = bc_derate_step(&p->derate, &s->derate, in->temp); /* in [0, 1] */
+    if (s->derate_on) {
+        /* without a winding reading, the winding temperature of the resistance estimate (bc_rest.h) */
+        float temp[BC_DERATE_CH] = {in->temp[0], in->temp[1]};
+        float T_r;
+        if (s->rest_on && !isfinite(temp[0]) && bc_rest_temp(&p->rest, &s->rest, &T_r) == BC_OK) temp[0] = T_r;
+        s->derate_f = bc_derate_step(&p->derate, &s->derate, temp); /* in [0, 1] */
+    }
     float i3[3];
     uint32_t why = bc_guard_step(&s->guard_p, &s->guard, in, i3);
     if (!h.valid && p->angle != BC_SINE_ANGLE_OBSERVER) why |= BC_FLAG_HALL_INVALID;
@@ -912,9 +933,15 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     out->diag[7] = (float)s->mode;
     if (s->mode == BC_SINE_MODE_START) return;
 
-    /* 5. current references (45), (8), I_s,sat from the table or (23) with R */
+    /* 5. current references (45), (8), I_s,sat from the table or (23) with R; i_d,ref: the resistance estimate's
+     * square wave (bc_rest.h) or 0 */
     float i_lim = s->derate_f * bc_sine_i_limit(p, s, v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f);
     float iq_ref = bc_clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
     if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, 1.5f * p->k_1 * iq_ref);
-    current_loops(p, s, idq, 0.0f, iq_ref, theta, omega_e, v_dc, p->emf_ff, was == BC_SINE_MODE_START, out);
+    float id_ref = s->rest_on ? bc_rest_ref(&p->rest, &s->rest) : 0.0f;
+    current_loops(p, s, idq, id_ref, iq_ref, theta, omega_e, v_dc, p->emf_ff, was == BC_SINE_MODE_START, out);
+    if (s->rest_on) {
+        int32_t ok = was == BC_SINE_MODE_SINE && !(out->flags & BC_FLAG_SATURATED);
+        bc_rest_step(&p->rest, &s->rest, out->diag[3], idq.d, ok); /* v_d applied, i_d measured */
+    }
 }

@@ -5,6 +5,7 @@
 
 #include "bldc/bc_commutation.h"
 #include "bldc/bc_derate.h"
+#include "bldc/bc_rest.h"
 #include "bldc/bc_emf.h"
 #include "bldc/bc_plant.h"
 #include "bldc/bc_sensors.h"
@@ -270,6 +271,25 @@ static const bc_field_desc FIELDS[] = {
     F(bc_derate_params, T_hi, "f4"),
     F(bc_derate_params, tau, "f4"),
     F(bc_derate_params, ts, "f4"),
+
+    F(bc_rest_params, i_inj, "f4"),
+    F(bc_rest_params, n_half, "i4"),
+    F(bc_rest_params, n_skip, "i4"),
+    F(bc_rest_params, r_lo, "f4"),
+    F(bc_rest_params, r_hi, "f4"),
+    F(bc_rest_params, a, "f4"),
+    F(bc_rest_params, r_ref, "f4"),
+    F(bc_rest_params, T_ref, "f4"),
+    F(bc_rest_state, k, "i4"),
+    F(bc_rest_state, bad, "i4"),
+    F(bc_rest_state, v0, "f4"),
+    F(bc_rest_state, sv, "f4"),
+    F(bc_rest_state, si, "f4"),
+    F(bc_rest_state, n, "i4"),
+    F(bc_rest_state, r, "f4"),
+    F(bc_rest_state, r_last, "f4"),
+    F(bc_rest_state, count, "u4"),
+    F(bc_rest_state, rejected, "u4"),
 };
 
 #define S BC_BIND_STRUCT
@@ -279,7 +299,7 @@ static const bc_struct_desc STRUCTS[] = {
     S(bc_sensor_state), S(bc_ctrl),         S(bc_sim_config),   S(bc_sim_inputs),  S(bc_sim_metrics),
     S(bc_sim_state),    S(bc_trace_row),    S(bc_ctrl_in),      S(bc_ctrl_out),     S(bc_sense_params), S(bc_sense_state),
     S(bc_user_desc),    S(bc_user_entry),   S(bc_user_watch),   S(bc_user_guard),
-    S(bc_derate_params), S(bc_derate_state),
+    S(bc_derate_params), S(bc_derate_state), S(bc_rest_params), S(bc_rest_state),
 };
 
 #define K BC_BIND_CONST

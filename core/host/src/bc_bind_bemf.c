@@ -27,7 +27,8 @@ static const bc_field_desc BEMF_FIELDS[] = {
     F(bc_bemf_params, restart_max, "f4"),  F(bc_bemf_params, use_current, "i4"),
     F(bc_bemf_params, i_max, "f4"),        F(bc_bemf_params, i_limit, "f4"),
     F(bc_bemf_params, k_limit, "f4"),      F(bc_bemf_params, v_max, "f4"),
-    F(bc_bemf_params, fast_demag, "i4"),     F(bc_bemf_params, dlim_d0, "f4"),
+    F(bc_bemf_params, fast_demag, "i4"),   F(bc_bemf_params, fd_after, "f4"),
+    F(bc_bemf_params, dlim_d0, "f4"),
     F(bc_bemf_params, dlim_vf, "f4"),      F(bc_bemf_params, dlim_tau, "f4"),
     F(bc_bemf_params, demag_max, "f4"),     F(bc_bemf_params, cmp_gate, "i4"),
 };

@@ -91,8 +91,10 @@ static inline void shapes_at(const bc_plant_params *restrict p, const bc_plant_s
             cs[1] = c;
             cs[2] = sn;
         }
-        double k0 = 0.0, k1 = 0.0, k2 = 0.0, d0 = 0.0, d1 = 0.0, d2 = 0.0, cm = 1.0, sm = 0.0;
-        for (int32_t m = 0; m < s->fz_n; ++m) {
+        /* m = 0 (cos 0 = 1, sin 0 = 0, no derivative) and m = 1 (cos th, sin th) as the loop would add them */
+        double k0 = s->fz_a[0][0], k1 = s->fz_a[1][0], k2 = s->fz_a[2][0], d0 = 0.0, d1 = 0.0, d2 = 0.0;
+        double cm = c, sm = sn;
+        for (int32_t m = 1; m < s->fz_n; ++m) {
             k0 += s->fz_a[0][m] * cm + s->fz_b[0][m] * sm;
             k1 += s->fz_a[1][m] * cm + s->fz_b[1][m] * sm;
             k2 += s->fz_a[2][m] * cm + s->fz_b[2][m] * sm;

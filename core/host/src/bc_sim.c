@@ -189,7 +189,7 @@ static void sim_on_step(void *ctx, double t, const double *acc, double tau)
 {
     bc_sim_state *s = (bc_sim_state *)ctx;
     angle_track(s);
-    if (!s->plant.acc_on) return; /* outside the metric window, no trace: nothing reads the history */
+    if (s->m.state != 1) return; /* outside the metric window nothing reads the history (metric_start resets it) */
     const double A = acc[BC_ACC_TAU];
     int64_t n = s->h_n;
     if (n > 0) {

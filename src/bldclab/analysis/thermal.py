@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 
 from .._core import core
 from .._files import read_toml
-from ..control import Control
+from ..control import Control, Sine, SixStep
 from ..errors import BldclabError, PlausibilityError
 from ..model._checks import check_number
 from ..model.motor import Drive
@@ -48,7 +48,7 @@ from .effmap import FEASIBLE_TOL_PU, map_controls
 from .experiments import steady_state
 
 __all__ = ["GRID_PU", "GRID_SCALE", "Derating", "Envelope", "LoadProfile", "ProfileResult", "envelope",
-           "hot_drive", "read_profile", "run_profile", "temperature_from_resistance"]
+           "envelope_controls", "hot_drive", "read_profile", "run_profile", "temperature_from_resistance"]
 
 #: Grid of the fast mode's operating points: speed and torque rounded to this share of ``Omega_0`` and ``T_N``.
 GRID_PU = 0.002
@@ -480,14 +480,19 @@ class Envelope:
     speeds : ndarray
         Mechanical speeds (rad/s).
     torque : ndarray
-        The highest torque (N m) at each speed (0 where even the lightest load overheats a node).
+        The mean torque (N m) the drive delivers at the highest allowed reference at each speed, at the envelope's
+        temperatures (the steady state, or the end of ``duration``); 0 where even the lightest load overheats a node.
     limiting : list of str
         What sets it at each speed: a node's name; ``"delivery"`` where the drive under its controller does not
-        deliver more (the bus voltage, or the controller's current limit: :class:`~bldclab.control.Sine` holds its
-        current to ``I_s,N``); ``"T_peak"`` at the search's top.
+        deliver more (the bus voltage, or the controller's current limit ``i_limit``); ``"T_peak"`` at the
+        search's top.
     duration : float or None
         ``None``: continuous (the steady state); else the time (s) from ``T0`` the torque is held.
     supply : str
+    reference : ndarray
+        The highest allowed torque reference (N m) at each speed.
+    i_limit : float
+        The controllers' current limit (A, peak phase current).
     """
 
     speeds: NDArray[np.float64]
@@ -495,26 +500,54 @@ class Envelope:
     limiting: list[str]
     duration: float | None
     supply: str
+    reference: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros(0))
+    i_limit: float = math.nan
 
     def to_pandas(self) -> Any:
-        """Return ``speed``, ``speed_rpm``, ``torque``, ``limiting`` as a DataFrame."""
+        """Return ``speed``, ``speed_rpm``, ``torque``, ``reference``, ``limiting`` as a DataFrame."""
         import pandas as pd
 
         return pd.DataFrame({"speed": self.speeds, "speed_rpm": self.speeds * 30.0 / math.pi, "torque": self.torque,
-                             "limiting": self.limiting})
+                             "reference": self.reference, "limiting": self.limiting})
+
+
+def envelope_controls(drive: Drive, lowest_speed: float, i_limit: float | None = None) -> dict[str, Control]:
+    """Return the envelope's controllers: both supplies limited to the same peak phase current.
+
+    Parameters
+    ----------
+    drive : Drive
+    lowest_speed : float
+        Lowest speed (rad/s): the sinusoidal controller hands off from its square-wave start at half of it.
+    i_limit : float, optional
+        Peak phase current limit (A), default ``2 I_N`` (the square wave's default ``i_max``). The square wave
+        clamps its current amplitude to it (``SixStep(i_max=...)``), the sinusoidal supply its amplitude
+        (``Sine(i_s_max=...)``, with its over-current trip 25 % above, for the ripple).
+
+    Returns
+    -------
+    dict
+        ``{"square": SixStep, "sine": Sine}``, both taking a torque reference (N m).
+    """
+    i_lim = 2.0 * drive.motor.I_N if i_limit is None else i_limit
+    check_number("i_limit", i_lim)
+    return {"square": SixStep(reference="torque", i_max=i_lim),
+            "sine": Sine(handoff_speed=0.5 * abs(lowest_speed), i_s_max=i_lim, i_max=1.25 * i_lim)}
 
 
 def envelope(drive: Drive, speeds: Sequence[float], *, supply: str = "sine", duration: float | None = None,
              ambient: float | None = None, h: float = 5.0, tol: float = 0.005, compensated: bool = True,
-             follow: bool = True) -> Envelope:
+             follow: bool = True, i_limit: float | None = None) -> Envelope:
     """Return the continuous (``duration=None``) or time-limited torque-speed envelope at an ambient.
 
-    For each speed the torque is bisected (to ``tol`` of ``T_N``) between 0 and the motor's ``T_peak``: a torque is
-    allowed when the drive delivers it (its steady mean torque not below it by more than
-    :data:`bldclab.analysis.effmap.FEASIBLE_TOL_PU` of ``T_N``) and no node with a ``T_max`` exceeds it: in the
-    steady state (continuous: the fixed point ``T = T_ss(P(T))`` of the losses at temperature, iterated to 0.01 K)
-    or during ``duration`` seconds from the ambient (exact steps of ``h`` s, the losses at each step's starting
-    temperatures).
+    For each speed the torque reference is bisected (to ``tol`` of ``T_N``) between 0 and the motor's ``T_peak``:
+    a reference is allowed when the drive delivers it (its steady mean torque not below ``g`` times it by more than
+    :data:`bldclab.analysis.effmap.FEASIBLE_TOL_PU` of ``T_N``, ``g <= 1`` the controller's torque per unit of
+    reference at a quarter of ``T_N`` and the ambient: a square wave on a sinusoidal back-EMF delivers about 4.5 %
+    less than its ``k_e = 2 k_phi`` promises, which is its torque constant, not a limit) and no node with a
+    ``T_max`` exceeds it: in the steady state (continuous: the fixed point ``T = T_ss(P(T))`` of the losses at
+    temperature, iterated to 0.01 K) or during ``duration`` seconds from the ambient (exact steps of ``h`` s, the
+    losses at each step's starting temperatures). The envelope's torque is the mean torque delivered there.
 
     Parameters
     ----------
@@ -535,6 +568,9 @@ def envelope(drive: Drive, speeds: Sequence[float], *, supply: str = "sine", dur
         the drive's, not its firmware's).
     follow : bool
         Parameters follow temperature (default); False: the envelope at ``T_ref`` parameters.
+    i_limit : float, optional
+        Peak phase current limit of both controllers (A), default ``2 I_N`` (:func:`envelope_controls`): the
+        supplies are compared at the same peak current, the inverter's stress.
 
     Returns
     -------
@@ -551,21 +587,24 @@ def envelope(drive: Drive, speeds: Sequence[float], *, supply: str = "sine", dur
     idx = {n: net.names.index(n) for n in limits}
     sources = [b for b, _ in th.losses]
     ws = [float(w) for w in speeds]
-    control = map_controls(drive, min(abs(w) for w in ws))[supply]
+    control = envelope_controls(drive, min(abs(w) for w in ws), i_limit)[supply]
+    i_lim = 2.0 * drive.motor.I_N if i_limit is None else float(i_limit)
     pts = _Points(drive, control, compensated, None)
     T_init = coupling.initial(net)
 
     def scales(T: NDArray[np.float64]) -> tuple[float, float, float]:
         return th.scales(net.temps(T)) if follow else (1.0, 1.0, 1.0)
 
-    def verdict(w: float, q: float) -> str | None:
-        """None if allowed, else what stops it."""
+    def verdict(w: float, q: float, g: float) -> tuple[str | None, float]:
+        """(None if allowed, else what stops it; the mean torque delivered at the final temperatures)."""
         T = T_init.copy()
+        tau = math.nan
         if duration is None:
             for _ in range(60):
                 loss = pts.losses(w, q, scales(T), sources)
-                if loss["tau"] < q - FEASIBLE_TOL_PU * drive.T_N:
-                    return "delivery"
+                tau = loss["tau"]
+                if tau < g * q - FEASIBLE_TOL_PU * drive.T_N:
+                    return "delivery", tau
                 T_new = net.steady(net.heat({b: loss[b] for b in sources})[0])
                 if any(T_new[i] > lim + 50.0 for n, i in idx.items() for lim in (limits[n],)):
                     T = T_new
@@ -581,33 +620,37 @@ def envelope(drive: Drive, speeds: Sequence[float], *, supply: str = "sine", dur
             while t < duration - 1e-9:
                 hh = min(h, duration - t)
                 loss = pts.losses(w, q, scales(T), sources)
-                if loss["tau"] < q - FEASIBLE_TOL_PU * drive.T_N:
-                    return "delivery"
+                tau = loss["tau"]
+                if tau < g * q - FEASIBLE_TOL_PU * drive.T_N:
+                    return "delivery", tau
                 T, _ = net.step(T, net.heat({b: loss[b] for b in sources})[0], hh)
                 t += hh
                 for n, i in idx.items():
                     worst_t[n] = max(worst_t[n], T[i])
             worst = [(worst_t[n] - limits[n], n) for n in idx]
         over = max(worst)
-        return over[1] if over[0] > 0.0 else None
+        return (over[1] if over[0] > 0.0 else None), tau
 
     top = drive.motor.T_peak if drive.motor.T_peak is not None else 3.0 * drive.T_N
     torque = np.full(len(ws), math.nan)
+    ref = np.full(len(ws), math.nan)
     limiting: list[str] = []
+    q_g = 0.25 * drive.T_N
     for j, w in enumerate(ws):
-        why_top = verdict(w, top)
+        g = min(1.0, pts.losses(w, q_g, scales(T_init), sources)["tau"] / q_g)
+        why_top, tau_top = verdict(w, top, g)
         if why_top is None:
-            torque[j] = top
+            torque[j], ref[j] = tau_top, top
             limiting.append("T_peak")
             continue
-        lo, hi, why = 0.0, top, why_top
+        lo, hi, why, tau_lo = 0.0, top, why_top, 0.0
         while hi - lo > tol * drive.T_N:
             mid = 0.5 * (lo + hi)
-            v = verdict(w, mid)
+            v, tau = verdict(w, mid, g)
             if v is None:
-                lo = mid
+                lo, tau_lo = mid, tau
             else:
                 hi, why = mid, v
-        torque[j] = lo
+        torque[j], ref[j] = tau_lo, lo
         limiting.append(why)
-    return Envelope(np.array(ws), torque, limiting, duration, supply)
+    return Envelope(np.array(ws), torque, limiting, duration, supply, ref, i_lim)

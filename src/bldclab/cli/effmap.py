@@ -12,6 +12,8 @@ from .._files import write_files
 from ..analysis.effmap import COMPARISON, FEASIBLE_TOL_PU, efficiency_map, map_controls
 from ..control.sixstep import CHOPPINGS
 from ..errors import BldclabError
+from ..model.motor import Drive
+from ..model.units import to_si
 from ..report.effmap_plots import effmap_figures
 from ..report.plots import load_matplotlib
 from ..sweep.effmap_store import EffMapStore
@@ -54,6 +56,10 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     p.add_argument("--chopping", choices=CHOPPINGS, default="pwm-on-pwm",
                    help="square-wave supply's chopping pattern (default pwm-on-pwm; sync: the positive leg "
                         "complementary, no freewheeling through a diode in the off-time)")
+    p.add_argument("--temperature", metavar="T",
+                   help="map the drive hot: winding, magnets and switches at T (\"120 degC\", \"393 K\"; a number "
+                        "is degC), R, the back-EMF and R_on by the [thermal] coefficients of the motor file "
+                        "(docs/thermal.md); the controllers know the hot values")
     add_inverter_option(p)
     add_verbose_option(p)
 
@@ -68,9 +74,28 @@ def _store_path(out: Path, store: Path | None) -> Path:
     return store
 
 
+def hot(drive: Drive, text: str) -> Drive:
+    """Return ``drive`` with every part at the ``--temperature`` given (``Drive.at_temperature``)."""
+    T = to_si(text, "temperature", "--temperature")
+    if not math.isfinite(T) or T <= -273.15:
+        raise BldclabError("--temperature", f"must be a finite temperature above absolute zero, got {text!r}")
+    if drive.thermal is None:
+        raise BldclabError("--temperature", f"drive {drive.name!r} has no [thermal] table in its motor file: no "
+                           "temperature coefficients (docs/motor-files.md)")
+    try:
+        return drive.at_temperature(winding=T, magnets=T, switches=T)
+    except BldclabError as exc:
+        raise BldclabError("--temperature", f"{text!r}: {exc.problem}") from None
+
+
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab effmap``."""
     drive = load_drive(args)
+    name, T_N, Omega_0 = drive.name, drive.T_N, drive.Omega_0  # the grid: the drive's bases at T_ref
+    suffix = ""
+    if args.temperature is not None:
+        drive = hot(drive, args.temperature)
+        suffix = f"-{to_si(args.temperature, 'temperature', '--temperature'):g}C"
     for name, n in (("--torques", args.torques), ("--speeds", args.speeds)):
         if n < 2:
             raise BldclabError(name, f"needs at least 2, got {n}")
@@ -79,11 +104,11 @@ def run_command(args: argparse.Namespace) -> int:
         raise BldclabError("--max-torque" if args.min_torque > 0 else "--min-torque",
                            f"needs 0 < --min-torque < --max-torque <= 5 p.u. of T_N, got {args.min_torque:g}, "
                            f"{args.max_torque:g}")
-    out = args.out if args.out is not None else Path("out") / f"{drive.name}-effmap"
+    out = args.out if args.out is not None else Path("out") / f"{name}-effmap{suffix}"
     check_out_dir(out)  # before the simulations: a bad --out fails in a second, not after the whole run
     sign = -1.0 if args.generating else 1.0
-    torques = sign * np.linspace(args.min_torque, args.max_torque, args.torques) * drive.T_N
-    speeds = np.linspace(args.min_speed, args.max_speed, args.speeds) * drive.Omega_0
+    torques = sign * np.linspace(args.min_torque, args.max_torque, args.torques) * T_N
+    speeds = np.linspace(args.min_speed, args.max_speed, args.speeds) * Omega_0
     controls = map_controls(drive, float(np.min(speeds)), args.chopping)
     workers = workers_of(args.workers)
     load_matplotlib()  # before the pool starts: its workers draw the figures with it already loaded

@@ -8,6 +8,7 @@ writes the trace at the thermal time scale (temperatures, losses, factors, speed
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +35,8 @@ def configure_command(p: argparse.ArgumentParser) -> None:
                    help="envelope speeds, comma-separated ('300 rpm' or per unit of Omega_0; default 0.15-0.75 pu)")
     p.add_argument("--durations", metavar="LIST", default="10 s,60 s",
                    help="time-limited envelopes from the ambient, comma-separated (default '10 s,60 s')")
+    p.add_argument("--current-limit", metavar="CURRENT",
+                   help="envelopes: peak phase current limit of both controllers ('100 A'; default 2 I_N)")
     p.add_argument("--supply", choices=("sine", "square"), default="sine", help="the controller (default: sine)")
     p.add_argument("--mode", choices=("fast", "switching"), default="fast",
                    help="fast: cycle-averaged steady points per thermal step (default); switching: every PWM period")
@@ -72,10 +75,16 @@ def _envelopes(args: argparse.Namespace) -> int:
         if not d > 0.0:
             raise BldclabError("--durations", f"durations must be > 0, got {v.strip()!r}")
         durations.append(d)
+    i_limit = None
+    if args.current_limit is not None:
+        i_limit = to_si(args.current_limit, "current", "--current-limit")
+        if not (math.isfinite(i_limit) and i_limit > 0.0):
+            raise BldclabError("--current-limit", f"must be a current > 0, got {args.current_limit!r}")
     cols = [(s, d) for d in durations for s in ("square", "sine")]
-    env = {c: envelope(drive, speeds, supply=c[0], duration=c[1], ambient=ambient) for c in cols}
+    env = {c: envelope(drive, speeds, supply=c[0], duration=c[1], ambient=ambient, i_limit=i_limit) for c in cols}
     print(f"{drive.name}: torque (N m) that keeps every node below its T_max"
-          + (f", ambient {ambient:g} degC" if ambient is not None else ""))
+          + (f", ambient {ambient:g} degC" if ambient is not None else "")
+          + f"; both supplies limited to {env[cols[0]].i_limit:.4g} A peak")
     print("after each: what limits it (a node; delivery: the bus voltage or the controller's current limit)")
     head = [f"{s} {'cont' if d is None else f'{d:g} s'}" for s, d in cols]
     print(f"{'rpm':>7} " + " ".join(f"{h:>22}" for h in head))
@@ -96,6 +105,8 @@ def _envelopes(args: argparse.Namespace) -> int:
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab thermal``."""
     check_out_file(args.out)
+    if args.current_limit is not None and not args.envelope:
+        raise BldclabError("--current-limit", "is an option of --envelope")
     if args.envelope:
         return _envelopes(args)
     drive = load(args.motor)

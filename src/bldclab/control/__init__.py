@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from .base import Control
 from .commission import Commission
-from .derate import TemperatureDerating
+from .derate import ResistanceEstimate, TemperatureDerating
 from .hallcal import HallCal, HallCalibration
 from .lu import Lu
 from .openloop import OpenLoop, SixStepVoltage
@@ -18,5 +18,5 @@ from .sine import Sine
 from .sixstep import SixStep
 from .user import UserControl
 
-__all__ = ["Commission", "Control", "HallCal", "HallCalibration", "Lu", "OpenLoop", "Sine", "SixStep",
-           "SixStepSensorless", "SixStepVoltage", "TemperatureDerating", "UserControl"]
+__all__ = ["Commission", "Control", "HallCal", "HallCalibration", "Lu", "OpenLoop", "ResistanceEstimate", "Sine",
+           "SixStep", "SixStepSensorless", "SixStepVoltage", "TemperatureDerating", "UserControl"]

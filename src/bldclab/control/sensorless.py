@@ -21,7 +21,7 @@ from ..model.motor import Drive
 from ..model.units import to_si
 from .base import Control, check_number
 
-__all__ = ["SixStepSensorless", "integral_to_30", "throttle_rate"]
+__all__ = ["SixStepSensorless", "fast_demag_after", "integral_to_30", "throttle_rate"]
 
 # the settings' C constants (values read from the library: bldclab._core)
 _METHOD = {"comparator": "BC_BEMF_COMPARATOR", "adc": "BC_BEMF_ADC", "integration": "BC_BEMF_INTEGRATE"}
@@ -62,6 +62,38 @@ def throttle_rate(value: float | str, field: str = "control.throttle_rate") -> f
     if not math.isfinite(v) or v < 0.0:
         raise BldclabError(field, f"must be a finite rate >= 0, got {value!r}")
     return v
+
+
+def fast_demag_after(drive: Drive, share: float = 0.45, min_samples: float = 4.0) -> float:
+    """Return the default share of the window after which the fast demagnetisation engages.
+
+    Parameters
+    ----------
+    drive : Drive
+    share : float
+        Share of the window from the commutation to the expected crossing (``30 deg + timing``) after which the fast
+        pattern engages: 0.45, below the demagnetisation limiter's default set point (0.6), so that a clamp growing
+        with the current meets the fast pattern first and the duty limit only if that is not enough.
+    min_samples : float
+        See below.
+
+    Returns
+    -------
+    float
+        ``share``; 0 (from the commutation) where the comparators have an offset (``drive.sensors.bemf_offset``:
+        the fast pattern's sectors read the comparator in the pair's on-time only, which keeps the offset's effect
+        on the slowest closed-loop speed to its closed form; htm-48v with 0.3 V: 0.057 p.u. against 0.056, with the
+        plain pattern 0.074), and where the inverter's diodes are ideal (``V_f = 0``) and the window at ``Omega_0``
+        spans fewer than ``min_samples`` samples: an ideal diode lets the floating phase conduct in the PWM
+        off-times before a rising crossing, and on such a drive (f60prov-2550kv: 1.6 samples) only the fast
+        pattern from the commutation keeps the crossing at 0.9 ``Omega_0`` (docs/sensorless.md section 6).
+    """
+    if drive.sensors.bemf_offset != 0.0:
+        return 0.0
+    window = math.pi / (6.0 * drive.motor.p * drive.Omega_0)
+    if drive.inverter.V_f == 0.0 and window * 2.0 * drive.inverter.f_pwm < min_samples:
+        return 0.0
+    return share
 
 
 def integral_to_30(drive: Drive, reference: str | None = None, n: int = 721) -> float:
@@ -158,6 +190,13 @@ class SixStepSensorless(Control):
         docs/sensorless.md. When it chops the negative leg and the drive's comparators have an offset
         (``drive.sensors.bemf_offset``), the comparator is read in the pair's on-time only until the crossing: the
         floating phase can clamp to the bus in the off-time, which a comparator with an offset reads as a crossing.
+    fast_demag_after : float, optional
+        The fast pattern engages once the clamp has lasted this share of the window from the commutation to the
+        expected crossing (``30 deg + timing``), at the output whose interval reaches it; 0: from the commutation.
+        A clamp that ends sooner never sees the pattern change, so at light load the drive's torque is that of the
+        plain pattern (the fast fall of the outgoing current dips the torque in every commutation: 1-2 % of the mean
+        on the catalog's servo and outrunner motors at 0.2 ``Omega_0``). Default :func:`fast_demag_after`: 0.45, or 0
+        where the comparators have an offset or where ideal diodes meet a window of under four samples.
     blanking : {"demag", "fixed"}
         ``demag``: after the fixed blanking the window for the crossing opens at the measured end of the
         demagnetisation (the floating phase shows the pre-crossing level, held at least ``min_pulse``); ``fixed``:
@@ -264,6 +303,7 @@ class SixStepSensorless(Control):
     method: Literal["comparator", "adc", "integration"] = "comparator"
     chopping: Literal["sync", "high", "pwm-on-pwm", "bipolar"] = "sync"
     fast_demag: bool = True
+    fast_demag_after: float | None = None
     blanking: Literal["demag", "fixed"] = "demag"
     blank: float | str = "5 deg"
     blank_time: float | str | None = None
@@ -329,6 +369,9 @@ class SixStepSensorless(Control):
         check_number("demag_limit", self.demag_limit, allow_zero=True)
         if self.demag_limit >= 1.0:
             raise BldclabError("control.demag_limit", f"must be in [0, 1), got {self.demag_limit!r}")
+        check_number("fast_demag_after", self.fast_demag_after, allow_zero=True, allow_none=True)
+        if self.fast_demag_after is not None and self.fast_demag_after >= 1.0:
+            raise BldclabError("control.fast_demag_after", f"must be in [0, 1), got {self.fast_demag_after!r}")
         for name in ("current_limit_time", "interval_gain", "timeout", "jump"):
             check_number(name, getattr(self, name))
         for name in ("align_duty", "ramp_duty"):
@@ -491,6 +534,7 @@ class SixStepSensorless(Control):
             k_limit=k_limit,
             v_max=2.0 * inv.V_dc,
             fast_demag=int(self.fast_demag),
+            fd_after=fast_demag_after(drive) if self.fast_demag_after is None else self.fast_demag_after,
             dlim_d0=min(2.0 * r_total(drive) * i_dlim / inv.V_dc, 1.0),
             dlim_vf=2.0 * m.k_phi / (p * inv.V_dc) if i_dlim > 0.0 else 0.0,
             dlim_tau=m.L / r_total(drive),

@@ -21,7 +21,7 @@ from ..model.analytic import i_sN, r_total
 from ..model.design import pi_gains
 from ..model.motor import Drive
 from .base import Control, check_number
-from .derate import TemperatureDerating, derate_record
+from .derate import ResistanceEstimate, TemperatureDerating, derate_record, rest_record
 from .hall import check_hall_options, hall_record, normalize_table
 from .sixstep import SixStep
 
@@ -103,9 +103,10 @@ class Sine(Control):
         if_accel_min`` (the I/f torque less the inertia's share at the slowest ramp); ``if_accel_min = if_accel``
         gives a fixed ramp.
     if_align_current : float, optional
-        Current amplitude of the alignment before the ramp (A), default ``0.9 I_s,N`` (at least ``if_current``); at
-        most ``I_s,N``. A load that holds the rotor (friction) leaves it within ``asin(tau_L / (1.5 k_1
-        if_align_current))`` of the angle the observer is seeded with; the rest of ``I_s,N`` brakes the swing.
+        Current amplitude of the alignment before the ramp (A), default ``0.9 I_s,N`` (at least ``if_current``, at
+        most ``i_s_max``); at most the current limit ``i_s_max``. A load that holds the rotor (friction) leaves it
+        within ``asin(tau_L / (1.5 k_1 if_align_current))`` of the angle the observer is seeded with; the rest of the
+        current limit brakes the swing.
     if_align : float, optional
         Time the I/f current vector is held still before the ramp (s). Default three periods of the rotor's
         oscillation about the vector, ``2 pi / sqrt(p 1.5 k_1 if_current / J)`` each.
@@ -162,6 +163,12 @@ class Sine(Control):
         Fraction of ``handoff_speed`` below it at which the drive returns to the square-wave start (-), in [0, 1).
     i_max : float, optional
         Over-current trip (A); default ``2 I_N``.
+    i_s_max : float, optional
+        Current limit: the largest current amplitude the controller asks for (A), default paper 1's
+        ``I_s,N = 2/sqrt(3) I_N`` (8), the amplitude of a sinusoid with the rated square wave's rms. A drive's short-
+        time rating (a 60 s envelope, :func:`bldclab.analysis.thermal.envelope`) raises it; at most ``i_max`` (the
+        trip would cut it off). The speed limit, the speed loop's default ``tau_max`` and the square-wave start's
+        torque clamp follow it.
     emf_points : int
         Points per back-EMF table (uniform over one electrical period; a multiple of 12 holds the corners of a
         120-degree trapezoid).
@@ -185,6 +192,10 @@ class Sine(Control):
     derate : TemperatureDerating, optional
         Derate the current limit ``I_s,N`` with the temperature inputs (firmware derating,
         :mod:`bldclab.control.derate`; the square-wave start too, unless ``start`` has its own); ``None``: none.
+    r_estimate : ResistanceEstimate, optional
+        Measure the winding resistance during operation by a square wave of d-axis current in the sine mode
+        (:class:`~bldclab.control.derate.ResistanceEstimate`, ``bc_rest.h``); without a winding sensor its
+        temperature is the derating's winding input. ``None``: no injection (``i_d,ref = 0``).
     """
 
     angle: Literal["hall", "pll", "encoder", "observer"] = "hall"
@@ -202,6 +213,7 @@ class Sine(Control):
     handoff_speed: float | None = None
     handoff_hysteresis: float = 0.2
     i_max: float | None = None
+    i_s_max: float | None = None
     emf_points: int = 360
     speed_loop: bool = False
     speed_bandwidth_hz: float = 5.0
@@ -221,12 +233,16 @@ class Sine(Control):
     lock_tolerance: float = 0.2
     restart_wait: float = 0.1
     derate: TemperatureDerating | None = None
+    r_estimate: ResistanceEstimate | None = None
     c_name: ClassVar[str] = "sine"
     ref_meaning: ClassVar[str] = "torque, N m"
 
     def __post_init__(self) -> None:
         if self.derate is not None and not isinstance(self.derate, TemperatureDerating):
             raise BldclabError("control.derate", f"must be a TemperatureDerating, got {type(self.derate).__name__}")
+        if self.r_estimate is not None and not isinstance(self.r_estimate, ResistanceEstimate):
+            raise BldclabError("control.r_estimate", f"must be a ResistanceEstimate, got "
+                               f"{type(self.r_estimate).__name__}")
         if self.angle not in _ANGLE:
             raise BldclabError("control.angle", f"must be one of {', '.join(_ANGLE)}, got {self.angle!r}")
         check_hall_options(self.pll_edges)
@@ -242,7 +258,7 @@ class Sine(Control):
         if self.bandwidth_hz is not None:
             check_number("bandwidth_hz", self.bandwidth_hz)
         check_number("phase_margin_deg", self.phase_margin_deg)
-        for name in ("R_design", "handoff_speed", "i_max", "tau_max"):
+        for name in ("R_design", "handoff_speed", "i_max", "i_s_max", "tau_max"):
             v = getattr(self, name)
             if v is not None:
                 check_number(name, v, allow_zero=name == "R_design")
@@ -302,13 +318,32 @@ class Sine(Control):
         return min(PAPER1_BANDWIDTH_HZ, drive.inverter.f_pwm / 10.0)
 
     def torque_limit(self, drive: Drive) -> float:
-        """Return the speed loop's torque limit (N m): ``tau_max``, default ``T_s,N = 1.5 k_1 I_s,N`` (paper 1 (12)).
+        """Return the speed loop's torque limit (N m): ``tau_max``, default ``1.5 k_1 i_s_max`` (paper 1 (12)).
 
         Parameters
         ----------
         drive : Drive
         """
-        return 1.5 * fundamental_k1(drive) * i_sN(drive) if self.tau_max is None else float(self.tau_max)
+        return 1.5 * fundamental_k1(drive) * self.current_limit(drive) if self.tau_max is None else float(self.tau_max)
+
+    def current_limit(self, drive: Drive) -> float:
+        """Return the current limit (A): ``i_s_max``, default ``I_s,N = 2/sqrt(3) I_N`` (paper 1 (8)).
+
+        Parameters
+        ----------
+        drive : Drive
+
+        Raises
+        ------
+        BldclabError
+            ``control.i_s_max`` above the over-current trip ``i_max``.
+        """
+        i_s = i_sN(drive) if self.i_s_max is None else float(self.i_s_max)
+        trip = 2.0 * drive.motor.I_N if self.i_max is None else float(self.i_max)
+        if i_s > trip:
+            raise BldclabError("control.i_s_max", f"must be at most the over-current trip i_max = {trip:.4g} A "
+                               f"(raise i_max with it), got {i_s:.4g} A")
+        return i_s
 
     def handoff(self, drive: Drive) -> float:
         """Return the hand-off speed (mechanical rad/s): ``handoff_speed``, default ``0.1 Omega_N``."""
@@ -362,21 +397,22 @@ class Sine(Control):
         m, inv = drive.motor, drive.inverter
         ts = 0.5 / inv.f_pwm
         st = self.sensorless_settings(drive)
+        i_lim = self.current_limit(drive)
         if self.angle == "observer" and st["if_accel_min"] > st["if_accel"] * (1.0 + 1e-9):
             raise BldclabError("control.if_accel_min", f"must be at most if_accel = {st['if_accel'] / m.p:.4g} "
                                f"rad/s^2, got {st['if_accel_min'] / m.p:.4g} rad/s^2")
-        if self.angle == "observer" and st["if_current"] > i_sN(drive):
-            raise BldclabError("control.if_current", f"must be at most I_s,N = {i_sN(drive):.4g} A, got "
-                               f"{st['if_current']:.4g} A")
-        if self.angle == "observer" and st["if_align_current"] > i_sN(drive) * (1.0 + 1e-9):
-            raise BldclabError("control.if_align_current", f"must be at most I_s,N = {i_sN(drive):.4g} A, got "
-                               f"{st['if_align_current']:.4g} A")
+        if self.angle == "observer" and st["if_current"] > i_lim:
+            raise BldclabError("control.if_current", f"must be at most the current limit i_s_max = "
+                               f"{i_lim:.4g} A, got {st['if_current']:.4g} A")
+        if self.angle == "observer" and self.if_align_current is not None and st["if_align_current"] > i_lim:
+            raise BldclabError("control.if_align_current", f"must be at most the current limit i_s_max = "
+                               f"{i_lim:.4g} A, got {st['if_align_current']:.4g} A")
         common = {"R": r_total(drive), "L": m.L, "psi": st["psi"], "ts": ts, "i_max": i_max, "v_max": 2.0 * inv.V_dc}
         fobs = core.filled("bc_fluxobs_params", gain=st["gain"], pll_bw=st["bandwidth"], **common)
         robs = core.filled("bc_redobs_params", alpha_o=st["bandwidth"], sigma0=st["sigma0"], zeta_inf=0.2, **common)
         return {"observer": core.const(_OBSERVER[self.observer]), "fobs": fobs[0], "robs": robs[0],
                 "if_current": st["if_current"], "if_align": st["if_align"],
-                "if_align_current": min(st["if_align_current"], i_sN(drive)),
+                "if_align_current": min(st["if_align_current"], i_lim),
                 "if_accel": st["if_accel"], "if_accel_min": min(st["if_accel_min"], st["if_accel"]),
                 "if_hold": st["if_hold"], "lock_time": st["lock_time"],
                 "lock_tol": self.lock_tolerance, "restart_wait": self.restart_wait, "if_damp": st["if_damp"],
@@ -424,7 +460,7 @@ class Sine(Control):
             kp=kp,
             ki=ki,
             v_max=2.0 * inv.V_dc,
-            i_s_max=i_sN(drive),
+            i_s_max=self.current_limit(drive),
             i_max=i_max,
             speed_limit=int(self.speed_limit),
             decouple=int(self.decoupling),
@@ -442,6 +478,8 @@ class Sine(Control):
             theta_offset=0.0,
             **hall_record(core, self.angle == "pll", self.pll_edges, self.hall_table),
             derate=derate_record(core, self.derate, 0.5 / inv.f_pwm),
+            rest=rest_record(core, self.r_estimate, 0.5 / inv.f_pwm, r_total(drive),
+                             drive.thermal.T_ref if drive.thermal is not None else 25.0, self.current_limit(drive)),
             six=six.record[0],
             flying_start=int(self.flying_start),
             speed_loop=int(self.speed_loop),

@@ -84,7 +84,7 @@ WAVEFORM_SUB = 4
 _KNOWN = ("simulated.csv", "analytic.csv", "table1.json", "verdict.txt", "waveforms.csv", "dynamometer.csv",
           "methods.csv", "methods_traces.csv", "methods_compared.svg", "faults.csv", "effmap.csv",
           "effmap_difference.csv", "effmap_difference.svg", "efficiency.csv", "hall.csv", "hall.svg", "desync.csv",
-          "desync.json", "desync.svg")
+          "desync.json", "desync.svg", "thermal_envelope.csv")
 
 _SINE, _SQUARE, _GRAY = "#1f77b4", "#d62728", "#7f7f7f"
 _PHASE = {"a": "#1f77b4", "b": "#ff7f0e", "c": "#2ca02c"}
@@ -319,6 +319,8 @@ class Results:
         ``desync.json`` of ``bldclab sensorless``: the disturbance, the axes, the table and the summary lines.
     desync_svg : str or None
         ``desync.svg`` of ``bldclab sensorless``, made inline-safe.
+    thermal_envelope : pandas.DataFrame or None
+        ``thermal_envelope.csv`` of ``bldclab thermal MOTOR --envelope --out`` written into the same directory.
     files : list of str
         Every file of the directory.
     source : str
@@ -346,6 +348,7 @@ class Results:
     desync: pd.DataFrame | None = None
     desync_summary: dict[str, Any] | None = None
     desync_svg: str | None = None
+    thermal_envelope: pd.DataFrame | None = None
     files: list[str] = dataclasses.field(default_factory=list)
     source: str = ""
 
@@ -459,11 +462,14 @@ class Results:
                                        source) from None
             if files.get("desync.svg"):
                 dsvg = _clean_svg(files["desync.svg"].decode("utf-8", "replace"))
+        tenv = _csv(files, "thermal_envelope.csv", ("speed",), source, required=False)
+        if tenv is not None:
+            _numeric(tenv, "thermal_envelope.csv", ("speed",), source)
         return cls(manifest=manifest, drive=drive, simulated=sim, analytic=an, table1=quantities, verdict=verdict,
                    waveforms=wf, dynamometer=dyno, methods=methods, methods_traces=traces, methods_svg=svg,
                    faults=faults, effmap=emap, effmap_difference=ediff if emap is not None else None,
                    effmap_svg=esvg if emap is not None else None, efficiency=eff, hall=hall, hall_svg=hsvg,
-                   desync=dsync, desync_summary=dsum, desync_svg=dsvg,
+                   desync=dsync, desync_summary=dsum, desync_svg=dsvg, thermal_envelope=tenv,
                    files=sorted(files), source=source)
 
 
@@ -941,6 +947,50 @@ def _section_desync(r: Results) -> str:
     return "".join(out)
 
 
+def _section_heat(r: Results) -> str:
+    th = r.drive.thermal
+    if th is None:
+        return ""
+    net = th.network()
+    taus = net.time_constants
+    nodes = [[n.name, "boundary" if n.boundary else "capacity", n.C if n.C is not None else "",
+              n.T if n.T is not None else "", n.T_max if n.T_max is not None else "",
+              ", ".join(k for k, v in (("winding", n.name in th.winding), ("magnets", n.name == th.magnets),
+                                        ("switches", n.name in th.switches)) if v)] for n in th.nodes]
+    links = [[x.a, x.b, x.R] for x in th.links]
+    routes = [[b, ", ".join(f"{n} {f:g}" for n, f in route)] for b, route in th.losses]
+    P1, _ = net.heat({b: 1.0 for b, _ in th.losses})
+    rise = net.temps(net.steady(P1))
+    out = ['<section id="heat"><h2>10. Heat: the thermal network</h2>'
+           "<p>The motor file's <code>[thermal]</code> table (docs/thermal.md): a lumped network whose nodes the "
+           "plant's losses heat; the winding's <code>R</code>, the magnets' flux and the switches' "
+           f"<code>R_on</code> follow its temperatures, linear about T_ref = {th.T_ref:g} degC (alpha_R "
+           f"{100 * th.alpha_R_value:.3g} %/K, alpha_k {100 * th.alpha_k:.3g} %/K, alpha_Ron "
+           f"{100 * th.alpha_Ron:.3g} %/K). Time constants of the network: "
+           + ", ".join(_num(t) for t in taus[:4]) + " s (the longest sets how long a load takes to reach its "
+           "steady temperature). The results above are at T_ref.</p>",
+           _html_table(["node", "kind", "C (J/K)", "T (degC)", "T_max (degC)", "sets"], nodes,
+                       [False, False, True, True, True, False]),
+           _html_table(["between", "and", "R (K/W)"], links, [False, False, True]),
+           _html_table(["loss", "heats (fraction)"], routes, [False, False]),
+           "<p>Steady temperatures with every routed loss source at 1 W (a sensitivity, degC): "
+           + ", ".join(f"{_e(k)} {v:.4g}" for k, v in rise.items()) + ".</p>"]
+    if r.thermal_envelope is not None:
+        env = r.thermal_envelope.copy()
+        env.insert(1, "speed_rpm", env["speed"] * 30.0 / math.pi)
+        out.append("<p>From the file <code>bldclab thermal MOTOR --envelope --out thermal_envelope.csv</code> wrote "
+                   "into this directory: per speed, the torque (N m) each supply delivers continuously (the steady "
+                   "state) and for the given times from the ambient with every node below its T_max, and what "
+                   "limits it (a node; <i>delivery</i>: the bus voltage or the controller's current limit).</p>"
+                   f'<div class="scroll">{_frame_table(env)}</div>')
+    else:
+        out.append("<p>The torque-speed envelopes (continuous and time-limited) are not in this directory: "
+                   "<code>bldclab thermal MOTOR --envelope --out DIR/thermal_envelope.csv</code> writes them, and "
+                   "the next report shows them here.</p>")
+    out.append("</section>")
+    return "".join(out)
+
+
 def _settings_rows(prefix: str, settings: Any) -> list[list[str]]:
     rows: list[list[str]] = []
     if isinstance(settings, dict):
@@ -1039,7 +1089,7 @@ def render(results: Results, *, report_command: str, created: str | None = None)
     name = r.drive.name or "(unnamed drive)"
     body = [_section_motor(r, page), _section_table1(r), _section_characteristics(r, page), _section_efficiency(r),
             _section_waveforms(r, page), _section_paper2(r, page), _section_faults(r), _section_effmap(r),
-            _section_hall(r), _section_desync(r), _section_provenance(r, report_command, created)]
+            _section_hall(r), _section_desync(r), _section_heat(r), _section_provenance(r, report_command, created)]
     toc = [("verdict", "Verdict"), ("motor", "Motor"), ("table1", "Table I"), ("characteristics", "Characteristics"),
            *([("efficiency", "Efficiency counts")] if r.efficiency is not None else []), ("waveforms", "Waveforms")]
     if r.methods is not None or r.methods_traces is not None or r.methods_svg is not None:

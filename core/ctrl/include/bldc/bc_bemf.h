@@ -169,17 +169,19 @@
  *     pair at the last commutation) during the first half of the sector (Omega (t_a - t_c) < pi/6) and the
  *     continuing one after; the other patterns chop pos.
  *     Fast demagnetisation (fast_demag = 1; BC_CHOP_SYNC, _HIGH, _PWMPWM; not in a start's first sector, which
- *     has no outgoing phase): from a commutation until the detector
- *     has seen the demagnetisation over (the pre level, 6) or a crossing, the continuing phase (in both pairs) chops
- *     instead: as BC_LEG_PWM with its average at the same pair voltage m (sync), else its own switch at m. The
+ *     has no outgoing phase): from the output whose interval ends with the clamp on for fd_after of the window pi/6 + adv
+ *     (fd_after = 0: from the commutation) until the detector has seen the demagnetisation over (the pre level, 6)
+ *     or a crossing, the continuing phase (in both pairs) chops instead: as BC_LEG_PWM with its average at the same pair voltage m (sync), else its own switch at m. The
  *     outgoing phase's current, averaged over the PWM, then falls with (2 - m) V_dc / 3 plus the back-EMF term
  *     instead of m V_dc / 3 when the pattern would chop the incoming phase (docs/sensorless.md, the closed forms):
- *     at low duty and high current the difference between a visible crossing and a hidden one.
+ *     at low duty and high current the difference between a visible crossing and a hidden one. A clamp shorter
+ *     than fd_after of the window never sees the pattern change, so the drive's torque is that of the plain
+ *     pattern (the fast fall of the outgoing current dips the torque in each commutation).
  *     When it chops the negative leg, the pair's off-time holds both its terminals at V_dc, and between the clamp's
  *     end and the sample that sees it the floating phase (still on its pre side, e_F > 0) can clamp to V_dc in the
  *     off-times, where a comparator with an offset reads the post level: in such a sector (cmp_gate = 1; with a
  *     comparator of no offset the clamp reads exactly the reference and changes nothing) the comparator is read
- *     only at the samples in the pair's on-time (an active switch state is centred at the carrier peak: the
+ *     (once the pattern is engaged) only at the samples in the pair's on-time (an active switch state is centred at the carrier peak: the
  *     valleys for the complementary negative leg of BC_CHOP_SYNC, the peaks for a lower switch chopping; the
  *     first sample is taken to be at a valley) until the crossing.
  *
@@ -278,6 +280,7 @@ typedef struct {
     float k_limit;       /* current limiter gain, 1/(A s) (>= 0) */
     float v_max;         /* largest plausible DC-bus measurement, V (> 0) */
     int32_t fast_demag;  /* 1: the continuing phase chops until the demagnetisation is seen over (8); 0: never */
+    float fd_after;      /* ... once the clamp has lasted this share of the window pi/6 + adv, [0, 1); 0: at once */
     float dlim_d0;       /* speed-dependent duty limit (2), CLOSED: m <= dlim_d0 + dlim_vf Omega; 0: none, [0, 1] */
     float dlim_vf;       /* its slope, 1/(rad/s) electrical (>= 0) */
     float dlim_tau;      /* the inductive part: dlim_d0 sqrt(1 + (Omega dlim_tau)^2), s (>= 0) */
@@ -302,6 +305,7 @@ typedef struct {
     int32_t incoming;      /* phase that entered the pair at the last commutation, -1 none */
     int32_t outgoing;      /* phase that left the pair at the last commutation, -1 none (a start's first sector) */
     int32_t fd_neg;        /* fast demagnetisation chops the negative leg in this sector (its off-time at V_dc) */
+    int32_t fd_on;         /* fast demagnetisation engaged in this sector (fd_after reached, the clamp not yet over) */
     uint32_t k_samp;       /* samples since init (even: carrier valley, odd: carrier peak) */
     uint32_t t_c;          /* tick of the commutation that began the sector */
     int32_t pending;       /* a commutation is scheduled at t_next */

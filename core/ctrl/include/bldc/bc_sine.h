@@ -248,6 +248,7 @@
 #include "bldc/bc_hall.h"
 #include "bldc/bc_pi.h"
 #include "bldc/bc_redobs.h"
+#include "bldc/bc_rest.h"
 #include "bldc/bc_sixstep.h"
 #include "bldc/bc_transform.h"
 #include "bldc/bc_types.h"
@@ -291,7 +292,7 @@ typedef struct {
     float ki;       /* d,q PI integral gain, V/(A s) (>= 0) */
     float v_max;    /* bound of the d,q PI integrators and largest plausible DC-bus measurement, V (> 0); sets
                        the speed range of the speed limit's table (5.) */
-    float i_s_max;  /* I_s,N: limit of |i_q,ref|, A (> 0) */
+    float i_s_max;  /* current limit of |i_q,ref|, A (0 < i_s_max <= i_max); paper 1: I_s,N */
     float i_max;    /* over-current trip, A (> 0) */
     int32_t speed_limit; /* 1: |i_q,ref| <= I_s,sat above base speed (from the shape tables if given, else (23)
                             with R); 0: off */
@@ -342,6 +343,9 @@ typedef struct {
     float t_dead;       /* the inverter's dead time, s (0 <= t_dead < ts): the observer's voltage is corrected */
     bc_derate_params derate; /* temperature derating of the current limit i_s_max (bc_derate.h) from in->temp; no
                                 channel enabled (all zero): none. The start controller derates by six.derate. */
+    bc_rest_params rest; /* the winding resistance during operation (bc_rest.h): in sine mode i_d,ref is its square
+                            wave; without a winding reading (in->temp[0] not finite) its temperature is the
+                            derating's winding input. rest.i_inj = 0: off (then the rest is not checked) */
 } bc_sine_params;
 
 typedef struct {
@@ -360,6 +364,8 @@ typedef struct {
     bc_derate_state derate; /* the derating's filter */
     int32_t derate_on;      /* a derating channel is enabled */
     float derate_f;         /* its factor at the last sample (1 without) */
+    bc_rest_state rest;     /* the resistance estimate (rest_on) */
+    int32_t rest_on;        /* p->rest.i_inj != 0 */
     /* shape-aware speed limit (5.), filled by bc_sine_init */
     int32_t lim_shape; /* 1: the table below is used; 0: (23) with R */
     float lim_w_top;   /* w_top: the table spans |omega_e| < w_top, electrical rad/s */
