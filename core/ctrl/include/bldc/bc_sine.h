@@ -191,30 +191,37 @@
  *          first third of if_align, then of theta_if = 0 (two steps: a rotor at the unstable point of one, or held
  *          near it by friction, is a quarter turn from the other's rest angle; the same PIs, decoupling with
  *          omega_if, no back-EMF feed-forward), its amplitude rising linearly over the first tenth of if_align
- *          (holding torque early, against an active load). A larger current than the ramp's
- *          narrows the band of angles in which a load holding the rotor (friction) leaves it away from the rest
- *          angle the observer is seeded with: asin(tau_load / (1.5 k_1 if_align_current)). A current-fed rotor
- *          has no damping of its own and would swing about the vector; its swing's back-EMF lies on d of theta_if
- *          (the rotor's q axis there, for either dir), and i_d,ref = -if_damp (x_d - R i_d) (x_d the d PI's
- *          integrator, clamped to +-min(if_align_current / 2, sqrt(i_s_max^2 - if_align_current^2))
- *          ) brakes it. An unloaded rotor settles with its q axis pi/2 behind the vector's (dir =
- *          -1: ahead); the observer is seeded there: theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP.
+ *          (holding torque early, against an active load). A larger current than the ramp's narrows the band of
+ *          angles in which a load holding the rotor (friction) leaves it away from the rest angle the observer is
+ *          seeded with: asin(tau_load / (1.5 k_1 if_align_current)). A current-fed rotor has no damping of its own
+ *          and would swing about the vector; its swing's back-EMF lies on d of theta_if (the rotor's q axis there,
+ *          for either dir), and i_d,ref = -if_damp (x_d - R i_d) (x_d the d PI's integrator, clamped to
+ *          +-min(if_align_current / 2, sqrt(i_s_max^2 - if_align_current^2))) brakes it. An unloaded rotor
+ *          settles with its q axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there:
+ *          theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP.
  *   RAMP   omega_if += dir a T_s up to |omega_if| = omega_on, theta_if += omega_if T_s. The rotor follows
- *          with the load angle its torque needs (a torque below 1.5 k_1 if_current). The ramp adapts to the load:
- *          with Delta = theta^ - theta_if (the observer's angle against the vector's), the rotor's torque is
- *          rho 1.5 k_1 if_current with rho = cos Delta (either dir), and a = if_accel_min + (if_accel -
- *          if_accel_min) clamp((0.9 - rho_f) / 0.4, 0, 1) (rho_f: rho low-passed with lock_time): the full ramp
- *          while the torque is at most half the I/f torque, the slowest at 90 % and above. The swing about the
- *          turning vector is braked as in ALIGN, through the observer: i_d,ref = if_damp psi_f (omega^ -
- *          omega_if) / sin Delta (|sin Delta| at least 0.25), clamped to +-min(if_current,
- *          sqrt(i_s_max^2 - if_current^2)), a torque -1.5 k_1 if_damp psi_f (omega^ - omega_if) against the
- *          rotor's slip (the I/f current's own torque 1.5 k_1 (i_q cos Delta - i_d sin Delta)).
+ *          with the load angle its torque needs (a torque below 1.5 k_1 if_current). With if_accel_min < if_accel
+ *          the ramp adapts to the load: with Delta = theta^ - theta_if (the observer's angle against the vector's)
+ *          the rotor's torque is rho 1.5 k_1 if_current, rho = cos Delta (either dir), and
+ *          a = if_accel clamp((BC_SINE_RHO_HI - rho) / (BC_SINE_RHO_HI - BC_SINE_RHO_LO), -1, 1): the full ramp
+ *          while the torque is at most RHO_LO of the I/f torque, none at RHO_HI, and above it the vector slows
+ *          (down to dir omega_if = -omega_on, following a rotor an active load pushes back); at rho >= RHO_HI the
+ *          vector does not outrun the rotor (dir omega_if <= dir omega^). A rotor the observer sees at rest
+ *          (|omega^| < 0.05 omega_on) is evidence of nothing (the observer holds its seed, which a load holding
+ *          the rotor leaves off): then a >= if_accel_min and |omega_if| <= 0.05 omega_on (the vector creeps past
+ *          the rotor's angle of largest torque, where it breaks away). The swing about the turning vector is
+ *          braked through the observer while it sees the rotor move: i_d,ref = if_damp psi_f (omega^ - omega_if)
+ *          sin Delta / max(sin^2 Delta, 1/16), within +-min(if_current, sqrt(i_s_max^2 - if_current^2)), a torque
+ *          -1.5 k_1 if_damp psi_f (omega^ - omega_if) against the rotor's slip (the current's torque is
+ *          1.5 k_1 (i_q cos Delta - i_d sin Delta)). Below omega_on for longer than omega_on / if_accel_min (the
+ *          slowest ramp's time): BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT. With if_accel_min = if_accel: the
+ *          fixed ramp at if_accel, none of this.
  *          At omega_on the lock is checked every sample: |flux / psi_f - 1| <= lock_tol (the observer's flux
  *          output, bc_obs.h), |err| <= lock_tol (its tracking loop's error: rad, or the sine of the angle error)
  *          and dir omega_f >= omega_off (omega_f: omega^ through a low-pass of time constant lock_time). The
- *          observer's own consistency, not its speed against omega_if: a current-
- *          fed rotor has no damping and swings about the turning vector at sqrt(p 1.5 k_1 if_current / J) (the
- *          plant's friction aside), and the observer follows the swing. When the lock has held for lock_time
+ *          observer's own consistency, not its speed against omega_if: the rotor may still swing about the
+ *          turning vector at sqrt(p 1.5 k_1 if_current / J) (undamped with the fixed ramp), and the observer
+ *          follows the swing. When the lock has held for lock_time
  *          the drive hands over to the sine mode on the observer's angle: the d,q integrators as in the Hall
  *          hand-off below (from the current measured in the observer's frame), the speed PI's integrator at the
  *          torque 1.5 k_1 i_q that current makes. Not locked within if_hold at omega_on: BC_FLAG_START_FAIL |
@@ -387,8 +394,8 @@ typedef struct {
     float n_lock;      /* time the lock criterion has held (start) or failed (sine), s */
     float omega_f;     /* the observer's speed low-passed (time constant lock_time), electrical rad/s */
     float if_t;        /* RAMP: time below omega_on, s */
-    int32_t if_trust;  /* RAMP: 1 while the observer sees the rotor move and is consistent */
-    float rho_f;       /* RAMP: the torque's share of 1.5 k_1 if_current, low-passed (time constant lock_time) */
+    int32_t if_trust;  /* RAMP: 1 while the observer sees the rotor move (adaptive ramp) */
+    float rho_f;       /* RAMP: the torque's share of 1.5 k_1 if_current, cos(theta^ - theta_if) */
     float u_hist[2][2]; /* alpha-beta voltage commanded one and two samples ago, V */
     int32_t u_ok[2];    /* 1: that voltage was applied by PWM on every leg */
     uint32_t n_restart; /* failed starts and lost locks since init */
