@@ -95,13 +95,15 @@ class Sine(Control):
         Mechanical acceleration of the I/f ramp (rad/s^2). Default: half the I/f torque ``1.5 k_1 if_current``
         accelerating the inertia ``J``, but at most the acceleration whose start and end excite a swing of the rotor
         about the current vector of 10 % of the hand-off speed (``0.1 omega_on omega_n``, ``omega_n`` below). The
-        ramp's largest acceleration: the ramp adapts to the load (``bc_sine.h``, RAMP), from this while the rotor's
-        torque is at most half the I/f torque down to ``if_accel_min`` when it is 90 % of it.
+        ramp's largest acceleration: the ramp adapts to the load (``bc_sine.h``, RAMP), full while the rotor's
+        torque (read from the observer) is at most 60 % of the I/f torque, none at 95 %, the vector waiting for the
+        rotor above that.
     if_accel_min : float, optional
-        Smallest acceleration of the load-adaptive I/f ramp (rad/s^2, mechanical), at most ``if_accel``; default
-        ``if_accel / 20``. A start succeeds against a load ``tau_L`` up to about ``1.5 k_1 if_current - J
-        if_accel_min`` (the I/f torque less the inertia's share at the slowest ramp); ``if_accel_min = if_accel``
-        gives a fixed ramp.
+        The load-adaptive ramp's slowest mean acceleration (rad/s^2, mechanical), at most ``if_accel``; default
+        ``if_accel / 20``: a ramp that takes longer than ``omega_on / if_accel_min`` ends in ``START_FAIL``. The
+        start is designed for a load ``tau_L / tau_if <= 0.95 - 0.35 if_accel_min / if_accel - J if_accel_min /
+        tau_if`` (``tau_if = 1.5 k_1 if_current``; docs/sensorless-sine.md). ``if_accel_min = if_accel``: the
+        fixed ramp at ``if_accel``, no adaptation.
     if_align_current : float, optional
         Current amplitude of the alignment before the ramp (A), default ``0.9 I_s,N`` (at least ``if_current``, at
         most ``i_s_max``); at most the current limit ``i_s_max``. A load that holds the rotor (friction) leaves it
