@@ -8,8 +8,9 @@ when a row misses its target (ok = "NO"; the rows are listed after the table) or
 ``--allow-miss`` (exploring) ignores the misses.
 
 Run: ``python benchmarks/run_all.py [--skip GROUP,...] [--seconds S] [--repeats R] [--allow-miss]`` with groups
-``plant``, ``sine``, ``sweep``, ``memory``, ``compare``, ``firmware``, ``cost``, ``motulator``. The default run takes
-about three minutes on 2 cores (plus about 20 s once, to install motulator).
+``plant``, ``sine``, ``sweep``, ``memory``, ``compare``, ``firmware``, ``cost``, ``motulator``, ``sensorless`` (the
+sensorless case beside motulator, ``sensorless_case.py``). The default run takes about four minutes on 2 cores (plus
+about 20 s once, to install motulator).
 """
 
 from __future__ import annotations
@@ -34,7 +35,8 @@ from types import ModuleType
 from typing import Any
 
 HERE = Path(__file__).resolve().parent
-GROUPS = ("plant", "sine", "sweep", "memory", "compare", "effmap", "cli", "firmware", "cost", "motulator")
+GROUPS = ("plant", "sine", "sweep", "memory", "compare", "effmap", "cli", "firmware", "cost", "motulator",
+          "sensorless")
 
 
 def load(name: str) -> ModuleType:
@@ -271,6 +273,27 @@ def motulator_rows(repeats: int, venv: Path, python: str | None, out: Path) -> l
     return rows
 
 
+def sensorless_rows(venv: Path, python: str | None, out: Path) -> list[Row]:
+    """The sensorless case (``sensorless_case.py``): servo-2k2 on the reduced-order observer beside motulator."""
+    sc = load("sensorless_case")
+    cmp = sc.compare(3, venv, python, out)
+    bt, bi = cmp.bl_time, cmp.bl_info
+    rows = [Row("sensorless case: bldclab", f"{bt['trace']:.4f}", "s per sim s", "", "",
+                f"trace; {bt['no_trace']:.4f} without; I/f start, hand-off at {bi['t_handoff']:.2f} s")]
+    if cmp.reason:
+        rows.append(Row("sensorless case: motulator", "not available", "", "", "", cmp.reason))
+        return rows
+    mi = cmp.mot_info
+    rows.append(Row("sensorless case: motulator", f"{cmp.mot_per_s:.2f}", "s per sim s", "", "",
+                    f"motulator {mi['version']}, {mi['solver_points']} solver points"))
+    rows.append(Row("sensorless case: motulator / bldclab", f"{cmp.ratio:.0f}", "x", "", "",
+                    "wall, bldclab with trace"))
+    for ch in cmp.checks:
+        rows.append(Row(f"  agreement: {ch.name}", f"{ch.value:+.4f}", ch.unit, f"|.| <= {ch.tol:g}",
+                        verdict(ch.ok), ch.why))
+    return rows
+
+
 # ------------------------------------------------------------------------------------------------------------
 
 
@@ -348,6 +371,7 @@ def main() -> int:
         ("firmware", firmware_rows),
         ("cost", cost_rows),
         ("motulator", lambda: motulator_rows(5, venv, args.python, out)),
+        ("sensorless", lambda: sensorless_rows(venv, args.python, out)),
     ]
     if "sweep" in skip and "memory" not in skip:
         groups.append(("memory", lambda: sweep_rows(args.points, args.workers, args.periods, 1, True, False)))

@@ -12,6 +12,10 @@ Then, on each drive at 0.5 Omega_0 (flux observer), the sensitivity: the control
 linkage off by +-25 %, R by +-50 %, L by +-30 %, and again from what self-commissioning measured starting from that
 wrong data; and the commissioning accuracy (R, L, psi_f against the plant's) with the time it takes.
 
+Then the current-sensor errors (``--sensors [DRIVE ...]`` alone): an offset on phase a and white noise on the
+measured phases, the controller unaware of them. And the start-up map (``--startup [DRIVE ...]`` alone): load kind x
+load x inertia x initial angle, with the design bound of the load-adaptive ramp.
+
 Run: ``PYTHONPATH=src python benchmarks/sensorless_sine.py [DRIVE ...]``.
 """
 
@@ -20,8 +24,10 @@ from __future__ import annotations
 import dataclasses
 import math
 import sys
+from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import NDArray
 
 import bldclab as bl
 from bldclab.model.analytic import i_sN, r_total
@@ -46,6 +52,7 @@ def angle_error(drive: bl.Drive, control: bl.Sine, speed: float, torque: float, 
     err = np.degrees(np.angle(np.exp(1j * (r["theta"] - r["theta_e"]))))[on]
     m = r.metrics
     return {"rms": float(np.sqrt(np.mean(err**2))) if err.size else math.nan,
+            "mean": float(np.mean(err)) if err.size else math.nan,
             "worst": float(np.max(np.abs(err))) if err.size else math.nan,
             "sine": float(on.sum() / max(last.sum(), 1)), "tau": m.tau_mean, "eff": m.efficiency}
 
@@ -77,36 +84,125 @@ def sensitivity(names: list[str]) -> None:
             print(f"{name:16s} {label:12s} {a['rms']:8.3f} {a['worst']:8.3f} {a['tau']:9.4g} {after}")
 
 
-def startup_map(names: list[str]) -> None:
-    """Print the start-up's success over load torque x inertia and the time to the hand-off.
+STARTUP_LOADS = (0.0, 0.5, 0.75, 0.9, 0.95, 1.0)  # of the I/f torque 1.5 k_1 if_current
+STARTUP_J = (0.5, 1.0, 2.0, 5.0)  # the plant's inertia over the nominal the controller is configured with
+STARTUP_ANGLES = (0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi + 0.05)  # rotor at t = 0 (rad, electrical): the
+# vector's own q axis, the aligned rest angle (pi/2 ahead), a quarter turn off, next to the unstable point
+STARTUP_KINDS = ("passive", "brake", "active")
 
-    The controller is configured from the nominal drive (its I/f ramp from the nominal inertia); the plant's inertia
-    is the nominal times a factor and a constant load (a fraction of the I/f current's torque ``1.5 k_1 if_current``)
-    acts from t = 0. Speed loop to 0.3 Omega_0. Success: in the sine mode at the end with the speed within 5 % of the
-    reference; ``t_lock``: the first sample in the sine mode; ``restarts``: samples flagged DESYNC (0: none).
+
+SENSOR_CASES = (("none", 0.0, 0.0), ("offset 1 %", 0.01, 0.0), ("offset 2 %", 0.02, 0.0), ("noise 0.5 %", 0.0, 0.005),
+                ("noise 1 %", 0.0, 0.01))  # phase a's offset and every phase's noise (std), of I_s,N
+
+
+def sensor_errors(names: list[str], speeds: tuple[float, ...] = (0.1, 0.5)) -> None:
+    """Print the angle error and torque with current-sensor errors: an offset on phase a, white noise on each
+    measured phase (``Sensors.current_offset``, ``current_noise``), at a fraction of ``Omega_0`` under half the
+    rated load (as :func:`main`), both observers, the controller unaware of them.
+
+    An offset ``D`` on phase a, with phases a and b measured, is the constant vector ``D (1 + j / sqrt(3))`` in
+    alpha-beta: the observers integrate ``R D`` as a voltage and subtract ``L D`` from the flux, so the angle error
+    gets a ripple at the electrical frequency and the current loops drive the true current off by the offset (a torque
+    ripple at the electrical frequency, zero mean). Noise enters the observers' flux through ``L i`` and the PLL.
     """
-    print(f"\n{'drive':16s} {'load/tau_if':>11s} {'J/J_nom':>8s} {'ok':>3s} {'t_lock s':>9s} {'DESYNC':>7s}")
+    print(f"\n{'drive':16s} {'obs':8s} {'speed':>6s} {'sensor error':14s} {'rms deg':>8s} {'worst':>8s} "
+          f"{'mean':>8s} {'tau':>9s}")
     for name in names:
         d = bl.load(name)
-        ctl = bl.Sine(angle="observer", speed_loop=True)
-        st = ctl.sensorless_settings(d)
-        tau_if = 1.5 * bl.control.sine.fundamental_k1(d) * st["if_current"]
-        w = 0.3 * d.Omega_0
-        for kj in (0.5, 1.0, 2.0, 5.0):
-            plant = dataclasses.replace(d, mechanics=dataclasses.replace(d.mechanics, J=kj * d.mechanics.J))
-            for fl in (0.0, 0.25, 0.5, 0.75, 0.9, 1.1):
-                load = fl * tau_if
-                t_acc = plant.mechanics.J * w / max(ctl.torque_limit(d) - load, 0.1 * ctl.torque_limit(d))
-                dur = 3 * (st["if_align"] + d.motor.p * ctl.handoff(d) / st["if_accel"] + 4 * st["lock_time"]) \
-                    + t_acc + 0.5
-                r = simulate(plant, ctl, Scenario(duration=dur, omega_ref=w, load_torque=load, trace_every=8),
-                             estimate=d)
-                on = r["mode"] > 0.5
-                ok = bool(on[-1]) and abs(r["omega_m"][-1] / w - 1) < 0.05
-                t_lock = float(r["t"][on][0]) if on.any() else math.nan
-                flags = r.flags_raised
-                print(f"{name:16s} {fl:11.2f} {kj:8.1f} {'yes' if ok else 'no':>3s} {t_lock:9.3f} "
-                      f"{'yes' if 'DESYNC' in flags else 'no':>7s}")
+        torque = 0.5 * 1.5 * bl.control.sine.fundamental_k1(d) * i_sN(d)
+        for frac in speeds:
+            w = frac * d.Omega_0
+            on = min(0.1 * d.motor.Omega_nominal, 0.5 * w)
+            ctl = bl.Sine(angle="observer", handoff_speed=on, handoff_hysteresis=0.5)
+            st = ctl.sensorless_settings(d)
+            t_load = st["if_align"] + d.motor.p * on / st["if_accel"] + 2 * st["lock_time"] \
+                + d.mechanics.J * w / torque + 0.3
+            wb = 2 * math.pi * ctl.speed_bandwidth_hz
+            t_ramp = max(0.3, torque / (d.mechanics.J * wb**2 / 4 * 0.2 * w))
+            dur = t_load + t_ramp + 0.3 + 20 * 2 * math.pi / (d.motor.p * w)
+            for label, off, noise in SENSOR_CASES:
+                plant = d.replace(sensors__current_offset=(off * i_sN(d), 0.0, 0.0),
+                                  sensors__current_noise=noise * i_sN(d))
+                for obs in ("flux", "reduced"):
+                    a = angle_error(plant, dataclasses.replace(ctl, observer=obs), w, torque, t_load, t_ramp, dur,
+                                    estimate=d)
+                    print(f"{name:16s} {obs:8s} {frac:6.2f} {label:14s} {a['rms']:8.3f} {a['worst']:8.3f} "
+                          f"{a['mean']:8.3f} {a['tau']:9.4g}", flush=True)
+
+
+RHO_LO, RHO_HI = 0.6, 0.95  # bc_sine.h: the load-adaptive ramp's band (BC_SINE_RHO_LO, BC_SINE_RHO_HI)
+
+
+def startup_bound(st: dict[str, float], J: float, p: int, tau_if: float) -> float:
+    """Return the largest load (a fraction of the I/f torque ``tau_if``) the start is designed to carry.
+
+    In the ramp the rotor's torque share ``rho`` (its load angle's cosine) sets the acceleration ``a = a_max (RHO_HI
+    - rho) / (RHO_HI - RHO_LO)``, and ``rho tau_if = tau_L + J a / p``; the ramp fails (START_FAIL) when its mean
+    acceleration is below ``a_min`` (``omega_on / a_min`` below the top). Equilibrium at ``a = a_min``:
+    ``tau_L / tau_if = RHO_HI - (RHO_HI - RHO_LO) a_min / a_max - J a_min / (p tau_if)``.
+    """
+    return RHO_HI - (RHO_HI - RHO_LO) * st["if_accel_min"] / st["if_accel"] - J * st["if_accel_min"] / (p * tau_if)
+
+
+def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str) -> dict[str, float]:
+    """One start: the controller configured from the nominal drive, the plant's inertia ``kj J``, a load of ``fl``
+    times the I/f torque, speed loop to 0.3 Omega_0.
+
+    ``kind``: ``passive`` a Coulomb-type load (the plant's friction ``tau_c``: against the motion, holding the
+    rotor at rest while the motor's torque is below it), ``brake`` an active constant load released at the end of
+    the alignment (a brake), ``active`` an active constant load from t = 0 (the legs still off). Returns ``ok``
+    (1: in the sine mode at the end, the speed within 5 %), ``bound`` (the load fraction the start is designed
+    for, :func:`startup_bound`), ``t_lock`` (s, the first sample in the sine mode), ``restarted`` (1: a DESYNC, a
+    failed start or a lost lock, before the end), ``flags`` and the I/f torque ``tau_if`` (N m).
+    """
+    ctl = bl.Sine(angle="observer", speed_loop=True)
+    st = ctl.sensorless_settings(d)
+    tau_if = 1.5 * bl.control.sine.fundamental_k1(d) * st["if_current"]
+    w = 0.3 * d.Omega_0
+    mech = dataclasses.replace(d.mechanics, J=kj * d.mechanics.J,
+                               tau_c=d.mechanics.tau_c + (fl * tau_if if kind == "passive" else 0.0))
+    plant = dataclasses.replace(d, mechanics=mech)
+    load: float | Callable[[NDArray[np.float64]], NDArray[np.float64]] = 0.0
+    if kind == "active":
+        load = fl * tau_if
+    elif kind == "brake":
+        t_rel = st["if_align"]
+        load = lambda t: np.where(t >= t_rel, fl * tau_if, 0.0)  # noqa: E731
+    p = d.motor.p
+    t_ramp = p * ctl.handoff(d) / st["if_accel_min"]  # the slowest ramp
+    t_acc = mech.J * w / max(ctl.torque_limit(d) - fl * tau_if, 0.1 * ctl.torque_limit(d))
+    dur = 2 * (st["if_align"] + t_ramp + 4 * st["lock_time"]) + t_acc + 0.5
+    r = simulate(plant, ctl, Scenario(duration=dur, omega_ref=w, load_torque=load, theta0=theta0, trace_every=16),
+                 estimate=d)
+    on = r["mode"] > 0.5
+    ok = bool(on[-1]) and abs(r["omega_m"][-1] / w - 1) < 0.05
+    return {"ok": float(ok), "bound": startup_bound(st, mech.J, p, tau_if),
+            "t_lock": float(r["t"][on][0]) if on.any() else math.nan, "restarted": float("DESYNC" in r.flags_raised),
+            "tau_if": tau_if, "flags": r.flags_raised}
+
+
+def startup_map(names: list[str]) -> None:
+    """Print the start-up's success over load torque x inertia x initial angle, per load kind (``startup_case``).
+
+    One line per drive, load kind, inertia and load: the starts that succeeded out of the initial angles, the
+    bound (the load fraction within which the start is designed to succeed), the time to the hand-off (s, range)
+    and the starts that restarted at least once (DESYNC); failures are named by their flags.
+    """
+    print(f"\n{'drive':16s} {'load kind':9s} {'J/J_nom':>7s} {'load/tau_if':>11s} {'bound':>6s} {'ok':>5s} "
+          f"{'t_lock s':>13s} {'restarts':>8s}  flags of the failures")
+    for name in names:
+        d = bl.load(name)
+        for kind in STARTUP_KINDS:
+            for kj in STARTUP_J:
+                for fl in STARTUP_LOADS:
+                    runs = [startup_case(d, fl, kj, th, kind) for th in STARTUP_ANGLES]
+                    good = [r for r in runs if r["ok"]]
+                    tl = [r["t_lock"] for r in good]
+                    tls = f"{min(tl):.2f}-{max(tl):.2f}" if tl else "-"
+                    fails = sorted({r["flags"] for r in runs if not r["ok"]})
+                    print(f"{name:16s} {kind:9s} {kj:7.1f} {fl:11.2f} {runs[0]['bound']:6.3f} "
+                          f"{len(good):>2d}/{len(runs):<2d} {tls:>13s} {sum(r['restarted'] for r in runs):8.0f}  "
+                          f"{'; '.join(fails)}", flush=True)
 
 
 def commissioning(names: list[str]) -> None:
@@ -147,6 +243,12 @@ def main(names: list[str]) -> None:
 
 
 if __name__ == "__main__":
+    if len(sys.argv) > 1 and sys.argv[1] == "--sensors":
+        sensor_errors(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v"])
+        raise SystemExit(0)
+    if len(sys.argv) > 1 and sys.argv[1] == "--startup":
+        startup_map(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v"])
+        raise SystemExit(0)
     drives = sys.argv[1:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv", "f60prov-2550kv"]
     main(drives)
     sensitivity(drives)

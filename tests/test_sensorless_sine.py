@@ -148,38 +148,86 @@ def test_lowest_speed_tried_holds_lock(obs: str) -> None:
     assert np.max(np.abs(np.degrees(angle_error(r, last)))) < 0.5
 
 
-@pytest.mark.parametrize("kj", [0.5, 1.0])
-def test_start_under_half_the_if_torque(kj: float) -> None:
-    """outrunner-24v, the controller configured for the nominal inertia, the plant's 0.5 or 1 times it, an active
-    load of half the I/f current's torque from t = 0: the drive starts, hands over, and its speed loop holds the
-    reference (within 5 %) with no restart."""
-    d = bl.load("outrunner-24v")
+RHO_LO, RHO_HI = 0.6, 0.95  # bc_sine.h: BC_SINE_RHO_LO, BC_SINE_RHO_HI
+
+
+def start_plant(d: bl.Drive, kj: float, tau_c: float = 0.0) -> bl.Drive:
+    """The drive with its inertia times ``kj`` and ``tau_c`` (N m) added to its Coulomb friction."""
+    return dataclasses.replace(d, mechanics=dataclasses.replace(d.mechanics, J=kj * d.mechanics.J,
+                                                                tau_c=d.mechanics.tau_c + tau_c))
+
+
+@pytest.mark.parametrize("kj", [1.0, 2.0])
+def test_adaptive_ramp_acceleration_closed_form(kj: float) -> None:
+    """servo-2k2, the controller configured for the nominal inertia, the plant's 1 or 2 times it, an active load
+    of 0.8 of the I/f torque ``tau_if = 1.5 k_1 if_current`` released at the end of the alignment (a brake). The
+    load-adaptive ramp sets ``a = a_max (RHO_HI - rho) / (RHO_HI - RHO_LO)`` from the rotor's torque share ``rho``,
+    and the rotor needs ``rho tau_if = tau_L + J a / p``: at equilibrium ``a = a_max (RHO_HI - f) / (RHO_HI - RHO_LO
+    + a_max J / (p tau_if))``, 3.4 times less than the fixed ramp's (which could not carry this load). The rotor's
+    mean acceleration between 30 % and 80 % of the hand-off speed is that to 10 %, and the start hands over without
+    a restart."""
+    d = bl.load("servo-2k2")
     ctl = bl.Sine(angle="observer", speed_loop=True)
     st = ctl.sensorless_settings(d)
-    load = 0.5 * 1.5 * fundamental_k1(d) * st["if_current"]
-    plant = dataclasses.replace(d, mechanics=dataclasses.replace(d.mechanics, J=kj * d.mechanics.J))
+    p = d.motor.p
+    tau_if = 1.5 * fundamental_k1(d) * st["if_current"]
+    f = 0.8
+    plant = start_plant(d, kj)
+    a_max = st["if_accel"] / p  # mechanical
+    a_eq = a_max * (RHO_HI - f) / (RHO_HI - RHO_LO + a_max * plant.mechanics.J / tau_if)
+    w_on = ctl.handoff(d)
+    t_al = st["if_align"]
+    dur = t_al + w_on / a_eq + 20 * st["lock_time"] + 0.3
+    r = simulate(plant, ctl, Scenario(duration=dur, omega_ref=0.3 * d.Omega_0, trace_every=4,
+                                      load_torque=lambda t: np.where(t >= t_al, f * tau_if, 0.0)), estimate=d)
+    t, w = r["t"], r["omega_m"]
+    k0 = int(np.argmax((t > t_al) & (w >= 0.3 * w_on)))
+    k1 = int(np.argmax((t > t_al) & (w >= 0.8 * w_on)))
+    assert k1 > k0 > 0
+    a = (w[k1] - w[k0]) / (t[k1] - t[k0])
+    assert a == pytest.approx(a_eq, rel=0.10)
+    assert r["mode"][-1] == 1
+    assert "DESYNC" not in r.flags_raised
+
+
+@pytest.mark.parametrize(("kind", "kj"), [("brake", 1.0), ("passive", 1.0), ("brake", 2.0), ("passive", 0.5)])
+def test_start_within_the_bound(kind: str, kj: float) -> None:
+    """servo-2k2, a load of 0.75 of the I/f torque (within the bound of ``benchmarks/sensorless_sine.py``,
+    ``startup_bound``: 0.91-0.93 here): an active load released at the end of the alignment, or a friction-type
+    load holding the rotor at rest (the plant's Coulomb friction). The drive starts, hands over, and its speed loop
+    holds the reference (within 5 %) with no restart."""
+    d = bl.load("servo-2k2")
+    ctl = bl.Sine(angle="observer", speed_loop=True)
+    st = ctl.sensorless_settings(d)
+    tau_if = 1.5 * fundamental_k1(d) * st["if_current"]
+    load = 0.75 * tau_if
+    plant = start_plant(d, kj, load if kind == "passive" else 0.0)
+    t_al = st["if_align"]
     w = 0.3 * d.Omega_0
-    dur = 3 * (st["if_align"] + d.motor.p * ctl.handoff(d) / st["if_accel"] + 4 * st["lock_time"]) \
+    dur = t_al + d.motor.p * ctl.handoff(d) / (0.1 * st["if_accel"]) + 20 * st["lock_time"] \
         + plant.mechanics.J * w / (ctl.torque_limit(d) - load) + 0.5
-    r = simulate(plant, ctl, Scenario(duration=dur, omega_ref=w, load_torque=load, trace_every=8), estimate=d)
+    lt = (lambda t: np.where(t >= t_al, load, 0.0)) if kind == "brake" else 0.0
+    r = simulate(plant, ctl, Scenario(duration=dur, omega_ref=w, load_torque=lt, trace_every=8), estimate=d)
     assert r["mode"][-1] == 1
     assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
     assert "DESYNC" not in r.flags_raised
 
 
 def test_start_against_a_load_above_the_if_torque_fails_by_name() -> None:
-    """A load above the I/f current's largest torque ``1.5 k_1 if_current`` (here 1.3 times it) cannot be started:
-    the start ends in START_FAIL (with DESYNC) and the drive retries, never a silent run in the sine mode."""
+    """A load above the I/f current's largest torque ``1.5 k_1 if_current`` (here 1.3 times it, active from t = 0)
+    cannot be started: the ramp ends in START_FAIL (with DESYNC) once it has spent the slowest ramp's time
+    ``omega_on / if_accel_min`` below the hand-off speed, and the drive retries, never a silent run in the sine
+    mode."""
     d = bl.load("outrunner-24v")
     ctl = bl.Sine(angle="observer", speed_loop=True)
     st = ctl.sensorless_settings(d)
     load = 1.3 * 1.5 * fundamental_k1(d) * st["if_current"]
-    dur = 3 * (st["if_align"] + d.motor.p * ctl.handoff(d) / st["if_accel"] + st["if_hold"])
+    dur = 1.5 * (st["if_align"] + d.motor.p * ctl.handoff(d) / st["if_accel_min"] + st["if_hold"])
     r = simulate(d, ctl, Scenario(duration=dur, omega_ref=0.3 * d.Omega_0, load_torque=load, trace_every=8))
     flags = r.flags_raised
-    assert "START_FAIL" in flags or "STALL" in flags or "LOCK_LOST" in flags
+    assert "START_FAIL" in flags
     assert "DESYNC" in flags
-    assert np.mean(r["mode"] == 1) < 0.2
+    assert np.mean(r["mode"] == 1) < 0.05
 
 
 def test_stall_under_overload_restarts_by_name() -> None:
@@ -222,6 +270,18 @@ def test_settings_and_errors() -> None:
     with pytest.raises(BldclabError) as e:
         simulate(d, bl.Sine(angle="observer", if_current=10 * i_sN(d)), Scenario(duration=0.01, speed=1.0))
     assert e.value.field == "control.if_current"
+    assert st["if_align_current"] == pytest.approx(0.9 * i_sN(d))
+    assert st["if_accel_min"] == pytest.approx(st["if_accel"] / 20)
+    with pytest.raises(BldclabError) as e:
+        simulate(d, bl.Sine(angle="observer", if_align_current=1.1 * i_sN(d)), Scenario(duration=0.01, speed=1.0))
+    assert e.value.field == "control.if_align_current"
+    with pytest.raises(BldclabError) as e:
+        simulate(d, bl.Sine(angle="observer", if_accel_min=2 * st["if_accel"] / d.motor.p),
+                 Scenario(duration=0.01, speed=1.0))
+    assert e.value.field == "control.if_accel_min"
+    with pytest.raises(BldclabError) as e:
+        bl.Sine(angle="observer", if_accel_min=-1.0)
+    assert e.value.field == "control.if_accel_min"
 
 
 def test_cli_angle_observer(capsys: pytest.CaptureFixture[str]) -> None:
@@ -251,3 +311,55 @@ def test_dead_time_compensation_restores_low_speed_lock() -> None:
     assert np.max(np.abs(np.degrees(angle_error(r, m)))) < 0.5
     r0, m0 = run_point(p, ctl, 0.1, estimate=d)
     assert not np.all(r0["mode"][m0] == 1)
+
+
+def test_current_sensor_offset_and_noise() -> None:
+    """servo-2k2 at 0.5 Omega_0, half the rated load, flux observer, the controller unaware of the sensor errors.
+
+    A constant offset D on phase a (phases a and b measured) is a constant vector in alpha-beta; the observer
+    integrates ``R D`` as a voltage and subtracts ``L D`` from the flux, so its angle error is a ripple at the
+    electrical frequency (zero mean), linear in D for a small offset: the error fits ``A cos(theta_e - phi)`` to 10 %
+    of its rms, has a mean below a tenth of its rms, and doubles (to 5 %) when D doubles. White noise on the
+    measured phases gives an angle error that doubles (to 15 %) when the noise's standard deviation doubles."""
+    d = bl.load("servo-2k2")
+    ctl = observer(d, 0.5)
+    amp, rms = [], []
+    for off in (0.01, 0.02):
+        plant = d.replace(sensors__current_offset=(off * i_sN(d), 0.0, 0.0))
+        r, m = run_point(plant, ctl, 0.5, estimate=d)
+        assert np.all(r["mode"][m] == 1)
+        err = angle_error(r, m)
+        th = r["theta_e"][m]
+        basis = np.column_stack([np.cos(th), np.sin(th), np.ones_like(th)])
+        coef, *_ = np.linalg.lstsq(basis, err, rcond=None)
+        resid = err - basis @ coef
+        e_rms = float(np.sqrt(np.mean(err**2)))
+        assert float(np.sqrt(np.mean(resid**2))) < 0.1 * e_rms
+        assert abs(float(np.mean(err))) < 0.1 * e_rms
+        amp.append(math.hypot(coef[0], coef[1]))
+        rms.append(e_rms)
+    assert amp[1] / amp[0] == pytest.approx(2.0, rel=0.05)
+    noisy = []
+    for sd in (0.005, 0.01):
+        plant = d.replace(sensors__current_noise=sd * i_sN(d))
+        r, m = run_point(plant, ctl, 0.5, estimate=d)
+        noisy.append(float(np.sqrt(np.mean(angle_error(r, m) ** 2))))
+    assert noisy[1] / noisy[0] == pytest.approx(2.0, rel=0.15)
+
+
+def test_fixed_ramp_with_a_wrong_resistance() -> None:
+    """htm-48v configured with R 50 % high (0.5 Omega_0, half the rated load): the load-adaptive ramp reads the
+    observer from standstill, where the wrong ``R i`` outweighs the back-EMF, and the drive is still in its I/f
+    start (flagged OPEN_LOOP, never in the sine mode on a wrong angle) when the window comes; the fixed ramp with
+    the one-current alignment (``if_accel_min = if_accel``, ``if_align_current = if_current``) hands over and runs
+    with about 1 deg of angle error (docs/sensorless-sine.md, sensitivity)."""
+    d = bl.load("htm-48v")
+    wrong = d.scaled(R=1.5)
+    r, m = run_point(d, observer(d, 0.5), 0.5, estimate=wrong)
+    assert "OPEN_LOOP" in r.flags_raised
+    assert not np.any(r["mode"][m] == 1)
+    st = observer(d, 0.5).sensorless_settings(wrong)
+    fixed = observer(d, 0.5, if_accel_min=st["if_accel"] / d.motor.p, if_align_current=st["if_current"])
+    r, m = run_point(d, fixed, 0.5, estimate=wrong)
+    assert np.all(r["mode"][m] == 1)
+    assert np.max(np.abs(np.degrees(angle_error(r, m)))) < 2.0

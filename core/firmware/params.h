@@ -102,7 +102,9 @@ static inline void htm_sine_observer(bc_sine_params *p)
     p->fobs.gain = 107.2f;
     p->if_current = 28.87f;
     p->if_align = 0.363f;
+    p->if_align_current = 51.96f;
     p->if_accel = 278.4f;
+    p->if_accel_min = 13.92f;
     p->if_hold = 1.172f;
     p->lock_time = 0.0466f;
     p->lock_tol = 0.2f;

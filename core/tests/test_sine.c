@@ -441,6 +441,109 @@ static void test_fuzz(void)
     CHECK(n_rearm > 100, "the over-current trip was re-armed %d times", n_rearm);
 }
 
+/* The sensorless mode (both observers, with and without the speed loop) under random and non-finite inputs: the
+ * outputs stay finite and the duties in [0, 1] in every phase of the I/f start (its load-adaptive ramp and the swing
+ * damping read the observer, whatever it estimates); the parameters of the start are validated. */
+static void observer_params(bc_sine_params *p, int32_t observer)
+{
+    const bc_fluxobs_params f = {.R = 0.05f, .L = 75e-6f, .psi = 0.0486f, .ts = p->ts, .gain = 107.2f,
+                                 .pll_bw = 556.0f, .i_max = 100.0f, .v_max = 96.0f};
+    const bc_redobs_params r = {.R = 0.05f, .L = 75e-6f, .psi = 0.0486f, .ts = p->ts, .alpha_o = 556.0f,
+                                .sigma0 = 333.3f, .zeta_inf = 0.2f, .i_max = 100.0f, .v_max = 96.0f};
+    p->angle = BC_SINE_ANGLE_OBSERVER;
+    p->observer = observer;
+    p->fobs = f;
+    p->robs = r;
+    p->if_current = 28.87f;
+    p->if_align_current = 51.96f;
+    p->if_align = 0.01f; /* short: the ramp is reached often */
+    p->if_accel = 278.4f;
+    p->if_accel_min = 13.92f;
+    p->if_hold = 0.05f;
+    p->lock_time = 0.0466f;
+    p->lock_tol = 0.2f;
+    p->restart_wait = 0.005f;
+    p->if_damp = 11.43f;
+}
+
+static void test_fuzz_observer(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    bc_sine_params base;
+    sine_params(&base, &f);
+    static const float special[] = {NAN, INFINITY, -INFINITY, 3e38f, -3e38f, 1e-38f, -1e-38f, 0.0f, 1e6f, -1e6f};
+    int bad_out = 0, n_ramp = 0, n_align = 0;
+    for (int variant = 0; variant < 4; ++variant) {
+        bc_sine_params p = base;
+        observer_params(&p, (variant & 1) ? BC_SINE_OBS_REDUCED : BC_SINE_OBS_FLUX);
+        p.speed_loop = (variant >> 1) & 1;
+        p.tau_max = 40.0f;
+        static bc_sine_state s;
+        CHECK(bc_sine_init(&p, &s) == BC_OK, "init observer variant %d", variant);
+        float phase = 0.0f;
+        for (int k = 0; k < 40000; ++k) {
+            bc_ctrl_in in;
+            memset(&in, 0, sizeof in);
+            int wild = (rnd_u32() % 512u) == 0u;
+            /* currents: a turning vector of random amplitude and speed plus noise (the observers then see a
+             * motion), sometimes anything */
+            phase += (float)(rnd() * 0.3);
+            float amp = (float)(rnd() * 60.0);
+            for (int x = 0; x < 3; ++x) {
+                float v = amp * cosf(phase - (float)x * 2.0943951f) + (float)((rnd() - 0.5) * 10.0);
+                in.i_abc[x] = wild ? special[rnd_u32() % 10u] : v;
+            }
+            in.i_mask = wild ? rnd_u32() : 3u;
+            in.v_dc = wild ? special[rnd_u32() % 10u] : (float)(20.0 + 70.0 * rnd()); /* v_max 96 V */
+            in.ref = wild ? special[rnd_u32() % 10u] : (float)((rnd() - 0.2) * 40.0);
+            in.omega_ref = wild ? special[rnd_u32() % 10u] : (float)((rnd() - 0.2) * 60.0);
+            bc_ctrl_out out;
+            bc_sine_step(&p, &s, &in, &out);
+            for (int x = 0; x < 3; ++x) {
+                if (!(out.leg[x].duty >= 0.0f && out.leg[x].duty <= 1.0f) || out.leg[x].mode < BC_LEG_OFF ||
+                    out.leg[x].mode > BC_LEG_LOW)
+                    bad_out += 1;
+            }
+            for (int j = 0; j < BC_DIAG_N; ++j) bad_out += !isfinite(out.diag[j]);
+            bad_out += !isfinite(s.if_theta) || !isfinite(s.if_omega) || !isfinite(s.rho_f);
+            n_ramp += s.mode == BC_SINE_MODE_START && s.sl_phase == BC_SINE_SL_RAMP;
+            n_align += s.mode == BC_SINE_MODE_START && s.sl_phase == BC_SINE_SL_ALIGN;
+            if (s.guard.latched) {
+                bc_ctrl_in in0 = in;
+                for (int x = 0; x < 3; ++x) in0.i_abc[x] = 0.0f;
+                in0.i_mask = 3u;
+                in0.v_dc = 48.0f;
+                in0.ref = 10.0f;
+                in0.omega_ref = 10.0f;
+                bc_sine_step(&p, &s, &in0, &out);
+            }
+        }
+    }
+    CHECK(bad_out == 0, "observer mode: every output finite, duties in [0, 1]: %d bad", bad_out);
+    CHECK(n_ramp > 1000, "the I/f ramp was exercised: %d samples", n_ramp);
+    CHECK(n_align > 1000, "the alignment was exercised: %d samples", n_align);
+
+    /* the start's parameters: a slowest ramp above the fastest, an alignment current above i_s_max, non-finite */
+    static bc_sine_state s;
+    bc_sine_params p = base;
+    observer_params(&p, BC_SINE_OBS_FLUX);
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "valid observer parameters accepted");
+    p.if_accel_min = 1.01f * p.if_accel;
+    CHECK(bc_sine_init(&p, &s) == BC_ERR_PARAM, "if_accel_min > if_accel rejected");
+    p.if_accel_min = p.if_accel; /* a fixed ramp */
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "if_accel_min = if_accel accepted");
+    p.if_accel_min = 0.0f;
+    CHECK(bc_sine_init(&p, &s) == BC_ERR_PARAM, "if_accel_min = 0 rejected");
+    p.if_accel_min = NAN;
+    CHECK(bc_sine_init(&p, &s) == BC_ERR_PARAM, "if_accel_min NaN rejected");
+    observer_params(&p, BC_SINE_OBS_FLUX);
+    p.if_align_current = 1.01f * p.i_s_max;
+    CHECK(bc_sine_init(&p, &s) == BC_ERR_PARAM, "if_align_current > i_s_max rejected");
+    p.if_align_current = 0.0f;
+    CHECK(bc_sine_init(&p, &s) == BC_ERR_PARAM, "if_align_current = 0 rejected");
+}
+
 /* Limits of the current reference, linear modulation, and the bumpless hand-off on a synthetic rotor. */
 static void test_limits_and_handoff(void)
 {
@@ -1122,6 +1225,7 @@ int main(void)
     test_params();
     test_safe_states();
     test_fuzz();
+    test_fuzz_observer();
     test_closed_loop_rest();
     test_limits_and_handoff();
     test_decoupling_measured();

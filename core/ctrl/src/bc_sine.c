@@ -313,8 +313,10 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
         } else {
             return BC_ERR_PARAM;
         }
-        if (!finite_pos(p->if_current) || p->if_current > p->i_s_max || !finite_nonneg(p->if_align) ||
-            !finite_pos(p->if_accel) || !finite_pos(p->if_hold) || !finite_pos(p->lock_time) ||
+        if (!finite_pos(p->if_current) || p->if_current > p->i_s_max || !finite_pos(p->if_align_current) ||
+            p->if_align_current > p->i_s_max || !finite_nonneg(p->if_align) ||
+            !finite_pos(p->if_accel) || !finite_pos(p->if_accel_min) || p->if_accel_min > p->if_accel ||
+            !finite_pos(p->if_hold) || !finite_pos(p->lock_time) ||
             !finite_pos(p->lock_tol) || p->lock_tol >= 1.0f || !finite_nonneg(p->restart_wait) || !finite_nonneg(p->if_damp) ||
             !finite_nonneg(p->t_dead) || p->t_dead >= p->ts)
             return BC_ERR_PARAM;
@@ -353,10 +355,11 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->n_quiet = 0;
     s->sl_phase = BC_SINE_SL_IDLE;
     s->sl_dir = 1;
-    s->if_theta = s->if_omega = s->sl_t = s->n_lock = s->omega_f = 0.0f;
+    s->if_theta = s->if_omega = s->sl_t = s->n_lock = s->omega_f = s->rho_f = s->if_t = 0.0f;
     s->u_hist[0][0] = s->u_hist[0][1] = s->u_hist[1][0] = s->u_hist[1][1] = 0.0f;
     s->u_ok[0] = s->u_ok[1] = 0;
     s->n_restart = 0u;
+    s->if_trust = 0;
     s->derate_on = p->derate.enabled[0] != 0 || p->derate.enabled[1] != 0;
     s->derate_f = 1.0f;
     if (s->derate_on && bc_derate_init(&p->derate, &s->derate) != BC_OK) return BC_ERR_PARAM;
@@ -700,18 +703,50 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
         float dir = (float)s->sl_dir;
         if (s->sl_phase == BC_SINE_SL_ALIGN) {
             s->sl_t += p->ts;
+            /* two steps: the vector at pi/2 for the first third, then at 0 (a rotor at the unstable point of
+             * one, or held by friction near it, is a quarter turn from the other's) */
+            s->if_theta = 3.0f * s->sl_t < p->if_align ? 0.5f * BC_PI_F : 0.0f;
             if (s->sl_t >= p->if_align) {
                 /* the unloaded rotor's q axis is pi/2 behind the vector's (dir < 0: ahead): seed the observer */
                 obs_reset(p, s, s->if_theta + dir * 0.5f * BC_PI_F, 0.0f, i_ab);
                 s->sl_phase = BC_SINE_SL_RAMP;
                 s->sl_t = 0.0f;
+                s->rho_f = 0.0f;
+                s->if_t = 0.0f;
+                s->if_trust = 0;
             }
         } else if (s->sl_phase == BC_SINE_SL_RAMP) {
-            /* omega_if += dir a T_s up to omega_on; theta_if += omega_if T_s */
-            float w = fabsf(s->if_omega) + p->if_accel * p->ts;
+            /* the load-adaptive ramp (if_accel_min < if_accel; otherwise the fixed ramp at if_accel): the
+             * torque's share of the I/f torque rho = cos(theta^ - theta_if) sets the acceleration
+             * a = if_accel clamp((RHO_HI - rho) / (RHO_HI - RHO_LO), -1, 1): full while the torque is at most
+             * RHO_LO of the I/f torque, none at RHO_HI, and past it the vector slows (waits for the rotor) */
+            int adaptive = p->if_accel_min < p->if_accel;
+            s->rho_f = cosf(o.theta - s->if_theta);
+            float a = p->if_accel;
+            /* the observer is trusted when it sees the rotor move (at least 5 % of omega_on): at rest it holds its
+             * seed, which a load holding the rotor leaves off. Not trusted: the vector creeps (below) at
+             * if_accel_min at least, the swing is not braked */
+            int moving = fabsf(o.omega_e) >= 0.05f * p->omega_on;
+            s->if_trust = adaptive && moving;
+            if (adaptive) {
+                a *= bc_clampf((BC_SINE_RHO_HI - s->rho_f) / (BC_SINE_RHO_HI - BC_SINE_RHO_LO), -1.0f, 1.0f);
+                if (!moving) a = fmaxf(a, p->if_accel_min);
+            }
+            /* omega_if += dir a T_s within dir [-omega_on, omega_on] (a rotor pushed back by an active load is
+             * followed back); theta_if += omega_if T_s */
+            float w = fmaxf(dir * s->if_omega + a * p->ts, -p->omega_on);
+            /* a rotor at rest is passed slowly (it breaks away where the torque is largest): at most a creep */
+            if (adaptive && !moving) w = fminf(w, 0.05f * p->omega_on);
+            /* at the top of the band the vector does not outrun the rotor (the observer's speed) */
+            if (s->if_trust && s->rho_f >= BC_SINE_RHO_HI) w = fminf(w, fmaxf(dir * o.omega_e, -p->omega_on));
             int at_top = w >= p->omega_on;
             s->if_omega = dir * (at_top ? p->omega_on : w);
             s->if_theta = bc_wrap_2pi(s->if_theta + s->if_omega * p->ts);
+            if (!at_top) {
+                /* below omega_on for longer than the slowest ramp takes: the load is beyond the I/f torque */
+                s->if_t += p->ts;
+                if (adaptive && s->if_t >= p->omega_on / p->if_accel_min) sl_desync(p, s, out, BC_FLAG_START_FAIL);
+            }
             if (at_top) {
                 s->sl_t += p->ts;
                 int lock = flux_ok && fabsf(o.err) <= p->lock_tol && s->omega_f * dir >= p->omega_off;
@@ -746,11 +781,24 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             /* the current rises over a tenth of if_align (enough holding torque early against an active load), and
              * the rotor's swing is braked: its back-EMF lies on d of theta_if (the rotor's q axis there, either
              * direction), seen in the d integrator; i_d,ref = -if_damp (x_d - R i_d) */
+            iq_ref = (float)s->sl_dir * p->if_align_current * s->derate_f;
             if (p->if_align > 0.0f) iq_ref *= bc_clampf(10.0f * s->sl_t / p->if_align, 0.0f, 1.0f);
             float sd1 = -sinf(theta), cd1 = -cosf(theta);
             bc_dq idq1 = bc_park(bc_clarke(i), sd1, cd1);
-            id_ref = bc_clampf(-p->if_damp * (s->pi_d.x - p->R * idq1.d), -0.5f * p->if_current,
-                               0.5f * p->if_current);
+            float ia = p->if_align_current;
+            float id_max = fminf(0.5f * ia, sqrtf(fmaxf(p->i_s_max * p->i_s_max - ia * ia, 0.0f))) * s->derate_f;
+            id_ref = bc_clampf(-p->if_damp * (s->pi_d.x - p->R * idq1.d), -id_max, id_max);
+        } else if (s->sl_phase == BC_SINE_SL_RAMP) {
+            /* the swing braked through the observer: i_d = if_damp psi_f (omega^ - omega_if) / sin Delta makes
+             * the torque -1.5 k_1 if_damp psi_f (omega^ - omega_if) (bc_sine.h, RAMP); near sin Delta = 0 (the
+             * rotor at the I/f current's largest torque) it fades: sin Delta / max(sin^2 Delta, 1/16) */
+            float psi = p->observer == BC_SINE_OBS_FLUX ? p->fobs.psi : p->robs.psi;
+            float sdl = sinf(o.theta - s->if_theta);
+            float id_max = sqrtf(fmaxf(p->i_s_max * p->i_s_max - p->if_current * p->if_current, 0.0f));
+            id_max = fminf(id_max, p->if_current) * s->derate_f;
+            id_ref = s->if_trust ? bc_clampf(p->if_damp * psi * (o.omega_e - s->if_omega) * sdl /
+                                                 fmaxf(sdl * sdl, 0.0625f), -id_max, id_max)
+                                 : 0.0f;
         }
         out->flags |= BC_FLAG_OPEN_LOOP;
     } else {

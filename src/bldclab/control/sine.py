@@ -94,7 +94,21 @@ class Sine(Control):
     if_accel : float, optional
         Mechanical acceleration of the I/f ramp (rad/s^2). Default: half the I/f torque ``1.5 k_1 if_current``
         accelerating the inertia ``J``, but at most the acceleration whose start and end excite a swing of the rotor
-        about the current vector of 10 % of the hand-off speed (``0.1 omega_on omega_n``, ``omega_n`` below).
+        about the current vector of 10 % of the hand-off speed (``0.1 omega_on omega_n``, ``omega_n`` below). The
+        ramp's largest acceleration: the ramp adapts to the load (``bc_sine.h``, RAMP), full while the rotor's
+        torque (read from the observer) is at most 60 % of the I/f torque, none at 95 %, the vector waiting for the
+        rotor above that.
+    if_accel_min : float, optional
+        The load-adaptive ramp's slowest mean acceleration (rad/s^2, mechanical), at most ``if_accel``; default
+        ``if_accel / 20``: a ramp that takes longer than ``omega_on / if_accel_min`` ends in ``START_FAIL``. The
+        start is designed for a load ``tau_L / tau_if <= 0.95 - 0.35 if_accel_min / if_accel - J if_accel_min /
+        tau_if`` (``tau_if = 1.5 k_1 if_current``; docs/sensorless-sine.md). ``if_accel_min = if_accel``: the
+        fixed ramp at ``if_accel``, no adaptation.
+    if_align_current : float, optional
+        Current amplitude of the alignment before the ramp (A), default ``0.9 I_s,N`` (at least ``if_current``, at
+        most ``i_s_max``); at most the current limit ``i_s_max``. A load that holds the rotor (friction) leaves it
+        within ``asin(tau_L / (1.5 k_1 if_align_current))`` of the angle the observer is seeded with; the rest of the
+        current limit brakes the swing.
     if_align : float, optional
         Time the I/f current vector is held still before the ramp (s). Default three periods of the rotor's
         oscillation about the vector, ``2 pi / sqrt(p 1.5 k_1 if_current / J)`` each.
@@ -215,7 +229,9 @@ class Sine(Control):
     observer_bandwidth: float | None = None
     if_current: float | None = None
     if_accel: float | None = None
+    if_accel_min: float | None = None
     if_align: float | None = None
+    if_align_current: float | None = None
     lock_tolerance: float = 0.2
     restart_wait: float = 0.1
     derate: TemperatureDerating | None = None
@@ -259,7 +275,8 @@ class Sine(Control):
         check_number("speed_bandwidth_hz", self.speed_bandwidth_hz)
         if self.observer not in _OBSERVER:
             raise BldclabError("control.observer", f"must be one of {', '.join(_OBSERVER)}, got {self.observer!r}")
-        for name in ("observer_gain", "observer_bandwidth", "if_current", "if_accel", "if_align"):
+        for name in ("observer_gain", "observer_bandwidth", "if_current", "if_accel", "if_accel_min", "if_align",
+                     "if_align_current"):
             if getattr(self, name) is not None:
                 check_number(name, getattr(self, name), allow_zero=name == "if_align")
         check_number("lock_tolerance", self.lock_tolerance)
@@ -347,8 +364,9 @@ class Sine(Control):
         -------
         dict of str to float
             ``psi`` (V s, ``k_1 / p``), ``gain`` (``lambda``, rad/s), ``bandwidth`` (rad/s), ``sigma0`` (rad/s),
-            ``if_current`` (A), ``if_accel`` (electrical rad/s^2), ``if_align`` (s), ``if_damp`` (A/V, the
-            alignment's swing damping ``omega_n J / (1.5 p^2 psi_f^2)``), ``lock_time`` (s) and ``if_hold`` (s).
+            ``if_current`` and ``if_align_current`` (A), ``if_accel`` and ``if_accel_min`` (electrical rad/s^2),
+            ``if_align`` (s), ``if_damp`` (A/V, the swing damping ``omega_n J / (1.5 p^2 psi_f^2)``), ``lock_time``
+            (s) and ``if_hold`` (s).
         """
         m = drive.motor
         ts = 0.5 / drive.inverter.f_pwm
@@ -364,12 +382,15 @@ class Sine(Control):
         w_n = math.sqrt(m.p * tau_if / drive.mechanics.J)
         a_if = (min(m.p * 0.5 * tau_if / drive.mechanics.J, 0.1 * w_on * w_n) if self.if_accel is None
                 else m.p * float(self.if_accel))
+        i_al = max(0.9 * i_sN(drive), i_if) if self.if_align_current is None else float(self.if_align_current)
+        a_min = a_if / 20.0 if self.if_accel_min is None else m.p * float(self.if_accel_min)
         align = 3.0 * 2.0 * math.pi / w_n if self.if_align is None else float(self.if_align)
         lock_time = 5.0 / min(gain, bw)
         # i_d = -k u_d brakes the alignment swing at the rate 1.5 p^2 psi^2 k / J: made w_n (near critical damping)
         damp = w_n * drive.mechanics.J / (1.5 * m.p**2 * (k1 / m.p) ** 2)
         return {"psi": k1 / m.p, "gain": gain, "bandwidth": bw,
                 "sigma0": min(r_total(drive) / (2.0 * m.L), 0.2 / ts), "if_current": i_if, "if_accel": a_if,
+                "if_accel_min": a_min, "if_align_current": i_al,
                 "if_align": align, "if_damp": damp, "lock_time": lock_time,
                 "if_hold": max(20.0 * lock_time, 10.0 * 2 * math.pi / w_on)}
 
@@ -378,15 +399,24 @@ class Sine(Control):
         m, inv = drive.motor, drive.inverter
         ts = 0.5 / inv.f_pwm
         st = self.sensorless_settings(drive)
-        if self.angle == "observer" and st["if_current"] > self.current_limit(drive):
+        i_lim = self.current_limit(drive)
+        if self.angle == "observer" and st["if_accel_min"] > st["if_accel"] * (1.0 + 1e-9):
+            raise BldclabError("control.if_accel_min", f"must be at most if_accel = {st['if_accel'] / m.p:.4g} "
+                               f"rad/s^2, got {st['if_accel_min'] / m.p:.4g} rad/s^2")
+        if self.angle == "observer" and st["if_current"] > i_lim:
             raise BldclabError("control.if_current", f"must be at most the current limit i_s_max = "
-                               f"{self.current_limit(drive):.4g} A, got {st['if_current']:.4g} A")
+                               f"{i_lim:.4g} A, got {st['if_current']:.4g} A")
+        if self.angle == "observer" and self.if_align_current is not None and st["if_align_current"] > i_lim:
+            raise BldclabError("control.if_align_current", f"must be at most the current limit i_s_max = "
+                               f"{i_lim:.4g} A, got {st['if_align_current']:.4g} A")
         common = {"R": r_total(drive), "L": m.L, "psi": st["psi"], "ts": ts, "i_max": i_max, "v_max": 2.0 * inv.V_dc}
         fobs = core.filled("bc_fluxobs_params", gain=st["gain"], pll_bw=st["bandwidth"], **common)
         robs = core.filled("bc_redobs_params", alpha_o=st["bandwidth"], sigma0=st["sigma0"], zeta_inf=0.2, **common)
         return {"observer": core.const(_OBSERVER[self.observer]), "fobs": fobs[0], "robs": robs[0],
                 "if_current": st["if_current"], "if_align": st["if_align"],
-                "if_accel": st["if_accel"], "if_hold": st["if_hold"], "lock_time": st["lock_time"],
+                "if_align_current": min(st["if_align_current"], i_lim),
+                "if_accel": st["if_accel"], "if_accel_min": min(st["if_accel_min"], st["if_accel"]),
+                "if_hold": st["if_hold"], "lock_time": st["lock_time"],
                 "lock_tol": self.lock_tolerance, "restart_wait": self.restart_wait, "if_damp": st["if_damp"],
                 "t_dead": inv.t_dead}
 

@@ -187,21 +187,41 @@
  * i_s_max; device drops are not in it). The start mode is I/f, in phases:
  *
  *   IDLE   the reference (tau, or omega_ref with the speed loop) is 0: legs off. Otherwise dir = its sign, ALIGN.
- *   ALIGN  the current vector i_q,ref = dir if_current, i_d,ref = 0 in the frame of theta_if = 0 (the same PIs,
- *          decoupling with omega_if, no back-EMF feed-forward) for if_align, its amplitude rising linearly over the
- *          first tenth of it (holding torque early, against an active load). A current-fed rotor has no damping of
- *          its own and would swing about the vector; its swing's back-EMF lies on d of theta_if (the rotor's q axis
- *          there, for either dir), and i_d,ref = -if_damp (x_d - R i_d) (x_d the d PI's integrator, clamped to
- *          +-if_current / 2) brakes it. An unloaded rotor settles with its q axis pi/2 behind the vector's (dir =
- *          -1: ahead); the observer is seeded there: theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP.
- *   RAMP   omega_if += dir if_accel T_s up to |omega_if| = omega_on, theta_if += omega_if T_s. The rotor follows
- *          with the load angle its torque needs (I/f is self-stabilising for any torque below 1.5 k_1 if_current).
+ *   ALIGN  the current vector i_q,ref = dir if_align_current, i_d,ref = 0 in the frame of theta_if = pi/2 for the
+ *          first third of if_align, then of theta_if = 0 (two steps: a rotor at the unstable point of one, or held
+ *          near it by friction, is a quarter turn from the other's rest angle; the same PIs, decoupling with
+ *          omega_if, no back-EMF feed-forward), its amplitude rising linearly over the first tenth of if_align
+ *          (holding torque early, against an active load). A larger current than the ramp's narrows the band of
+ *          angles in which a load holding the rotor (friction) leaves it away from the rest angle the observer is
+ *          seeded with: asin(tau_load / (1.5 k_1 if_align_current)). A current-fed rotor has no damping of its own
+ *          and would swing about the vector; its swing's back-EMF lies on d of theta_if (the rotor's q axis there,
+ *          for either dir), and i_d,ref = -if_damp (x_d - R i_d) (x_d the d PI's integrator, clamped to
+ *          +-min(if_align_current / 2, sqrt(i_s_max^2 - if_align_current^2))) brakes it. An unloaded rotor
+ *          settles with its q axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there:
+ *          theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP.
+ *   RAMP   omega_if += dir a T_s up to |omega_if| = omega_on, theta_if += omega_if T_s. The rotor follows
+ *          with the load angle its torque needs (a torque below 1.5 k_1 if_current). With if_accel_min < if_accel
+ *          the ramp adapts to the load: with Delta = theta^ - theta_if (the observer's angle against the vector's)
+ *          the rotor's torque is rho 1.5 k_1 if_current, rho = cos Delta (either dir), and
+ *          a = if_accel clamp((BC_SINE_RHO_HI - rho) / (BC_SINE_RHO_HI - BC_SINE_RHO_LO), -1, 1): the full ramp
+ *          while the torque is at most RHO_LO of the I/f torque, none at RHO_HI, and above it the vector slows
+ *          (down to dir omega_if = -omega_on, following a rotor an active load pushes back); at rho >= RHO_HI the
+ *          vector does not outrun the rotor (dir omega_if <= dir omega^). A rotor the observer sees at rest
+ *          (|omega^| < 0.05 omega_on) is evidence of nothing (the observer holds its seed, which a load holding
+ *          the rotor leaves off): then a >= if_accel_min and |omega_if| <= 0.05 omega_on (the vector creeps past
+ *          the rotor's angle of largest torque, where it breaks away). The swing about the turning vector is
+ *          braked through the observer while it sees the rotor move: i_d,ref = if_damp psi_f (omega^ - omega_if)
+ *          sin Delta / max(sin^2 Delta, 1/16), within +-min(if_current, sqrt(i_s_max^2 - if_current^2)), a torque
+ *          -1.5 k_1 if_damp psi_f (omega^ - omega_if) against the rotor's slip (the current's torque is
+ *          1.5 k_1 (i_q cos Delta - i_d sin Delta)). Below omega_on for longer than omega_on / if_accel_min (the
+ *          slowest ramp's time): BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT. With if_accel_min = if_accel: the
+ *          fixed ramp at if_accel, none of this.
  *          At omega_on the lock is checked every sample: |flux / psi_f - 1| <= lock_tol (the observer's flux
  *          output, bc_obs.h), |err| <= lock_tol (its tracking loop's error: rad, or the sine of the angle error)
  *          and dir omega_f >= omega_off (omega_f: omega^ through a low-pass of time constant lock_time). The
- *          observer's own consistency, not its speed against omega_if: a current-
- *          fed rotor has no damping and swings about the turning vector at sqrt(p 1.5 k_1 if_current / J) (the
- *          plant's friction aside), and the observer follows the swing. When the lock has held for lock_time
+ *          observer's own consistency, not its speed against omega_if: the rotor may still swing about the
+ *          turning vector at sqrt(p 1.5 k_1 if_current / J) (undamped with the fixed ramp), and the observer
+ *          follows the swing. When the lock has held for lock_time
  *          the drive hands over to the sine mode on the observer's angle: the d,q integrators as in the Hall
  *          hand-off below (from the current measured in the observer's frame), the speed PI's integrator at the
  *          torque 1.5 k_1 i_q that current makes. Not locked within if_hold at omega_on: BC_FLAG_START_FAIL |
@@ -222,6 +242,10 @@
  */
 #ifndef BC_SINE_H
 #define BC_SINE_H
+
+/* The load-adaptive I/f ramp's band of the torque's share of the I/f torque (section "Sensorless", RAMP). */
+#define BC_SINE_RHO_LO 0.6f
+#define BC_SINE_RHO_HI 0.95f
 
 #include <stdint.h>
 
@@ -314,12 +338,15 @@ typedef struct {
     bc_redobs_params robs;     /* the reduced-order observer's (observer = BC_SINE_OBS_REDUCED) */
     float if_current; /* I/f current amplitude, A (0 < if_current <= i_s_max) */
     float if_align;   /* time the vector is held at its start angle, s (>= 0) */
-    float if_accel;   /* I/f ramp's electrical acceleration, rad/s^2 (> 0) */
+    float if_align_current; /* current amplitude of ALIGN, A (0 < if_align_current <= i_s_max) */
+    float if_accel;   /* I/f ramp's electrical acceleration, rad/s^2 (> 0): its largest (load-adaptive ramp) */
+    float if_accel_min; /* the ramp's smallest acceleration, rad/s^2 (0 < if_accel_min <= if_accel; = if_accel:
+                           a fixed ramp) */
     float if_hold;    /* longest time at omega_on waiting for the lock, s (> 0) */
     float lock_time;  /* the lock criterion must hold this long for the handover, its violation for a loss, s (> 0) */
     float lock_tol;   /* relative band of the lock criterion, - (0 .. 1) */
     float restart_wait; /* legs off after a failed start or a lost lock, s (>= 0) */
-    float if_damp;      /* swing damping of ALIGN, A/V (>= 0) */
+    float if_damp;      /* swing damping of ALIGN and RAMP, A/V (>= 0) */
     float t_dead;       /* the inverter's dead time, s (0 <= t_dead < ts): the observer's voltage is corrected */
     bc_derate_params derate; /* temperature derating of the current limit i_s_max (bc_derate.h) from in->temp; no
                                 channel enabled (all zero): none. The start controller derates by six.derate. */
@@ -366,6 +393,9 @@ typedef struct {
     float sl_t;        /* time in the present phase (RAMP: at omega_on; sine mode: below omega_off), s */
     float n_lock;      /* time the lock criterion has held (start) or failed (sine), s */
     float omega_f;     /* the observer's speed low-passed (time constant lock_time), electrical rad/s */
+    float if_t;        /* RAMP: time below omega_on, s */
+    int32_t if_trust;  /* RAMP: 1 while the observer sees the rotor move (adaptive ramp) */
+    float rho_f;       /* RAMP: the torque's share of 1.5 k_1 if_current, cos(theta^ - theta_if) */
     float u_hist[2][2]; /* alpha-beta voltage commanded one and two samples ago, V */
     int32_t u_ok[2];    /* 1: that voltage was applied by PWM on every leg */
     uint32_t n_restart; /* failed starts and lost locks since init */
