@@ -9,7 +9,8 @@ Per drive (``bldclab drives``), all with the default :class:`~bldclab.control.se
 - ``err@x``: commutation angle error against the Hall-exact instant, mean / worst (electrical degrees, positive
   late) at 0.2, 0.5 and 0.9 ``Omega_0`` (:func:`angle_error`, 8 electrical periods after settling, imposed speed,
   the default duty: back-EMF plus the drop of half ``I_N``);
-- ``dT@x``: mean torque of the sensorless drive over Hall six-step's at equal duty and speed, minus one (%), and
+- ``dT@x``: mean torque of the sensorless drive over Hall six-step's at equal duty and speed, minus one (%; the
+  duty at which Hall six-step gives half ``I_N``'s torque), and
   ``eta@x`` both efficiencies (sensorless / Hall, %) (:func:`versus_hall`, same points and periods);
 - ``start``: successes / attempts over a small start-up grid (:func:`startup_grid`): added load 0, 0.5 and 0.9
   times the closed-form bound at the drive's inertia (:func:`startup_load_bound`) and 1.3 times the static torque

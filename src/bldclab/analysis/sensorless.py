@@ -350,6 +350,38 @@ def _ripple(res: SimResult, t0: float) -> float:
     return float(np.std(ipk) / m) if m > 0.0 else math.nan
 
 
+def _hall_duty(drive: Drive, speed_pu: float, periods: float, control: SixStep, rel_tol: float = 0.02,
+               runs: int = 5) -> tuple[float, SimResult]:
+    """The duty at which Hall six-step gives the torque of half the rated current, ``k_pair I_N / 2``, at an imposed
+    speed (full duty where it cannot); return it and that Hall run.
+
+    A secant on the duty from :func:`_duty`'s estimate, its first slope ``k_pair V_dc / (2 |R + R_on + j omega_e
+    L|)``; at most ``runs`` Hall runs, the first within ``rel_tol`` of the torque ending it.
+    """
+    target = 0.5 * pair_torque_constant(drive) * drive.motor.I_N
+    w_e = drive.motor.p * speed_pu * drive.Omega_0
+    slope = pair_torque_constant(drive) * drive.inverter.V_dc / (
+        2.0 * math.hypot(r_total(drive), w_e * drive.motor.L))
+    d = _duty(drive, speed_pu, None)
+    best: tuple[float, float, SimResult] | None = None
+    prev: tuple[float, float] | None = None
+    for _ in range(runs):
+        hall, _t0 = run_locked(drive, speed_pu, d, periods=periods, control=control)
+        tau = hall.metrics.tau_mean if hall.metrics is not None else 0.0
+        if best is None or abs(tau - target) < abs(best[1] - target):
+            best = (d, tau, hall)
+        if abs(tau - target) <= rel_tol * target or (d >= 1.0 and tau < target):
+            break
+        if prev is not None and tau != prev[1]:
+            slope = (tau - prev[1]) / (d - prev[0])
+        prev = (d, tau)
+        d = min(1.0, max(0.0, d + (target - tau) / slope)) if slope > 0.0 else d
+        if d == prev[0]:
+            break
+    assert best is not None
+    return best[0], best[2]
+
+
 def versus_hall(drive: Drive, speeds: Sequence[float], *, duty: float | None = None, periods: float = 20.0,
                 chopping: Literal["sync", "high", "pwm-on-pwm", "bipolar"] = "sync", **control_kw: Any
                 ) -> VersusHallResult:
@@ -364,7 +396,11 @@ def versus_hall(drive: Drive, speeds: Sequence[float], *, duty: float | None = N
     speeds : sequence of float
         Imposed speeds, p.u. of ``Omega_0``.
     duty : float, optional
-        The duty of both; default the back-EMF's duty at the speed plus the resistive drop of half ``I_N``.
+        The duty of both; default the duty at which Hall six-step gives the torque of half the rated current,
+        ``k_pair I_N / 2`` (a secant over at most five Hall runs, from the back-EMF's duty plus the drop of half
+        ``I_N``; full duty where that torque is out of reach), so that every drive is compared at a comparable load
+        (a duty estimated from the back-EMF alone leaves a drive whose ``omega_e L`` exceeds its resistance, or
+        whose back-EMF is a few percent off the estimate, at a small fraction of that current).
     periods : float
         Electrical periods measured.
     chopping : {"sync", "high", "pwm-on-pwm", "bipolar"}
@@ -382,10 +418,13 @@ def versus_hall(drive: Drive, speeds: Sequence[float], *, duty: float | None = N
                                                  "efficiency_hall", "ripple_sl", "ripple_hall", "in_sync",
                                                  "duty_applied")}
     for sp in speeds:
-        d = _duty(drive, float(sp), duty)
+        hall_ctl = SixStep(regulation="duty", chopping=chopping, timed=True)
+        if duty is None:
+            d, hall = _hall_duty(drive, float(sp), periods, hall_ctl)
+        else:
+            d = float(duty)
+            hall, _ = run_locked(drive, float(sp), d, periods=periods, control=hall_ctl)
         res, t0 = run_locked(drive, float(sp), d, periods=periods, chopping=chopping, **control_kw)
-        hall, _ = run_locked(drive, float(sp), d, periods=periods,
-                             control=SixStep(regulation="duty", chopping=chopping, timed=True))
         ms, mh = res.metrics, hall.metrics
         if ms is None or mh is None:
             raise BldclabError("speeds", f"no metric window at {sp} p.u.")  # pragma: no cover - window always set
