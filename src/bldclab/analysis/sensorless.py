@@ -352,11 +352,11 @@ def _ripple(res: SimResult, t0: float) -> float:
 
 def _hall_duty(drive: Drive, speed_pu: float, periods: float, control: SixStep, rel_tol: float = 0.02,
                runs: int = 5) -> tuple[float, SimResult]:
-    """The duty at which Hall six-step gives the torque of half the rated current, ``k_pair I_N / 2``, at an imposed
-    speed (full duty where it cannot); return it and that Hall run.
+    """Return the duty at which Hall six-step gives half the rated current's torque, and that Hall run.
 
-    A secant on the duty from :func:`_duty`'s estimate, its first slope ``k_pair V_dc / (2 |R + R_on + j omega_e
-    L|)``; at most ``runs`` Hall runs, the first within ``rel_tol`` of the torque ending it.
+    The torque is ``k_pair I_N / 2`` at the imposed speed (full duty where it cannot be reached). A secant on the
+    duty from :func:`_duty`'s estimate, its first slope ``k_pair V_dc / (2 |R + R_on + j omega_e L|)``; at most
+    ``runs`` Hall runs, the first within ``rel_tol`` of the torque ending it.
     """
     target = 0.5 * pair_torque_constant(drive) * drive.motor.I_N
     w_e = drive.motor.p * speed_pu * drive.Omega_0
