@@ -502,6 +502,18 @@ def compare(repeats: int = 5, venv: Path = DEFAULT_VENV, python: str | None = No
     return cmp
 
 
+def check_lines(checks: list[Check], saved: Path | None) -> list[str]:
+    """The agreement table of a comparison (one line per check) and where its trajectories were saved."""
+    w = max(len(ch.name) for ch in checks)
+    lines = [f"{'agreement (bldclab - motulator)':<{w}}  {'value':>10}  {'tolerance':>9}  ok"]
+    for ch in checks:
+        lines.append(f"{ch.name:<{w}}  {ch.value:>+10.4f}  {ch.tol:>9.3g}  {'yes' if ch.ok else 'NO':<3} {ch.unit}"
+                     f" ({ch.why})")
+    if saved is not None:
+        lines.append(f"trajectories: {saved.relative_to(ROOT) if saved.is_relative_to(ROOT) else saved}")
+    return lines
+
+
 def report(cmp: Comparison) -> list[str]:
     """Lines describing a comparison (timing, split of bldclab's time, agreement)."""
     c, bt = cmp.case, cmp.bl_time
@@ -520,14 +532,7 @@ def report(cmp: Comparison) -> list[str]:
                  f"(build {mi['wall_build']:.2f} s + simulate {mi['wall_sim']:.2f} s, {mi['solver_points']} solver "
                  f"points); ratio {cmp.ratio:.0f}x with trace, {cmp.ratio_no_trace:.0f}x without (target >= "
                  f"{TARGET_RATIO:g}x); CPU time ratio {cmp.ratio_cpu:.0f}x")
-    w = max(len(ch.name) for ch in cmp.checks)
-    lines.append(f"{'agreement (bldclab - motulator)':<{w}}  {'value':>10}  {'tolerance':>9}  ok")
-    for ch in cmp.checks:
-        lines.append(f"{ch.name:<{w}}  {ch.value:>+10.4f}  {ch.tol:>9.3g}  {'yes' if ch.ok else 'NO':<3} {ch.unit}"
-                     f" ({ch.why})")
-    if cmp.saved is not None:
-        lines.append(f"trajectories: {cmp.saved.relative_to(ROOT) if cmp.saved.is_relative_to(ROOT) else cmp.saved}")
-    return lines
+    return lines + check_lines(cmp.checks, cmp.saved)
 
 
 def main() -> int:

@@ -396,14 +396,7 @@ def report(cmp: SlComparison) -> list[str]:
                  f"step at {c.t_step:g} s; {cmp.mot_per_s:.2f} s per simulated s ({mi['solver_points']} solver "
                  f"points); ratio {cmp.ratio:.0f}x (wall, bldclab with trace); worst |angle error| in the window "
                  f"{cmp.worst.get('motulator', math.nan):.3f} deg")
-    w = max(len(ch.name) for ch in cmp.checks)
-    lines.append(f"{'agreement (bldclab - motulator)':<{w}}  {'value':>10}  {'tolerance':>9}  ok")
-    for ch in cmp.checks:
-        lines.append(f"{ch.name:<{w}}  {ch.value:>+10.4f}  {ch.tol:>9.3g}  {'yes' if ch.ok else 'NO':<3} {ch.unit}"
-                     f" ({ch.why})")
-    if cmp.saved is not None:
-        lines.append(f"trajectories: {cmp.saved.relative_to(ROOT) if cmp.saved.is_relative_to(ROOT) else cmp.saved}")
-    return lines
+    return lines + mc.check_lines(cmp.checks, cmp.saved)
 
 
 def main() -> int:

@@ -648,6 +648,17 @@ static void sl_desync(const bc_sine_params *p, bc_sine_state *s, bc_ctrl_out *ou
     out->flags |= why | BC_FLAG_DESYNC;
 }
 
+/* The torque reference: the speed PI's limited output on omega_ref - omega_m (its unlimited output and error in
+ * *tau_u, *e_w for the PI's update once the current is known), or the input's torque reference. */
+static float torque_ref(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *in, float omega_m, float *tau_u,
+                        float *e_w)
+{
+    if (!p->speed_loop) return in->ref;
+    *e_w = in->omega_ref - omega_m;
+    *tau_u = bc_pi_output(&s->piw_p, &s->pi_w, *e_w, 0.0f); /* tau = PI_w(omega_ref - omega_m) */
+    return bc_pi_limit(&s->piw_p, *tau_u);
+}
+
 /* Sensorless sample (bc_sine.h, "Sensorless"): observer, I/f start-up, handover, loss of lock. */
 static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *in, bc_abc i,
                             bc_ctrl_out *out)
@@ -806,14 +817,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
         float sd0 = -sinf(theta), cd0 = -cosf(theta);
         bc_dq idq0 = bc_park(bc_clarke(i), sd0, cd0);
         if (handoff && p->speed_loop) bc_pi_reset(&s->piw_p, &s->pi_w, 1.5f * p->k_1 * idq0.q);
-        float omega_m = omega_e / (float)p->p;
-        if (p->speed_loop) {
-            e_w = in->omega_ref - omega_m;
-            tau_u = bc_pi_output(&s->piw_p, &s->pi_w, e_w, 0.0f); /* tau = PI_w(omega_ref - omega_m) */
-            tau = bc_pi_limit(&s->piw_p, tau_u);
-        } else {
-            tau = in->ref;
-        }
+        tau = torque_ref(p, s, in, omega_e / (float)p->p, &tau_u, &e_w);
         float i_lim = s->derate_f * bc_sine_i_limit(p, s, in->v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f);
         iq_ref = bc_clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */
         if (p->speed_loop) bc_pi_update(&s->piw_p, &s->pi_w, e_w, tau_u, 1.5f * p->k_1 * iq_ref);
@@ -900,14 +904,8 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
     bc_dq idq = bc_park(bc_clarke(i), sd, cd);
 
     /* 4. torque reference */
-    float tau, tau_u = 0.0f, e_w = 0.0f;
-    if (p->speed_loop) {
-        e_w = in->omega_ref - omega_m;
-        tau_u = bc_pi_output(&s->piw_p, &s->pi_w, e_w, 0.0f); /* tau = PI_w(omega_ref - omega_m) */
-        tau = bc_pi_limit(&s->piw_p, tau_u);
-    } else {
-        tau = in->ref;
-    }
+    float tau_u = 0.0f, e_w = 0.0f;
+    float tau = torque_ref(p, s, in, omega_m, &tau_u, &e_w);
 
     if (s->mode == BC_SINE_MODE_START && !s->six_run) {
         /* flying start: coast until the rotor is known to be slower than omega_on */
