@@ -110,6 +110,7 @@ static inline void htm_sine_observer(bc_sine_params *p)
     p->lock_tol = 0.2f;
     p->restart_wait = 0.1f;
     p->if_damp = 11.43f;
+    p->if_r_est = 0;
 }
 
 /* Self-commissioning on htm-48v: the record bldclab.control.Commission() builds for the drive. */

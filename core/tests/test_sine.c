@@ -479,6 +479,7 @@ static void test_fuzz_observer(void)
         observer_params(&p, (variant & 1) ? BC_SINE_OBS_REDUCED : BC_SINE_OBS_FLUX);
         p.speed_loop = (variant >> 1) & 1;
         p.tau_max = 40.0f;
+        p.if_r_est = variant == 0 || variant == 3; /* the resistance of the alignment, both observers */
         static bc_sine_state s;
         CHECK(bc_sine_init(&p, &s) == BC_OK, "init observer variant %d", variant);
         float phase = 0.0f;
@@ -506,7 +507,8 @@ static void test_fuzz_observer(void)
                     bad_out += 1;
             }
             for (int j = 0; j < BC_DIAG_N; ++j) bad_out += !isfinite(out.diag[j]);
-            bad_out += !isfinite(s.if_theta) || !isfinite(s.if_omega) || !isfinite(s.rho_f);
+            bad_out += !isfinite(s.if_theta) || !isfinite(s.if_omega) || !isfinite(s.rho_f) || !(s.r_obs >= 0.0f) ||
+                       !isfinite(s.r_obs);
             n_ramp += s.mode == BC_SINE_MODE_START && s.sl_phase == BC_SINE_SL_RAMP;
             n_align += s.mode == BC_SINE_MODE_START && s.sl_phase == BC_SINE_SL_ALIGN;
             if (s.guard.latched) {
@@ -542,6 +544,58 @@ static void test_fuzz_observer(void)
     CHECK(bc_sine_init(&p, &s) == BC_ERR_PARAM, "if_align_current > i_s_max rejected");
     p.if_align_current = 0.0f;
     CHECK(bc_sine_init(&p, &s) == BC_ERR_PARAM, "if_align_current = 0 rejected");
+    observer_params(&p, BC_SINE_OBS_FLUX);
+    p.if_r_est = 2;
+    CHECK(bc_sine_init(&p, &s) == BC_ERR_PARAM, "if_r_est = 2 rejected");
+}
+
+/* The resistance measured in ALIGN (if_r_est): a locked rotor (no back-EMF), the windings an R-L load integrated
+ * exactly over each half period with the voltage of the duties (one sample late, as the PWM applies them); the
+ * controller and its observers configured with R 1.5 and 0.5 times the load's. At the ramp's first sample the
+ * observer's R is the load's to 0.1 %; without if_r_est it stays the configured one. */
+static void test_alignment_resistance(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_IMPOSED);
+    const double R = 0.05, L = 75e-6, vdc = 48.0;
+    for (int c = 0; c < 3; ++c) {
+        bc_sine_params p;
+        sine_params(&p, &f);
+        observer_params(&p, c == 1 ? BC_SINE_OBS_REDUCED : BC_SINE_OBS_FLUX);
+        float rc = (float)(c == 2 ? 0.5 * R : 1.5 * R);
+        p.R = p.fobs.R = p.robs.R = rc;
+        p.if_align = 0.1f; /* the current settled long before its last quarter */
+        p.if_r_est = 1;
+        static bc_sine_state s;
+        CHECK(bc_sine_init(&p, &s) == BC_OK, "init (case %d)", c);
+        double ia = 0.0, ib = 0.0, ua = 0.0, ub = 0.0, ts = (double)p.ts, e = exp(-R * ts / L);
+        int k;
+        for (k = 0; k < 200000 && !(s.sl_phase == BC_SINE_SL_RAMP); ++k) {
+            bc_ctrl_in in;
+            memset(&in, 0, sizeof in);
+            in.i_abc[0] = (float)ia;
+            in.i_abc[1] = (float)(-0.5 * ia + 0.8660254037844386 * ib);
+            in.i_abc[2] = (float)(-0.5 * ia - 0.8660254037844386 * ib);
+            in.i_mask = 3u;
+            in.v_dc = (float)vdc;
+            in.ref = 10.0f;
+            bc_ctrl_out out;
+            bc_sine_step(&p, &s, &in, &out);
+            /* the voltage of the previous sample's duties acts over this half period */
+            ia = ia * e + (1.0 - e) * ua / R;
+            ib = ib * e + (1.0 - e) * ub / R;
+            double v[3];
+            for (int x = 0; x < 3; ++x) v[x] = out.leg[x].mode == BC_LEG_PWM ? (double)out.leg[x].duty * vdc : 0.0;
+            ua = (2.0 * v[0] - v[1] - v[2]) / 3.0;
+            ub = (v[1] - v[2]) / 1.7320508075688772;
+        }
+        CHECK(s.sl_phase == BC_SINE_SL_RAMP, "case %d: the ramp was reached (%d samples)", c, k);
+        CHECK(fabs((double)s.r_obs / R - 1.0) < 1e-3, "case %d: the observer's R %.6g Ohm against the load's %.6g", c,
+              (double)s.r_obs, R);
+        p.if_r_est = 0;
+        CHECK(bc_sine_init(&p, &s) == BC_OK, "init without if_r_est (case %d)", c);
+        CHECK(s.r_obs == rc, "case %d: without if_r_est the configured R", c);
+    }
 }
 
 /* Limits of the current reference, linear modulation, and the bumpless hand-off on a synthetic rotor. */
@@ -1226,6 +1280,7 @@ int main(void)
     test_safe_states();
     test_fuzz();
     test_fuzz_observer();
+    test_alignment_resistance();
     test_closed_loop_rest();
     test_limits_and_handoff();
     test_decoupling_measured();

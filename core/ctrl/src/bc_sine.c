@@ -318,7 +318,7 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
             !finite_pos(p->if_accel) || !finite_pos(p->if_accel_min) || p->if_accel_min > p->if_accel ||
             !finite_pos(p->if_hold) || !finite_pos(p->lock_time) ||
             !finite_pos(p->lock_tol) || p->lock_tol >= 1.0f || !finite_nonneg(p->restart_wait) || !finite_nonneg(p->if_damp) ||
-            !finite_nonneg(p->t_dead) || p->t_dead >= p->ts)
+            !finite_nonneg(p->t_dead) || p->t_dead >= p->ts || !is_flag(p->if_r_est))
             return BC_ERR_PARAM;
     }
     if (p->emf_ff) {
@@ -360,6 +360,8 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->u_ok[0] = s->u_ok[1] = 0;
     s->n_restart = 0u;
     s->if_trust = 0;
+    s->r_obs = p->observer == BC_SINE_OBS_REDUCED ? p->robs.R : p->fobs.R;
+    s->r_ui = s->r_ii = 0.0f;
     s->derate_on = p->derate.enabled[0] != 0 || p->derate.enabled[1] != 0;
     s->derate_f = 1.0f;
     if (s->derate_on && bc_derate_init(&p->derate, &s->derate) != BC_OK) return BC_ERR_PARAM;
@@ -625,11 +627,18 @@ static void obs_reset(const bc_sine_params *p, bc_sine_state *s, float theta_e, 
 static void obs_run(const bc_sine_params *p, bc_sine_state *s, const bc_obs_in *in, bc_obs_out *o)
 {
     if (p->observer == BC_SINE_OBS_FLUX) {
-        bc_fluxobs_step(&p->fobs, &s->fobs, in, o);
+        bc_fluxobs_params fp = p->fobs;
+        fp.R = s->r_obs; /* the configured R, or the one measured in ALIGN (if_r_est) */
+        bc_fluxobs_step(&fp, &s->fobs, in, o);
     } else {
-        bc_redobs_step(&p->robs, &s->robs, in, o);
+        bc_redobs_params rp = p->robs;
+        rp.R = s->r_obs;
+        bc_redobs_step(&rp, &s->robs, in, o);
     }
 }
+
+/* The configured resistance of the observer chosen. */
+static float obs_r(const bc_sine_params *p) { return p->observer == BC_SINE_OBS_FLUX ? p->fobs.R : p->robs.R; }
 
 /* Legs off in the sensorless start (IDLE, WAIT): the voltage of the coming samples is not known. */
 static void sl_off(bc_sine_state *s, bc_ctrl_out *out)
@@ -666,6 +675,8 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
     /* the observer, with the voltage commanded two samples ago (applied over [t_k-1, t_k]) */
     bc_obs_out o = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0};
     bc_ab i_ab = bc_clarke(i);
+    const float u_obs[2] = {s->u_hist[1][0], s->u_hist[1][1]}; /* the voltage over [t_k-1, t_k] */
+    const int32_t u_obs_ok = s->u_ok[1];
     if (s->u_ok[1]) {
         bc_obs_in oi = {{s->u_hist[1][0], s->u_hist[1][1]}, i_ab};
         obs_run(p, s, &oi, &o);
@@ -708,6 +719,9 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             s->if_theta = 0.0f;
             s->if_omega = 0.0f;
             s->n_lock = 0.0f;
+            s->r_obs = obs_r(p);
+            s->r_ui = 0.0f;
+            s->r_ii = 0.0f;
             bc_pi_reset(&s->pi_p, &s->pi_d, 0.0f);
             bc_pi_reset(&s->pi_p, &s->pi_q, 0.0f);
         }
@@ -717,7 +731,25 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             /* two steps: the vector at pi/2 for the first third, then at 0 (a rotor at the unstable point of
              * one, or held by friction near it, is a quarter turn from the other's) */
             s->if_theta = 3.0f * s->sl_t < p->if_align ? 0.5f * BC_PI_F : 0.0f;
+            /* the resistance over the last quarter (if_r_est): sums of u.i and i.i, u the applied voltage the
+             * observer took this sample (over [t_k-1, t_k]), i the current at t_k */
+            if (p->if_r_est && 4.0f * s->sl_t >= 3.0f * p->if_align && u_obs_ok) {
+                float ui = u_obs[0] * i_ab.alpha + u_obs[1] * i_ab.beta;
+                float ii = i_ab.alpha * i_ab.alpha + i_ab.beta * i_ab.beta;
+                if (isfinite(ui) && isfinite(ii)) {
+                    s->r_ui += ui;
+                    s->r_ii += ii;
+                }
+            }
             if (s->sl_t >= p->if_align) {
+                if (p->if_r_est) {
+                    /* R^ = sum u.i / sum i.i, accepted if the current was there and R^ is plausible */
+                    float n = 0.25f * p->if_align / p->ts, ia = p->if_align_current;
+                    float r0 = obs_r(p), r = s->r_ui / fmaxf(s->r_ii, 1e-30f);
+                    float r_lo = 0.25f * r0, r_hi = r0 > 0.0f ? 4.0f * r0 : p->v_max / ia;
+                    if (isfinite(r) && s->r_ii >= 0.25f * ia * ia * fmaxf(n - 2.0f, 1.0f) && r >= r_lo && r <= r_hi)
+                        s->r_obs = r;
+                }
                 /* the unloaded rotor's q axis is pi/2 behind the vector's (dir < 0: ahead): seed the observer */
                 obs_reset(p, s, s->if_theta + dir * 0.5f * BC_PI_F, 0.0f, i_ab);
                 s->sl_phase = BC_SINE_SL_RAMP;

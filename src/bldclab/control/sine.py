@@ -112,6 +112,12 @@ class Sine(Control):
     if_align : float, optional
         Time the I/f current vector is held still before the ramp (s). Default three periods of the rotor's
         oscillation about the vector, ``2 pi / sqrt(p 1.5 k_1 if_current / J)`` each.
+    if_r_estimate : bool
+        The observers use the resistance the alignment measures (``sum u.i / sum i.i`` over its last quarter, the
+        rotor at rest: the voltage is ``R i``), not the drive data's; kept from the ramp until the next alignment,
+        the configured R where the measurement is implausible (outside ``[R/4, 4 R]``). A wrong R biases the
+        observer most at low speed, where the load-adaptive ramp reads it. Default ``False`` (the drive data's R);
+        measured on the catalog drives to 0.002-2 % (docs/sensorless-sine.md).
     lock_tolerance : float
         Band of the lock criterion (-), in (0, 1): the observer's flux within it of ``psi_f`` (relative) and its
         tracking error within it (rad) for the hand-off; its flux out of it too long is a lost lock.
@@ -232,6 +238,7 @@ class Sine(Control):
     if_accel_min: float | None = None
     if_align: float | None = None
     if_align_current: float | None = None
+    if_r_estimate: bool = False
     lock_tolerance: float = 0.2
     restart_wait: float = 0.1
     derate: TemperatureDerating | None = None
@@ -279,6 +286,8 @@ class Sine(Control):
                      "if_align_current"):
             if getattr(self, name) is not None:
                 check_number(name, getattr(self, name), allow_zero=name == "if_align")
+        if not isinstance(self.if_r_estimate, bool):
+            raise BldclabError("control.if_r_estimate", f"must be True or False, got {self.if_r_estimate!r}")
         check_number("lock_tolerance", self.lock_tolerance)
         if self.lock_tolerance >= 1:
             raise BldclabError("control.lock_tolerance", f"must be in (0, 1), got {self.lock_tolerance!r}")
@@ -418,7 +427,7 @@ class Sine(Control):
                 "if_accel": st["if_accel"], "if_accel_min": min(st["if_accel_min"], st["if_accel"]),
                 "if_hold": st["if_hold"], "lock_time": st["lock_time"],
                 "lock_tol": self.lock_tolerance, "restart_wait": self.restart_wait, "if_damp": st["if_damp"],
-                "t_dead": inv.t_dead}
+                "t_dead": inv.t_dead, "if_r_est": int(self.if_r_estimate)}
 
     def _r_design(self, drive: Drive, scale: float) -> float:
         """Design resistance of a loop of ``scale`` phases in series (Ohm)."""

@@ -199,6 +199,15 @@
  *          +-min(if_align_current / 2, sqrt(i_s_max^2 - if_align_current^2))) brakes it. An unloaded rotor
  *          settles with its q axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there:
  *          theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP.
+ *          With if_r_est = 1 the alignment also measures the resistance the observers use: over its last quarter
+ *          (the vector still, the rotor at rest or swinging out) R^ = sum u.i / sum i.i of the applied
+ *          alpha-beta voltage (the one the observer takes, dead-time corrected) and the current. At rest the
+ *          voltage is R i; a swing's back-EMF adds its mechanical power tau omega_m, whose sum over the window is
+ *          the change of the kinetic energy (small once braked). R^ replaces the observers' R from the ramp on if
+ *          it is finite, the window's mean |i|^2 at least a quarter of if_align_current^2, and R^ within [R/4, 4 R]
+ *          of the configured R (outside: the configured R; with R = 0 configured: within [0, v_max / i]); kept
+ *          through the sine mode until the next ALIGN. A wrong R biases the observer most at low speed (R i
+ *          against a back-EMF that starts at zero), where the start reads it.
  *   RAMP   omega_if += dir a T_s up to |omega_if| = omega_on, theta_if += omega_if T_s. The rotor follows
  *          with the load angle its torque needs (a torque below 1.5 k_1 if_current). With if_accel_min < if_accel
  *          the ramp adapts to the load: with Delta = theta^ - theta_if (the observer's angle against the vector's)
@@ -348,6 +357,8 @@ typedef struct {
     float restart_wait; /* legs off after a failed start or a lost lock, s (>= 0) */
     float if_damp;      /* swing damping of ALIGN and RAMP, A/V (>= 0) */
     float t_dead;       /* the inverter's dead time, s (0 <= t_dead < ts): the observer's voltage is corrected */
+    int32_t if_r_est;   /* 1: the observers use the resistance measured in ALIGN (section "Sensorless"); 0: R of
+                           fobs / robs */
     bc_derate_params derate; /* temperature derating of the current limit i_s_max (bc_derate.h) from in->temp; no
                                 channel enabled (all zero): none. The start controller derates by six.derate. */
     bc_rest_params rest; /* the winding resistance during operation (bc_rest.h): in sine mode i_d,ref is its square
@@ -396,6 +407,8 @@ typedef struct {
     float if_t;        /* RAMP: time below omega_on, s */
     int32_t if_trust;  /* RAMP: 1 while the observer sees the rotor move (adaptive ramp) */
     float rho_f;       /* RAMP: the torque's share of 1.5 k_1 if_current, cos(theta^ - theta_if) */
+    float r_obs;       /* the resistance the observer uses, Ohm (if_r_est: measured in the last ALIGN) */
+    float r_ui, r_ii;  /* ALIGN: sums of u.i (W) and i.i (A^2) over its last quarter */
     float u_hist[2][2]; /* alpha-beta voltage commanded one and two samples ago, V */
     int32_t u_ok[2];    /* 1: that voltage was applied by PWM on every leg */
     uint32_t n_restart; /* failed starts and lost locks since init */
