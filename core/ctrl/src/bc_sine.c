@@ -362,6 +362,8 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->if_trust = 0;
     s->r_obs = p->observer == BC_SINE_OBS_REDUCED ? p->robs.R : p->fobs.R;
     s->r_ui = s->r_ii = 0.0f;
+    s->n_catch = s->w_rev = 0.0f;
+    s->caught = 0;
     s->derate_on = p->derate.enabled[0] != 0 || p->derate.enabled[1] != 0;
     s->derate_f = 1.0f;
     if (s->derate_on && bc_derate_init(&p->derate, &s->derate) != BC_OK) return BC_ERR_PARAM;
@@ -699,7 +701,28 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
 
     if (s->mode == BC_SINE_MODE_SINE) {
         s->n_lock = flux_ok ? 0.0f : s->n_lock + p->ts;
-        if (fabsf(s->omega_f) < p->omega_off) {
+        float ref0 = p->speed_loop ? in->omega_ref : in->ref;
+        /* turning with the reference: w_rev follows the speed; against it (a reversal, a caught rotor braked)
+         * the speed must fall: faster than w_rev + omega_off against it, the load outweighs the current limit */
+        int against = ref0 * s->omega_f < 0.0f;
+        if (!against) s->w_rev = fabsf(s->omega_f);
+        if (against && fabsf(s->omega_f) > s->w_rev + p->omega_off) {
+            sl_desync(p, s, out, BC_FLAG_START_FAIL);
+        } else if (fabsf(s->omega_f) < p->omega_off && flux_ok && ref0 != 0.0f) {
+            /* slowing through the hand-off speed with the observer consistent (a reversal under load, a brake):
+             * back to the I/f ramp without turning the legs off, the vector on the rotor's q axis as the observer
+             * has it, at its speed: the I/f current carries the rotor through the speeds the observer cannot */
+            out->flags |= BC_FLAG_STALL;
+            s->mode = BC_SINE_MODE_START;
+            s->sl_phase = BC_SINE_SL_RAMP;
+            s->sl_dir = ref0 < 0.0f ? -1 : 1;
+            s->if_theta = bc_wrap_2pi(o.theta);
+            s->if_omega = bc_clampf(o.omega_e, -p->omega_on, p->omega_on);
+            s->sl_t = s->n_lock = s->n_catch = 0.0f; /* if_t goes on: the start's budget (a reset at the top) */
+            s->rho_f = 1.0f;
+            s->if_trust = 0;
+            if (s->rest_on) bc_rest_restart(&s->rest);
+        } else if (fabsf(s->omega_f) < p->omega_off) {
             sl_desync(p, s, out, BC_FLAG_STALL);
         } else if (s->n_lock >= p->lock_time) {
             sl_desync(p, s, out, BC_FLAG_LOCK_LOST);
@@ -720,6 +743,9 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             s->if_omega = 0.0f;
             s->n_lock = 0.0f;
             s->r_obs = obs_r(p);
+            s->n_catch = 0.0f;
+            s->caught = 0;
+            s->if_t = 0.0f;
             s->r_ui = 0.0f;
             s->r_ii = 0.0f;
             bc_pi_reset(&s->pi_p, &s->pi_d, 0.0f);
@@ -798,10 +824,26 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                     s->mode = BC_SINE_MODE_SINE;
                     s->n_lock = 0.0f;
                     s->sl_t = 0.0f;
+                    s->if_t = 0.0f; /* a completed ramp: a later hand-back has the whole budget */
+                    s->w_rev = fabsf(s->omega_f);
                 } else if (s->sl_t >= p->if_hold) {
                     sl_desync(p, s, out, BC_FLAG_START_FAIL);
                 }
             }
+        }
+    }
+    if (s->mode == BC_SINE_MODE_START && was == BC_SINE_MODE_START &&
+        (s->sl_phase == BC_SINE_SL_ALIGN || s->sl_phase == BC_SINE_SL_RAMP)) {
+        /* catch: the observer consistent on a rotor already turning at least at omega_on, either direction (a
+         * rotor turning when the drive starts, or pushed by an active load): the sine mode at once, whose speed
+         * loop brakes or drives it with the whole current limit */
+        int turning = !s->caught && flux_ok && fabsf(o.err) <= p->lock_tol && fabsf(s->omega_f) >= p->omega_on;
+        s->n_catch = turning ? s->n_catch + p->ts : 0.0f;
+        if (s->n_catch >= p->lock_time) {
+            s->mode = BC_SINE_MODE_SINE;
+            s->n_lock = s->sl_t = s->n_catch = 0.0f;
+            s->caught = 1; /* once a start */
+            s->w_rev = fabsf(s->omega_f);
         }
     }
     out->diag[5] = o.theta;

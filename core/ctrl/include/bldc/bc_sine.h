@@ -237,11 +237,25 @@
  *          BC_FLAG_DESYNC, WAIT.
  *   WAIT   legs off for restart_wait, then IDLE (and a new ALIGN).
  *
+ *   CATCH  (in ALIGN and RAMP, once a start) the observer runs from the first sample of ALIGN; when it is
+ *          consistent (|flux / psi_f - 1| <= lock_tol, |err| <= lock_tol) on a rotor turning at least at omega_on
+ *          (|omega_f| >= omega_on, either direction) for lock_time, the drive goes to the sine mode at once (the
+ *          hand-off below): a rotor turning when the drive starts (a flying start), or one an active load has
+ *          pushed through the alignment vector's unstable point and spins backwards (the alignment's stationary
+ *          vector cannot catch it: its torque averages zero on a slipping rotor), is driven or braked by the speed
+ *          loop with the whole current limit.
+ *
  * In the sine mode the lock is checked every sample with the same band (the speed against itself: only the flux
- * magnitude); violated for lock_time (BC_FLAG_LOCK_LOST), or |omega_f| < omega_off (BC_FLAG_STALL):
- * BC_FLAG_DESYNC,
- * legs off, WAIT, then a new start (n_restart counts them). A rotor still turning when the next ALIGN comes is
- * pulled to the aligned angle (no flying restart).
+ * magnitude); violated for lock_time: BC_FLAG_LOCK_LOST | BC_FLAG_DESYNC, legs off, WAIT, then a new start
+ * (n_restart counts them). |omega_f| < omega_off (a rotor slowing through the hand-off speed: a reversal, a
+ * caught rotor braked, an overload) with the flux in band and a non-zero reference: BC_FLAG_STALL and back to
+ * RAMP without turning the legs off (the hand-back), the vector on the rotor's q axis as the observer has it
+ * (theta_if = theta^, omega_if = omega^ within +-omega_on, dir the reference's sign), so that the I/f current
+ * carries the rotor through the speeds the observer cannot see; its time below omega_on goes on counting from
+ * the start's (reset at ALIGN and at a hand-off at the top). Without the flux in band, or with a zero reference:
+ * BC_FLAG_STALL | BC_FLAG_DESYNC, WAIT. Turning against the reference (a reversal, a caught backward rotor) the
+ * speed must fall: |omega_f| above w_rev + omega_off (w_rev: |omega_f| when it last turned with the reference,
+ * or at the catch) means the load outweighs the current limit: BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT.
  * diag in this mode: 0 i_d, 1 i_q (A, in the frame used: theta_if in the start mode), 2 i_q,ref (A), 3 v_d, 4 v_q
  * (V), 5 the observer's angle (rad), 6 its speed (electrical rad/s), 7 mode (0 start, 1 sine).
  *
@@ -409,6 +423,9 @@ typedef struct {
     float rho_f;       /* RAMP: the torque's share of 1.5 k_1 if_current, cos(theta^ - theta_if) */
     float r_obs;       /* the resistance the observer uses, Ohm (if_r_est: measured in the last ALIGN) */
     float r_ui, r_ii;  /* ALIGN: sums of u.i (W) and i.i (A^2) over its last quarter */
+    float n_catch;     /* ALIGN, RAMP: time the observer has held a consistent lock at |omega_f| >= omega_on, s */
+    int32_t caught;    /* this start has caught a turning rotor (once a start) */
+    float w_rev;       /* sine mode: |omega_f| when it last turned with the reference (or at the catch), rad/s */
     float u_hist[2][2]; /* alpha-beta voltage commanded one and two samples ago, V */
     int32_t u_ok[2];    /* 1: that voltage was applied by PWM on every leg */
     uint32_t n_restart; /* failed starts and lost locks since init */
