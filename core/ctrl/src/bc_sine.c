@@ -362,7 +362,7 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->if_trust = 0;
     s->r_obs = p->observer == BC_SINE_OBS_REDUCED ? p->robs.R : p->fobs.R;
     s->r_ui = s->r_ii = 0.0f;
-    s->n_catch = s->w_rev = 0.0f;
+    s->n_catch = s->w_rev = s->if_wmin = 0.0f;
     s->caught = 0;
     s->derate_on = p->derate.enabled[0] != 0 || p->derate.enabled[1] != 0;
     s->derate_f = 1.0f;
@@ -721,6 +721,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             s->sl_t = s->n_lock = s->n_catch = 0.0f; /* if_t goes on: the start's budget (a reset at the top) */
             s->rho_f = 1.0f;
             s->if_trust = 0;
+            s->if_wmin = fminf(s->if_wmin, (float)s->sl_dir * s->if_omega);
             if (s->rest_on) bc_rest_restart(&s->rest);
         } else if (fabsf(s->omega_f) < p->omega_off) {
             sl_desync(p, s, out, BC_FLAG_STALL);
@@ -782,6 +783,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 s->sl_t = 0.0f;
                 s->rho_f = 0.0f;
                 s->if_t = 0.0f;
+                s->if_wmin = 0.0f;
                 s->if_trust = 0;
             }
         } else if (s->sl_phase == BC_SINE_SL_RAMP) {
@@ -812,9 +814,16 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             s->if_omega = dir * (at_top ? p->omega_on : w);
             s->if_theta = bc_wrap_2pi(s->if_theta + s->if_omega * p->ts);
             if (!at_top) {
-                /* below omega_on for longer than the slowest ramp takes: the load is beyond the I/f torque */
+                /* below omega_on for longer than the slowest ramp takes from its lowest speed (the mean
+                 * acceleration since then below if_accel_min): the load is beyond the I/f torque. A vector that
+                 * followed a rotor pushed back starts the count again from its new lowest speed. */
+                if (w < s->if_wmin) {
+                    s->if_wmin = w;
+                    s->if_t = 0.0f;
+                }
                 s->if_t += p->ts;
-                if (adaptive && s->if_t >= p->omega_on / p->if_accel_min) sl_desync(p, s, out, BC_FLAG_START_FAIL);
+                if (adaptive && s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min)
+                    sl_desync(p, s, out, BC_FLAG_START_FAIL);
             }
             if (at_top) {
                 s->sl_t += p->ts;

@@ -222,8 +222,9 @@
  *          braked through the observer while it sees the rotor move: i_d,ref = if_damp psi_f (omega^ - omega_if)
  *          sin Delta / max(sin^2 Delta, 1/16), within +-min(if_current, sqrt(i_s_max^2 - if_current^2)), a torque
  *          -1.5 k_1 if_damp psi_f (omega^ - omega_if) against the rotor's slip (the current's torque is
- *          1.5 k_1 (i_q cos Delta - i_d sin Delta)). Below omega_on for longer than omega_on / if_accel_min (the
- *          slowest ramp's time): BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT. With if_accel_min = if_accel: the
+ *          1.5 k_1 (i_q cos Delta - i_d sin Delta)). Below omega_on for longer than (omega_on - omega_low) /
+ *          if_accel_min (the slowest ramp's time from the vector's lowest speed dir omega_low, <= 0, reached
+ *          since the ramp's start): BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT. With if_accel_min = if_accel: the
  *          fixed ramp at if_accel, none of this.
  *          At omega_on the lock is checked every sample: |flux / psi_f - 1| <= lock_tol (the observer's flux
  *          output, bc_obs.h), |err| <= lock_tol (its tracking loop's error: rad, or the sine of the angle error)
@@ -425,6 +426,7 @@ typedef struct {
     float r_ui, r_ii;  /* ALIGN: sums of u.i (W) and i.i (A^2) over its last quarter */
     float n_catch;     /* ALIGN, RAMP: time the observer has held a consistent lock at |omega_f| >= omega_on, s */
     int32_t caught;    /* this start has caught a turning rotor (once a start) */
+    float if_wmin;     /* RAMP: the vector's lowest speed in dir since the ramp's start, electrical rad/s */
     float w_rev;       /* sine mode: |omega_f| when it last turned with the reference (or at the catch), rad/s */
     float u_hist[2][2]; /* alpha-beta voltage commanded one and two samples ago, V */
     int32_t u_ok[2];    /* 1: that voltage was applied by PWM on every leg */
