@@ -94,7 +94,8 @@ static inline void shapes_at(const bc_plant_params *restrict p, const bc_plant_s
         /* m = 0 (cos 0 = 1, sin 0 = 0, no derivative) and m = 1 (cos th, sin th) as the loop would add them */
         double k0 = s->fz_a[0][0], k1 = s->fz_a[1][0], k2 = s->fz_a[2][0], d0 = 0.0, d1 = 0.0, d2 = 0.0;
         double cm = c, sm = sn;
-        for (int32_t m = 1; m < s->fz_n; ++m) {
+        /* the recurrence's next cos, sin only where another order follows (a sinusoid has one order: none) */
+        for (int32_t m = 1; m < s->fz_n;) {
             k0 += s->fz_a[0][m] * cm + s->fz_b[0][m] * sm;
             k1 += s->fz_a[1][m] * cm + s->fz_b[1][m] * sm;
             k2 += s->fz_a[2][m] * cm + s->fz_b[2][m] * sm;
@@ -104,6 +105,7 @@ static inline void shapes_at(const bc_plant_params *restrict p, const bc_plant_s
                 d1 += fm * (s->fz_b[1][m] * cm - s->fz_a[1][m] * sm);
                 d2 += fm * (s->fz_b[2][m] * cm - s->fz_a[2][m] * sm);
             }
+            if (++m >= s->fz_n) break;
             const double cn = cm * c - sm * sn;
             sm = sm * c + cm * sn;
             cm = cn;
