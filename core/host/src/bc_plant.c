@@ -25,8 +25,10 @@ static const double SIN_PHI[3] = {0.0, 0.86602540378443864676, -0.86602540378443
 /* Force inlining where a function's constant arguments select its branches (GCC and Clang; elsewhere a hint). */
 #if defined(__GNUC__)
 #define BC_ALWAYS_INLINE inline __attribute__((always_inline))
+#define BC_NOINLINE __attribute__((noinline))
 #else
 #define BC_ALWAYS_INLINE inline
+#define BC_NOINLINE
 #endif
 
 typedef bc_plant_aux aux_t; /* the circuit quantities computed with a derivative (bc_plant.h) */
@@ -52,7 +54,14 @@ static double h_max_of(const bc_plant_params *p)
 /* cos and sin of th: rotated from a reference angle ref = {th_r, cos th_r, sin th_r} (the step's start) when th is
  * within 0.03 rad of it, by the Taylor series of cos and sin of the difference (truncation below 2e-17), else from
  * libm. The RK4 stages of a step lie within p omega h of its start, so a step costs one libm cos/sin instead of four. */
-static void cos_sin(double th, const double *ref, double *c, double *sn)
+/* out of line: gcc fuses the pair into one sincos call here, not where cos_sin is inlined */
+static BC_NOINLINE void cos_sin_libm(double th, double *c, double *sn)
+{
+    *c = cos(th);
+    *sn = sin(th);
+}
+
+static BC_ALWAYS_INLINE void cos_sin(double th, const double *ref, double *c, double *sn)
 {
     double d = ref ? th - ref[0] : 1.0;
     if (fabs(d) < 0.03) {
@@ -63,14 +72,13 @@ static void cos_sin(double th, const double *ref, double *c, double *sn)
         *sn = ref[2] * cd + ref[1] * sd;
         return;
     }
-    *c = cos(th);
-    *sn = sin(th);
+    cos_sin_libm(th, c, sn);
 }
 
 /* k_x(th) of the three phases and, if dk is non-null, dk_x/dth (tables: the piece's slope; Fourier: the series
  * differentiated term by term, sum_m m (y_m cos - x_m sin)). A Fourier shape needs cos and sin of th: from ref
  * (cos_sin) and, if cs is non-null, returned there as {th, cos th, sin th} (cs[0] = HUGE_VAL if none was needed). */
-static inline void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s, double th,
+static BC_ALWAYS_INLINE void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s, double th,
                              double *restrict k, double *restrict dk, const double *ref, double *cs)
 {
     if (cs) cs[0] = HUGE_VAL;
