@@ -533,7 +533,17 @@ static BC_ALWAYS_INLINE void acc_step(double *restrict acc, int n, double h, con
                      const double *restrict f1, const double *restrict fd1)
 {
     const double a = 0.5 * h, b = h * h / 12.0;
-    for (int j = 0; j < n; ++j) acc[j] += a * (f0[j] + f1[j]) + b * (fd0[j] - fd1[j]);
+    /* loops of a fixed length (unrolled, no remainder loop), the one that covers lanes 0 .. n - 1: the rates of the
+     * lanes beyond n are zero, so adding them changes nothing */
+    if (n <= BC_ACC_COG) { /* the metric lanes and friction */
+        for (int j = 0; j < BC_ACC_COG; ++j) acc[j] += a * (f0[j] + f1[j]) + b * (fd0[j] - fd1[j]);
+    } else if (n <= BC_ACC_VA) {
+        for (int j = 0; j < BC_ACC_VA; ++j) acc[j] += a * (f0[j] + f1[j]) + b * (fd0[j] - fd1[j]);
+    } else if (n <= BC_ACC_OPT) {
+        for (int j = 0; j < BC_ACC_OPT; ++j) acc[j] += a * (f0[j] + f1[j]) + b * (fd0[j] - fd1[j]);
+    } else {
+        for (int j = 0; j < BC_ACC_N; ++j) acc[j] += a * (f0[j] + f1[j]) + b * (fd0[j] - fd1[j]);
+    }
 }
 
 /* The lanes integrated at accumulation level `level` (bc_plant_set_accumulate): acc_mask, and
