@@ -807,16 +807,78 @@ static void unpack(bc_plant_state *s, const double *y)
 
 /* One classical Runge-Kutta step of length h from y0 with derivative k1 = f(y0) (the five states only; the power
  * flows follow by acc_step from the step's ends). */
+/* What core_at computes from the step's constants alone (the conduction coefficients, the supply, the drags' sign
+ * and the mechanics are fixed inside a step), taken once per step for the three inner stages. */
+typedef struct {
+    double src[3]; /* v_src P up + P U0 */
+    double sgn;    /* the Coulomb-like drags' sign */
+    int fric;      /* friction acts */
+    int dyn;       /* the speed is a state */
+} stage_c;
+
+/* Fourier shapes on the usual plant (no ideal limiter, cogging, fan load or iron loss; a conducting circuit; the
+ * drags' sign fixed at the step start): stage_at may replace core_at without its aux. Table shapes keep core_at:
+ * there the same path measured 1.4 % more instructions (sine on the flux observer), not fewer. */
+static int stage_ok(const bc_plant_params *p, const bc_plant_state *s)
+{
+    return s->fz_n > 0 && !s->hold_on && p->n_cog == 0 && !s->prop_on && !s->fe_on && s->tc_gain != 0.0 &&
+           (!(s->drag_on && !s->stuck) || (s->work.valid && s->work.wdir != 0));
+}
+
+static BC_ALWAYS_INLINE void stage_init(const bc_plant_params *p, const bc_plant_state *s, stage_c *c)
+{
+    const double vs = s->v_src;
+    for (int x = 0; x < 3; ++x) c->src[x] = vs * s->tc_pup[x] + s->tc_pu0[x];
+    c->fric = s->drag_on && !s->stuck;
+    c->sgn = c->fric ? (double)s->work.wdir : 0.0;
+    c->dyn = p->mech == BC_MECH_DYNAMIC && !s->stuck;
+}
+
+/* core_at(p, s, y, dy, 0, 0, ref) where stage_ok: the same expressions in the same order (bit for bit), with the
+ * terms that are zero there kept as the zeros core_at adds. */
+static BC_ALWAYS_INLINE void stage_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s,
+                                      const stage_c *restrict c, const double *restrict y, double *restrict dy,
+                                      const double *ref)
+{
+    const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
+    const double th = y[Y_TH], om = y[Y_OM];
+    double k[3];
+    shapes_at(p, s, th, k, 0, ref, 0);
+    const double e0 = om * k[0], e1 = om * k[1], e2 = om * k[2];
+    const double *B = s->tc_b;
+    const double eb = s->tc_cn[0] * e0 + s->tc_cn[1] * e1 + s->tc_cn[2] * e2;
+    dy[Y_I] = c->src[0] - (B[0] * i0 + B[1] * i1 + B[2] * i2) - s->tc_pc[0] * (e0 - eb);
+    dy[Y_I + 1] = c->src[1] - (B[3] * i0 + B[4] * i1 + B[5] * i2) - s->tc_pc[1] * (e1 - eb);
+    dy[Y_I + 2] = c->src[2] - (B[6] * i0 + B[7] * i1 + B[8] * i2) - s->tc_pc[2] * (e2 - eb);
+    const double tau_cog = 0.0, t_prop = 0.0, t_fe = 0.0;
+    const double tau = k[0] * i0 + k[1] * i1 + k[2] * i2 + tau_cog;
+    const double tau_net = tau - s->tau_load - t_prop;
+    const double t_fric = c->fric ? p->B * om + p->tau_c * c->sgn : 0.0;
+    dy[Y_TH] = (double)p->p * om;
+    dy[Y_OM] = c->dyn ? (tau_net - t_fric - t_fe) / p->J : 0.0;
+}
+
 static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
                 double *y1)
 {
     double k2[NY], k3[NY], k4[NY], yt[NY];
-    for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
-    core_at(p, s, yt, k2, 0, 0, s->work.cs);
-    for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
-    core_at(p, s, yt, k3, 0, 0, s->work.cs);
-    for (int j = 0; j < NY; ++j) yt[j] = y0[j] + h * k3[j];
-    core_at(p, s, yt, k4, 0, 0, s->work.cs);
+    if (stage_ok(p, s)) {
+        stage_c c;
+        stage_init(p, s, &c);
+        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
+        stage_at(p, s, &c, yt, k2, s->work.cs);
+        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
+        stage_at(p, s, &c, yt, k3, s->work.cs);
+        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + h * k3[j];
+        stage_at(p, s, &c, yt, k4, s->work.cs);
+    } else {
+        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
+        core_at(p, s, yt, k2, 0, 0, s->work.cs);
+        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
+        core_at(p, s, yt, k3, 0, 0, s->work.cs);
+        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + h * k3[j];
+        core_at(p, s, yt, k4, 0, 0, s->work.cs);
+    }
     for (int j = 0; j < NY; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
     if (p->mech == BC_MECH_IMPOSED) {
         y1[Y_OM] = y0[Y_OM]; /* exactly constant */
