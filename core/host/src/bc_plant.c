@@ -51,9 +51,11 @@ static double h_max_of(const bc_plant_params *p)
 /* ---------------------------------------------------------------------------------------------------------- */
 /* back-EMF shapes and cogging at an angle inside the current pieces                                          */
 
-/* cos and sin of th: rotated from a reference angle ref = {th_r, cos th_r, sin th_r} (the step's start) when th is
- * within 0.03 rad of it, by the Taylor series of cos and sin of the difference (truncation below 2e-17), else from
- * libm. The RK4 stages of a step lie within p omega h of its start, so a step costs one libm cos/sin instead of four. */
+/* cos and sin of th: rotated from a reference angle ref = {th_r, cos th_r, sin th_r} when th is within 0.03 rad of
+ * it, by the Taylor series of cos and sin of the difference (truncation below 2e-17), else from libm. The reference
+ * is always a libm value (an anchor: shapes_at passes the reference on as the evaluation's cs when it rotated from
+ * it), so no rotation is ever rotated again and the error stays at a few ulp however long the run: the RK4 stages
+ * and the step ends within 0.03 rad of the last libm angle cost no libm call. Returns 1 if it rotated from ref. */
 /* out of line: gcc fuses the pair into one sincos call here, not where cos_sin is inlined */
 static BC_NOINLINE void cos_sin_libm(double th, double *c, double *sn)
 {
@@ -61,7 +63,7 @@ static BC_NOINLINE void cos_sin_libm(double th, double *c, double *sn)
     *sn = sin(th);
 }
 
-static BC_ALWAYS_INLINE void cos_sin(double th, const double *ref, double *c, double *sn)
+static BC_ALWAYS_INLINE int cos_sin(double th, const double *ref, double *c, double *sn)
 {
     double d = ref ? th - ref[0] : 1.0;
     if (fabs(d) < 0.03) {
@@ -70,14 +72,30 @@ static BC_ALWAYS_INLINE void cos_sin(double th, const double *ref, double *c, do
         double sd = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0)));
         *c = ref[1] * cd - ref[2] * sd;
         *sn = ref[2] * cd + ref[1] * sd;
-        return;
+        return 1;
     }
     cos_sin_libm(th, c, sn);
+    return 0;
+}
+
+/* cs = the anchor of an evaluation at th: ref if cos_sin rotated from it, else {th, c, sn} (libm) */
+static BC_ALWAYS_INLINE void cs_anchor(double *cs, int rotated, const double *ref, double th, double c, double sn)
+{
+    if (rotated) {
+        cs[0] = ref[0];
+        cs[1] = ref[1];
+        cs[2] = ref[2];
+    } else {
+        cs[0] = th;
+        cs[1] = c;
+        cs[2] = sn;
+    }
 }
 
 /* k_x(th) of the three phases and, if dk is non-null, dk_x/dth (tables: the piece's slope; Fourier: the series
  * differentiated term by term, sum_m m (y_m cos - x_m sin)). A Fourier shape needs cos and sin of th: from ref
- * (cos_sin) and, if cs is non-null, returned there as {th, cos th, sin th} (cs[0] = HUGE_VAL if none was needed). */
+ * (cos_sin) and, if cs is non-null, its anchor returned there: {th_a, cos th_a, sin th_a} of the libm angle it was
+ * rotated from, or of th itself (cs[0] = HUGE_VAL if none was needed). */
 static BC_ALWAYS_INLINE void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s, double th,
                              double *restrict k, double *restrict dk, const double *ref, double *cs)
 {
@@ -93,12 +111,8 @@ static BC_ALWAYS_INLINE void shapes_at(const bc_plant_params *restrict p, const 
     }
     if (s->fz_n > 0) { /* three Fourier series in the global angle: one recurrence cos(m th), sin(m th) for all */
         double c, sn;
-        cos_sin(th, ref, &c, &sn);
-        if (cs) {
-            cs[0] = th;
-            cs[1] = c;
-            cs[2] = sn;
-        }
+        const int rot = cos_sin(th, ref, &c, &sn);
+        if (cs) cs_anchor(cs, rot, ref, th, c, sn);
         /* m = 0 (cos 0 = 1, sin 0 = 0, no derivative) and m = 1 (cos th, sin th) as the loop would add them */
         double k0 = s->fz_a[0][0], k1 = s->fz_a[1][0], k2 = s->fz_a[2][0], d0 = 0.0, d1 = 0.0, d2 = 0.0;
         double cm = c, sm = sn;
@@ -138,13 +152,9 @@ static BC_ALWAYS_INLINE void shapes_at(const bc_plant_params *restrict p, const 
             continue;
         }
         if (!trig) {
-            cos_sin(th, ref, &c, &sn);
+            const int rot = cos_sin(th, ref, &c, &sn);
             trig = 1;
-            if (cs) {
-                cs[0] = th;
-                cs[1] = c;
-                cs[2] = sn;
-            }
+            if (cs) cs_anchor(cs, rot, ref, th, c, sn);
         }
         /* cos and sin of the local angle th - PHI[x] by rotation, then harmonics by recurrence */
         double c1 = c * COS_PHI[x] + sn * SIN_PHI[x];
@@ -2278,7 +2288,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
             }
         }
         state_step(p, s, y0, s->work.k1, h, y1);
-        core_at(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, 0);
+        core_at(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, s->work.cs);
         /* watched functions: the first that goes negative inside the step is an event */
         int dir_om = s->work.wdir;
         const uint32_t neg = watch_eval(p, s, y1, a1, dir_om, g1);
