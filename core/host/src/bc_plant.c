@@ -99,7 +99,10 @@ static BC_ALWAYS_INLINE void cs_anchor(double *cs, int rotated, const double *re
 static BC_ALWAYS_INLINE void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s, double th,
                              double *restrict k, double *restrict dk, const double *ref, double *cs)
 {
-    if (cs) cs[0] = HUGE_VAL;
+    if (cs) { /* none (table shapes); the zeros keep the aux fully defined */
+        cs[0] = HUGE_VAL;
+        cs[1] = cs[2] = 0.0;
+    }
     const double ks = s->k_scale; /* the magnets' flux at temperature (bc_plant_set_thermal) */
     if (s->emf_tables) { /* the usual case (tables and trapezoids): one multiply-add per phase */
         for (int x = 0; x < 3; ++x) {
