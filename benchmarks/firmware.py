@@ -166,6 +166,17 @@ def _torque_runs(drive_name: str, make: Callable[[], Any], ref: Callable[[Any], 
     return runs
 
 
+def _lu_runs(scale: float) -> list[tuple[str, Any, Any, Any]]:
+    """Lu's torque runs at T_N, and light load (T_N / 4 at 0.2 Omega_0): there the current stops in every PWM
+    period and the mean law solves a whole period's mean at every period's start, its costliest steady state."""
+    import bldclab as bl
+
+    d = bl.load("lu-4kw")
+    light = ("0.2 Omega_0, T_N/4", d, _lu(), bl.Scenario(duration=scale * T_STEADY, speed=0.2 * d.Omega_0,
+                                                         ref=0.25 * d.T_N, trace=False))
+    return [*_torque_runs("lu-4kw", _lu, lambda dd: dd.T_N)(scale), light]
+
+
 def _sixv_runs(scale: float) -> list[tuple[str, Any, Any, Any]]:
     import bldclab as bl
 
@@ -275,7 +286,7 @@ def _lu() -> Any:
 CLOSED_LOOP: dict[str, ClosedLoop] = {c.name: c for c in (
     ClosedLoop("sixstep", "sixstep", "bc_sixstep_step", _torque_runs("htm-48v", _sixstep, lambda d: d.T_N)),
     ClosedLoop("sine", "sine", "bc_sine_step", _torque_runs("htm-48v", _sine, _sine_ref)),
-    ClosedLoop("lu", "lu", "bc_lu_step", _torque_runs("lu-4kw", _lu, lambda d: d.T_N)),
+    ClosedLoop("lu", "lu", "bc_lu_step", _lu_runs),
     ClosedLoop("sixv", "sixv", "bc_sixv_step", _sixv_runs),
     ClosedLoop("hallcal", "hallcal", "bc_hallcal_step", _hallcal_runs),
     ClosedLoop("hallcal_speed", "hallcal", "bc_hallcal_step", _hallcal_speed_runs),

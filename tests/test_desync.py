@@ -399,6 +399,26 @@ def test_cli_out_that_is_a_file_fails_before_running(tmp_path, capsys):
     assert "--out" in capsys.readouterr().err
 
 
+def test_a_point_the_simulation_refuses_is_refused_not_no_start(f60):
+    # an inertia 10^5 times the motor's: five mechanical time constants of settling are hours, a per-sample trace
+    # of them is beyond the trace limit, and the simulation refuses the run before it starts
+    big = f60.mechanics.J * 1e5
+    res = desync_map(f60, Axis("J", (big,)), step=ThrottleStep(0.3, 0.7), workers=1, summarise=False)
+    (row,) = res.points.itertuples()
+    assert row.outcome == "refused" and "scenario.trace" in row.note, (row.outcome, row.note)
+    assert res.table().splitlines()[1].split()[-1] == "REFUSED"
+    assert "refused 1" in res.summary()[0] and not any(line.startswith("plant's truth") for line in res.summary())
+
+
+def test_cli_a_map_whose_every_point_is_refused_exits_2_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "m"
+    assert main(["sensorless", "f60prov-2550kv", "--inertia", "10", "--timing", "0,10", "--rate", "inf",
+                 "--workers", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "every point of the map was refused" in err and "--settle" in err, err
+    assert not out.exists()
+
+
 @pytest.mark.slow  # the session's compare run, a map and a report
 def test_report_of_the_directory_shows_the_desync_section(compare_htm48v, tmp_path):
     """bldclab sensorless written into a compare results directory adds the desync map section to the report; a

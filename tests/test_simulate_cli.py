@@ -141,7 +141,8 @@ def test_speed_ref_is_the_reference_shown_and_drawn(tmp_path, capsys):
                "--duration", "0.3 s", "--trace-every", "4", "--out", str(out), "--plot"])
     assert rc == 0
     heading = capsys.readouterr().out.splitlines()[0]
-    assert "speed reference 0 s: 0 rpm, 0.1 s: 300 rpm (speed loop; torque up to 33.69 N m)" in heading
+    assert "speed reference 0 s: 0 rpm, 0.1 s: 300 rpm (final 31.42 rad/s = 300 rpm = " in heading
+    assert "pu; speed loop; torque up to 33.69 N m)" in heading
     assert "reference 33.69" not in heading
     res = bl.SimResult.load(out / "result.npz")
     fig = res.plot()

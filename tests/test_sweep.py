@@ -389,10 +389,13 @@ def test_kill_9_mid_sweep_then_resume(tmp_path, slow_reference):
     t0 = time.monotonic()
     while running(workers) and time.monotonic() - t0 < 30:
         time.sleep(0.05)
-    orphans = running(workers)
+    orphans = []
+    for p in running(workers):  # described before the kill below, for the message
+        with contextlib.suppress(psutil.Error):
+            orphans.append((p.pid, p.status(), " ".join(p.cmdline())[:200]))
     with contextlib.suppress(ProcessLookupError):
         os.killpg(proc.pid, signal.SIGKILL)
-    assert not orphans, [(p.pid, p.name(), p.status()) for p in orphans]
+    assert not orphans, orphans
     before = stored_rows(db)
     assert 10 <= at_kill <= before < 80, (at_kill, before)
     print(f"kill -9: {at_kill} rows seen before the kill, {before} stored, 80 cases")

@@ -380,8 +380,9 @@ static float solve_pair(const bc_lu_params *p, lu_memo *m, const bc_lu_point *x,
     } while (0)
     float g;
     float a = 0.0f, b = 1.0f, ga, gb, d;
-    if (mean && d0 > 0.0f && d0 < 1.0f) {
-        /* the mean laws start from a good guess (the last period's duty): bracket on its side only */
+    if (d0 > 0.0f && d0 < 1.0f) {
+        /* a first estimate inside [0, 1] (the closed-form law's duty, or the mean law's last period's): bracket on
+         * its side only (the far end's evaluation is saved) */
         G_OF(d0, g);
         if (fabsf(g) <= tol) return d0;
         if (g < 0.0f) {
@@ -406,7 +407,7 @@ static float solve_pair(const bc_lu_params *p, lu_memo *m, const bc_lu_point *x,
         float range = fmaxf(gb - ga, 1e-30f);
         if (gb < 0.0f) return d0 > 1.0f ? d0 : 1.0f - gb / range; /* out of reach at full duty */
         if (ga > 0.0f) return d0 < 0.0f ? d0 : -ga / range;        /* too much even at zero duty */
-        d = (d0 > 0.0f && d0 < 1.0f) ? d0 : a - ga * (b - a) / range;
+        d = a - ga * (b - a) / range;
     }
     /* Illinois (modified regula falsi, bc_root_bracket) on the bracket [a, b], g(a) <= 0 <= g(b) */
 #undef G_OF

@@ -28,6 +28,9 @@ Each point is classified (:func:`classify`, on a :class:`Observation` of the run
 ``no start``
     the drive was not in closed loop, in sync, at the step (for ``start == 0``: it never reached it); the reason is
     the controller's last (``START_FAIL``: the forced ramp saw no crossings for a handover).
+``refused``
+    the point did not run: the simulation refused its drive or scenario (its ``note`` says why, e.g. a run too
+    long to keep its per-sample trace, where a large inertia makes the settling time minutes).
 
 **The plant's truth.** The controller's flags are its own diagnosis; the map also measures the real loss of
 synchronisation. At every closed-loop commutation (a change of the driven pair in the applied leg modes) the true
@@ -93,7 +96,7 @@ __all__ = [
 ]
 
 #: The outcomes of a point, in the order the map's legend lists them.
-OUTCOMES = ("sync", "recovered", "desync", "undetected", "no start")
+OUTCOMES = ("sync", "recovered", "desync", "undetected", "no start", "refused")
 
 #: The controller's reasons for giving up (flag names of ``bc_types.h``), as the map names them.
 REASONS = {
@@ -650,6 +653,7 @@ def _run_point(job: DesyncJob) -> dict[str, Any]:
                         (lambda tt, a=step.start, b=step.end, ts=t_step: np.where(tt < ts, a, b)))
             res = simulate(drive, control, Scenario(duration=t_end, ref=ref, theta0=step.theta0), check="warn")
     except (PlausibilityError, BldclabError) as exc:
+        row["outcome"] = "refused"
         row["note"] = f"refused: {exc}"
         return row
     sig = res.signals
@@ -697,7 +701,8 @@ def _tagged(values: tuple[tuple[str, Any], ...], caught: list[str]) -> list[str]
 # the map
 
 #: Short cell texts of the table (:meth:`DesyncMapResult.table`).
-_SHORT = {"sync": "sync", "recovered": "rec", "desync": "LOST", "undetected": "UNDET", "no start": "nostart"}
+_SHORT = {"sync": "sync", "recovered": "rec", "desync": "LOST", "undetected": "UNDET", "no start": "nostart",
+          "refused": "REFUSED"}
 SHORT_REASONS = {"ZC_HIDDEN": "hidden", "ZC_TIMEOUT": "timeout", "ZC_JUMP": "jump", "STALL": "stall",
                  "START_FAIL": "startfail", "OVERCURRENT": "trip", "SAFE": "safe"}
 
@@ -801,7 +806,7 @@ class DesyncMapResult:
             counts = lost.reason.value_counts()
             lines.append("reasons of the desyncs after the step: " + ", ".join(
                 f"{r} {int(c)}" for r, c in counts.items()))
-        ran = p[p.outcome != "no start"]
+        ran = p[~p.outcome.isin(["no start", "refused"])]
         if len(ran):
             agree = int(((ran.outcome == "sync") & ~ran.truth_lost).sum())
             flagged_true = int((ran.outcome.isin(["desync", "recovered"]) & ran.truth_lost).sum())

@@ -182,6 +182,11 @@ def run_command(args: argparse.Namespace) -> int:
     load_matplotlib()
     res = desync_map(drive, axes[0], axes[1] if len(axes) > 1 else None, step=step, control=control, bound=bound,
                      workers=workers, summarise=False)
+    refused = res.points[res.points.outcome == "refused"]
+    if len(refused) == len(res.points):
+        why = str(refused.note.iloc[0]).removeprefix("refused: ")
+        raise BldclabError("MOTOR", f"every point of the map was refused ({why}); its runs last "
+                           f"{_run_times(res)}: give --settle and --observe, or check the drive's inertia")
     _print(res, workers)
     files: dict[str, bytes] = {"desync.csv": res.points.to_csv(index=False).encode(),
                                "desync.json": json.dumps(_summary(res, args), indent=2).encode()}
@@ -190,6 +195,17 @@ def run_command(args: argparse.Namespace) -> int:
         print(f"wrote {path}")
     summarise(res.warnings, len(res.points), args.verbose)
     return 0
+
+
+def _run_times(res: DesyncMapResult) -> str:
+    """Return the runs the map's points ask for, in words (before the axes' changes)."""
+    step, d, c = res.step, res.drive, res.control
+    after = f"{step.observe_time(d, c):.3g} s after the step"
+    if step.is_start:
+        return after
+    return (f"{step.start_time(d, c):.3g} s before the step (of which settle {step.settle_time(d):.3g} s: five "
+            f"mechanical time constants at the start throttle with J = {d.mechanics.J:.3g} kg m^2 unless --settle "
+            f"is given) and {after}")
 
 
 def _print(res: DesyncMapResult, workers: int) -> None:
@@ -202,7 +218,7 @@ def _print(res: DesyncMapResult, workers: int) -> None:
           f"J = {d.mechanics.J:.3g} kg m^2, f_pwm = {d.inverter.f_pwm / 1e3:g} kHz, V_dc = {d.inverter.V_dc:g} V")
     print("  sync: held; rec: desync then restarted, in sync at the end; LOST: desync, not back; UNDET: the plant's "
           "truth saw a commutation out of sync, the controller flagged nothing; nostart: not in closed loop at the "
-          "step; after ':' the controller's reason")
+          "step; REFUSED: not simulated (note below); after ':' the controller's reason")
     for line in res.table().splitlines():
         print(f"  {line}")
     for line in res.summary():

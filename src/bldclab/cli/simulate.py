@@ -13,7 +13,7 @@ import tomllib
 import warnings
 from dataclasses import asdict, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from .._core import decode_flags
 from .._files import write_files
@@ -414,7 +414,9 @@ def run_command(args: argparse.Namespace) -> int:
         ref_text, limit = args.speed_ref, ctl.torque_limit(drive)
         reference: dict[str, Any] = {"reference": ref_text, "reference_unit": "speed (as given)",
                                      "torque_limit_N_m": limit}
-        heading = f"speed reference {ref_text} (speed loop; torque up to {limit:.4g} N m)"
+        w_end = _final(cast("float | Piecewise", sc.omega_ref))  # a bare number is rad/s: say what it was given
+        heading = (f"speed reference {ref_text} (final {w_end:.4g} rad/s = {w_end * _RPM:.4g} rpm = "
+                   f"{w_end / drive.Omega_0:.3g} pu; speed loop; torque up to {limit:.4g} N m)")
     else:
         reference = {"reference": ref, "reference_unit": unit}
         heading = f"reference {ref:.4g} {unit}"

@@ -24,7 +24,7 @@ __all__ = ["OUTCOME_COLOURS", "desync_figures", "plot_desync_map"]
 
 #: Colour of each outcome on the map.
 OUTCOME_COLOURS = {"sync": "#4caf50", "recovered": "#ffc107", "desync": "#e53935", "undetected": "#8e24aa",
-                   "no start": "#9e9e9e"}
+                   "no start": "#9e9e9e", "refused": "#212121"}
 
 
 def _ticks(ax: Axes, res: DesyncMapResult) -> None:

@@ -92,10 +92,18 @@ def _run_chunk(chunk: Sequence[tuple[int, str, dict[str, Any]]]) -> list[_Outcom
     return out
 
 
-def _worker_init() -> None:
-    """Worker process setup: Ctrl-C is the parent's business; exit when orphaned (parent killed with -9)."""
+def _worker_init(parent: int) -> None:
+    """Worker process setup: Ctrl-C is the parent's business; exit when orphaned (parent killed with -9).
+
+    Parameters
+    ----------
+    parent : int
+        Process id of the sweep's process, taken there: a worker still starting when its parent is killed would
+        otherwise read its new parent (init) as the one to watch, and never exit.
+    """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    parent = os.getppid()
+    if os.getppid() != parent:
+        os._exit(1)
 
     def watch() -> None:
         while True:
@@ -180,7 +188,8 @@ class _PoolBackend(_Backend):
     def __init__(self, workers: int, context: str) -> None:
         self.slots = workers
         self.pool = concurrent.futures.ProcessPoolExecutor(
-            max_workers=workers, mp_context=multiprocessing.get_context(context), initializer=_worker_init)
+            max_workers=workers, mp_context=multiprocessing.get_context(context), initializer=_worker_init,
+            initargs=(os.getpid(),))
 
     def submit(self, chunk: list[tuple[int, str, dict[str, Any]]]) -> Any:
         return self.pool.submit(_run_chunk, chunk)

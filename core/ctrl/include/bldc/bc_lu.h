@@ -270,8 +270,9 @@ float bc_lu_mean_ordered(const bc_lu_params *p, const bc_lu_point *x, const bc_l
                          float i_next[3], int *dry);
 
 /* The PAIR duty that makes the ordered model's T(k+1) = T* (|error| <= tol, N m), starting from the closed-form
- * duty d0; beyond [0, 1] it returns d0 if d0 is beyond on the same side, else 1 + (or -) the shortfall over the
- * torque range: > 1 means T* is out of reach at full duty, < 0 at zero duty. */
+ * duty d0 (inside [0, 1]: bracketed between d0 and the end of [0, 1] on the root's side, the other end never
+ * evaluated); beyond [0, 1] it returns d0 if d0 is beyond on the same side, else past 1 (or 0) by the shortfall
+ * over the bracket's slope: > 1 means T* is out of reach at full duty, < 0 at zero duty. */
 float bc_lu_solve_pair(const bc_lu_params *p, const bc_lu_point *x, int pos, int neg, float t_ref, int rising,
                        float d0, float tol);
 
