@@ -328,6 +328,11 @@ class VersusHallResult:
         The sensorless drive's mean applied duty over the measured periods: below ``duties`` where its limits
         (the speed-dependent duty limit, the demagnetisation limiter) acted, and the comparison is then not at equal
         duty.
+    torque_target : tuple of float
+        The torque the duty was sought for, ``k_pair I_N / 2`` (N m); nan where the duty was given. Where Hall
+        six-step cannot reach it (``duties`` 1; e.g. the drone motors at 0.9 ``Omega_0``, whose inductance takes the
+        current) the comparison is at full duty: :meth:`to_pandas`'s ``hall_share``, the Hall drive's torque over
+        it, says so.
     """
 
     speeds: tuple[float, ...]
@@ -340,12 +345,21 @@ class VersusHallResult:
     ripple_hall: tuple[float, ...]
     in_sync: tuple[bool, ...]
     duty_applied: tuple[float, ...]
+    torque_target: tuple[float, ...] = ()
 
     def to_pandas(self) -> pd.DataFrame:
-        """Return one row per speed, with the relative torque difference (sensorless over Hall, minus one)."""
-        df = pd.DataFrame(dataclasses.asdict(self))
+        """Return one row per speed, with ``torque_rel`` and ``hall_share``.
+
+        ``torque_rel``: the relative torque difference (sensorless over Hall, minus one); ``hall_share``: Hall
+        six-step's torque over the target torque (nan without one).
+        """
+        d = dataclasses.asdict(self)
+        if not d["torque_target"]:
+            d["torque_target"] = (math.nan,) * len(self.speeds)
+        df = pd.DataFrame(d)
         df.insert(0, "speed_pu", df.pop("speeds"))
         df["torque_rel"] = df["torque_sl"] / df["torque_hall"] - 1.0
+        df["hall_share"] = df["torque_hall"] / df["torque_target"]
         return df
 
 
@@ -444,9 +458,13 @@ def versus_hall(drive: Drive, speeds: Sequence[float], *, duty: float | None = N
         out["ripple_hall"].append(_ripple(hall, t0))
         out["in_sync"].append(_in_sync(res, t0))
         out["duty_applied"].append(float(np.mean(res.signals["duty"][res.t >= t0])))
-    return VersusHallResult(tuple(float(x) for x in speeds), *(tuple(out[k]) for k in (
-        "duties", "torque_sl", "torque_hall", "efficiency_sl", "efficiency_hall", "ripple_sl", "ripple_hall",
-        "in_sync", "duty_applied")))
+    target = 0.5 * pair_torque_constant(drive) * drive.motor.I_N if duty is None else math.nan
+    return VersusHallResult(
+        speeds=tuple(float(x) for x in speeds), duties=tuple(out["duties"]), torque_sl=tuple(out["torque_sl"]),
+        torque_hall=tuple(out["torque_hall"]), efficiency_sl=tuple(out["efficiency_sl"]),
+        efficiency_hall=tuple(out["efficiency_hall"]), ripple_sl=tuple(out["ripple_sl"]),
+        ripple_hall=tuple(out["ripple_hall"]), in_sync=tuple(out["in_sync"]), duty_applied=tuple(out["duty_applied"]),
+        torque_target=(target,) * len(speeds))
 
 
 @dataclass(frozen=True)
