@@ -10,7 +10,8 @@ Per drive (``bldclab drives``), all with the default :class:`~bldclab.control.se
   late) at 0.2, 0.5 and 0.9 ``Omega_0`` (:func:`angle_error`, 8 electrical periods after settling, imposed speed,
   the default duty: back-EMF plus the drop of half ``I_N``);
 - ``dT@x``: mean torque of the sensorless drive over Hall six-step's at equal duty and speed, minus one (%; the
-  duty at which Hall six-step gives half ``I_N``'s torque), and
+  duty at which Hall six-step gives half ``I_N``'s torque; ``*``: out of Hall six-step's reach, compared at full
+  duty), and
   ``eta@x`` both efficiencies (sensorless / Hall, %) (:func:`versus_hall`, same points and periods);
 - ``start``: successes / attempts over a small start-up grid (:func:`startup_grid`): added load 0, 0.5 and 0.9
   times the closed-form bound at the drive's inertia (:func:`startup_load_bound`) and 1.3 times the static torque
@@ -67,7 +68,8 @@ def row(name: str, workers: int) -> dict[str, Any]:
         out["err"] = [f"error: {e}"] * 3
     try:
         vh = versus_hall(d, SPEEDS, periods=PERIODS).to_pandas()
-        out["dT"] = [_f(100 * x, "{:+.1f}") for x in vh.torque_rel]
+        out["dT"] = [_f(100 * x, "{:+.1f}") + ("*" if duty >= 1.0 and share < 0.98 else "") for x, duty, share in
+                     zip(vh.torque_rel, vh.duties, vh.hall_share, strict=True)]
         out["eta"] = [f"{_f(100 * a, '{:.0f}')}/{_f(100 * b, '{:.0f}')}" for a, b in
                       zip(vh.efficiency_sl, vh.efficiency_hall, strict=True)]
     except Exception as e:
@@ -118,7 +120,8 @@ def main() -> None:
     for n in notes:
         print(n)
     print(f"({time.perf_counter() - t0:.0f} s; err: mean/worst deg electrical, '!' = the loop did not hold; "
-          f"eta: sensorless/Hall; {len(todo)} drives)")
+          f"dT '*': half I_N's torque out of Hall six-step's reach, compared at full duty; eta: sensorless/Hall; "
+          f"{len(todo)} drives)")
 
 
 if __name__ == "__main__":

@@ -150,6 +150,38 @@ def test_non_finite_values_are_an_error(normal_result):
     assert "i_a at t =" in f.message
 
 
+def test_runner_row_summary_is_what_the_signals_give(monkeypatch):
+    """The C runner's summary of the trace rows (peaks, finiteness) equals numpy's scan of the signals."""
+    seen = []
+    check = plausibility.check_result
+
+    def spy(drive, res, rows=None):
+        seen.append((res, rows))
+        return check(drive, res, rows)
+
+    monkeypatch.setattr(plausibility, "check_result", spy)
+    sc = bl.Scenario(duration=0.02, omega_ref=30.0, trace=True)  # rotor dynamics: omega_m's peak is read too
+    bl.simulate(HTM, bl.Sine(speed_loop=True), sc)
+    ((res, rows),) = seen
+    assert rows is not None and not rows.nonfinite and len(res) > 100
+    assert rows.peak == tuple(float(np.max(np.abs(res[n]))) for n in ("i_a", "i_b", "i_c", "omega_m"))
+    assert rows.peak[0] > 0.0 and rows.peak[3] > 0.0
+
+
+def test_row_summary_gives_the_findings_of_the_scan(normal_result):
+    signals = dict(normal_result.signals, i_a=np.where(np.arange(len(normal_result)) == 5, np.inf, 0.0))
+    bad = bl.SimResult(signals, normal_result.units, normal_result.docs, normal_result.metrics, normal_result.meta)
+    peak = tuple(float(np.max(np.abs(normal_result[n]))) for n in ("i_a", "i_b", "i_c", "omega_m"))
+    assert plausibility.check_result(HTM, normal_result, plausibility.RowSummary(peak, False)) == []
+    # a summary that saw a non-finite row defers to the scan, which names the signal and the instant
+    (f,) = plausibility.check_result(HTM, bad, plausibility.RowSummary(peak, True))
+    assert (f.cause, "i_a at t =" in f.message) == ("result.finite", True)
+    # huge peaks from the summary reach the current check as the scanned ones do
+    drive = HTM.replace(inverter__i_trip=0.0)
+    (f,) = plausibility.check_result(drive, normal_result, plausibility.RowSummary((1e35, 0.0, 0.0, 0.0), False))
+    assert (f.level, f.cause) == ("error", "result.currents")
+
+
 def test_currents_without_hardware_trip_beyond_100_in_are_an_error(normal_result):
     drive = HTM.replace(inverter__i_trip=0.0)
     (f,) = plausibility.check_result(drive, _with_metrics(normal_result, i_peak=(1e35, 0.0, 0.0)))

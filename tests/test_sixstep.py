@@ -299,13 +299,15 @@ def test_timing_advance_raises_high_speed_torque():
 def test_drone_motor_at_35000_rpm_commutates_at_the_ideal_instant():
     """The 5-inch drone motor (f60prov-2550kv, 48 kHz) at 35,000 rpm: 2 PWM periods per commutation sector. The Hall
     drive commutating at the timer instant gives the ideal commutation's torque (the encoder's exact angle) to 2e-4
-    at 0 and 30 degrees of advance; waiting for the edge seen at the next sample loses half the torque; the 30-degree
-    advance an ESC offers raises it by half (docs/catalog-drones.md, "High-speed six-step")."""
+    at 0 and 30 degrees of advance; waiting for the edge seen at the next sample loses a third of the torque (half on
+    an ideal inverter; with the entry's 0.77 V body diodes the late commutation's outgoing current falls against
+    the diode's drop too); the 30-degree advance an ESC offers raises it by half (docs/catalog-drones.md,
+    "High-speed six-step")."""
     d = bl.load("f60prov-2550kv")
     w = 35000.0 * math.pi / 30.0 / d.Omega_0
     for timing in (0.0, math.radians(30.0)):
         ideal = _duty_torque(d, w, timed=True, commutation="encoder", timing=timing)
         assert _duty_torque(d, w, timed=True, timing=timing) == pytest.approx(ideal, rel=2e-4)
     t0 = _duty_torque(d, w, timed=True)
-    assert _duty_torque(d, w, advance=False) < 0.6 * t0
+    assert _duty_torque(d, w, advance=False) < 0.7 * t0
     assert _duty_torque(d, w, timed=True, timing="30 deg") > 1.4 * t0

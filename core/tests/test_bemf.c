@@ -1044,6 +1044,58 @@ static void test_start_current_limit(void)
     CHECK(bc_bemf_init(&p, &s) == BC_ERR_PARAM, "i_start NaN refused");
 }
 
+/* the inverter's share d_diode (2): the start-up's duties and the speed-dependent limit are an ideal inverter's; the
+ * duty applied is d_diode + (1 - d_diode) x that, sample by sample the same run otherwise (a rotor that does not move:
+ * the same inputs reach both controllers), and the chopping leg's duty (high-side pattern) is that duty */
+static void test_diode_share(void)
+{
+    bc_bemf_params p0 = start_params(BC_BEMF_COMPARATOR);
+    p0.chop = BC_CHOP_HIGH;
+    p0.ramp_vf = 1e-4f;
+    p0.ramp_tau = 2e-3f;
+    bc_bemf_params p1 = p0;
+    const float q = 0.04f; /* 0.7 V of a diode on a 16.8 V bus: 0.7 / 17.5 */
+    p1.d_diode = q;
+    bc_bemf_state s0, s1;
+    CHECK(bc_bemf_init(&p0, &s0) == BC_OK && bc_bemf_init(&p1, &s1) == BC_OK, "init with d_diode");
+    bc_ctrl_in in;
+    memset(&in, 0, sizeof in);
+    in.v_dc = 16.8f;
+    in.ref = 0.5f;
+    bc_ctrl_out o0, o1;
+    long n_align = 0, n_ramp = 0, bad = 0, bad_leg = 0;
+    long k_end = (long)((double)p0.align_time / TS) + 400;
+    for (long k = 0; k < k_end; ++k) {
+        in.tick_now = (uint32_t)(k * 250);
+        memset(&o0, 0, sizeof o0);
+        memset(&o1, 0, sizeof o1);
+        bc_bemf_step(&p0, &s0, &in, &o0);
+        bc_bemf_step(&p1, &s1, &in, &o1);
+        if (o1.diag[0] != o0.diag[0]) {
+            ++bad;
+            continue;
+        }
+        if (o0.diag[0] == (float)BC_BEMF_ALIGN) ++n_align;
+        else if (o0.diag[0] == (float)BC_BEMF_RAMP) ++n_ramp;
+        else continue;
+        double want = (double)q + (1.0 - (double)q) * (double)o0.diag[6];
+        if (fabs((double)o1.diag[6] - want) > 1e-6) ++bad;
+        double top = 0.0; /* the chopping (high) leg's duty */
+        for (int x = 0; x < 3; ++x)
+            if (o1.leg[x].mode == BC_LEG_HIGH && (double)o1.leg[x].duty > top) top = (double)o1.leg[x].duty;
+        if (fabs(top - want) > 1e-6) ++bad_leg;
+    }
+    CHECK(n_align > 100 && n_ramp > 50 && bad == 0 && bad_leg == 0,
+          "d_diode: duty q + (1 - q) d in %ld of %ld alignment and ramp samples, the chopping leg at it in %ld",
+          n_align + n_ramp - bad, n_align + n_ramp, n_align + n_ramp - bad_leg);
+    p1.d_diode = 1.0f;
+    CHECK(bc_bemf_init(&p1, &s1) == BC_ERR_PARAM, "d_diode = 1 refused");
+    p1.d_diode = -0.01f;
+    CHECK(bc_bemf_init(&p1, &s1) == BC_ERR_PARAM, "d_diode < 0 refused");
+    p1.d_diode = NAN;
+    CHECK(bc_bemf_init(&p1, &s1) == BC_ERR_PARAM, "d_diode NaN refused");
+}
+
 /* fast demagnetisation and the demagnetisation limiter on the kinematic rotor (300 Hz, 22 samples a sector) */
 static void test_fast_demag_and_limiter(void)
 {
@@ -1192,6 +1244,7 @@ int main(void)
     test_stop_and_reverse();
     test_throttle_and_limit();
     test_start_current_limit();
+    test_diode_share();
     test_fast_demag_and_limiter();
     return bc_test_summary("test_bemf");
 }

@@ -63,7 +63,8 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
         !(fin(p->v_max) && p->v_max > 0.0f) || (p->fast_demag != 0 && p->fast_demag != 1) ||
         !(fin(p->fd_after) && p->fd_after >= 0.0f && p->fd_after < 1.0f) || !in01(p->dlim_d0) ||
         !nonneg(p->dlim_vf) || !nonneg(p->dlim_tau) || !(fin(p->demag_max) && p->demag_max >= 0.0f && p->demag_max < 1.0f) ||
-        (p->cmp_gate != 0 && p->cmp_gate != 1) || !nonneg(p->i_start))
+        (p->cmp_gate != 0 && p->cmp_gate != 1) || !nonneg(p->i_start) ||
+        !(fin(p->d_diode) && p->d_diode >= 0.0f && p->d_diode < 1.0f))
         return BC_ERR_PARAM;
     *s = (bc_bemf_state){0};
     s->ts_tick = p->ts * p->f_tick;
@@ -126,12 +127,20 @@ static float advance_of(const bc_bemf_params *p, const bc_bemf_state *s, float w
     return fin(a) ? bc_clampf(a, 0.0f, p->adv_max) : p->adv_max;
 }
 
-/* the forced ramp's duty at electrical speed w: ramp_duty sqrt(1 + (w ramp_tau)^2) + ramp_vf w, in [0, 1] */
+/* a duty of the ideal inverter (synchronous, no dead time, no diode drop) made the inverter's: d_diode + (1 - d_diode) d,
+ * in [0, 1] (2) */
+static float with_diode(const bc_bemf_params *p, float d)
+{
+    float m = p->d_diode + (1.0f - p->d_diode) * d;
+    return fin(m) ? bc_clampf(m, 0.0f, 1.0f) : 0.0f;
+}
+
+/* the forced ramp's duty at electrical speed w: d_diode + (1 - d_diode) (ramp_duty sqrt(1 + (w ramp_tau)^2) +
+ * ramp_vf w), in [0, 1] */
 static float ramp_duty_at(const bc_bemf_params *p, float w)
 {
     float x = w * p->ramp_tau;
-    float d = p->ramp_duty * sqrtf(1.0f + x * x) + p->ramp_vf * w;
-    return fin(d) ? bc_clampf(d, 0.0f, 1.0f) : 0.0f;
+    return with_diode(p, p->ramp_duty * sqrtf(1.0f + x * x) + p->ramp_vf * w);
 }
 
 /* Open-loop time to an angle: w tau + a tau^2 / 2 (w + a tau capped at w1) reaches ang. */
@@ -546,14 +555,14 @@ static int fd_engage(const bc_bemf_params *p, bc_bemf_state *s, float travel_end
 static float duty_of(const bc_bemf_params *p, const bc_bemf_state *s)
 {
     float m = 0.0f;
-    if (s->mode == BC_BEMF_ALIGN) m = p->align_duty;
+    if (s->mode == BC_BEMF_ALIGN) m = with_diode(p, p->align_duty);
     else if (s->mode == BC_BEMF_RAMP) m = ramp_duty_at(p, s->w_now); /* at the forced speed now */
     else if (s->mode == BC_BEMF_CLOSED) {
         m = fmaxf(s->d_cmd, p->duty_min);
         if (p->demag_max > 0.0f) m = fminf(m, s->d_dm);
         if (p->dlim_d0 > 0.0f) { /* speed-dependent limit */
             float w = omega_of(p, s), x = w * p->dlim_tau;
-            m = fminf(m, p->dlim_d0 * sqrtf(1.0f + x * x) + p->dlim_vf * w);
+            m = fminf(m, with_diode(p, p->dlim_d0 * sqrtf(1.0f + x * x) + p->dlim_vf * w));
         }
     }
     m = fminf(m, s->d_lim);

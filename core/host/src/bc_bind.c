@@ -178,6 +178,8 @@ static const bc_field_desc FIELDS[] = {
     F(bc_sim_state, flag_run_t0, "f8"),
     F(bc_sim_state, flag_run_t1, "f8"),
     F(bc_sim_state, m, "bc_sim_metrics"),
+    F(bc_sim_state, row_peak, "f8"),
+    F(bc_sim_state, row_nonfinite, "i4"),
 
     F(bc_ctrl_in, i_abc, "f4"),
     F(bc_ctrl_in, i_mask, "u4"),

@@ -134,6 +134,14 @@ static void row_close(bc_sim_state *s, bc_trace_row *rows, int64_t cap, int64_t 
     if (rows != 0 && *nw < cap) {
         rows[*nw] = *r;
         *nw += 1;
+        /* the result checks' summary of the rows (bldclab.sim.plausibility), gathered here instead of by strided
+         * passes over the record array */
+        const double pk[4] = {fabs(r->i_a), fabs(r->i_b), fabs(r->i_c), fabs(r->omega_m)};
+        for (int j = 0; j < 4; ++j) {
+            if (pk[j] > s->row_peak[j]) s->row_peak[j] = pk[j];
+        }
+        if (!(isfinite(r->i_a) && isfinite(r->i_b) && isfinite(r->i_c) && isfinite(r->tau_e) && isfinite(r->omega_m)))
+            s->row_nonfinite = 1;
     } else if (rows != 0) {
         *overflow = 1;
     }

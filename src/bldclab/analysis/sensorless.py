@@ -169,7 +169,8 @@ def run_locked(drive: Drive, speed_pu: float, duty: float, *, periods: float = 2
     """Run the sensorless drive locked at an imposed speed; return the run and the time the measurement starts.
 
     Above four PWM periods per sector the forced start locks at that speed and the imposed speed ramps up to
-    ``speed_pu`` over the first half of the settling time.
+    ``speed_pu`` over the first half of the settling time, the throttle with it in proportion (``duty`` at
+    ``speed_pu``), as the back-EMF rises: the current on the way stays near the measured point's.
 
     Parameters
     ----------
@@ -211,10 +212,16 @@ def run_locked(drive: Drive, speed_pu: float, duty: float, *, periods: float = 2
     dur = (settle + periods) * period
     th0 = 5.0 * math.pi / 6.0 - w_lock * ts + 1e-3  # the rotor enters sector 2 when the first output applies
     speed: Any = w_m
+    ref: Any = duty
     if w_lock < w_e:
         t_up = 0.5 * t0
         speed = lambda t: (w_lock + (w_e - w_lock) * np.clip(t / t_up, 0.0, 1.0)) / p  # noqa: E731
-    res = simulate(drive, ctl, Scenario(duration=dur, speed=speed, ref=duty, theta0=th0, trace_sub=trace_sub,
+        # the throttle rises with the speed (as the back-EMF does), so the current on the way stays near the
+        # measured point's: the full throttle at the lock speed drives the current of a back-EMF at less than half
+        # the speed, and its clamp hides the crossing (f60prov-2550kv at 0.9 Omega_0, full duty: ZC_HIDDEN 0.6 ms
+        # after the lock, where the point itself holds with its clamp at 0.4 of the window)
+        ref = lambda t: duty * (w_lock + (w_e - w_lock) * np.clip(t / t_up, 0.0, 1.0)) / w_e  # noqa: E731
+    res = simulate(drive, ctl, Scenario(duration=dur, speed=speed, ref=ref, theta0=th0, trace_sub=trace_sub,
                                         window=(t0, dur)), check="warn")
     return res, t0
 
@@ -321,6 +328,11 @@ class VersusHallResult:
         The sensorless drive's mean applied duty over the measured periods: below ``duties`` where its limits
         (the speed-dependent duty limit, the demagnetisation limiter) acted, and the comparison is then not at equal
         duty.
+    torque_target : tuple of float
+        The torque the duty was sought for, ``k_pair I_N / 2`` (N m); nan where the duty was given. Where Hall
+        six-step cannot reach it (``duties`` 1; e.g. the drone motors at 0.9 ``Omega_0``, whose inductance takes the
+        current) the comparison is at full duty: :meth:`to_pandas`'s ``hall_share``, the Hall drive's torque over
+        it, says so.
     """
 
     speeds: tuple[float, ...]
@@ -333,12 +345,21 @@ class VersusHallResult:
     ripple_hall: tuple[float, ...]
     in_sync: tuple[bool, ...]
     duty_applied: tuple[float, ...]
+    torque_target: tuple[float, ...] = ()
 
     def to_pandas(self) -> pd.DataFrame:
-        """Return one row per speed, with the relative torque difference (sensorless over Hall, minus one)."""
-        df = pd.DataFrame(dataclasses.asdict(self))
+        """Return one row per speed, with ``torque_rel`` and ``hall_share``.
+
+        ``torque_rel``: the relative torque difference (sensorless over Hall, minus one); ``hall_share``: Hall
+        six-step's torque over the target torque (nan without one).
+        """
+        d = dataclasses.asdict(self)
+        if not d["torque_target"]:
+            d["torque_target"] = (math.nan,) * len(self.speeds)
+        df = pd.DataFrame(d)
         df.insert(0, "speed_pu", df.pop("speeds"))
         df["torque_rel"] = df["torque_sl"] / df["torque_hall"] - 1.0
+        df["hall_share"] = df["torque_hall"] / df["torque_target"]
         return df
 
 
@@ -437,9 +458,13 @@ def versus_hall(drive: Drive, speeds: Sequence[float], *, duty: float | None = N
         out["ripple_hall"].append(_ripple(hall, t0))
         out["in_sync"].append(_in_sync(res, t0))
         out["duty_applied"].append(float(np.mean(res.signals["duty"][res.t >= t0])))
-    return VersusHallResult(tuple(float(x) for x in speeds), *(tuple(out[k]) for k in (
-        "duties", "torque_sl", "torque_hall", "efficiency_sl", "efficiency_hall", "ripple_sl", "ripple_hall",
-        "in_sync", "duty_applied")))
+    target = 0.5 * pair_torque_constant(drive) * drive.motor.I_N if duty is None else math.nan
+    return VersusHallResult(
+        speeds=tuple(float(x) for x in speeds), duties=tuple(out["duties"]), torque_sl=tuple(out["torque_sl"]),
+        torque_hall=tuple(out["torque_hall"]), efficiency_sl=tuple(out["efficiency_sl"]),
+        efficiency_hall=tuple(out["efficiency_hall"]), ripple_sl=tuple(out["ripple_sl"]),
+        ripple_hall=tuple(out["ripple_hall"]), in_sync=tuple(out["in_sync"]), duty_applied=tuple(out["duty_applied"]),
+        torque_target=(target,) * len(speeds))
 
 
 @dataclass(frozen=True)
@@ -759,8 +784,9 @@ def demag_times(res: SimResult, drive: Drive, *, chopping: str, fast_demag: bool
 # ------------------------------------------------------------------------------------------------------------
 # start-up over load torque x inertia x initial rotor angle
 
-#: The controller's flags that name a failed start (bc_types.h), in the order a tie is named.
-START_FAILURES = ("START_FAIL", "STALL", "DESYNC", "ZC_TIMEOUT", "ZC_JUMP", "ZC_HIDDEN", "OVERCURRENT", "SAFE")
+#: The controller's flags that name a failed start (bc_types.h), in the order a tie is named: a desync's reason
+#: (raised at the same sample as ``DESYNC``) before ``DESYNC`` itself.
+START_FAILURES = ("START_FAIL", "STALL", "ZC_TIMEOUT", "ZC_JUMP", "ZC_HIDDEN", "DESYNC", "OVERCURRENT", "SAFE")
 _START_KEYS = ("align_current", "align_duty", "align_time", "ramp_duty", "ramp_vf", "ramp_tau", "ramp_time",
                "start_current_limit", "stall_speed", "ramp_start_speed", "ramp_end_speed")
 

@@ -21,7 +21,7 @@ from ..model.motor import Drive
 from ..model.units import to_si
 from .base import Control, check_number
 
-__all__ = ["SixStepSensorless", "fast_demag_after", "integral_to_30", "throttle_rate"]
+__all__ = ["SixStepSensorless", "fast_demag_after", "integral_to_30", "inverter_share", "throttle_rate"]
 
 # the settings' C constants (values read from the library: bldclab._core)
 _METHOD = {"comparator": "BC_BEMF_COMPARATOR", "adc": "BC_BEMF_ADC", "integration": "BC_BEMF_INTEGRATE"}
@@ -95,6 +95,45 @@ def fast_demag_after(drive: Drive, share: float = 0.45, min_samples: float = 4.0
     if drive.inverter.V_f == 0.0 and window * 2.0 * drive.inverter.f_pwm < min_samples:
         return 0.0
     return share
+
+
+def inverter_share(drive: Drive, chopping: str, current: float) -> float:
+    """Return the duty the inverter's diodes and dead time take from a start-up duty (``d_diode``, docs/sensorless.md).
+
+    The start-up duties (alignment, forced ramp) and the closed loop's speed-dependent limit are computed for an
+    ideal inverter, ``d_s = u / V_dc`` for the pair voltage ``u`` they need (the drop of the current on ``2 (R +
+    R_on)`` and the back-EMF); the controller applies ``d = q + (1 - q) d_s`` with ``q`` this share:
+
+    - ``high``, ``pwm-on-pwm``, ``bipolar``: in the off-time the chopping leg's current flows through a diode, so the
+      leg sits at ``-V_d``, ``V_d = V_f + (r_d - R_on) I``, instead of near 0 (bipolar: the pair at ``-(V_dc + 2
+      V_d)`` instead of ``-V_dc``), and ``u = d (V_dc + V_d) - V_d``: ``q = V_d / (V_dc + V_d)``;
+    - ``sync``: the diode carries the current only in the dead time before each turn-on and after each turn-off of
+      the chopping switch: ``q = t_dead f_pwm (V_dc + 2 V_f) / V_dc`` (to first order).
+
+    It presumes the current in the chopping leg continuous over the PWM period (the start-up's current through
+    ``L``; true on every catalog drive). On f60prov-2550kv (16.8 V, alignment duty 0.034) a 0.7 V diode alone takes
+    more than the whole alignment voltage in the off-time: uncounted, the high-side pattern drives no current.
+
+    Parameters
+    ----------
+    drive : Drive
+    chopping : {"sync", "high", "pwm-on-pwm", "bipolar"}
+    current : float
+        The chopping leg's current (A); the start-up's alignment current.
+
+    Returns
+    -------
+    float
+        ``q``, at most 0.5 (a diode drop above the bus voltage is no inverter).
+    """
+    inv = drive.inverter
+    v = inv.V_dc
+    if chopping == "sync":
+        q = inv.t_dead * inv.f_pwm * (v + 2.0 * inv.V_f) / v
+    else:
+        v_d = max(inv.V_f + (inv.r_d - inv.R_on) * abs(current), 0.0)
+        q = v_d / (v + v_d)
+    return min(max(q, 0.0), 0.5)
 
 
 def integral_to_30(drive: Drive, reference: str | None = None, n: int = 721) -> float:
@@ -254,7 +293,10 @@ class SixStepSensorless(Control):
         Current the alignment duty drives through the line resistance at standstill, and the forced ramp's current;
         default ``0.5 I_N``.
     align_duty : float, optional
-        Alignment duty; default ``2 (R + R_on) align_current / V_dc``.
+        Alignment duty of an ideal inverter; default ``1.5 (R + R_on) align_current / V_dc`` (two phases in
+        parallel against the third). This, ``ramp_duty``, ``ramp_vf`` and ``duty_limit_current``'s limit are duties
+        of an ideal inverter; the controller applies ``q + (1 - q) d`` with ``q`` the share of the inverter's diode
+        drop and dead time for the chopping pattern (:func:`inverter_share`; 0 for the ideal inverter).
     ramp_start_speed, ramp_end_speed : float or str, optional
         Forced commutation's speeds (mechanical); defaults 0 (from standstill at the ramp's acceleration: a start speed
         above what the rotor reaches in the first sector leaves a light rotor behind) and ``0.1 Omega_0``.
@@ -471,7 +513,9 @@ class SixStepSensorless(Control):
         -------
         dict
             ``align_current`` (A), ``align_duty``, ``align_time`` (s), ``ramp_duty``, ``ramp_vf`` (per electrical
-            rad/s), ``ramp_tau`` (s), ``ramp_time`` (s), ``start_current_limit`` (A), and the speeds of
+            rad/s), ``ramp_tau`` (s), ``ramp_time`` (s), ``start_current_limit`` (A), ``diode_duty`` (the
+            inverter's share :func:`inverter_share`: the duties applied are ``diode_duty + (1 - diode_duty) x`` the
+            ideal inverter's duties here), and the speeds of
             :meth:`speeds` (mechanical rad/s): ``stall_speed``, ``ramp_start_speed``, ``ramp_end_speed``.
         """
         m, v, j = drive.motor, drive.inverter.V_dc, drive.mechanics.J
@@ -499,6 +543,7 @@ class SixStepSensorless(Control):
                                     else float(self.start_current_limit)),
             "ramp_time": t_ramp if self.ramp_time is None else float(self.ramp_time),
             "stall_speed": stall, "ramp_start_speed": start, "ramp_end_speed": end,
+            "diode_duty": inverter_share(drive, self.chopping, i_al),
         }
 
     def c_record(self, drive: Drive, core: Core, n_samples: int) -> CParams:  # noqa: D102
@@ -571,4 +616,5 @@ class SixStepSensorless(Control):
             demag_max=self.demag_limit,
             cmp_gate=int(drive.sensors.bemf_offset != 0.0 and self.fast_demag),
             i_start=su["start_current_limit"] if self.current_sensing else 0.0,
+            d_diode=su["diode_duty"],
         ))

@@ -732,7 +732,9 @@ def _run(drive: Drive, control: Control, scenario: Scenario, check: str, estimat
         raise BldclabError("drive", "the C plant rejected the parameters (a value out of its physical range)")
 
     n_rows = trace_rows(drive, scenario)
-    rows = np.zeros(n_rows, dtype=c.trace_dtype)
+    # np.empty, not zeros: the runner writes every field of every row it reports and the rest is cut off below; calloc
+    # would clear the 344-byte records (10 MB a simulated second) that the last run's freed buffer gives back
+    rows = np.empty(n_rows, dtype=c.trace_dtype)
     n_written = 0
     chunks = _chunks(n)
     coupler = None
@@ -801,8 +803,11 @@ def _run(drive: Drive, control: Control, scenario: Scenario, check: str, estimat
     chosen = scenario.window is not None
     # the default window (the whole run) is not checked as a measurement: guards see the run as before it existed
     res = SimResult(signals, units, docs, metrics if chosen else None, meta)
+    pk = st["row_peak"]
+    rows_summary = _plaus.RowSummary((float(pk[0]), float(pk[1]), float(pk[2]), float(pk[3])),
+                                     bool(int(st["row_nonfinite"])))
     try:
-        meta["warnings"] = issued + _guards_after(drive, res, imposed, check)
+        meta["warnings"] = issued + _guards_after(drive, res, imposed, check, rows_summary)
     except PlausibilityError as exc:  # the inputs' warnings are its cause: they lead the message
         raise _plaus.cause_first(exc, issued) from None
     res.metrics = metrics
@@ -874,15 +879,17 @@ def _guards_before(drive: Drive, control: Control, cparams: np.ndarray, imposed:
     return _plaus.apply(findings, check, stacklevel=5)
 
 
-def _guards_after(drive: Drive, res: SimResult, imposed: bool, check: str) -> list[str]:
-    """Plausibility checks on the result; return the warnings issued."""
+def _guards_after(drive: Drive, res: SimResult, imposed: bool, check: str,
+                  rows: _plaus.RowSummary | None = None) -> list[str]:
+    """Plausibility checks on the result (``rows``: the runner's summary of its trace rows); return the warnings."""
     if check == "off":
         return []
-    findings = _plaus.check_result(drive, res)
+    findings = _plaus.check_result(drive, res, rows)
     if not imposed:
         w = [abs(res.meta["final"]["omega_m"])]
         if "omega_m" in res.signals and len(res):
-            w.append(float(np.max(np.abs(res.signals["omega_m"]))))
+            w.append(rows.peak[3] if rows is not None and not rows.nonfinite
+                     else float(np.max(np.abs(res.signals["omega_m"]))))
         findings += _plaus.check_pwm(drive, max(w), time_constant=False)
         if res.metrics is not None:
             findings += _plaus.check_steady(drive, res)

@@ -52,6 +52,7 @@ import re
 import warnings
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -72,9 +73,30 @@ from ..model.motor import Drive
 from .results import SimResult
 
 __all__ = ["BALANCE_ERROR", "BALANCE_WARN", "CHECK_MODES", "PWM_PER_PERIOD_ERROR", "PWM_PER_PERIOD_WARN",
-           "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "Finding", "apply", "cause_first", "cause_of",
-           "check_pwm", "check_reference", "check_result", "check_speed", "check_steady", "collect", "distinct",
-           "summary"]
+           "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "Finding", "RowSummary", "apply", "cause_first",
+           "cause_of", "check_pwm", "check_reference", "check_result", "check_speed", "check_steady", "collect",
+           "distinct", "summary"]
+
+@dataclass(frozen=True)
+class RowSummary:
+    """What the C runner gathered over the trace rows it wrote (``bc_sim_state.row_peak``, ``row_nonfinite``).
+
+    It spares :func:`check_result` the strided passes over the record array (one per signal) that would find the
+    same: while ``nonfinite`` is false, every traced ``i_x``, ``tau_e`` and ``omega_m`` is finite and ``peak`` holds
+    their largest magnitudes, exactly what ``np.max(np.abs(signal))`` gives.
+
+    Attributes
+    ----------
+    peak : tuple of float
+        Largest ``|i_a|``, ``|i_b|``, ``|i_c|`` (A) and ``|omega_m|`` (rad/s) of the rows.
+    nonfinite : bool
+        A row holds a non-finite ``i_x``, ``tau_e`` or ``omega_m`` (then the checks scan the signals themselves, to
+        name the first).
+    """
+
+    peak: tuple[float, float, float, float]
+    nonfinite: bool
+
 
 #: Accepted values of ``simulate(..., check=)``.
 CHECK_MODES = ("error", "warn", "off")
@@ -138,7 +160,7 @@ def check_reference(drive: Drive, control: Control, ref_max: float, i_limit: flo
                     f"I_N = {m.I_N:.4g} A; error above {REF_ERROR_FACTOR:g} times the limit)")]
 
 
-def _nonfinite(res: SimResult) -> list[str]:
+def _nonfinite(res: SimResult, rows: RowSummary | None = None) -> list[str]:
     bad = []
     m = res.metrics
     if m is not None:
@@ -154,6 +176,8 @@ def _nonfinite(res: SimResult) -> list[str]:
         vals = np.atleast_1d(np.asarray(final.get(key, 0.0), dtype=float))
         if not np.all(np.isfinite(vals)):
             bad.append(f"final {key} = {final[key]}")
+    if rows is not None and not rows.nonfinite:
+        return bad  # the runner saw every traced value finite
     for name in ("i_a", "i_b", "i_c", "tau_e", "omega_m"):
         sig = res.signals.get(name)
         if sig is not None and sig.size and not np.all(np.isfinite(sig)):
@@ -162,19 +186,22 @@ def _nonfinite(res: SimResult) -> list[str]:
     return bad
 
 
-def check_result(drive: Drive, res: SimResult) -> list[Finding]:
+def check_result(drive: Drive, res: SimResult, rows: RowSummary | None = None) -> list[Finding]:
     """Check a finished run: finite values, energy balance, currents after a hardware trip.
 
     Parameters
     ----------
     drive : Drive
     res : SimResult
+    rows : RowSummary, optional
+        The runner's summary of ``res``'s trace rows (:func:`bldclab.simulate` passes it); without it the signals are
+        scanned.
 
     Returns
     -------
     list of Finding
     """
-    bad = _nonfinite(res)
+    bad = _nonfinite(res, rows)
     if bad:
         return [Finding("error", "result.finite", f"non-finite values ({'; '.join(bad[:3])}): the integration "
                         "diverged")]
@@ -193,10 +220,14 @@ def check_result(drive: Drive, res: SimResult) -> list[Finding]:
     peaks = [abs(v) for v in res.meta.get("final", {}).get("i", [])]
     if m is not None:
         peaks += list(m.i_peak)
-    for name in ("i_a", "i_b", "i_c"):
-        sig = res.signals.get(name)
-        if sig is not None and sig.size:
-            peaks.append(float(np.max(np.abs(sig))))
+    if rows is not None and not rows.nonfinite:
+        peaks += [rows.peak[x] for x, name in enumerate(("i_a", "i_b", "i_c"))
+                  if name in res.signals and res.signals[name].size]
+    else:
+        for name in ("i_a", "i_b", "i_c"):
+            sig = res.signals.get(name)
+            if sig is not None and sig.size:
+                peaks.append(float(np.max(np.abs(sig))))
     i_pk = max(peaks, default=0.0)
     i_trip = drive.inverter.i_trip
     tripped = res.meta.get("stats", {}).get("hw_trip") is not None

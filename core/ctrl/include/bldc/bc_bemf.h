@@ -63,6 +63,15 @@
  *     dlim_vf = 2 k_phi / (p V_dc) (the back-EMF's duty), dlim_d0 = 2 (R + R_on) I / V_dc and dlim_tau = L / (R +
  *     R_on) (the pair's impedance at the electrical speed) the pair's current stays near I whatever the throttle
  *     does: a throttle step cannot trip the drive at low speed.
+ *     The inverter's share (d_diode): the three duties above (align_duty, the ramp's law, the speed-dependent limit)
+ *     are those of an ideal inverter, d_s = u / V_dc for the pair voltage u; the duty applied is d_diode + (1 -
+ *     d_diode) d_s. A pattern that leaves the chopping leg's current to a diode in the off-time (HIGH, PWMPWM,
+ *     BIPOLAR) puts the leg at -V_d there instead of near 0 (the pair at -(V_dc + 2 V_d) instead of -V_dc, BIPOLAR),
+ *     V_d = V_f + (r_d - R_on) I: u = m (V_dc + V_d) - V_d, so d_diode = V_d / (V_dc + V_d); SYNC loses the dead time
+ *     before each turn-on of the chopping switch and after each turn-off to the diode, d_diode = t_dead f_pwm (V_dc +
+ *     2 V_f) / V_dc (to first order). At the alignment's few percent of duty the drop is the whole difference:
+ *     f60prov-2550kv (0.034 at 16.8 V) with a 0.7 V diode and d_diode = 0 drives no current at all in the high-side
+ *     pattern.
  *     Demagnetisation limiter (demag_max > 0), at each crossing in CLOSED whose sector's demagnetisation was
  *     measured (6): r = Omega t_demag / (pi/6 + adv), the share of the window from the commutation to the crossing
  *     that the clamp took; the duty cap
@@ -301,6 +310,7 @@ typedef struct {
     float demag_max;     /* demagnetisation limiter (2): largest demagnetisation angle / (pi/6 + adv), [0, 1); 0: off */
     int32_t cmp_gate;    /* 1: in a fast-demagnetisation sector on the negative leg, the comparator in the on-time only */
     float i_start;       /* start-up current limit (ALIGN, RAMP; use_current), cycle by cycle, A (>= 0; 0: none) */
+    float d_diode;       /* the inverter's share (2): align, ramp and dlim duties d -> d_diode + (1 - d_diode) d, [0, 1) */
 } bc_bemf_params;
 
 typedef struct {

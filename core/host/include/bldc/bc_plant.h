@@ -301,7 +301,8 @@ typedef void (*bc_plant_term_fn)(void *ctx, double t0, double t1, const double v
 /* Circuit quantities computed with a derivative (private to bc_plant.c, like bc_plant_work). */
 typedef struct {
     double k[3], dk[3], e[3], v[3]; /* shapes, dk/dtheta (when asked for), back-EMFs, terminals (where read) */
-    double cs[3];                   /* {theta, cos, sin} for Fourier shapes (theta = HUGE_VAL: none) */
+    double cs[3];                   /* {theta_a, cos, sin} for Fourier shapes: the libm anchor the evaluation's cos,
+                                       sin were rotated from, or its own angle (theta_a = HUGE_VAL: none) */
     double w[3];                    /* averaged legs with R_src: sum_y M_xy i_y */
     double vn, vbus, idc, tau, tau_cog, tau_net, tau_fe, t_fric, p_rsrc;
     double t_prop;                  /* the propeller's load torque k_q omega |omega|, N m */
@@ -321,8 +322,9 @@ typedef struct {
     double k1[5];               /* derivative of (i_a, i_b, i_c, theta, omega) at the current state */
     double tau;                 /* tau_e at the current state, N m */
     double w[2][BC_PLANT_NW];   /* watched functions at the current state: w[cur] */
-    double cs[3];               /* {theta, cos theta, sin theta} at the current state for Fourier shapes (theta =
-                                   HUGE_VAL: none), the reference the RK4 stages rotate from */
+    double cs[3];               /* {theta_a, cos theta_a, sin theta_a} for Fourier shapes: the libm anchor within
+                                   0.03 rad of the current angle (theta_a = HUGE_VAL: none), the reference the RK4
+                                   stages and the step end rotate from */
     double f[2][BC_ACC_N];      /* rates of acc[] at the current state (valid while acc_on): f[cur] */
     double fd[2][BC_ACC_N];     /* their time derivatives: fd[cur] */
     int32_t a_ok;               /* 1: a[cur] holds the circuit quantities at the current state (a gate edge then

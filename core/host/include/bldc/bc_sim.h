@@ -183,6 +183,8 @@ typedef struct {
     double at_time;            /* instant of the timed leg change applied in the current sample, s (-1: none) */
     double row_acc0[BC_ACC_N];
     double row_tmin, row_tmax;
+    double row_peak[4];        /* largest |i_a|, |i_b|, |i_c|, |omega_m| of the trace rows written so far */
+    int32_t row_nonfinite;     /* 1: a trace row written so far holds a non-finite i_x, tau_e or omega_m */
     float temp[2];             /* what the temperature sensors read (bc_ctrl_in.temp), degC; NaN: none */
 } bc_sim_state;
 
