@@ -12,7 +12,11 @@
  * The comparator shows that level d_cmp late (filter + propagation, a pure delay); edges are time-stamped
  * floor(t f_tick). A glitch (glitch_t >= 0) inverts phase glitch_x's comparator for glitch_len.
  * ADC: once per PWM period at the carrier peak (odd samples), of the terminal voltage d_adc late (rail: 0 or V,
- * floating unclamped V/2 + e_x), v_neutral = V/2; in the next sample's input.
+ * floating unclamped V/2 + e_x, within [0, V]: beyond a rail its diode conducts), v_neutral = V/2; in the next
+ * sample's input. Off-time clamp (clamp_pre, clamp_post < 1): the floating terminal (after its demagnetisation) also
+ * reads the rail on its back-EMF's side (0 for e_x < 0, V for e_x > 0) where |k| exceeds clamp_pre before its
+ * crossing or clamp_post after it (k the trapezoid, its ramp 30 degrees either side of the crossing): the phase
+ * still conducts a current its back-EMF drove in the PWM off-time (high-side chopping: e_x < 0 clamps to 0 V).
  *
  * The controller's output at sample k applies from t_(k+delay) (and leg_at from there + t_at); every change of the
  * driven pair is a commutation, recorded with its time. True crossings of the floating phase are recorded too. */
@@ -40,6 +44,7 @@ typedef struct {
     int delay;
     double d_cmp, d_adc;
     double demag, demag_long;
+    double clamp_pre, clamp_post; /* off-time clamp beyond these |k| (>= 1: none) */
     long n_long;
     int glitch_x;
     double glitch_t, glitch_len;
@@ -92,6 +97,8 @@ static inline void sb_init(synth_bemf *g, double ts, double f_tick, int delay)
     g->delay = delay;
     g->v_dc = 12.0;
     g->ke = 0.01;
+    g->clamp_pre = 2.0;
+    g->clamp_post = 2.0;
     g->t_freeze = HUGE_VAL;
     g->n_long = -1;
     g->glitch_t = -1.0;
@@ -317,7 +324,15 @@ static inline void sb_sample(synth_bemf *g, long k, bc_ctrl_in *in)
             if (x == g->seg_pos[j]) v = g->v_dc;
             else if (x == g->seg_neg[j]) v = 0.0;
             else if (x == g->seg_fl[j] && tv < g->seg_cl_end[j]) v = g->seg_cl[j] ? g->v_dc : 0.0;
-            else v = 0.5 * g->v_dc + g->ke * w * sb_trap(sb_theta(g, tv) - (double)x * 2.0 * BC_PI / 3.0);
+            else {
+                double th = sb_theta(g, tv) - (double)x * 2.0 * BC_PI / 3.0;
+                double k = sb_trap(th), e = g->ke * w * k;
+                /* after the crossing: |k| grows along the motion */
+                int post = fabs(sb_trap(th + (w >= 0.0 ? 1e-6 : -1e-6))) > fabs(k);
+                v = 0.5 * g->v_dc + e;
+                if (fabs(k) > (post ? g->clamp_post : g->clamp_pre)) v = e < 0.0 ? 0.0 : g->v_dc;
+                v = v < 0.0 ? 0.0 : (v > g->v_dc ? g->v_dc : v);
+            }
             g->v_term[x] = (float)v;
         }
     }

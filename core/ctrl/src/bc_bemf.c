@@ -199,6 +199,8 @@ static void enter_sector(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctr
     s->pre_seen = 0;
     s->dm_known = 0;
     s->n_post = 0;
+    s->pre_free = 0;
+    s->zc_est = 0;
     s->integ = 0;
     s->sector_ok = 0;
     s->pending = 0;
@@ -269,6 +271,7 @@ static void start(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
     s->reason = BC_BEMF_REASON_NONE;
     s->d_cmd = 0.0f;
     s->t60 = 0.0f;
+    s->r_zc = 0.0f;
     s->t_last = 0.0f;
     s->have_zc = 0;
     s->virt = 0;
@@ -341,6 +344,16 @@ static int detect_comparator(const bc_bemf_params *p, bc_bemf_state *s, const bc
     return 1;
 }
 
+/* F's terminal within V_dc/32 of a rail (or beyond): F conducts through a diode (the outgoing current, or a current
+ * its back-EMF drove in a PWM off-time that has not yet decayed), and the sample's value is not its back-EMF. Its
+ * sign still is (the rail is on the side F's back-EMF or the outgoing current pushes it); free, F sits at least
+ * 0.046 V_dc from the rails in the pair's on-time up to 30 degrees after its crossing (6). */
+static int rail_clamped(const bc_ctrl_in *in, int f)
+{
+    float band = in->v_dc * (1.0f / 32.0f);
+    return in->v_term[f] > band && in->v_term[f] < in->v_dc - band ? 0 : 1;
+}
+
 /* ADC. Returns 1 with *x_e when a crossing is accepted at this sample's conversion; post_open while every
  * conversion since the window opened showed the post level. */
 static int detect_adc(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, const bemf_now *n, float *x_e)
@@ -355,6 +368,7 @@ static int detect_adc(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_i
     int f = floating(s->sector);
     float u = (s->sector & 1) ? in->v_term[f] - in->v_neutral : in->v_neutral - in->v_term[f];
     if (!fin(u)) return 0;
+    int cl = rail_clamped(in, f);
     int opening = !s->adc_seen;
     s->adc_seen = 1;
     if (opening && u > 0.0f) s->post_open = 1; /* the post level at the window's first conversion ... */
@@ -367,27 +381,61 @@ static int detect_adc(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_i
             s->t_demag = fmaxf(tdiff(t, s->t_c) * s->inv_tick - filter_delay(p, omega_of(p, s)), 0.0f);
         }
         s->n_post = 0;
-        s->u_pre = u;
         s->t_pre = t;
+        if (!cl) { /* the value only from a free terminal */
+            s->u_pre = u;
+            s->t_pre_free = t;
+            s->pre_free = 1;
+        }
         return 0;
     }
     if (!s->pre_seen) return 0; /* post with no pre sample in the window: the clamp, or already past */
     if (s->n_post == 0) { /* the first post sample: the crossing between it and the last pre sample */
         float dt = tdiff(t, s->t_pre);
-        float frac = -s->u_pre / (u - s->u_pre);
-        float xe = fin(frac) ? bc_clampf(frac, 0.0f, 1.0f) * dt : dt;
-        s->te_off = xe;                                  /* crossing, ticks after t_pre */
-        s->lam = 0.5f * u * (dt - xe) * s->inv_tick;     /* integral from the crossing (u = 0 there) */
-    } else {
-        s->lam += 0.5f * (s->u_last + u) * tdiff(t, s->t_u) * s->inv_tick;
+        float xe;
+        if (!cl && s->pre_free) { /* linear between the last free pre sample and this one, inside (t_pre, t] */
+            float dtf = tdiff(t, s->t_pre_free);
+            float frac = -s->u_pre / (u - s->u_pre);
+            xe = (fin(frac) ? bc_clampf(frac, 0.0f, 1.0f) * dtf : dtf) - tdiff(s->t_pre, s->t_pre_free);
+            xe = bc_clampf(xe, 0.0f, dt);
+        } else if (!cl && s->r_zc > 0.0f) { /* the pre end clamped: back along the last crossing's slope */
+            xe = bc_clampf(dt - u / s->r_zc * p->f_tick, 0.0f, dt);
+            if (!fin(xe)) xe = 0.5f * dt;
+        } else { /* no value to interpolate: the middle of the bracket */
+            xe = 0.5f * dt;
+        }
+        /* with the pre end clamped and this sample free, refined at the next free post sample (the line through the
+         * two) */
+        s->zc_est = !cl && !s->pre_free;
+        s->te_off = xe; /* crossing, ticks after t_pre */
+        /* the integral from the crossing (u = 0 there); a clamped first post sample is not integrated */
+        s->lam = cl ? 0.0f : 0.5f * u * (dt - xe) * s->inv_tick;
+        /* the slope: the interpolation's line, or from the crossing */
+        if (!cl && s->pre_free) s->r_last = fmaxf((u - s->u_pre) / (tdiff(t, s->t_pre_free) * s->inv_tick), 0.0f);
+        else s->r_last = dt - xe > 0.0f && !cl ? fmaxf(u / ((dt - xe) * s->inv_tick), 0.0f) : 0.0f;
+        if (!cl && s->pre_free && fin(s->r_last)) s->r_zc = s->r_last;
+        s->u_last = cl ? 0.0f : u;
+        s->t_u = cl ? tadd(s->t_pre, xe) : t;
+    } else if (!cl) { /* the trapezoid from the last free post sample (over clamped ones: a linear ramp exactly) */
+        float dtu = tdiff(t, s->t_u) * s->inv_tick;
+        if (s->zc_est) { /* the crossing back along the line through the first two free post samples, in the bracket */
+            float dt = tdiff(s->t_u, s->t_pre);
+            float back = s->u_last * tdiff(t, s->t_u) / (u - s->u_last);
+            if (fin(back) && u > s->u_last) {
+                s->te_off = bc_clampf(dt - back, 0.0f, dt);
+                s->lam = 0.5f * s->u_last * (dt - s->te_off) * s->inv_tick;
+                s->r_zc = (u - s->u_last) / dtu;
+                if (!fin(s->r_zc)) s->r_zc = 0.0f;
+            }
+            s->zc_est = 0;
+        }
+        s->lam += 0.5f * (s->u_last + u) * dtu;
+        s->r_last = dtu > 0.0f ? fmaxf((u - s->u_last) / dtu, 0.0f) : 0.0f;
+        s->u_last = u;
+        s->t_u = t;
     }
-    /* the slope: from the previous post sample, or (first post sample) from the last pre one, as the interpolation */
-    float u0 = s->n_post > 0 ? s->u_last : s->u_pre;
-    float dtu = tdiff(t, s->n_post > 0 ? s->t_u : s->t_pre) * s->inv_tick;
-    s->r_last = dtu > 0.0f ? fmaxf((u - u0) / dtu, 0.0f) : 0.0f;
     if (!fin(s->r_last)) s->r_last = 0.0f;
-    s->u_last = u;
-    s->t_u = t;
+    if (!fin(s->lam)) s->lam = 0.0f;
     s->n_post += 1;
     if (s->n_post < p->n_samples) return 0;
     *x_e = (tdiff(s->t_pre, n->tk) + s->te_off) * s->inv_tick;
@@ -678,6 +726,7 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
                     s->det = 1;
                     s->cnt_open = in->zc_count[floating(s->sector)];
                     s->pre_seen = 0;
+                    s->pre_free = 0;
                     s->post_open = 0;
                     s->n_post = 0;
                 }
@@ -697,7 +746,9 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
             int f = floating(s->sector);
             float u = (s->sector & 1) ? in->v_term[f] - in->v_neutral : in->v_neutral - in->v_term[f];
             float dt = tdiff(t, s->t_u) * s->inv_tick;
-            if (fin(u) && dt > 0.0f && tdiff(t, n.tk) <= 0.0f) {
+            /* a clamped sample is skipped: the instant stays the one predicted from the last free sample, and the
+             * next free one integrates the trapezoid over the gap */
+            if (fin(u) && dt > 0.0f && tdiff(t, n.tk) <= 0.0f && !rail_clamped(in, f)) {
                 s->lam += 0.5f * (s->u_last + u) * dt;
                 s->r_last = fmaxf((u - s->u_last) / dt, 0.0f);
                 s->u_last = u;

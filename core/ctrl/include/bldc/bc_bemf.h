@@ -146,6 +146,17 @@
  *     (t0, u0) and the first post one (t1, u1):  t_e = t0 + (t1 - t0) (-u0) / (u1 - u0). The demagnetisation end
  *     t_dm is the first pre sample in the window (resolution: one conversion). Every level is seen at a conversion,
  *     so the two blankings are the same rule here.
+ *     Clamped samples: a conversion with v_term[F] within v_dc/32 of a rail (or beyond) shows F conducting through a
+ *     diode: the outgoing current, or (high-side or synchronous chopping) a current F's back-EMF drove in the PWM
+ *     off-time that has not decayed by the conversion. Its level counts (the rail is on the side F's current, and
+ *     so its back-EMF, pushes it), its value is no back-EMF and is never used: the interpolation runs between the
+ *     last free pre sample and the first post one (kept inside (t0, t1]); with the pre end clamped, back from the
+ *     free post sample along the last crossing's slope (the middle of the bracket before the first), refined at the
+ *     next free post sample from the line through the two. The band: a free F sits at v_dc/2 + e_F - (e_p + e_q)/2
+ *     in the pair's on-time (centre-aligned PWM, the default conversion instant), at least 0.046 v_dc from either
+ *     rail up to 30 degrees after its crossing for any motoring duty (a sinusoid at full duty and no load; the ideal
+ *     trapezoid 0.25 v_dc); the diode puts a conducting F beyond the rail, so the band covers the ADC's noise and
+ *     step only. Sampled in the off-time, a free F near its crossing is near a rail too (and read as clamped).
  *
  *     Measured demagnetisation (diag 4): t_demag = t_dm - t_c - the delays of 7 (the filter's, and the comparator's
  *     propagation with BC_BEMF_COMPARATOR; exact for a pure delay, an RC filter shows a step tau ln 2 late rather
@@ -175,6 +186,8 @@
  *     is predicted from the last sample u_j and slope r (from the previous post sample; for the first, from the last
  *     pre sample, as the interpolation; clamped >= 0): lambda_j + u_j tau + r tau^2 / 2 = threshold, commutation at
  *     t_j + tau - atan(Omega tau_filter) / Omega (a threshold already passed: interpolated back between the samples).
+ *     A clamped sample (6) is not integrated: the instant stays the one predicted from the last free sample, and the
+ *     next free one adds the trapezoid over the whole gap (exact for a linear ramp).
  *     It is committed once it falls before the end of the interval the output applies to (8), else predicted again
  *     from the next conversion. Not reached by t_zc + (pi/3) / Omega (60 degrees after the crossing): at once.
  *
@@ -370,9 +383,13 @@ typedef struct {
     uint32_t cnt_c;        /* zc_count[F] at the last sample before the commutation */
     uint32_t cnt_open;     /* zc_count[F] at the last sample before the window */
     int32_t n_post;        /* ADC: consecutive post samples */
-    float u_pre;           /* ADC: the last pre sample */
-    uint32_t t_pre;        /* ADC: its tick */
+    float u_pre;           /* ADC: the last pre sample of a free terminal (not at a rail) */
+    uint32_t t_pre_free;   /* ADC: its tick */
+    int32_t pre_free;      /* ADC: u_pre is from this window */
+    uint32_t t_pre;        /* ADC: the tick of the last pre sample, free or clamped */
     float te_off;          /* ADC: the crossing, ticks after t_pre */
+    float r_zc;            /* ADC: the slope of the last crossing's line, V/s (0: none) */
+    int32_t zc_est;        /* ADC: te_off the bracket's middle (its pre end clamped), to refine at the next free post */
     /* integration (BC_BEMF_INTEGRATE) */
     int32_t integ;         /* integrating since the crossing */
     float lam;             /* integral so far, V s */
