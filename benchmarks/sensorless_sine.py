@@ -68,7 +68,7 @@ def sensitivity(names: list[str]) -> None:
         on = min(0.1 * d.motor.Omega_nominal, 0.5 * w)
         ctl = bl.Sine(angle="observer", handoff_speed=on, handoff_hysteresis=0.5)
         st = ctl.sensorless_settings(d)
-        t_load = st["if_align"] + d.motor.p * on / st["if_accel"] + 2 * st["lock_time"] \
+        t_load = st["if_align"] + st["t_ramp_if"] + 2 * st["lock_time"] \
             + d.mechanics.J * w / torque + 0.3
         wb = 2 * math.pi * ctl.speed_bandwidth_hz
         t_ramp = max(0.3, torque / (d.mechanics.J * wb**2 / 4 * 0.2 * w))
@@ -115,7 +115,7 @@ def sensor_errors(names: list[str], speeds: tuple[float, ...] = (0.1, 0.5)) -> N
             on = min(0.1 * d.motor.Omega_nominal, 0.5 * w)
             ctl = bl.Sine(angle="observer", handoff_speed=on, handoff_hysteresis=0.5)
             st = ctl.sensorless_settings(d)
-            t_load = st["if_align"] + d.motor.p * on / st["if_accel"] + 2 * st["lock_time"] \
+            t_load = st["if_align"] + st["t_ramp_if"] + 2 * st["lock_time"] \
                 + d.mechanics.J * w / torque + 0.3
             wb = 2 * math.pi * ctl.speed_bandwidth_hz
             t_ramp = max(0.3, torque / (d.mechanics.J * wb**2 / 4 * 0.2 * w))
@@ -230,7 +230,7 @@ def main(names: list[str]) -> None:
             ctl = bl.Sine(angle="observer", handoff_speed=on, handoff_hysteresis=0.5)
             st = ctl.sensorless_settings(d)
             # start, then the speed loop's way up at T_s,N / 2 of acceleration torque, then 0.3 s to settle
-            t_load = st["if_align"] + d.motor.p * on / st["if_accel"] + 2 * st["lock_time"] \
+            t_load = st["if_align"] + st["t_ramp_if"] + 2 * st["lock_time"] \
                 + d.mechanics.J * w / torque + 0.3
             wb = 2 * math.pi * ctl.speed_bandwidth_hz
             t_ramp = max(0.3, torque / (d.mechanics.J * wb**2 / 4 * 0.2 * w))
