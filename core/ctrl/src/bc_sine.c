@@ -360,6 +360,7 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->u_ok[0] = s->u_ok[1] = 0;
     s->n_restart = 0u;
     s->if_trust = s->if_moved = 0;
+    s->if_tb = 0.0f;
     s->r_obs = p->observer == BC_SINE_OBS_REDUCED ? p->robs.R : p->fobs.R;
     s->r_ui = s->r_ii = 0.0f;
     s->n_catch = s->w_rev = s->if_wmin = 0.0f;
@@ -786,6 +787,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 s->if_t = 0.0f;
                 s->if_wmin = 0.0f;
                 s->if_trust = s->if_moved = 0;
+                s->if_tb = 0.0f;
             }
         } else if (s->sl_phase == BC_SINE_SL_RAMP) {
             /* the load-adaptive ramp (if_accel_min < if_accel; otherwise the fixed ramp at if_accel): the
@@ -838,7 +840,11 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                     s->if_t = 0.0f;
                 }
                 s->if_t += p->ts;
-                if (adaptive && s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min)
+                if (w < 0.0f) s->if_tb += p->ts;
+                /* and against dir for longer in all than the slowest ramp's time: the load drives the rotor back
+                 * (a rotor pushed back ever faster would restart the count above at every new lowest speed) */
+                if (adaptive && (s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min ||
+                                 s->if_tb >= p->omega_on / p->if_accel_min))
                     sl_desync(p, s, out, BC_FLAG_START_FAIL);
             }
             if (at_top) {
@@ -849,7 +855,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                     s->mode = BC_SINE_MODE_SINE;
                     s->n_lock = 0.0f;
                     s->sl_t = 0.0f;
-                    s->if_t = 0.0f; /* a completed ramp: a later hand-back has the whole budget */
+                    s->if_t = s->if_tb = 0.0f; /* a completed ramp: a later hand-back has the whole budget */
                     s->w_rev = fabsf(s->omega_f);
                 } else if (s->sl_t >= p->if_hold) {
                     sl_desync(p, s, out, BC_FLAG_START_FAIL);
