@@ -1220,6 +1220,134 @@ static void test_closed_loop_rest(void)
 
 /* Closed loop from standstill with the rotor mechanics: square-wave start, hand-off at 0.1 Omega_N, no current
  * above 1.2 I_N around the switch. */
+/* The load-adaptive ramp below the observer's trusted speed (htm-48v, friction half the I/f torque, the rotor at the
+ * alignment's rest): until the observer has seen the rotor move the vector creeps (at most 0.05 omega_on); from then
+ * on, while the observer's speed is below BC_SINE_TRUST omega_on, it turns at if_accel_min whatever the observer's
+ * angle says; the start hands off to the sine mode; duties finite in [0, 1] throughout. */
+static void test_ramp_untrusted(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_DYNAMIC);
+    static bc_sine_params p;
+    static bc_sine_state s;
+    sine_params(&p, &f);
+    observer_params(&p, BC_SINE_OBS_FLUX);
+    p.if_align = 0.3631f;
+    p.if_hold = 1.17f;
+    double tau_if = 1.5 * (double)p.k_1 * (double)p.if_current;
+    f.p.tau_c = 0.5 * tau_if;
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    static bc_sim_config cfg;
+    static bc_sim_inputs in;
+    static bc_sim_state st;
+    memset(&cfg, 0, sizeof cfg);
+    memset(&in, 0, sizeof in);
+    cfg.plant = &f.p;
+    cfg.sensors = &f.sp;
+    cfg.ctrl.step = sine_slot;
+    cfg.ctrl.params = &p;
+    cfg.ctrl.state = &s;
+    cfg.delay = 1;
+    cfg.trace_every = 1;
+    cfg.trace_sub = 1;
+    in.v_src_c = 48.0;
+    in.ref_c = 1.5 * k1_trap() * i_sn();
+    static const double i0[3] = {0.0, 0.0, 0.0};
+    CHECK(bc_sim_init(&cfg, &st, 0.5 * BC_PI / 8.0, 0.0, i0, 48.0) == BC_OK, "sim init");
+    double ts = (double)p.ts, w_on = (double)p.omega_on;
+    int n_creep = 0, n_blind = 0, bad_creep = 0, bad_blind = 0, bad_out = 0, k_sine = -1, safe = 0;
+    double worst = 0.0;
+    float w_prev = 0.0f;
+    int ramp_prev = 0, moved_prev = 0;
+    for (int k = 0; k < (int)(6.0 / ts) && k_sine < 0; ++k) {
+        bc_trace_row row;
+        int64_t nw = 0;
+        if (bc_sim_run(&cfg, &st, &in, 1, &row, 1, &nw) != BC_OK) break;
+        safe |= ((uint32_t)row.flags & BC_FLAG_SAFE) != 0u;
+        for (int x = 0; x < 3; ++x) {
+            double dty = (double)st.last.leg[x].duty;
+            bad_out |= !isfinite(dty) || dty < 0.0 || dty > 1.0;
+        }
+        int ramp = s.mode == BC_SINE_MODE_START && s.sl_phase == BC_SINE_SL_RAMP;
+        if (ramp && !s.if_moved) {
+            ++n_creep;
+            bad_creep |= fabs((double)s.if_omega) > 0.05 * w_on * (1.0 + 1e-6);
+        }
+        if (ramp && ramp_prev && moved_prev && fabs(row.d6) < (double)BC_SINE_TRUST * w_on &&
+            (double)s.if_omega < w_on) {
+            double a = ((double)s.if_omega - (double)w_prev) / ts;
+            ++n_blind;
+            worst = fmax(worst, fabs(a / (double)p.if_accel_min - 1.0));
+            bad_blind |= fabs(a / (double)p.if_accel_min - 1.0) > 0.02;
+        }
+        if (s.mode == BC_SINE_MODE_SINE) k_sine = k;
+        w_prev = s.if_omega;
+        ramp_prev = ramp;
+        moved_prev = s.if_moved;
+    }
+    CHECK(n_creep > 0 && !bad_creep, "the vector creeps at most 0.05 omega_on until the rotor moves (%d samples)",
+          n_creep);
+    CHECK(n_blind > 1000 && !bad_blind, "below the trusted speed the vector turns at if_accel_min: %d samples, "
+          "worst %.3g relative", n_blind, worst);
+    CHECK(k_sine > 0, "hands off to the sine mode (%.3f s)", k_sine * ts);
+    CHECK(!safe, "never safe");
+    CHECK(!bad_out, "duties finite in [0, 1]");
+}
+
+/* A load a little above the I/f torque on a heavy rotor (htm-48v, five times its inertia, an active load of 1.02
+ * tau_if from the alignment's end): the rotor is driven back ever faster but stays below the catch speed for longer
+ * than the slowest ramp's time; the vector follows it back, every new lowest speed restarting the ramp's count. The
+ * time the vector has turned backwards ends the start: START_FAIL | DESYNC within 1.5 omega_on / if_accel_min of
+ * the ramp's start (without that limit: none in that time). */
+static void test_ramp_pushed_back(void)
+{
+    static fixture f;
+    fixture_htm(&f, BC_MECH_DYNAMIC);
+    static bc_sine_params p;
+    static bc_sine_state s;
+    sine_params(&p, &f);
+    observer_params(&p, BC_SINE_OBS_FLUX);
+    p.if_align = 0.3631f;
+    p.if_hold = 1.17f;
+    f.p.J = 5.0 * 0.05;
+    double tau_if = 1.5 * (double)p.k_1 * (double)p.if_current;
+    CHECK(bc_sine_init(&p, &s) == BC_OK, "init");
+    static bc_sim_config cfg;
+    static bc_sim_inputs in;
+    static bc_sim_state st;
+    memset(&cfg, 0, sizeof cfg);
+    memset(&in, 0, sizeof in);
+    cfg.plant = &f.p;
+    cfg.sensors = &f.sp;
+    cfg.ctrl.step = sine_slot;
+    cfg.ctrl.params = &p;
+    cfg.ctrl.state = &s;
+    cfg.delay = 1;
+    cfg.trace_every = 1;
+    cfg.trace_sub = 1;
+    in.v_src_c = 48.0;
+    in.ref_c = 1.5 * k1_trap() * i_sn();
+    static const double i0[3] = {0.0, 0.0, 0.0};
+    CHECK(bc_sim_init(&cfg, &st, 0.5 * BC_PI / 8.0, 0.0, i0, 48.0) == BC_OK, "sim init");
+    double ts = (double)p.ts, t_max = (double)p.if_align + 1.5 * (double)p.omega_on / (double)p.if_accel_min;
+    int k_fail = -1, bad_out = 0;
+    for (int k = 0; k < (int)(t_max / ts) && k_fail < 0; ++k) {
+        in.tau_load_c = k * ts >= (double)p.if_align ? 1.02 * tau_if : 0.0;
+        bc_trace_row row;
+        int64_t nw = 0;
+        if (bc_sim_run(&cfg, &st, &in, 1, &row, 1, &nw) != BC_OK) break;
+        for (int x = 0; x < 3; ++x) {
+            double dty = (double)st.last.leg[x].duty;
+            bad_out |= !isfinite(dty) || dty < 0.0 || dty > 1.0;
+        }
+        uint32_t fl = (uint32_t)row.flags;
+        if ((fl & BC_FLAG_START_FAIL) && (fl & BC_FLAG_DESYNC)) k_fail = k;
+    }
+    CHECK(k_fail > 0, "START_FAIL | DESYNC within %.2f s", t_max);
+    CHECK(st.plant.omega < 0.0, "the rotor was driven back: %.3f rad/s", st.plant.omega);
+    CHECK(!bad_out, "duties finite in [0, 1]");
+}
+
 static void test_closed_loop_start(void)
 {
     static fixture f;
@@ -1289,5 +1417,7 @@ int main(void)
     test_speed_limit_table();
     test_closed_loop_imposed();
     test_closed_loop_start();
+    test_ramp_untrusted();
+    test_ramp_pushed_back();
     return bc_test_summary("test_sine");
 }
