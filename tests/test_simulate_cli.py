@@ -203,3 +203,23 @@ def test_six_step_settings_are_checked_before_the_run(argv, option, words, capsy
     assert main(["simulate", "htm-48v", *argv]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"bldclab: error: {option}") and words in err[0], err
+
+
+def _strict_json(text: str) -> dict:
+    def refuse(name: str) -> None:
+        raise ValueError(f"not standard JSON: {name}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_json_output_is_standard_json_when_a_quantity_is_undefined(tmp_path: Path,
+                                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    """Duty 0 at half speed draws no power from the bus (p_dc ~ -5e-5 W): the efficiency is undefined. Python's
+    json wrote it as NaN, which jq and JavaScript refuse; it must be null, on stdout and in metrics.json."""
+    rc = main(["simulate", "htm-48v", "--control", "sixv", "--duty", "0", "--speed", "0.5 pu", "--no-trace",
+               "--format", "json", "--out", str(tmp_path / "o")])
+    assert rc == 0
+    out = _strict_json(capsys.readouterr().out)
+    assert out["p_dc_W"] <= 0 and out["efficiency"] is None
+    saved = _strict_json((tmp_path / "o" / "metrics.json").read_text())
+    assert saved["efficiency"] is None and saved["metrics"]["efficiency"] is None

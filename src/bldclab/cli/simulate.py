@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import difflib
 import io
-import json
 import math
 import sys
 import time
@@ -16,7 +15,7 @@ from pathlib import Path
 from typing import Any, cast
 
 from .._core import decode_flags
-from .._files import write_files
+from .._files import json_text, write_files
 from ..analysis.experiments import electrical_period
 from ..control import Control, Sine, SixStep
 from ..control.sixstep import COMMUTATIONS as SIXSTEP_COMMUTATIONS
@@ -439,7 +438,7 @@ def run_command(args: argparse.Namespace) -> int:
     if not sc.trace:
         summary["trace_rows"] = 0
     if args.format == "json":
-        print(json.dumps(summary, indent=2))
+        print(json_text(summary))
     else:
         print(f"{drive.name}, {args.control} control, {heading}, "
               f"{'dynamometer' if sc.speed is not None else 'rotor dynamics'}, {drive.inverter.model} inverter")
@@ -456,13 +455,13 @@ def run_command(args: argparse.Namespace) -> int:
             buf = io.BytesIO()
             res.to_pandas().to_csv(buf)
             files["trace.csv"] = buf.getvalue()
-        files["metrics.json"] = (json.dumps({**summary, "metrics": asdict(m)}, indent=2) + "\n").encode()
+        files["metrics.json"] = (json_text({**summary, "metrics": asdict(m)}) + "\n").encode()
         if args.plot:
             fig = res.plot()
             files["waveforms.png"] = plots.figure_bytes(fig, "png")
             files["waveforms.svg"] = plots.figure_bytes(fig, "svg")
         written = write_files(args.out, files)
         res.save(args.out / "result.npz")
-        for path in [*written, args.out / "result.npz"]:
-            print(f"wrote {path}")
+        for path in [*written, args.out / "result.npz"]:  # --format json: stdout stays one JSON document
+            print(f"wrote {path}", file=sys.stderr if args.format == "json" else sys.stdout)
     return 0
