@@ -298,3 +298,19 @@ def test_frictionless_drive_at_no_load_is_not_refused_for_its_mechanical_balance
     assert abs(m.balance_mechanical) < 1e-4
     assert abs(m.p_emf) < 1e-3 * m.tau_std * m.omega_mean  # the net terms really are tiny: the case of the fix
     assert 1.0 < m.omega_mean / drive.Omega_0 < math.pi / 3
+
+
+def test_residue_of_a_run_where_almost_nothing_flows_is_not_graded():
+    """Six-step at zero duty at half speed: the back-EMF stays below the bus, milliamps flow, the bus delivers
+    -5e-5 W; a round-off of 2.5e-8 W is 5e-4 of that flow and was warned as an unresolved integration. It is 1e-11
+    of the rated power V_dc I_N = 2400 W, below BALANCE_FLOOR: no finding. The same relative residue on a flow of
+    the drive's size is still graded (test_energy_residue_graded)."""
+    om = 0.5 * HTM.Omega_0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PlausibilityWarning)
+        res = bl.simulate(HTM, bl.SixStepVoltage("high"), _imposed(HTM, om, 0.0))
+    m = res.metrics
+    assert abs(m.p_src_total) < 1e-3 and max(m.i_rms) < 0.01  # the case: almost nothing flows
+    assert plausibility.check_result(HTM, res) == []
+    small = plausibility.check_result(HTM.replace(motor__I_N=1e-6), res)  # a rating that small: graded again
+    assert [f.level for f in small if f.cause == "result.energy_balance"] == ["warning"]
