@@ -75,8 +75,9 @@ from ..model.limits import grade as _grade
 from ..model.motor import Drive
 from .results import SimResult
 
-__all__ = ["BALANCE_ERROR", "BALANCE_FLOOR", "BALANCE_WARN", "CHECK_MODES", "PWM_PER_PERIOD_ERROR", "PWM_PER_PERIOD_WARN",
-           "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "Finding", "RowSummary", "apply", "cause_first",
+__all__ = ["BALANCE_ERROR", "BALANCE_FLOOR", "BALANCE_WARN", "CHECK_MODES", "PWM_PER_PERIOD_ERROR",
+           "PWM_PER_PERIOD_WARN", "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "Finding", "RowSummary", "apply",
+           "cause_first",
            "cause_of", "check_pwm", "check_reference", "check_result", "check_speed", "check_steady", "collect",
            "distinct", "summary"]
 
