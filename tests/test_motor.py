@@ -357,6 +357,11 @@ BAD_FILES = [
                  "motor.emf.k_b", "zero", id="table-phase-zero"),
     pytest.param(FOURIER_EMF, [("b = [0.0, 0.38, 0.0, 0.02]", "b = [1.0, 0.0, 0.0, 0.0]")], "motor.emf.b",
                  "zero", id="fourier-no-harmonics"),
+    # shapes whose line-to-line back-EMF is zero (a part common to the three phases only): no torque, k_phi = 0
+    pytest.param(TABLE_EMF, [("k = [0.0, 0.32, 0.32, 0.0, -0.32, -0.32]", "k = [0.1, 0.1, 0.1, 0.1, 0.1, 0.1]")],
+                 "motor.emf", "line-to-line", id="table-constant"),
+    pytest.param(FOURIER_EMF, [("b = [0.0, 0.38, 0.0, 0.02]", "b = [0.0, 0.0, 0.0, 0.02]")], "motor.emf",
+                 "line-to-line", id="fourier-triplen-only"),
     # three phases needed
     pytest.param(PHASE_ARRAY_EMF, [("[[motor.emf.phase]]\nkind = \"sinusoid\"\nk_1 = 0.37\n", "")],
                  "motor.emf.phase", "three", id="phase-array-two"),
@@ -543,6 +548,8 @@ BAD_OBJECTS = [
     pytest.param(lambda: _motor(emf=Trapezoid(0.1)), "emf", "BackEmf", id="motor-emf-shape"),
     pytest.param(lambda: _motor(T_peak=0.0), "T_peak", "> 0", id="motor-T_peak-zero"),
     pytest.param(lambda: _motor(R=100.0), "R", "exceeds V_N", id="motor-R-large"),
+    pytest.param(lambda: _motor(emf=BackEmf.symmetric(Fourier((0.0, 0.0, 0.0, 0.1), (0.0, 0.0, 0.0, 0.0)))), "emf",
+                 "line-to-line", id="motor-emf-triplen"),
     pytest.param(lambda: Inverter(48.0, 1e4, t_dead=2.5e-5), "t_dead", "quarter", id="inverter-t_dead"),
     pytest.param(lambda: Inverter(48.0, 0.0), "f_pwm", "> 0", id="inverter-f_pwm-zero"),
     pytest.param(lambda: Inverter(48.0, 1e4, V_f=-0.7), "V_f", ">= 0", id="inverter-V_f"),
