@@ -322,6 +322,16 @@ BAD_FILES = [
                  "strictly increasing", id="table-unsorted"),
     pytest.param(TABLE_EMF, [("theta = [0, 30, 150,", "theta = [0, 30, 30,")], "motor.emf.theta",
                  "strictly increasing", id="table-duplicate-angle"),
+    # table in degrees: the error speaks the file's unit (it said "got [0, 8.37758] (write degrees with theta_unit =
+    # \"deg\")" to a file that did, and "(0.523599 rad) follows 2.61799 rad" for 30 after 150)
+    pytest.param(TABLE_EMF, [("theta = [0, 30, 150,", "theta = [0, 150, 30,")], "motor.emf.theta",
+                 "entry 2 (30 deg) follows 150 deg", id="table-unsorted-in-deg"),
+    pytest.param(TABLE_EMF, [("180, 210, 330]", "180, 210, 480]")], "motor.emf.theta",
+                 "angles must lie in [0, 360) deg, one electrical period (theta_e = p theta_m), got [0, 480] deg",
+                 id="table-beyond-360-deg"),
+    pytest.param(TABLE_EMF, [("theta_unit = \"deg\"\ntheta = [0, 30, 150, 180, 210, 330]",
+                              "theta = [0, 0.5, 2.6, 3.1, 3.7, 6.5]")], "motor.emf.theta",
+                 "write degrees with theta_unit", id="table-beyond-2pi-rad"),
     # table: a hole (TOML has no null: a short column)
     pytest.param(TABLE_EMF, [("k = [0.0, 0.32, 0.32, 0.0, -0.32, -0.32]",
                               "k = [0.0, 0.32, 0.32, 0.0, -0.32]")],
@@ -343,8 +353,10 @@ BAD_FILES = [
                              ("k = [0.0, 0.32, 0.32, 0.0, -0.32, -0.32]", "k = [0.1, -0.1]")],
                  "motor.emf.theta", "at least 3", id="table-too-short"),
     # angles outside [0, 2 pi)
-    pytest.param(TABLE_EMF, [("210, 330]", "210, 360]")], "motor.emf.theta", "[0, 2 pi)", id="table-360deg"),
-    pytest.param(TABLE_EMF, [("theta = [0,", "theta = [-10,")], "motor.emf.theta", "[0, 2 pi)",
+    pytest.param(TABLE_EMF, [("210, 330]", "210, 360]")], "motor.emf.theta",
+                 "got [0, 360] deg: 360 deg is 0 again (the table is periodic): drop the last point",
+                 id="table-360deg"),
+    pytest.param(TABLE_EMF, [("theta = [0,", "theta = [-10,")], "motor.emf.theta", "[0, 360) deg",
                  id="table-negative-angle"),
     pytest.param(TABLE_EMF, [('theta_unit = "deg"\n', ""),
                              ("theta = [0, 30, 150, 180, 210, 330]", "theta = [0, 1, 2, 3, 4, 7]")],
