@@ -314,3 +314,22 @@ def test_residue_of_a_run_where_almost_nothing_flows_is_not_graded():
     assert plausibility.check_result(HTM, res) == []
     small = plausibility.check_result(HTM.replace(motor__I_N=1e-6), res)  # a rating that small: graded again
     assert [f.level for f in small if f.cause == "result.energy_balance"] == ["warning"]
+
+
+def test_rotor_driven_far_beyond_no_load_speed_by_the_load_names_the_load():
+    # servo-2k2 with rotor dynamics and a load of 100 T_N: the load spins the rotor backwards to tens of times
+    # Omega_0 within 0.05 s; the cause is the load, not the PWM frequency the rotor's speed then outruns
+    drive = bl.load("servo-2k2")
+    sc = bl.Scenario(duration=0.05, ref=drive.T_N, load_torque=100 * drive.T_N, window=(0.025, 0.05))
+    with pytest.raises(PlausibilityError, match=r"scenario\.load_torque: the rotor reached .* times the no-load "
+                                                r"speed") as exc:
+        bl.simulate(drive, bl.Sine(), sc)
+    assert exc.value.field == "scenario.load_torque"
+
+
+def test_rotor_driven_somewhat_beyond_no_load_speed_warns():
+    # 3 T_N against the sinusoidal controller's 1.05 T_N: the rotor runs backwards past Omega_0, a warning
+    drive = bl.load("servo-2k2")
+    sc = bl.Scenario(duration=0.3, ref=drive.T_N, load_torque=3 * drive.T_N, window=(0.25, 0.3))
+    with pytest.warns(PlausibilityWarning, match=r"scenario\.load_torque: the rotor reached"):
+        bl.simulate(drive, bl.Sine(), sc, check="warn")

@@ -1141,6 +1141,10 @@ def test_kv_as_a_plain_number_is_rpm_per_volt(tmp_path: Path) -> None:
     ('R_ll = "0.08 Ohm"', 'R_ll = "0.08 Ohm"\nR = 0.04', "motor.R_ll", "not both"),
     ('R_ll = "0.08 Ohm"', 'R = "0.08 Ohm line-to-line"', "motor.R", 'R_ll = "0.08 Ohm"'),
     ('L_ll = "15 uH"', "", "motor.L", "is missing"),
+    # L's rule (> 0) named on the field the file has: L_ll = 0 was "motor.L: must be > 0", L_ll < 0 "must be >= 0"
+    ('L_ll = "15 uH"', "L_ll = 0", "motor.L_ll", "must be > 0, got 0"),
+    ('L_ll = "15 uH"', 'L_ll = "-15 uH"', "motor.L_ll", "must be > 0, got -1.5e-05"),
+    ('R_ll = "0.08 Ohm"', 'R_ll = "-0.08 Ohm"', "motor.R_ll", "must be >= 0, got -0.08"),
     ('KV = "1950 rpm/V"', 'KV = "1950 rpm/V"\nKV_rms = 2700', "motor.KV_rms", "cannot be given with KV"),
     ('kind = "sinusoid"', 'kind = "sinusoid"\nk_1 = 0.0028', "motor.emf.k_1", "cannot be given with motor.KV"),
     ('KV = "1950 rpm/V"', "", "motor.emf.k_1", "is missing"),

@@ -388,7 +388,7 @@ def _phase_value(name: str, phase: object, line: object, dimension: str) -> floa
                            f"{ll} (= 2 {name}), not both")
     if line is not None:
         value = to_si(line, dimension, ll)
-        check_number(ll, value, lo=0.0)
+        check_number(ll, value, lo=0.0, lo_open=name == "L")  # the rules of R (>= 0) and L (> 0), named as given
         return value / 2.0
     if phase is None:
         raise BldclabError(name, f"is missing (per phase; or give the line-to-line value as {ll})")

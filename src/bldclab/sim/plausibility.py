@@ -25,6 +25,10 @@ Thresholds and why (``T_pwm = 1 / f_pwm``, ``tau_el = L / R``, ``f_e = p |Omega|
   speed range of any practical permanent-magnet drive (3 to 5, rarely 10). (With a sinusoidal back-EMF, six-step
   voltage, whose fundamental is ``2 sqrt(3) / pi = 1.10`` times the bus, can still motor up to ``1.10 Omega_0``:
   there the warning flags a regime outside the paper-1 comparison rather than a wrong result.)
+* With rotor dynamics, the peak speed vs ``Omega_0`` (``check_driven_speed``): the drive alone reaches about
+  ``1.05 Omega_0``; a rotor beyond ``1.5 Omega_0`` was driven by its load (a load torque above the drive's spins it
+  backwards) or started there: a warning on ``scenario.load_torque``; above ``10 Omega_0`` an error, raised before the
+  consequences (too few PWM periods per electrical period at that speed) that would otherwise name ``inverter.f_pwm``.
 * Reference vs the drive's limit: the controller's over-current trip ``i_max`` (its default is a multiple of
   ``I_N``), for a torque reference also the motor's ``T_peak`` if larger: warning above the limit (the reference
   cannot be reached without tripping; a reference above the continuous rating ``I_N`` alone is a legitimate short
@@ -78,7 +82,8 @@ from .results import SimResult
 __all__ = ["BALANCE_ERROR", "BALANCE_FLOOR", "BALANCE_WARN", "CHECK_MODES", "PWM_PER_PERIOD_ERROR",
            "PWM_PER_PERIOD_WARN", "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "Finding", "RowSummary", "apply",
            "cause_first",
-           "cause_of", "check_pwm", "check_reference", "check_result", "check_speed", "check_steady", "collect",
+           "cause_of", "check_driven_speed", "check_pwm", "check_reference", "check_result", "check_speed",
+           "check_steady", "collect",
            "distinct", "summary"]
 
 @dataclass(frozen=True)
@@ -254,6 +259,45 @@ def check_result(drive: Drive, res: SimResult, rows: RowSummary | None = None) -
                            f"a phase current reached {i_pk:.4g} A, {i_pk / drive.motor.I_N:.3g} times I_N = "
                            f"{drive.motor.I_N:.4g} A (error above {CURRENT_ERROR_IN:g} I_N)"))
     return out
+
+
+#: With rotor dynamics, a peak speed above this many ``Omega_0`` is a warning (the drive alone reaches about 1.05:
+#: a sinusoidal back-EMF's six-step no-load speed; no controller weakens the field), above ``SPEED_ERROR_PU`` an
+#: error: the load torque (or the initial speed) drove the rotor, the drive did not.
+DRIVEN_SPEED_WARN_PU = 1.5
+
+
+def check_driven_speed(drive: Drive, omega_max: float, omega_final: float) -> list[Finding]:
+    """Check the peak speed of a run with rotor dynamics against the no-load speed ``Omega_0``.
+
+    A rotor far beyond ``Omega_0`` was driven there by its load (a load torque above the drive's torque spins it
+    backwards) or started there: that is the cause to name, before the consequences (too few PWM periods per
+    electrical period, diode currents) that other checks report.
+
+    Parameters
+    ----------
+    drive : Drive
+    omega_max : float
+        Highest mechanical speed magnitude of the run (rad/s).
+    omega_final : float
+        Mechanical speed at the end of the run (rad/s), for its direction.
+
+    Returns
+    -------
+    list of Finding
+    """
+    omega_0 = drive.Omega_0
+    pu = omega_max / omega_0
+    level = _grade(pu, DRIVEN_SPEED_WARN_PU, SPEED_ERROR_PU)
+    if not level:
+        return []
+    direction = "backwards" if omega_final < 0.0 else "forwards"
+    return [Finding(level, "scenario.load_torque",
+                    f"the rotor reached {omega_max:.4g} rad/s ({omega_max * 30 / math.pi:.4g} rpm, ending "
+                    f"{direction}), {pu:.4g} times the no-load speed Omega_0 = V_dc / (2 k_phi) = {omega_0:.4g} "
+                    f"rad/s: the drive cannot reach that, so the load torque (above the drive's torque, T_N = "
+                    f"{drive.T_N:.4g} N m) or the initial speed drove it (warning above {DRIVEN_SPEED_WARN_PU:g} "
+                    f"Omega_0, error above {SPEED_ERROR_PU:g})")]
 
 
 def check_steady(drive: Drive, res: SimResult) -> list[Finding]:
