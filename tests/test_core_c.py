@@ -11,7 +11,7 @@ import pytest
 
 CORE = Path(__file__).resolve().parents[1] / "core"
 
-pytestmark = pytest.mark.slow  # make + run every C test: ~25 s plain, ~75 s under the sanitizers
+pytestmark = pytest.mark.slow  # make + run every C test: ~15 s each, plain and under the sanitizers
 
 
 @pytest.mark.parametrize("sanitize", [False, True], ids=["plain", "asan-ubsan"])
