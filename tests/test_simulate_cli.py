@@ -223,3 +223,20 @@ def test_json_output_is_standard_json_when_a_quantity_is_undefined(tmp_path: Pat
     assert out["p_dc_W"] <= 0 and out["efficiency"] is None
     saved = _strict_json((tmp_path / "o" / "metrics.json").read_text())
     assert saved["efficiency"] is None and saved["metrics"]["efficiency"] is None
+
+
+def test_a_long_run_off_a_terminal_says_how_long_once(capsys: pytest.CaptureFixture[str]) -> None:
+    """`--duration "1e6 s"` in a log or CI ran silently for hours (the progress line is for terminals): one note on
+    stderr with the extrapolated wall time, not repeated."""
+    from bldclab.cli.simulate import _Progress
+
+    prog = _Progress(False, 1e6)
+    prog.start -= 10.0  # 10 s for the first 1/1000: 1e4 s, 2.8 h
+    prog(1, 1000)
+    prog(2, 1000)
+    err = capsys.readouterr().err
+    assert err.count("bldclab: note:") == 1
+    assert "1e+06 s to simulate will take about 2.8 h" in err and "--progress" in err
+    quick = _Progress(False, 1.0)
+    quick(1, 1000)  # a run of milliseconds: nothing
+    assert capsys.readouterr().err == ""
