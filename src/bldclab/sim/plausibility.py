@@ -39,9 +39,10 @@ Thresholds and why (``T_pwm = 1 / f_pwm``, ``tau_el = L / R``, ``f_e = p |Omega|
   0.995 ``Omega_0`` of a drive with 28 PWM periods per electrical period). Warning above 1e-4 (the energy
   bookkeeping is off by more than 0.01 %); error above 1e-2 (efficiencies wrong by a percent, the size of the
   differences the comparisons resolve: the integration did not resolve the run). A residue whose power is below
-  ``BALANCE_FLOOR`` (1e-7) of the drive's rated power ``V_dc I_N`` is not graded: where almost nothing flows (six-step
-  at zero duty below the no-load speed, milliamps through the open switches) a round-off of 1e-8 W is a large share
-  of the flow but no error in any result.
+  ``BALANCE_FLOOR`` (1e-6) of the drive's rated power ``V_dc I_N`` is not graded: where almost nothing flows (six-step
+  at zero duty below the no-load speed, milliamps through the open switches; a frictionless motor at no load, whose
+  PWM ripple exchanges far more energy than the net flow) a residue of 1e-8 to 1e-6 W is a large share of the net
+  flow but moves no reported power by more than a millionth of the drive's rating.
 * Non-finite metrics, states or traced currents/torques/speeds: error.
 * Currents after the inverter's hardware trip ``Inverter.i_trip`` (all legs off): they can only decay unless the
   back-EMF drives them through the diodes. Warning above 1.01 ``i_trip``; error above 2 ``i_trip`` (beyond the
@@ -113,7 +114,7 @@ CHECK_MODES = ("error", "warn", "off")
 REF_ERROR_FACTOR = 10.0
 BALANCE_WARN = 1e-4
 BALANCE_ERROR = 1e-2
-BALANCE_FLOOR = 1e-7
+BALANCE_FLOOR = 1e-6
 TRIP_WARN = 1.01
 TRIP_ERROR = 2.0
 CURRENT_ERROR_IN = 100.0
