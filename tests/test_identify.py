@@ -482,3 +482,19 @@ def test_unevenly_sampled_noisy_record_has_no_leverage_spikes():
     for j in range(3):  # local grids: phase x's table is the shape of its local angle
         err = np.max(np.abs(res.k[j] - shape(res.theta)))
         assert err < 0.02 * k1, (j, err / k1)
+
+
+def test_a_mechanical_angle_column_is_named_as_such():
+    """A shaft encoder's angle (one revolution, 0-360 deg) given as `theta` for a 4-pole-pair motor: the voltages
+    make 4 periods while the column makes one. It was refused as `covers only 1 electrical periods: record at least
+    one whole period`; the error must say the column reads as a mechanical angle, with the pole pairs it implies."""
+    p = 4
+    theta_m = np.linspace(0.0, TWO_PI, 2000, endpoint=False)
+    cols = {f"v_{x}": 50.0 * np.sin(p * theta_m - j * TWO_PI / 3) for j, x in enumerate("abc")}
+    with pytest.raises(BldclabError) as info:
+        identify({"theta": theta_m, **cols}, "1500 rpm", pole_pairs=p)
+    assert info.value.field == "column theta"
+    assert "go through 4 periods" in info.value.problem and "mechanical angle" in info.value.problem
+    assert "4 pole pairs" in info.value.problem and "theta_e = p theta_m" in info.value.problem
+    res = identify({"theta": p * theta_m, **cols}, "1500 rpm", pole_pairs=p)  # the electrical angle: accepted
+    assert np.max(np.abs(res.k[0] - 50.0 / (1500 * math.pi / 30) * np.sin(res.theta))) < 1e-3

@@ -592,6 +592,13 @@ def identify(data: str | Path | Waveform | Mapping[str, ArrayLike], speed: objec
     if wf.theta is not None:
         theta = wf.theta - wf.theta[0]
         periods = float(theta[-1] / TWO_PI)
+        phi = _space_angle(wf.v)
+        turns = abs(float(phi[-1] - phi[0])) / max(float(theta[-1]), 1e-300)
+        if turns > 1.5:  # the voltages turn k times per electrical turn of the column: a shaft (mechanical) angle
+            raise BldclabError(f"column {wf.columns['theta']}", f"the voltages go through {turns:.3g} periods while "
+                               "this angle advances by one: it reads as a mechanical angle (of a motor with "
+                               f"{round(turns)} pole pairs?); give the electrical angle theta_e = p theta_m, or a "
+                               "time column", wf.source)
         if periods < 1.0:
             raise BldclabError(f"column {wf.columns['theta']}", f"the record covers only {periods:.3g} electrical "
                                "periods: record at least one whole period (2-3 recommended)", wf.source)
