@@ -498,3 +498,14 @@ def test_a_mechanical_angle_column_is_named_as_such():
     assert "4 pole pairs" in info.value.problem and "theta_e = p theta_m" in info.value.problem
     res = identify({"theta": p * theta_m, **cols}, "1500 rpm", pole_pairs=p)  # the electrical angle: accepted
     assert np.max(np.abs(res.k[0] - 50.0 / (1500 * math.pi / 30) * np.sin(res.theta))) < 1e-3
+
+
+def test_report_shows_a_start_just_before_zero_as_a_small_negative_angle():
+    """A record starting a hair before phase a's zero crossing has theta_e0 = 2 pi - 1e-4 rad; the report printed
+    `theta_e at start   360 deg`, the same as 0 but read as a full turn. It shows the signed angle."""
+    theta = np.linspace(-1e-4, 3 * TWO_PI, 3000)
+    cols = {f"v_{x}": 10.0 * np.sin(theta - j * TWO_PI / 3) for j, x in enumerate("abc")}
+    res = identify({"theta": theta, **cols}, "1000 rpm", pole_pairs=2)
+    assert res.theta_e0 > 6.28
+    line = next(ln for ln in res.report().splitlines() if "theta_e at start" in ln)
+    assert float(line.split()[-2]) == pytest.approx(-1e-4 / (math.pi / 180), abs=2e-3)

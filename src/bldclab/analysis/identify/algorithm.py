@@ -331,7 +331,8 @@ class Identification:
         out.append(f"  window             +-{self.window / DEG:.3g} deg (local linear regression)")
         out.append(f"  noise              {self.noise:.4g} V rms ({100 * self.noise / self.peak_voltage:.3g} % of "
                    f"the {self.peak_voltage:.4g} V peak)")
-        out.append(f"  theta_e at start   {self.theta_e0 / DEG:.4g} deg")
+        start = (self.theta_e0 / DEG + 180.0) % 360.0 - 180.0  # signed: 2 pi - 1e-5 rad printed as 360 deg before
+        out.append(f"  theta_e at start   {start:.4g} deg")
         out.append(f"  {'phase':<22}" + "".join(f"{x:>12}" for x in _PHASES))
         out.append("  fundamental (V s/rad) " + "".join(f"{v:12.6g}" for v in self.fundamental))
         out.append("  spacing error (deg)   " + "".join(f"{v / DEG:12.4g}" for v in self.spacing))
