@@ -509,3 +509,15 @@ def test_report_shows_a_start_just_before_zero_as_a_small_negative_angle():
     assert res.theta_e0 > 6.28
     line = next(ln for ln in res.report().splitlines() if "theta_e at start" in ln)
     assert float(line.split()[-2]) == pytest.approx(-1e-4 / (math.pi / 180), abs=2e-3)
+
+
+def test_an_angle_column_in_degrees_that_steps_back_is_reported_in_degrees_too(tmp_path: Path):
+    """A `theta (deg)` column stepping back from 99 to 0 deg was reported only in radians (1.728 and 0)."""
+    f = tmp_path / "rec.csv"
+    th = np.arange(0.0, 720.0, 1.0)
+    th[100:120] -= 100.0
+    rows = "\n".join(f"{t},{10 * math.sin(math.radians(t))},{10 * math.sin(math.radians(t) - 2.0944)}" for t in th)
+    f.write_text("theta (deg),v_ab,v_bc\n" + rows + "\n")
+    with pytest.raises(BldclabError) as info:
+        identify(f, "1000 rpm", pole_pairs=2)
+    assert "(0 deg) after" in info.value.problem and "(99 deg)" in info.value.problem
