@@ -505,3 +505,20 @@ def test_torque_control_warns_like_the_other_commands(capsys: pytest.CaptureFixt
     assert rc == 0 and err
     assert all(line.startswith("bldclab: warning: ") for line in err.splitlines()), err
     assert "rect at 100 % of T_N, 3000 rpm: mean torque 96.5 % of the reference" in err
+
+
+def test_template_keeps_an_existing_file_unless_forced(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`bldclab template --from my.toml --out my.toml` rewrote a user's hand-written file in SI numbers, its comments
+    and unit strings gone; any existing --out file is kept (exit 2, untouched) unless --force."""
+    mine = tmp_path / "my.toml"
+    rc, _, _ = run_main(capsys, "template", "--from", "htm-48v", "--out", str(mine))
+    hand = mine.read_text().replace("L = 7.5e-05", 'L = "75 uH"  # measured at 1 kHz')
+    mine.write_text(hand)
+    rc, out, err = run_main(capsys, "template", "--from", str(mine), "--out", str(mine))
+    assert rc == 2 and out == ""
+    assert "--out" in err and "exists, and is the --from file" in err and "--force" in err
+    assert mine.read_text() == hand
+    rc, _, err = run_main(capsys, "template", "--from", "lu-4kw", "--out", str(mine))
+    assert rc == 2 and "exists: give another name, or --force" in err and mine.read_text() == hand
+    rc, _, _ = run_main(capsys, "template", "--from", "lu-4kw", "--out", str(mine), "--force")
+    assert rc == 0 and bl.load(mine) == bl.load("lu-4kw")

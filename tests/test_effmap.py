@@ -70,6 +70,11 @@ def test_points_above_the_envelope_are_flagged_not_dropped(drive):
     p = res.points.set_index("torque_ref")
     assert not p.loc[1.3 * ch.T_q, "feasible"] and p.loc[0.3 * ch.T_q, "feasible"]
     assert p.loc[1.3 * ch.T_q, "tau_mean"] < 1.3 * ch.T_q - FEASIBLE_TOL_PU * drive.T_N
+    # the note says what the infeasible point delivered (a user sees why it is blank); a feasible one has none
+    tau = p.loc[1.3 * ch.T_q, "tau_mean"]
+    assert p.loc[1.3 * ch.T_q, "note"].startswith(
+        f"delivers {100 * tau / (1.3 * ch.T_q):.3g} % of the torque asked for")
+    assert p.loc[0.3 * ch.T_q, "note"] == ""
     assert res.difference.empty  # one supply: nothing to compare
     assert np.isnan(res.grid("square", "efficiency")[0, 0])
 

@@ -373,3 +373,16 @@ def test_a_failed_calibration_is_a_note_not_a_number(htm, monkeypatch):
     r = hall.hall_study(htm, errors=[4 * DEG], cases=["one"], variants=[("lu, cal.", hall.lu_cal)]).points
     hall.calibrated_table.cache_clear()
     assert r.tau_mean.isna().all() and r.note.str.contains("BC_HALLCAL_E_STUCK").all()
+
+
+def test_table_columns_stay_apart_for_small_values():
+    """A ripple like 0.0009696 p.u. (9 characters at 4 digits) printed against its neighbours without a space ran
+    the columns together ("ripple pu0.00098840.0009866"); every value must stay a separate token."""
+    import pandas as pd
+
+    rows = [dict(variant="sine (46)", case="one", error_deg=e, tau_rel=1.0, ripple_sampled_pu=-0.0009884 + e * 1e-9,
+                 efficiency=0.5451) for e in (0.0, 5.0, 10.0)]
+    res = hall.HallStudyResult(drive="x", speed=1.0, torque=1.0, T_N=1.0, points=pd.DataFrame(rows), seconds=0.0)
+    line = next(ln for ln in res.table().splitlines() if "ripple pu" in ln)
+    assert line.split()[-3:] == [f"{-0.0009884 + e * 1e-9:.4g}" for e in (0.0, 5.0, 10.0)]
+    assert "pu -0.0009884" in line

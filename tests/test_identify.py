@@ -460,3 +460,64 @@ def test_cli_bad_file_keeps_an_existing_output(tmp_path: Path, capsys: pytest.Ca
     assert f"column v_c, line {HEADER_LINES + 2 + 2000}" in stderr
     assert out.read_text() == "old"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "m.toml"]
+
+
+def test_unevenly_sampled_noisy_record_has_no_leverage_spikes():
+    """A scope export with jittered time stamps (1500 samples at uniform random times over 4 electrical periods),
+    0.7 % noise, 5th and 7th harmonics and a common offset. Where the default window's four samples bunched at one
+    end, the local line extrapolated the noise (intercept variance up to 59 times one sample's): an 8 % spike of the
+    peak and a false half-wave-asymmetry warning. The table must stay within 2 % of the true shape (noise per
+    sample 0.6 % of the peak) and raise no warning."""
+    rng = np.random.default_rng(3)
+    p, wm, k1 = 4, 1500 * math.pi / 30, 0.35
+    t = np.sort(rng.uniform(0.0, 4 * TWO_PI / (p * wm), 1500))
+
+    def shape(th):
+        return k1 * (np.sin(th) + 0.04 * np.sin(5 * th) + 0.02 * np.sin(7 * th + 0.3))
+
+    cols = {f"v_{x}": wm * shape(p * wm * t - j * TWO_PI / 3) + 1.7 + rng.normal(0.0, 0.4, t.size)
+            for j, x in enumerate("abc")}
+    res = identify({"t": t, **cols}, "1500 rpm", pole_pairs=p)
+    assert not res.warnings
+    for j in range(3):  # local grids: phase x's table is the shape of its local angle
+        err = np.max(np.abs(res.k[j] - shape(res.theta)))
+        assert err < 0.02 * k1, (j, err / k1)
+
+
+def test_a_mechanical_angle_column_is_named_as_such():
+    """A shaft encoder's angle (one revolution, 0-360 deg) given as `theta` for a 4-pole-pair motor: the voltages
+    make 4 periods while the column makes one. It was refused as `covers only 1 electrical periods: record at least
+    one whole period`; the error must say the column reads as a mechanical angle, with the pole pairs it implies."""
+    p = 4
+    theta_m = np.linspace(0.0, TWO_PI, 2000, endpoint=False)
+    cols = {f"v_{x}": 50.0 * np.sin(p * theta_m - j * TWO_PI / 3) for j, x in enumerate("abc")}
+    with pytest.raises(BldclabError) as info:
+        identify({"theta": theta_m, **cols}, "1500 rpm", pole_pairs=p)
+    assert info.value.field == "column theta"
+    assert "go through 4 periods" in info.value.problem and "mechanical angle" in info.value.problem
+    assert "4 pole pairs" in info.value.problem and "theta_e = p theta_m" in info.value.problem
+    res = identify({"theta": p * theta_m, **cols}, "1500 rpm", pole_pairs=p)  # the electrical angle: accepted
+    assert np.max(np.abs(res.k[0] - 50.0 / (1500 * math.pi / 30) * np.sin(res.theta))) < 1e-3
+
+
+def test_report_shows_a_start_just_before_zero_as_a_small_negative_angle():
+    """A record starting a hair before phase a's zero crossing has theta_e0 = 2 pi - 1e-4 rad; the report printed
+    `theta_e at start   360 deg`, the same as 0 but read as a full turn. It shows the signed angle."""
+    theta = np.linspace(-1e-4, 3 * TWO_PI, 3000)
+    cols = {f"v_{x}": 10.0 * np.sin(theta - j * TWO_PI / 3) for j, x in enumerate("abc")}
+    res = identify({"theta": theta, **cols}, "1000 rpm", pole_pairs=2)
+    assert res.theta_e0 > 6.28
+    line = next(ln for ln in res.report().splitlines() if "theta_e at start" in ln)
+    assert float(line.split()[-2]) == pytest.approx(-1e-4 / (math.pi / 180), abs=2e-3)
+
+
+def test_an_angle_column_in_degrees_that_steps_back_is_reported_in_degrees_too(tmp_path: Path):
+    """A `theta (deg)` column stepping back from 99 to 0 deg was reported only in radians (1.728 and 0)."""
+    f = tmp_path / "rec.csv"
+    th = np.arange(0.0, 720.0, 1.0)
+    th[100:120] -= 100.0
+    rows = "\n".join(f"{t},{10 * math.sin(math.radians(t))},{10 * math.sin(math.radians(t) - 2.0944)}" for t in th)
+    f.write_text("theta (deg),v_ab,v_bc\n" + rows + "\n")
+    with pytest.raises(BldclabError) as info:
+        identify(f, "1000 rpm", pole_pairs=2)
+    assert "(0 deg) after" in info.value.problem and "(99 deg)" in info.value.problem

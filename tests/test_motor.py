@@ -322,6 +322,16 @@ BAD_FILES = [
                  "strictly increasing", id="table-unsorted"),
     pytest.param(TABLE_EMF, [("theta = [0, 30, 150,", "theta = [0, 30, 30,")], "motor.emf.theta",
                  "strictly increasing", id="table-duplicate-angle"),
+    # table in degrees: the error speaks the file's unit (it said "got [0, 8.37758] (write degrees with theta_unit =
+    # \"deg\")" to a file that did, and "(0.523599 rad) follows 2.61799 rad" for 30 after 150)
+    pytest.param(TABLE_EMF, [("theta = [0, 30, 150,", "theta = [0, 150, 30,")], "motor.emf.theta",
+                 "entry 2 (30 deg) follows 150 deg", id="table-unsorted-in-deg"),
+    pytest.param(TABLE_EMF, [("180, 210, 330]", "180, 210, 480]")], "motor.emf.theta",
+                 "angles must lie in [0, 360) deg, one electrical period (theta_e = p theta_m), got [0, 480] deg",
+                 id="table-beyond-360-deg"),
+    pytest.param(TABLE_EMF, [("theta_unit = \"deg\"\ntheta = [0, 30, 150, 180, 210, 330]",
+                              "theta = [0, 0.5, 2.6, 3.1, 3.7, 6.5]")], "motor.emf.theta",
+                 "write degrees with theta_unit", id="table-beyond-2pi-rad"),
     # table: a hole (TOML has no null: a short column)
     pytest.param(TABLE_EMF, [("k = [0.0, 0.32, 0.32, 0.0, -0.32, -0.32]",
                               "k = [0.0, 0.32, 0.32, 0.0, -0.32]")],
@@ -343,8 +353,10 @@ BAD_FILES = [
                              ("k = [0.0, 0.32, 0.32, 0.0, -0.32, -0.32]", "k = [0.1, -0.1]")],
                  "motor.emf.theta", "at least 3", id="table-too-short"),
     # angles outside [0, 2 pi)
-    pytest.param(TABLE_EMF, [("210, 330]", "210, 360]")], "motor.emf.theta", "[0, 2 pi)", id="table-360deg"),
-    pytest.param(TABLE_EMF, [("theta = [0,", "theta = [-10,")], "motor.emf.theta", "[0, 2 pi)",
+    pytest.param(TABLE_EMF, [("210, 330]", "210, 360]")], "motor.emf.theta",
+                 "got [0, 360] deg: 360 deg is 0 again (the table is periodic): drop the last point",
+                 id="table-360deg"),
+    pytest.param(TABLE_EMF, [("theta = [0,", "theta = [-10,")], "motor.emf.theta", "[0, 360) deg",
                  id="table-negative-angle"),
     pytest.param(TABLE_EMF, [('theta_unit = "deg"\n', ""),
                              ("theta = [0, 30, 150, 180, 210, 330]", "theta = [0, 1, 2, 3, 4, 7]")],
@@ -357,6 +369,11 @@ BAD_FILES = [
                  "motor.emf.k_b", "zero", id="table-phase-zero"),
     pytest.param(FOURIER_EMF, [("b = [0.0, 0.38, 0.0, 0.02]", "b = [1.0, 0.0, 0.0, 0.0]")], "motor.emf.b",
                  "zero", id="fourier-no-harmonics"),
+    # shapes whose line-to-line back-EMF is zero (a part common to the three phases only): no torque, k_phi = 0
+    pytest.param(TABLE_EMF, [("k = [0.0, 0.32, 0.32, 0.0, -0.32, -0.32]", "k = [0.1, 0.1, 0.1, 0.1, 0.1, 0.1]")],
+                 "motor.emf", "line-to-line", id="table-constant"),
+    pytest.param(FOURIER_EMF, [("b = [0.0, 0.38, 0.0, 0.02]", "b = [0.0, 0.0, 0.0, 0.02]")], "motor.emf",
+                 "line-to-line", id="fourier-triplen-only"),
     # three phases needed
     pytest.param(PHASE_ARRAY_EMF, [("[[motor.emf.phase]]\nkind = \"sinusoid\"\nk_1 = 0.37\n", "")],
                  "motor.emf.phase", "three", id="phase-array-two"),
@@ -543,6 +560,8 @@ BAD_OBJECTS = [
     pytest.param(lambda: _motor(emf=Trapezoid(0.1)), "emf", "BackEmf", id="motor-emf-shape"),
     pytest.param(lambda: _motor(T_peak=0.0), "T_peak", "> 0", id="motor-T_peak-zero"),
     pytest.param(lambda: _motor(R=100.0), "R", "exceeds V_N", id="motor-R-large"),
+    pytest.param(lambda: _motor(emf=BackEmf.symmetric(Fourier((0.0, 0.0, 0.0, 0.1), (0.0, 0.0, 0.0, 0.0)))), "emf",
+                 "line-to-line", id="motor-emf-triplen"),
     pytest.param(lambda: Inverter(48.0, 1e4, t_dead=2.5e-5), "t_dead", "quarter", id="inverter-t_dead"),
     pytest.param(lambda: Inverter(48.0, 0.0), "f_pwm", "> 0", id="inverter-f_pwm-zero"),
     pytest.param(lambda: Inverter(48.0, 1e4, V_f=-0.7), "V_f", ">= 0", id="inverter-V_f"),
@@ -1122,6 +1141,10 @@ def test_kv_as_a_plain_number_is_rpm_per_volt(tmp_path: Path) -> None:
     ('R_ll = "0.08 Ohm"', 'R_ll = "0.08 Ohm"\nR = 0.04', "motor.R_ll", "not both"),
     ('R_ll = "0.08 Ohm"', 'R = "0.08 Ohm line-to-line"', "motor.R", 'R_ll = "0.08 Ohm"'),
     ('L_ll = "15 uH"', "", "motor.L", "is missing"),
+    # L's rule (> 0) named on the field the file has: L_ll = 0 was "motor.L: must be > 0", L_ll < 0 "must be >= 0"
+    ('L_ll = "15 uH"', "L_ll = 0", "motor.L_ll", "must be > 0, got 0"),
+    ('L_ll = "15 uH"', 'L_ll = "-15 uH"', "motor.L_ll", "must be > 0, got -1.5e-05"),
+    ('R_ll = "0.08 Ohm"', 'R_ll = "-0.08 Ohm"', "motor.R_ll", "must be >= 0, got -0.08"),
     ('KV = "1950 rpm/V"', 'KV = "1950 rpm/V"\nKV_rms = 2700', "motor.KV_rms", "cannot be given with KV"),
     ('kind = "sinusoid"', 'kind = "sinusoid"\nk_1 = 0.0028', "motor.emf.k_1", "cannot be given with motor.KV"),
     ('KV = "1950 rpm/V"', "", "motor.emf.k_1", "is missing"),

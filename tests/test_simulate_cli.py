@@ -203,3 +203,40 @@ def test_six_step_settings_are_checked_before_the_run(argv, option, words, capsy
     assert main(["simulate", "htm-48v", *argv]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"bldclab: error: {option}") and words in err[0], err
+
+
+def _strict_json(text: str) -> dict:
+    def refuse(name: str) -> None:
+        raise ValueError(f"not standard JSON: {name}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_json_output_is_standard_json_when_a_quantity_is_undefined(tmp_path: Path,
+                                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    """Duty 0 at half speed draws no power from the bus (p_dc ~ -5e-5 W): the efficiency is undefined. Python's
+    json wrote it as NaN, which jq and JavaScript refuse; it must be null, on stdout and in metrics.json."""
+    rc = main(["simulate", "htm-48v", "--control", "sixv", "--duty", "0", "--speed", "0.5 pu", "--no-trace",
+               "--format", "json", "--out", str(tmp_path / "o")])
+    assert rc == 0
+    out = _strict_json(capsys.readouterr().out)
+    assert out["p_dc_W"] <= 0 and out["efficiency"] is None
+    saved = _strict_json((tmp_path / "o" / "metrics.json").read_text())
+    assert saved["efficiency"] is None and saved["metrics"]["efficiency"] is None
+
+
+def test_a_long_run_off_a_terminal_says_how_long_once(capsys: pytest.CaptureFixture[str]) -> None:
+    """`--duration "1e6 s"` in a log or CI ran silently for hours (the progress line is for terminals): one note on
+    stderr with the extrapolated wall time, not repeated."""
+    from bldclab.cli.simulate import _Progress
+
+    prog = _Progress(False, 1e6)
+    prog.start -= 10.0  # 10 s for the first 1/1000: 1e4 s, 2.8 h
+    prog(1, 1000)
+    prog(2, 1000)
+    err = capsys.readouterr().err
+    assert err.count("bldclab: note:") == 1
+    assert "1e+06 s to simulate will take about 2.8 h" in err and "--progress" in err
+    quick = _Progress(False, 1.0)
+    quick(1, 1000)  # a run of milliseconds: nothing
+    assert capsys.readouterr().err == ""

@@ -8,6 +8,8 @@ write leaves nothing behind.
 from __future__ import annotations
 
 import contextlib
+import json
+import math
 import os
 import tempfile
 import tomllib
@@ -17,7 +19,7 @@ from typing import IO, Any
 
 from .errors import BldclabError
 
-__all__ = ["read_toml", "write_atomic", "write_files"]
+__all__ = ["json_text", "read_toml", "write_atomic", "write_files"]
 
 
 def read_toml(path: str | Path, what: str) -> dict[str, Any]:
@@ -130,3 +132,36 @@ def write_files(out_dir: Path, files: dict[str, bytes]) -> list[Path]:
         raise BldclabError("--out", f"cannot create directory {str(out_dir)!r}: {exc.strerror or exc}"
                            ) from None
     return [write_atomic(out_dir / name, content, "--out") for name, content in files.items()]
+
+
+def _finite_or_none(obj: Any) -> Any:
+    """Return ``obj`` with every non-finite float (NaN, +-inf) replaced by ``None``, recursively."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite_or_none(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_finite_or_none(v) for v in obj]
+    return obj
+
+
+def json_text(obj: Any, indent: int | None = 2) -> str:
+    """Return ``obj`` as standard JSON (RFC 8259), an undefined number (NaN, +-inf) written as ``null``.
+
+    Python's :func:`json.dumps` writes ``NaN`` and ``Infinity``, which no other JSON reader accepts (``jq``,
+    JavaScript's ``JSON.parse``); a quantity that is undefined for a run (an efficiency without input power) is
+    ``null`` instead.
+
+    Parameters
+    ----------
+    obj : Any
+        Dicts, lists, tuples, strings, numbers (NumPy floats are floats), booleans, None.
+    indent : int or None
+        As :func:`json.dumps`.
+
+    Returns
+    -------
+    str
+        The JSON text, without a trailing newline.
+    """
+    return json.dumps(_finite_or_none(obj), indent=indent, allow_nan=False)

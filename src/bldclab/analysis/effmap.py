@@ -136,10 +136,15 @@ def _run_point(job: EffMapJob) -> dict[str, Any]:
     m = point.metrics
     acc = point_losses(m, buckets)
     tol = FEASIBLE_TOL_PU * drive.T_N
+    feasible = bool(abs(point.tau_mean - torque) <= tol)
+    # an infeasible point says what it delivered: below the torque asked for is the envelope (current or voltage
+    # limit) or a regulation that misses its reference; above it is never the envelope
+    note = "" if feasible else (f"delivers {100.0 * point.tau_mean / torque:.3g} % of the torque asked for "
+                                f"({point.tau_mean:.4g} of {torque:.4g} N m; tolerance {tol:.3g} N m)")
     row.update({"tau_mean": point.tau_mean, "tau_mean_pu": point.tau_mean_pu, **acc,
                 "balance_electrical": m.balance_electrical,
                 "i_rms_a": m.i_rms[0], "i_rms_b": m.i_rms[1], "i_rms_c": m.i_rms[2],
-                "feasible": bool(abs(point.tau_mean - torque) <= tol), "note": "",
+                "feasible": feasible, "note": note,
                 "_warnings": [f"{supply} at {torque:.4g} N m, {speed:.4g} rad/s: {text}" for text in caught]})
     return row
 
@@ -158,7 +163,7 @@ class EffMapResult:
         ``p_shaft`` (W), each bucket of :attr:`buckets` (W), ``p_loss`` (their sum, W), ``p_stored`` (change of
         magnetic energy over the window per second, W), ``residue`` (``p_in - p_shaft - p_loss - p_stored``, W),
         ``efficiency``, ``balance_electrical``, ``i_rms_a`` ... (A), ``feasible`` and ``note`` (why a point has no
-        measurement).
+        measurement, or what an infeasible one delivered: ``delivers 61.1 % of the torque asked for ...``).
     difference : pandas.DataFrame
         The points feasible for both supplies: ``torque_ref``, ``torque_ref_pu``, ``speed``, ``speed_pu``,
         ``speed_rpm``, ``eta_square``, ``eta_sine``, ``d_eta`` (``eta_sine - eta_square``) and ``winner``

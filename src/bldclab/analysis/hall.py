@@ -214,13 +214,13 @@ class HallStudyResult:
         """Return the study as a text table: one line per variant and case, one column group per error."""
         errs = sorted(self.points.error_deg.unique())
         wv = max([len("variant"), *(len(str(v)) for v in self.points.variant)]) + 2
-        head = f"{'variant':<{wv}}{'case':<12}{'error (deg)':>11}" + "".join(f"{e:>9.3g}" for e in errs)
+        head = f"{'variant':<{wv}}{'case':<12}{'error (deg)':>11}" + "".join(f" {e:>9.3g}" for e in errs)
         lines = [head]
         for (var, case), g in self.points.groupby(["variant", "case"], sort=False):
             g = g.set_index("error_deg")
             for name, col, scale in (("tau/tau0", "tau_rel", 1.0), ("ripple pu", "ripple_sampled_pu", 1.0),
                                      ("eff %", "efficiency", 100.0)):
-                vals = "".join(f"{scale * g.loc[e, col]:>9.4g}" if e in g.index else f"{'':>9}" for e in errs)
+                vals = "".join(f" {scale * g.loc[e, col]:>9.4g}" if e in g.index else f" {'':>9}" for e in errs)
                 lines.append(f"{var if name == 'tau/tau0' else '':<{wv}}{case if name == 'tau/tau0' else '':<12}"
                              f"{name:>11}{vals}")
         return "\n".join(lines)

@@ -7,8 +7,8 @@ R, L and the flux linkage the controller measures, against the motor file's valu
 from __future__ import annotations
 
 import argparse
-import json
 
+from .._files import json_text
 from ..analysis.commission import commission
 from ..control.sine import fundamental_k1
 from ..model.analytic import r_total
@@ -31,7 +31,7 @@ def run_command(args: argparse.Namespace) -> int:
     true = {"R": r_total(drive), "L": drive.motor.L, "psi_f": fundamental_k1(drive) / drive.motor.p}
     if args.format == "json":
         out = e.to_dict() | {"true": true}
-        print(json.dumps(out, indent=2))
+        print(json_text(out))
     else:
         print(f"status        {e.status}")
         for key, unit in (("R", "Ohm"), ("L", "H"), ("psi_f", "V s")):

@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 from typing import Any
 
-from .._files import write_files
+from .._files import json_text, write_files
 from ..analysis.desync import AXES, REASONS, Axis, DesyncMapResult, ThrottleStep, desync_map
 from ..control.sensorless import SixStepSensorless, throttle_rate
 from ..errors import BldclabError
@@ -189,7 +188,7 @@ def run_command(args: argparse.Namespace) -> int:
                            f"{_run_times(res)}: give --settle and --observe, or check the drive's inertia")
     _print(res, workers)
     files: dict[str, bytes] = {"desync.csv": res.points.to_csv(index=False).encode(),
-                               "desync.json": json.dumps(_summary(res, args), indent=2).encode()}
+                               "desync.json": json_text(_summary(res, args)).encode()}
     files.update(desync_figures(res))
     for path in write_files(out, files):
         print(f"wrote {path}")

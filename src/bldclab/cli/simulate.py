@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import difflib
 import io
-import json
 import math
 import sys
 import time
@@ -16,7 +15,7 @@ from pathlib import Path
 from typing import Any, cast
 
 from .._core import decode_flags
-from .._files import write_files
+from .._files import json_text, write_files
 from ..analysis.experiments import electrical_period
 from ..control import Control, Sine, SixStep
 from ..control.sixstep import COMMUTATIONS as SIXSTEP_COMMUTATIONS
@@ -331,10 +330,13 @@ def _scenario(args: argparse.Namespace, drive: Any, ref: float) -> Scenario:
 class _Progress:
     """A progress line on stderr, redrawn in place: shown when asked, or on a terminal for a long run."""
 
+    NOTE_S = 60.0  # off a terminal (a log, CI), a run expected to take longer says so once
+
     def __init__(self, forced: bool, total_s: float) -> None:
         self.forced, self.total_s = forced, total_s
         self.start = time.monotonic()
         self.shown = False
+        self.noted = False
         self.drawn = -math.inf
 
     def __call__(self, done: int, total: int) -> None:
@@ -342,7 +344,14 @@ class _Progress:
         if not self.shown:
             # on a terminal, only when the run is going to take a while (extrapolated from the first pieces)
             eta = elapsed * total / max(done, 1)
-            if not (self.forced or (sys.stderr.isatty() and eta > 10.0)):
+            tty = sys.stderr.isatty()
+            if not self.forced and not tty and not self.noted and eta > self.NOTE_S and done < total:
+                self.noted = True
+                sys.stderr.write(f"bldclab: note: {self.total_s:.4g} s to simulate will take about "
+                                 f"{_fmt_duration(eta)} at this rate ({self.total_s * done / total / elapsed:.3g} "
+                                 "simulated s per s); --progress shows its progress\n")
+                sys.stderr.flush()
+            if not (self.forced or (tty and eta > 10.0)):
                 return
             self.shown = True
         if done < total and elapsed - self.drawn < 0.25:  # redraw four times a second at most
@@ -361,6 +370,14 @@ def _show(caught: list[warnings.WarningMessage]) -> None:
             warnings.warn(str(w.message), PlausibilityWarning, stacklevel=2)
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+
+def _fmt_duration(s: float) -> str:
+    """Return a wall time as ``"3.2 min"``, ``"5.1 h"`` or ``"12 days"``."""
+    for unit, size in (("days", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if s >= size:
+            return f"{s / size:.2g} {unit}"
+    return f"{s:.2g} s"
 
 
 def _fmt_bytes(b: float) -> str:
@@ -439,7 +456,7 @@ def run_command(args: argparse.Namespace) -> int:
     if not sc.trace:
         summary["trace_rows"] = 0
     if args.format == "json":
-        print(json.dumps(summary, indent=2))
+        print(json_text(summary))
     else:
         print(f"{drive.name}, {args.control} control, {heading}, "
               f"{'dynamometer' if sc.speed is not None else 'rotor dynamics'}, {drive.inverter.model} inverter")
@@ -456,13 +473,13 @@ def run_command(args: argparse.Namespace) -> int:
             buf = io.BytesIO()
             res.to_pandas().to_csv(buf)
             files["trace.csv"] = buf.getvalue()
-        files["metrics.json"] = (json.dumps({**summary, "metrics": asdict(m)}, indent=2) + "\n").encode()
+        files["metrics.json"] = (json_text({**summary, "metrics": asdict(m)}) + "\n").encode()
         if args.plot:
             fig = res.plot()
             files["waveforms.png"] = plots.figure_bytes(fig, "png")
             files["waveforms.svg"] = plots.figure_bytes(fig, "svg")
         written = write_files(args.out, files)
         res.save(args.out / "result.npz")
-        for path in [*written, args.out / "result.npz"]:
-            print(f"wrote {path}")
+        for path in [*written, args.out / "result.npz"]:  # --format json: stdout stays one JSON document
+            print(f"wrote {path}", file=sys.stderr if args.format == "json" else sys.stdout)
     return 0

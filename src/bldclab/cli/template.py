@@ -204,12 +204,20 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     """Declare the arguments of ``bldclab template``."""
     p.add_argument("--from", dest="source", metavar="MOTOR", default="htm-48v",
                    help="drive to start from: built-in name (bldclab drives) or motor file (default: htm-48v)")
-    p.add_argument("--out", type=Path, metavar="FILE.toml", help="write the file here (default: standard output)")
+    p.add_argument("--out", type=Path, metavar="FILE.toml", help="write the file here (default: standard output); "
+                   "an existing file is kept unless --force")
+    p.add_argument("--force", action="store_true", help="overwrite an existing --out file")
 
 
 def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab template``: print or write the commented motor file."""
     check_out_file(args.out)
+    if args.out is not None and args.out.exists() and not args.force:
+        # a template is where a hand-written motor file starts: writing over one (`--from my.toml --out my.toml`
+        # rewrites it in SI numbers, its comments and unit strings gone) needs to be asked for
+        same = Path(args.source).exists() and Path(args.source).resolve() == args.out.resolve()
+        raise BldclabError("--out", f"{str(args.out)!r} exists" + (", and is the --from file (its comments and "
+                           "units would be lost)" if same else "") + ": give another name, or --force to overwrite it")
     try:
         text = template(args.source)
     except BldclabError as exc:

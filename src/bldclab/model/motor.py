@@ -114,6 +114,14 @@ class Motor:
         check_number("T_peak", self.T_peak, lo=0.0, lo_open=True, allow_none=True)
         if not isinstance(self.emf, BackEmf):
             raise BldclabError("emf", "must be a BackEmf")
+        k = self.emf.k_abc(np.linspace(0.0, 2.0 * math.pi, 1441))
+        if not float(np.max(np.abs(k - k.mean(axis=0)))) > 1e-9 * float(np.max(np.abs(k))):
+            # only a part common to the three phases (a constant, triplen harmonics): no line-to-line back-EMF, no
+            # torque from any current (sum i_x = 0), and no speed base V_dc / (2 k_phi)
+            raise BldclabError("emf", "the line-to-line back-EMF k_x - k_y is zero at every angle (k_phi = 0): the "
+                               "shapes hold only a part common to the three phases (a constant, triplen harmonics), "
+                               "which a star motor without neutral cannot turn into torque; give the phase back-EMF "
+                               "with its fundamental")
         if self.Omega_N is None and self.V_N - 2.0 * self.R * self.I_N <= 0.0:
             raise BldclabError("R", "2 R I_N exceeds V_N: no positive nominal speed")
         for name in ("P_fe_eddy", "P_fe_hyst", "P_fe_ex"):
@@ -380,7 +388,7 @@ def _phase_value(name: str, phase: object, line: object, dimension: str) -> floa
                            f"{ll} (= 2 {name}), not both")
     if line is not None:
         value = to_si(line, dimension, ll)
-        check_number(ll, value, lo=0.0)
+        check_number(ll, value, lo=0.0, lo_open=name == "L")  # the rules of R (>= 0) and L (> 0), named as given
         return value / 2.0
     if phase is None:
         raise BldclabError(name, f"is missing (per phase; or give the line-to-line value as {ll})")

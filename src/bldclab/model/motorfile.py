@@ -120,6 +120,28 @@ def _unit_scale(sec: Section, key: str, default: str, dim: str) -> float:
     return to_si(f"1 {unit}", dim, sec.name(key))
 
 
+def _check_theta_as_written(sec: Section, theta: tuple[float, ...], scale: float) -> None:
+    """Check a table's angles for range and order in the file's own ``theta_unit`` (``Table`` speaks radians).
+
+    A file in degrees with an angle of 480 was told ``got [0, 8.37758] (write degrees with theta_unit = "deg")``,
+    which it did; the error names the values as written and the range in that unit.
+    """
+    unit = sec.string("theta_unit", "rad")
+    th = [t / scale for t in theta]
+    if len(th) < 3:
+        return  # Table names the length
+    period = TWO_PI / scale
+    if min(th) < 0.0 or max(th) >= period:
+        hint = (f"{period:g} {unit} is 0 again (the table is periodic): drop the last point" if min(th) >= 0.0
+                and th[-1] == period and max(th[:-1]) < period else "give one electrical period")
+        raise BldclabError(sec.name("theta"), f"angles must lie in [0, {period:g}) {unit}, one electrical period "
+                           f"(theta_e = p theta_m), got [{min(th):g}, {max(th):g}] {unit}: {hint}")
+    for j in range(1, len(th)):
+        if not th[j] > th[j - 1]:
+            raise BldclabError(sec.name("theta"), f"angles must be strictly increasing: entry {j} ({th[j]:g} "
+                               f"{unit}) follows {th[j - 1]:g} {unit}")
+
+
 def _magnitude(sec: Section, key: str, sizeless: str | None) -> float:
     """Read the size of an analytic shape (``k_phi``, ``k_1``); 1 when a speed constant gives it (``sizeless``)."""
     if sizeless is not None:
@@ -173,6 +195,8 @@ def _shape_from(sec: Section, phase: int | None, sizeless: str | None = None) ->
         k_scale = _unit_scale(sec, "unit", "V s/rad", "emf_constant")
         th_scale = _unit_scale(sec, "theta_unit", "rad", "angle")
         theta = tuple(sec.numbers("theta", th_scale))
+        if th_scale != 1.0:
+            _check_theta_as_written(sec, theta, th_scale)
         key = "k" if phase is None else "k_" + PHASES[phase]
         k = tuple(sec.numbers(key, k_scale))
         try:

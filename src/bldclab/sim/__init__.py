@@ -890,6 +890,7 @@ def _guards_after(drive: Drive, res: SimResult, imposed: bool, check: str,
         if "omega_m" in res.signals and len(res):
             w.append(rows.peak[3] if rows is not None and not rows.nonfinite
                      else float(np.max(np.abs(res.signals["omega_m"]))))
+        findings += _plaus.check_driven_speed(drive, max(w), float(res.meta["final"]["omega_m"]))
         findings += _plaus.check_pwm(drive, max(w), time_constant=False)
         if res.metrics is not None:
             findings += _plaus.check_steady(drive, res)

@@ -25,6 +25,10 @@ Thresholds and why (``T_pwm = 1 / f_pwm``, ``tau_el = L / R``, ``f_e = p |Omega|
   speed range of any practical permanent-magnet drive (3 to 5, rarely 10). (With a sinusoidal back-EMF, six-step
   voltage, whose fundamental is ``2 sqrt(3) / pi = 1.10`` times the bus, can still motor up to ``1.10 Omega_0``:
   there the warning flags a regime outside the paper-1 comparison rather than a wrong result.)
+* With rotor dynamics, the peak speed vs ``Omega_0`` (``check_driven_speed``): the drive alone reaches about
+  ``1.05 Omega_0``; a rotor beyond ``1.5 Omega_0`` was driven by its load (a load torque above the drive's spins it
+  backwards) or started there: a warning on ``scenario.load_torque``; above ``10 Omega_0`` an error, raised before the
+  consequences (too few PWM periods per electrical period at that speed) that would otherwise name ``inverter.f_pwm``.
 * Reference vs the drive's limit: the controller's over-current trip ``i_max`` (its default is a multiple of
   ``I_N``), for a torque reference also the motor's ``T_peak`` if larger: warning above the limit (the reference
   cannot be reached without tripping; a reference above the continuous rating ``I_N`` alone is a legitimate short
@@ -34,7 +38,11 @@ Thresholds and why (``T_pwm = 1 / f_pwm``, ``tau_el = L / R``, ``f_e = p |Omega|
   (about as ``(omega_e h)^4``), the largest measured on a legitimate run being 4.6e-5 (sinusoidal supply at
   0.995 ``Omega_0`` of a drive with 28 PWM periods per electrical period). Warning above 1e-4 (the energy
   bookkeeping is off by more than 0.01 %); error above 1e-2 (efficiencies wrong by a percent, the size of the
-  differences the comparisons resolve: the integration did not resolve the run).
+  differences the comparisons resolve: the integration did not resolve the run). A residue whose power is below
+  ``BALANCE_FLOOR`` (1e-6) of the drive's rated power ``V_dc I_N`` is not graded: where almost nothing flows (six-step
+  at zero duty below the no-load speed, milliamps through the open switches; a frictionless motor at no load, whose
+  PWM ripple exchanges far more energy than the net flow) a residue of 1e-8 to 1e-6 W is a large share of the net
+  flow but moves no reported power by more than a millionth of the drive's rating.
 * Non-finite metrics, states or traced currents/torques/speeds: error.
 * Currents after the inverter's hardware trip ``Inverter.i_trip`` (all legs off): they can only decay unless the
   back-EMF drives them through the diodes. Warning above 1.01 ``i_trip``; error above 2 ``i_trip`` (beyond the
@@ -72,9 +80,11 @@ from ..model.limits import grade as _grade
 from ..model.motor import Drive
 from .results import SimResult
 
-__all__ = ["BALANCE_ERROR", "BALANCE_WARN", "CHECK_MODES", "PWM_PER_PERIOD_ERROR", "PWM_PER_PERIOD_WARN",
-           "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "Finding", "RowSummary", "apply", "cause_first",
-           "cause_of", "check_pwm", "check_reference", "check_result", "check_speed", "check_steady", "collect",
+__all__ = ["BALANCE_ERROR", "BALANCE_FLOOR", "BALANCE_WARN", "CHECK_MODES", "PWM_PER_PERIOD_ERROR",
+           "PWM_PER_PERIOD_WARN", "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "Finding", "RowSummary", "apply",
+           "cause_first",
+           "cause_of", "check_driven_speed", "check_pwm", "check_reference", "check_result", "check_speed",
+           "check_steady", "collect",
            "distinct", "summary"]
 
 @dataclass(frozen=True)
@@ -104,6 +114,7 @@ CHECK_MODES = ("error", "warn", "off")
 REF_ERROR_FACTOR = 10.0
 BALANCE_WARN = 1e-4
 BALANCE_ERROR = 1e-2
+BALANCE_FLOOR = 1e-6
 TRIP_WARN = 1.01
 TRIP_ERROR = 2.0
 CURRENT_ERROR_IN = 100.0
@@ -208,9 +219,15 @@ def check_result(drive: Drive, res: SimResult, rows: RowSummary | None = None) -
     out = []
     m = res.metrics
     if m is not None:
+        dt = m.t1 - m.t0
+        tau_rms = math.sqrt(m.tau_std**2 + m.tau_mean**2)
+        flow = {"balance_electrical": max(abs(m.p_src_total), abs(m.p_emf)),  # the scales of Metrics.from_c, in W
+                "balance_mechanical": max(abs(m.p_emf), abs(m.p_fric), abs(m.p_fe), abs(m.p_load),
+                                          abs(m.dW_kin) / dt if dt > 0 else 0.0, tau_rms * abs(m.omega_mean))}
+        floor = BALANCE_FLOOR * drive.inverter.V_dc * drive.motor.I_N
         for name in ("balance_electrical", "balance_mechanical"):
             r = abs(getattr(m, name))
-            level = _grade(r, BALANCE_WARN, BALANCE_ERROR)
+            level = _grade(r, BALANCE_WARN, BALANCE_ERROR) if r * flow[name] >= floor else None
             if level:
                 out.append(Finding(level, "result.energy_balance",
                                    f"{name} residue {getattr(m, name):.3g} over the window [{m.t0:.4g}, {m.t1:.4g}] "
@@ -243,6 +260,45 @@ def check_result(drive: Drive, res: SimResult, rows: RowSummary | None = None) -
                            f"a phase current reached {i_pk:.4g} A, {i_pk / drive.motor.I_N:.3g} times I_N = "
                            f"{drive.motor.I_N:.4g} A (error above {CURRENT_ERROR_IN:g} I_N)"))
     return out
+
+
+#: With rotor dynamics, a peak speed above this many ``Omega_0`` is a warning (the drive alone reaches about 1.05:
+#: a sinusoidal back-EMF's six-step no-load speed; no controller weakens the field), above ``SPEED_ERROR_PU`` an
+#: error: the load torque (or the initial speed) drove the rotor, the drive did not.
+DRIVEN_SPEED_WARN_PU = 1.5
+
+
+def check_driven_speed(drive: Drive, omega_max: float, omega_final: float) -> list[Finding]:
+    """Check the peak speed of a run with rotor dynamics against the no-load speed ``Omega_0``.
+
+    A rotor far beyond ``Omega_0`` was driven there by its load (a load torque above the drive's torque spins it
+    backwards) or started there: that is the cause to name, before the consequences (too few PWM periods per
+    electrical period, diode currents) that other checks report.
+
+    Parameters
+    ----------
+    drive : Drive
+    omega_max : float
+        Highest mechanical speed magnitude of the run (rad/s).
+    omega_final : float
+        Mechanical speed at the end of the run (rad/s), for its direction.
+
+    Returns
+    -------
+    list of Finding
+    """
+    omega_0 = drive.Omega_0
+    pu = omega_max / omega_0
+    level = _grade(pu, DRIVEN_SPEED_WARN_PU, SPEED_ERROR_PU)
+    if not level:
+        return []
+    direction = "backwards" if omega_final < 0.0 else "forwards"
+    return [Finding(level, "scenario.load_torque",
+                    f"the rotor reached {omega_max:.4g} rad/s ({omega_max * 30 / math.pi:.4g} rpm, ending "
+                    f"{direction}), {pu:.4g} times the no-load speed Omega_0 = V_dc / (2 k_phi) = {omega_0:.4g} "
+                    f"rad/s: the drive cannot reach that, so the load torque (above the drive's torque, T_N = "
+                    f"{drive.T_N:.4g} N m) or the initial speed drove it (warning above {DRIVEN_SPEED_WARN_PU:g} "
+                    f"Omega_0, error above {SPEED_ERROR_PU:g})")]
 
 
 def check_steady(drive: Drive, res: SimResult) -> list[Finding]:

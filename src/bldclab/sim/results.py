@@ -97,8 +97,9 @@ class Metrics:
         (dimensionless). The booked switching energies enter both sides, so the residue measures the circuit's
         integration; the booking itself is checked against hand calculations (tests/test_losses.py).
     balance_mechanical : float
-        ``(E_emf + E_cog - E_fric - E_fe - E_load - dW_kin) / max(|E_emf|, ...)`` (dynamic mechanics; 0
-        otherwise).
+        ``(E_emf + E_cog - E_fric - E_fe - E_load - dW_kin) / max(|E_emf|, |E_fric|, |E_fe|, |E_load|, |dW_kin|,
+        tau_rms |omega_mean| (t1 - t0))`` (dynamic mechanics; 0 otherwise). The last term, the shaft's gross energy
+        flow, keeps a frictionless drive at no load (every net term near zero) from reading as unresolved.
     i_rms, i_peak : tuple of float
         Per-phase rms and peak current (A).
     efficiency : float
@@ -159,7 +160,10 @@ class Metrics:
         if imposed:
             bal_m = 0.0
         else:
-            scale_m = max(abs(E["emf"]), abs(E["fric"]), abs(E["fe"]), abs(E["load"]), abs(dW_kin), 1e-300)
+            # The shaft's gross energy flow, rms torque times the mean speed over the window: without friction or
+            # load in a steady state every net term is ~0 and would divide a round-off residue into a large ratio.
+            gross = math.sqrt(max(E["tau2"], 0.0) * dt) * abs(omega_integral) / dt
+            scale_m = max(abs(E["emf"]), abs(E["fric"]), abs(E["fe"]), abs(E["load"]), abs(dW_kin), gross, 1e-300)
             bal_m = (E["emf"] + E["cog"] - E["fric"] - E["fe"] - E["load"] - dW_kin) / scale_m
         tau_mean = E["tau"] / dt
         ma_min, ma_max = float(m["tau_ma_min"]), float(m["tau_ma_max"])

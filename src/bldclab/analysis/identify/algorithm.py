@@ -331,7 +331,8 @@ class Identification:
         out.append(f"  window             +-{self.window / DEG:.3g} deg (local linear regression)")
         out.append(f"  noise              {self.noise:.4g} V rms ({100 * self.noise / self.peak_voltage:.3g} % of "
                    f"the {self.peak_voltage:.4g} V peak)")
-        out.append(f"  theta_e at start   {self.theta_e0 / DEG:.4g} deg")
+        start = (self.theta_e0 / DEG + 180.0) % 360.0 - 180.0  # signed: 2 pi - 1e-5 rad printed as 360 deg before
+        out.append(f"  theta_e at start   {start:.4g} deg")
         out.append(f"  {'phase':<22}" + "".join(f"{x:>12}" for x in _PHASES))
         out.append("  fundamental (V s/rad) " + "".join(f"{v:12.6g}" for v in self.fundamental))
         out.append("  spacing error (deg)   " + "".join(f"{v / DEG:12.4g}" for v in self.spacing))
@@ -592,6 +593,13 @@ def identify(data: str | Path | Waveform | Mapping[str, ArrayLike], speed: objec
     if wf.theta is not None:
         theta = wf.theta - wf.theta[0]
         periods = float(theta[-1] / TWO_PI)
+        phi = _space_angle(wf.v)
+        turns = abs(float(phi[-1] - phi[0])) / max(float(theta[-1]), 1e-300)
+        if turns > 1.5:  # the voltages turn k times per electrical turn of the column: a shaft (mechanical) angle
+            raise BldclabError(f"column {wf.columns['theta']}", f"the voltages go through {turns:.3g} periods while "
+                               "this angle advances by one: it reads as a mechanical angle (of a motor with "
+                               f"{round(turns)} pole pairs?); give the electrical angle theta_e = p theta_m, or a "
+                               "time column", wf.source)
         if periods < 1.0:
             raise BldclabError(f"column {wf.columns['theta']}", f"the record covers only {periods:.3g} electrical "
                                "periods: record at least one whole period (2-3 recommended)", wf.source)

@@ -79,10 +79,16 @@ class _Periodic:
         return np.where(ok, s2 / np.where(ok, den, 1.0), 1.0 / np.maximum(n, 1.0))
 
     def window(self, g: NDArray[np.float64], h: float, min_count: int = 4) -> NDArray[np.float64]:
-        """Return per-angle half-widths: ``h``, widened where fewer than ``min_count`` samples fall inside."""
+        """Return per-angle half-widths: ``h``, widened where the window holds too few samples or lopsided ones.
+
+        Widened where fewer than ``min_count`` samples fall inside, or where they lie so much to one side of ``g``
+        that the line's intercept carries more than twice the noise variance of ``min_count`` evenly spread samples
+        (an unevenly sampled record: four samples bunched at one end of the window extrapolate the line, and the
+        noise with it, up to 59 times its variance).
+        """
         hw = np.full(np.shape(g), float(h))
         for _ in range(40):
-            few = self.count(g, hw) < min_count
+            few = (self.count(g, hw) < min_count) | (self.self_weight(g, hw) > 2.0 / min_count)
             if not np.any(few):
                 break
             hw[few] *= 1.5

@@ -368,9 +368,11 @@ def _build(data: dict[str, NDArray[np.float64]], used: dict[str, str], ignored: 
         bad = np.nonzero(np.diff(theta) <= 0.0)[0]
         if bad.size:
             j = int(bad[0]) + 1
+            deg = 180.0 / math.pi  # a column in degrees reads its own numbers too
             raise BldclabError(f"column {used['theta']}, {where(j)}", f"the angle does not increase: "
-                               f"{theta[j]:.9g} rad after {theta[j - 1]:.9g} rad (unwrapped): the test must "
-                               "turn forwards at constant speed", source)
+                               f"{theta[j]:.9g} rad ({theta[j] * deg:.6g} deg) after {theta[j - 1]:.9g} rad "
+                               f"({theta[j - 1] * deg:.6g} deg) (unwrapped): the test must turn forwards at "
+                               "constant speed", source)
     phase_keys = [f"v_{x}" for x in _PHASES]
     closure = math.nan
     if all(k in data for k in phase_keys):
