@@ -42,7 +42,7 @@ ENTRY = "import sys; from bldclab.cli import main; sys.exit(main())"
 
 def light_commands(tmp: Path) -> list[list[str]]:
     """Return the light commands' arguments (``template`` writes into ``tmp``)."""
-    return [["--help"], ["drives"], ["check", "htm-48v"], ["template", "--out", str(tmp / "motor.toml")],
+    return [["--help"], ["drives"], ["check", "htm-48v"], ["template", "--force", "--out", str(tmp / "motor.toml")],
             ["analyze", "htm-48v"]]
 
 
