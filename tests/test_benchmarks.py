@@ -247,8 +247,8 @@ def test_cli_startup_prints_both_tables(tmp_path):
                           capture_output=True, text=True, cwd=tmp_path, timeout=300)
     assert proc.returncode == 0, proc.stderr
     out = proc.stdout
-    for command in ("bldclab --help", "bldclab drives", "bldclab check htm-48v", "bldclab template --force --out motor.toml",
-                    "bldclab analyze htm-48v"):
+    for command in ("bldclab --help", "bldclab drives", "bldclab check htm-48v",
+                    "bldclab template --force --out motor.toml", "bldclab analyze htm-48v"):
         assert any(line.startswith(command + " ") for line in out.splitlines()), command
     for phase in ("imports", "simulations", "figures, report", "exit", "wall"):
         assert any(line.startswith(phase + " ") for line in out.splitlines()), phase
