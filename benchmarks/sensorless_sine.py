@@ -68,7 +68,7 @@ def sensitivity(names: list[str]) -> None:
         on = min(0.1 * d.motor.Omega_nominal, 0.5 * w)
         ctl = bl.Sine(angle="observer", handoff_speed=on, handoff_hysteresis=0.5)
         st = ctl.sensorless_settings(d)
-        t_load = st["if_align"] + st["t_ramp_if"] + 2 * st["lock_time"] \
+        t_load = st["if_align"] + d.motor.p * on / st["if_accel"] + 2 * st["lock_time"] \
             + d.mechanics.J * w / torque + 0.3
         wb = 2 * math.pi * ctl.speed_bandwidth_hz
         t_ramp = max(0.3, torque / (d.mechanics.J * wb**2 / 4 * 0.2 * w))
@@ -115,7 +115,7 @@ def sensor_errors(names: list[str], speeds: tuple[float, ...] = (0.1, 0.5)) -> N
             on = min(0.1 * d.motor.Omega_nominal, 0.5 * w)
             ctl = bl.Sine(angle="observer", handoff_speed=on, handoff_hysteresis=0.5)
             st = ctl.sensorless_settings(d)
-            t_load = st["if_align"] + st["t_ramp_if"] + 2 * st["lock_time"] \
+            t_load = st["if_align"] + d.motor.p * on / st["if_accel"] + 2 * st["lock_time"] \
                 + d.mechanics.J * w / torque + 0.3
             wb = 2 * math.pi * ctl.speed_bandwidth_hz
             t_ramp = max(0.3, torque / (d.mechanics.J * wb**2 / 4 * 0.2 * w))
@@ -133,18 +133,15 @@ def sensor_errors(names: list[str], speeds: tuple[float, ...] = (0.1, 0.5)) -> N
 RHO_LO, RHO_HI = 0.6, 0.95  # bc_sine.h: the load-adaptive ramp's band (BC_SINE_RHO_LO, BC_SINE_RHO_HI)
 
 
-def startup_bound(st: dict[str, float], J: float, p: int, tau_if: float, tau_f: float = 0.0) -> float:
+def startup_bound(st: dict[str, float], J: float, p: int, tau_if: float) -> float:
     """Return the largest load (a fraction of the I/f torque ``tau_if``) the start is designed to carry.
 
     In the ramp the rotor's torque share ``rho`` (its load angle's cosine) sets the acceleration ``a = a_max (RHO_HI
-    - rho) / (RHO_HI - RHO_LO)``, and ``rho tau_if = tau_L + tau_f + J a / p``, ``tau_f`` (N m) the plant's own
-    friction at the hand-off speed (``tau_c + B omega_on``: the drive's mechanics, carried besides the load); the
-    ramp fails (START_FAIL) when its mean acceleration is below ``a_min`` (``omega_on / a_min`` below the top).
-    Equilibrium at ``a = a_min``:
-    ``tau_L / tau_if = RHO_HI - (RHO_HI - RHO_LO) a_min / a_max - (J a_min / p + tau_f) / tau_if``.
+    - rho) / (RHO_HI - RHO_LO)``, and ``rho tau_if = tau_L + J a / p``; the ramp fails (START_FAIL) when its mean
+    acceleration is below ``a_min`` (``omega_on / a_min`` below the top). Equilibrium at ``a = a_min``:
+    ``tau_L / tau_if = RHO_HI - (RHO_HI - RHO_LO) a_min / a_max - J a_min / (p tau_if)``.
     """
-    return (RHO_HI - (RHO_HI - RHO_LO) * st["if_accel_min"] / st["if_accel"]
-            - (J * st["if_accel_min"] / p + tau_f) / tau_if)
+    return RHO_HI - (RHO_HI - RHO_LO) * st["if_accel_min"] / st["if_accel"] - J * st["if_accel_min"] / (p * tau_if)
 
 
 def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str) -> dict[str, float]:
@@ -179,8 +176,7 @@ def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str) ->
                  estimate=d)
     on = r["mode"] > 0.5
     ok = bool(on[-1]) and abs(r["omega_m"][-1] / w - 1) < 0.05
-    tau_f = d.mechanics.tau_c + d.mechanics.B * ctl.handoff(d)  # the drive's own friction, not the load
-    return {"ok": float(ok), "bound": startup_bound(st, mech.J, p, tau_if, tau_f),
+    return {"ok": float(ok), "bound": startup_bound(st, mech.J, p, tau_if),
             "t_lock": float(r["t"][on][0]) if on.any() else math.nan, "restarted": float("DESYNC" in r.flags_raised),
             "tau_if": tau_if, "flags": r.flags_raised}
 
@@ -234,7 +230,7 @@ def main(names: list[str]) -> None:
             ctl = bl.Sine(angle="observer", handoff_speed=on, handoff_hysteresis=0.5)
             st = ctl.sensorless_settings(d)
             # start, then the speed loop's way up at T_s,N / 2 of acceleration torque, then 0.3 s to settle
-            t_load = st["if_align"] + st["t_ramp_if"] + 2 * st["lock_time"] \
+            t_load = st["if_align"] + d.motor.p * on / st["if_accel"] + 2 * st["lock_time"] \
                 + d.mechanics.J * w / torque + 0.3
             wb = 2 * math.pi * ctl.speed_bandwidth_hz
             t_ramp = max(0.3, torque / (d.mechanics.J * wb**2 / 4 * 0.2 * w))

@@ -359,8 +359,7 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->u_hist[0][0] = s->u_hist[0][1] = s->u_hist[1][0] = s->u_hist[1][1] = 0.0f;
     s->u_ok[0] = s->u_ok[1] = 0;
     s->n_restart = 0u;
-    s->if_trust = s->if_moved = 0;
-    s->if_tb = 0.0f;
+    s->if_trust = 0;
     s->r_obs = p->observer == BC_SINE_OBS_REDUCED ? p->robs.R : p->fobs.R;
     s->r_ui = s->r_ii = 0.0f;
     s->n_catch = s->w_rev = s->if_wmin = 0.0f;
@@ -722,7 +721,6 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             s->sl_t = s->n_lock = s->n_catch = 0.0f; /* if_t goes on: the start's budget (a reset at the top) */
             s->rho_f = 1.0f;
             s->if_trust = 0;
-            s->if_moved = 1; /* turning at the hand-off speed */
             s->if_wmin = fminf(s->if_wmin, (float)s->sl_dir * s->if_omega);
             if (s->rest_on) bc_rest_restart(&s->rest);
         } else if (fabsf(s->omega_f) < p->omega_off) {
@@ -786,8 +784,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 s->rho_f = 0.0f;
                 s->if_t = 0.0f;
                 s->if_wmin = 0.0f;
-                s->if_trust = s->if_moved = 0;
-                s->if_tb = 0.0f;
+                s->if_trust = 0;
             }
         } else if (s->sl_phase == BC_SINE_SL_RAMP) {
             /* the load-adaptive ramp (if_accel_min < if_accel; otherwise the fixed ramp at if_accel): the
@@ -798,34 +795,19 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             s->rho_f = cosf(o.theta - s->if_theta);
             float a = p->if_accel;
             /* the observer is trusted when it sees the rotor move (at least 5 % of omega_on): at rest it holds its
-             * seed, which a load holding the rotor leaves off. Until it first does, the vector creeps (below) at
-             * if_accel_min at least; its angle is read (the load judged, the swing braked) from BC_SINE_TRUST
-             * omega_on on */
+             * seed, which a load holding the rotor leaves off. Not trusted: the vector creeps (below) at
+             * if_accel_min at least, the swing is not braked */
             int moving = fabsf(o.omega_e) >= 0.05f * p->omega_on;
-            int reliable = fabsf(o.omega_e) >= BC_SINE_TRUST * p->omega_on;
-            s->if_trust = adaptive && reliable;
-            if (moving && !s->if_moved) {
-                /* broken away: the slowest ramp's time counts from here (the creep before it is not the ramp) */
-                s->if_moved = 1;
-                s->if_t = 0.0f;
-                s->if_wmin = fminf(dir * s->if_omega, 0.0f);
-            }
+            s->if_trust = adaptive && moving;
             if (adaptive) {
-                /* the load is read from the observer's angle only where that angle is good to a few degrees (a
-                 * voltage-model observer's angle error from a voltage error goes as 1 / omega): below
-                 * BC_SINE_TRUST omega_on, the slowest ramp, which the rotor follows with any load within the
-                 * design bound (its load angle then within the band's) */
-                if (reliable)
-                    a *= bc_clampf((BC_SINE_RHO_HI - s->rho_f) / (BC_SINE_RHO_HI - BC_SINE_RHO_LO), -1.0f, 1.0f);
-                else
-                    a = p->if_accel_min;
+                a *= bc_clampf((BC_SINE_RHO_HI - s->rho_f) / (BC_SINE_RHO_HI - BC_SINE_RHO_LO), -1.0f, 1.0f);
+                if (!moving) a = fmaxf(a, p->if_accel_min);
             }
             /* omega_if += dir a T_s within dir [-omega_on, omega_on] (a rotor pushed back by an active load is
              * followed back); theta_if += omega_if T_s */
             float w = fmaxf(dir * s->if_omega + a * p->ts, -p->omega_on);
-            /* a rotor at rest is passed slowly (it breaks away where the torque is largest): at most a creep
-             * until the observer has seen it move */
-            if (adaptive && !s->if_moved) w = fminf(w, 0.05f * p->omega_on);
+            /* a rotor at rest is passed slowly (it breaks away where the torque is largest): at most a creep */
+            if (adaptive && !moving) w = fminf(w, 0.05f * p->omega_on);
             /* at the top of the band the vector does not outrun the rotor (the observer's speed) */
             if (s->if_trust && s->rho_f >= BC_SINE_RHO_HI) w = fminf(w, fmaxf(dir * o.omega_e, -p->omega_on));
             int at_top = w >= p->omega_on;
@@ -840,11 +822,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                     s->if_t = 0.0f;
                 }
                 s->if_t += p->ts;
-                if (w < 0.0f) s->if_tb += p->ts;
-                /* and against dir for longer in all than the slowest ramp's time: the load drives the rotor back
-                 * (a rotor pushed back ever faster would restart the count above at every new lowest speed) */
-                if (adaptive && (s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min ||
-                                 s->if_tb >= p->omega_on / p->if_accel_min))
+                if (adaptive && s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min)
                     sl_desync(p, s, out, BC_FLAG_START_FAIL);
             }
             if (at_top) {
@@ -855,7 +833,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                     s->mode = BC_SINE_MODE_SINE;
                     s->n_lock = 0.0f;
                     s->sl_t = 0.0f;
-                    s->if_t = s->if_tb = 0.0f; /* a completed ramp: a later hand-back has the whole budget */
+                    s->if_t = 0.0f; /* a completed ramp: a later hand-back has the whole budget */
                     s->w_rev = fabsf(s->omega_f);
                 } else if (s->sl_t >= p->if_hold) {
                     sl_desync(p, s, out, BC_FLAG_START_FAIL);

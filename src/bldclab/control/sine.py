@@ -32,7 +32,6 @@ _ANGLE = {"hall": "BC_SINE_ANGLE_HALL", "pll": "BC_SINE_ANGLE_HALL", "encoder": 
           "observer": "BC_SINE_ANGLE_OBSERVER"}
 _OBSERVER = {"flux": "BC_SINE_OBS_FLUX", "reduced": "BC_SINE_OBS_REDUCED"}
 OBSERVER_ANGLE_ERROR = math.radians(1.0)  # the PLL's lag at the rated acceleration the default bandwidth allows
-IF_TRUST = 0.25  # bc_sine.h BC_SINE_TRUST: the observer's speed (of omega_on) from which the I/f ramp reads its angle
 _LIMIT = {"hexagon": "BC_SINE_LIMIT_HEX", "circle": "BC_SINE_LIMIT_CIRCLE"}
 PAPER1_BANDWIDTH_HZ = 1000.0  # paper 1's current-loop crossover (Hz)
 
@@ -104,11 +103,8 @@ class Sine(Control):
         ``if_accel / 20``: a ramp that takes longer than ``omega_on / if_accel_min`` (from its lowest speed, if it
         followed a rotor pushed back: ``(omega_on - omega_low) / if_accel_min``) ends in ``START_FAIL``. The
         start is designed for a load ``tau_L / tau_if <= 0.95 - 0.35 if_accel_min / if_accel - J if_accel_min /
-        tau_if`` (``tau_if = 1.5 k_1 if_current``; docs/sensorless-sine.md). Below the observer's trusted speed
-        (``IF_TRUST`` of the hand-off speed) the ramp turns at ``if_accel_min`` without reading the observer's
-        angle, so the unloaded start takes ``IF_TRUST omega_on / if_accel_min + (1 - IF_TRUST) omega_on /
-        if_accel`` (``sensorless_settings()["t_ramp_if"]``). ``if_accel_min = if_accel``: the fixed ramp at
-        ``if_accel``, no adaptation.
+        tau_if`` (``tau_if = 1.5 k_1 if_current``; docs/sensorless-sine.md). ``if_accel_min = if_accel``: the
+        fixed ramp at ``if_accel``, no adaptation.
     if_align_current : float, optional
         Current amplitude of the alignment before the ramp (A), default ``0.9 I_s,N`` (at least ``if_current``, at
         most ``i_s_max``); at most the current limit ``i_s_max``. A load that holds the rotor (friction) leaves it
@@ -380,9 +376,7 @@ class Sine(Control):
             ``psi`` (V s, ``k_1 / p``), ``gain`` (``lambda``, rad/s), ``bandwidth`` (rad/s), ``sigma0`` (rad/s),
             ``if_current`` and ``if_align_current`` (A), ``if_accel`` and ``if_accel_min`` (electrical rad/s^2),
             ``if_align`` (s), ``if_damp`` (A/V, the swing damping ``omega_n J / (1.5 p^2 psi_f^2)``), ``lock_time``
-            (s), ``if_hold`` (s) and ``t_ramp_if`` (s, the unloaded ramp's time from the alignment's end to the
-            hand-off speed: ``IF_TRUST omega_on / if_accel_min`` below the observer's trusted speed, then
-            ``(1 - IF_TRUST) omega_on / if_accel``; the creep before the rotor breaks away not counted).
+            (s) and ``if_hold`` (s).
         """
         m = drive.motor
         ts = 0.5 / drive.inverter.f_pwm
@@ -408,9 +402,7 @@ class Sine(Control):
                 "sigma0": min(r_total(drive) / (2.0 * m.L), 0.2 / ts), "if_current": i_if, "if_accel": a_if,
                 "if_accel_min": a_min, "if_align_current": i_al,
                 "if_align": align, "if_damp": damp, "lock_time": lock_time,
-                "if_hold": max(20.0 * lock_time, 10.0 * 2 * math.pi / w_on),
-                "t_ramp_if": (IF_TRUST * w_on / a_min + (1.0 - IF_TRUST) * w_on / a_if) if a_min < a_if
-                else w_on / a_if}
+                "if_hold": max(20.0 * lock_time, 10.0 * 2 * math.pi / w_on)}
 
     def _observer_records(self, drive: Drive, core: Core, i_max: float) -> dict[str, object]:
         """Return the sensorless members of ``bc_sine_params``."""

@@ -218,12 +218,7 @@
  *          vector does not outrun the rotor (dir omega_if <= dir omega^). A rotor the observer sees at rest
  *          (|omega^| < 0.05 omega_on) is evidence of nothing (the observer holds its seed, which a load holding
  *          the rotor leaves off): then a >= if_accel_min and |omega_if| <= 0.05 omega_on (the vector creeps past
- *          the rotor's angle of largest torque, where it breaks away) until the observer first sees it move
- *          (if_moved; the START_FAIL time counts from then). A vector that has turned against dir for
- *          omega_on / if_accel_min in all since the ramp's start (following a rotor the load drives back) also
- *          ends in BC_FLAG_START_FAIL | BC_FLAG_DESYNC (the lowest-speed count alone does not bound a rotor
- *          pushed back ever faster). Below |omega^| = BC_SINE_TRUST omega_on the observer's
- *          angle is not read (its error from an unknown voltage goes as 1 / omega): a = if_accel_min, no braking. The swing about the turning vector is
+ *          the rotor's angle of largest torque, where it breaks away). The swing about the turning vector is
  *          braked through the observer while it sees the rotor move: i_d,ref = if_damp psi_f (omega^ - omega_if)
  *          sin Delta / max(sin^2 Delta, 1/16), within +-min(if_current, sqrt(i_s_max^2 - if_current^2)), a torque
  *          -1.5 k_1 if_damp psi_f (omega^ - omega_if) against the rotor's slip (the current's torque is
@@ -275,9 +270,6 @@
 /* The load-adaptive I/f ramp's band of the torque's share of the I/f torque (section "Sensorless", RAMP). */
 #define BC_SINE_RHO_LO 0.6f
 #define BC_SINE_RHO_HI 0.95f
-/* The observer's speed (a fraction of omega_on) from which the adaptive ramp reads the load from its angle; below
- * it, once the rotor has broken away, the vector turns at if_accel_min (section "Sensorless", RAMP). */
-#define BC_SINE_TRUST 0.25f
 
 #include <stdint.h>
 
@@ -429,8 +421,6 @@ typedef struct {
     float omega_f;     /* the observer's speed low-passed (time constant lock_time), electrical rad/s */
     float if_t;        /* RAMP: time below omega_on, s */
     int32_t if_trust;  /* RAMP: 1 while the observer sees the rotor move (adaptive ramp) */
-    int32_t if_moved;  /* RAMP: 1 once the observer has seen the rotor move since the ramp's start */
-    float if_tb;       /* RAMP: time the vector has turned against dir since the ramp's start, s */
     float rho_f;       /* RAMP: the torque's share of 1.5 k_1 if_current, cos(theta^ - theta_if) */
     float r_obs;       /* the resistance the observer uses, Ohm (if_r_est: measured in the last ALIGN) */
     float r_ui, r_ii;  /* ALIGN: sums of u.i (W) and i.i (A^2) over its last quarter */
