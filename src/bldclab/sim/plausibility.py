@@ -219,11 +219,7 @@ def check_result(drive: Drive, res: SimResult, rows: RowSummary | None = None) -
     out = []
     m = res.metrics
     if m is not None:
-        dt = m.t1 - m.t0
-        tau_rms = math.sqrt(m.tau_std**2 + m.tau_mean**2)
-        flow = {"balance_electrical": max(abs(m.p_src_total), abs(m.p_emf)),  # the scales of Metrics.from_c, in W
-                "balance_mechanical": max(abs(m.p_emf), abs(m.p_fric), abs(m.p_fe), abs(m.p_load),
-                                          abs(m.dW_kin) / dt if dt > 0 else 0.0, tau_rms * abs(m.omega_mean))}
+        flow = dict(zip(("balance_electrical", "balance_mechanical"), m.balance_flows(), strict=True))
         floor = BALANCE_FLOOR * drive.inverter.V_dc * drive.motor.I_N
         for name in ("balance_electrical", "balance_mechanical"):
             r = abs(getattr(m, name))

@@ -23,6 +23,29 @@ __all__ = ["Metrics", "SimResult"]
 _ALIASES = {"flags": "ctrl_flags", "ctrl_flags": "flags"}
 
 
+def balance_scales(src: float, emf: float, fric: float, fe: float, load: float, kin: float,
+                   gross: float) -> tuple[float, float]:
+    """Return the scales the energy-balance residues are divided by, in the unit of the flows given (J or W).
+
+    Parameters
+    ----------
+    src, emf, fric, fe, load : float
+        The DC source's total energy (with the booked switching energies), the back-EMF's, friction's, iron loss's
+        and the load's, over the window (J; or their mean powers, W).
+    kin : float
+        Change of kinetic energy (J; or its rate, W).
+    gross : float
+        The shaft's gross flow, rms torque times the mean speed (times the window's length for J).
+
+    Returns
+    -------
+    tuple of float
+        ``(electrical, mechanical)``: ``max(|src|, |emf|)`` and ``max(|emf|, |fric|, |fe|, |load|, |kin|,
+        gross)`` (:class:`Metrics`, ``balance_electrical`` and ``balance_mechanical``).
+    """
+    return max(abs(src), abs(emf)), max(abs(emf), abs(fric), abs(fe), abs(load), abs(kin), gross)
+
+
 @dataclass(frozen=True)
 class Metrics:
     """What happened over a metric window [t0, t1] of a run (computed in C from integrated power flows).
@@ -154,17 +177,16 @@ class Metrics:
         dW_L = float(m["w_l1"] - m["w_l0"])
         dW_kin = float(m["w_kin1"] - m["w_kin0"])
         E_src_total = E["src"] + E["swloss"] + E["rr"]
-        scale_e = max(abs(E_src_total), abs(E["emf"]), 1e-300)
+        # The shaft's gross energy flow, rms torque times the mean speed over the window: without friction or load
+        # in a steady state every net term is ~0 and would divide a round-off residue into a large ratio.
+        gross = math.sqrt(max(E["tau2"], 0.0) * dt) * abs(omega_integral) / dt
+        scale_e, scale_m = balance_scales(E_src_total, E["emf"], E["fric"], E["fe"], E["load"], dW_kin, gross)
         bal_e = (E_src_total - E["Rsrc"] - E["cu"] - E["sw"] - E["diode"] - E["swloss"] - E["rr"] - E["emf"]
-                 - dW_L) / scale_e
+                 - dW_L) / max(scale_e, 1e-300)
         if imposed:
             bal_m = 0.0
         else:
-            # The shaft's gross energy flow, rms torque times the mean speed over the window: without friction or
-            # load in a steady state every net term is ~0 and would divide a round-off residue into a large ratio.
-            gross = math.sqrt(max(E["tau2"], 0.0) * dt) * abs(omega_integral) / dt
-            scale_m = max(abs(E["emf"]), abs(E["fric"]), abs(E["fe"]), abs(E["load"]), abs(dW_kin), gross, 1e-300)
-            bal_m = (E["emf"] + E["cog"] - E["fric"] - E["fe"] - E["load"] - dW_kin) / scale_m
+            bal_m = (E["emf"] + E["cog"] - E["fric"] - E["fe"] - E["load"] - dW_kin) / max(scale_m, 1e-300)
         tau_mean = E["tau"] / dt
         ma_min, ma_max = float(m["tau_ma_min"]), float(m["tau_ma_max"])
         if int(m["n_ma"]) == 0:
@@ -188,6 +210,17 @@ class Metrics:
             i_rms=(math.sqrt(E["i2a"] / dt), math.sqrt(E["i2b"] / dt), math.sqrt(E["i2c"] / dt)),
             i_peak=(float(m["i_peak"][0]), float(m["i_peak"][1]), float(m["i_peak"][2])),
             efficiency=shaft / p_src_total if p_src_total > 0.0 else math.nan)
+
+    def balance_flows(self) -> tuple[float, float]:
+        """Return the flows the two energy-balance residues are relative to, as mean powers (W).
+
+        See :func:`balance_scales`; ``residue * flow`` is the unbalanced power.
+        """
+        dt = self.t1 - self.t0
+        gross = math.sqrt(self.tau_std**2 + self.tau_mean**2) * abs(self.omega_mean)
+        return balance_scales(self.p_src_total, self.p_emf, self.p_fric, self.p_fe, self.p_load,
+                              self.dW_kin / dt if dt > 0 else 0.0, gross)
+
 
 
 class SimResult:
