@@ -679,8 +679,8 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
     bc_ab i_ab = bc_clarke(i);
     const float u_obs[2] = {s->u_hist[1][0], s->u_hist[1][1]}; /* the voltage over [t_k-1, t_k] */
     const int32_t u_obs_ok = s->u_ok[1];
-    if (s->u_ok[1]) {
-        bc_obs_in oi = {{s->u_hist[1][0], s->u_hist[1][1]}, i_ab};
+    if (u_obs_ok) {
+        bc_obs_in oi = {{u_obs[0], u_obs[1]}, i_ab};
         obs_run(p, s, &oi, &o);
     } else {
         obs_reset(p, s, s->if_theta, 0.0f, i_ab); /* nothing known to integrate: held at the I/f angle */
