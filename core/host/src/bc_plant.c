@@ -1165,8 +1165,9 @@ static void wrap_angle(const bc_plant_params *p, bc_plant_state *s)
     s->work.out_ok = 0; /* the cached circuit quantities were computed at the unwrapped angle */
 }
 
-/* Time to the next angle bound, or HUGE_VAL. *th_ev receives the bound. */
-static double angle_event(const bc_plant_params *p, bc_plant_state *s, double *th_ev)
+/* Time to the next angle bound, or HUGE_VAL. *th_ev receives the bound. A bound the rotor cannot reach within twice
+ * h_lim (the step's length without it) ends no step, so its time is not solved for (HUGE_VAL): the step is the same. */
+static double angle_event(const bc_plant_params *p, bc_plant_state *s, double *th_ev, double h_lim)
 {
     double om = s->omega;
     if (s->stuck || (p->mech == BC_MECH_IMPOSED && om == 0.0)) {
@@ -1191,15 +1192,22 @@ static double angle_event(const bc_plant_params *p, bc_plant_state *s, double *t
         s->work.th_ok = 1;
     }
     *th_ev = target;
-    double delta = (target - s->theta) * (double)s->dir / (double)p->p; /* mechanical angle to go, >= 0 */
+    const double d_e = (target - s->theta) * (double)s->dir; /* electrical angle to go */
+    double w0 = om * (double)s->dir;
+    double acc = p->mech == BC_MECH_IMPOSED ? 0.0 : s->work.k1[Y_OM] * (double)s->dir;
+    /* out of reach: at most p (|w0| t + |acc| t^2 / 2) in t = 2 h_lim (the 1 % covers the rounding of the time the
+     * code below solves for, which then exceeds 2 h_lim > h_lim by far more than a rounding of the clock) */
+    const double hb = 2.0 * h_lim;
+    if (d_e > 1.01 * (double)p->p * (fabs(w0) + 0.5 * fabs(acc) * hb) * hb) {
+        return HUGE_VAL;
+    }
+    double delta = d_e / (double)p->p; /* mechanical angle to go, >= 0 */
     if (!(delta >= 0.0)) {
         return 0.0;
     }
-    double w0 = om * (double)s->dir;
     if (p->mech == BC_MECH_IMPOSED) {
         return w0 > 0.0 ? delta / w0 : HUGE_VAL;
     }
-    double acc = s->work.k1[Y_OM] * (double)s->dir;
     double disc = w0 * w0 + 2.0 * acc * delta;
     if (disc < 0.0) {
         return HUGE_VAL; /* stops before the bound: the speed zero crossing comes first */
@@ -2173,6 +2181,11 @@ static BC_ALWAYS_INLINE void hermite_extremes(double h, double f0, double f1, do
 {
     double m0 = h * d0, m1 = h * d1, D = f1 - f0;
     double c2 = 3.0 * D - 2.0 * m0 - m1, c3 = m0 + m1 - 2.0 * D;
+    /* q'(u) in Bernstein form on [0, 1] has the coefficients m0, m0 + c2, m1: all three of one sign, with a margin far
+     * above the rounding of the roots below, leave no turning point inside (a torque monotonic over the step, the
+     * common case) and nothing to solve for */
+    const double mu = 1e-6 * (fabs(m0) + fabs(m1) + fabs(D)), b1 = m0 + c2;
+    if ((m0 > mu && m1 > mu && b1 > mu) || (m0 < -mu && m1 < -mu && b1 < -mu)) return;
     /* q'(u) = m0 + 2 c2 u + 3 c3 u^2 */
     double a = 3.0 * c3, b = 2.0 * c2, c = m0;
     double u[2];
@@ -2268,7 +2281,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
         if (tf < t_stop) t_stop = tf;
         if (s->t + hmax < t_stop) t_stop = s->t + hmax;
         double th_ev = 0.0;
-        double ha = angle_event(p, s, &th_ev);
+        double ha = angle_event(p, s, &th_ev, t_stop - s->t);
         int angle_step = 0;
         if (s->t + ha < t_stop) {
             t_stop = s->t + ha;

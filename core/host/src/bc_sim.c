@@ -172,10 +172,18 @@ static BC_ALWAYS_INLINE double hist_interp(const bc_sim_state *s, int64_t a, dou
     return s->h_a[ja] + u * (m0 + u * (3.0 * D - 2.0 * m0 - m1 + u * (m0 + m1 - 2.0 * D)));
 }
 
-static void ma_fold(bc_sim_state *s, double ma)
+/* Fold MA = num / T into the extremes. Division by T > 0 is monotonic (correctly rounded), so the extreme of the
+ * quotients is the quotient of the extreme numerator: the division is made only where an extreme moves. */
+static void ma_fold(bc_sim_state *s, double num, double T)
 {
-    if (ma < s->m.tau_ma_min) s->m.tau_ma_min = ma;
-    if (ma > s->m.tau_ma_max) s->m.tau_ma_max = ma;
+    if (num < s->ma_num_min) {
+        s->ma_num_min = num;
+        s->m.tau_ma_min = num / T;
+    }
+    if (num > s->ma_num_max) {
+        s->ma_num_max = num;
+        s->m.tau_ma_max = num / T;
+    }
     s->m.n_ma += 1;
 }
 
@@ -234,14 +242,14 @@ static void sim_on_step(void *ctx, double t, const double *acc, double tau)
         const int j = (int)((lag + 1) & (BC_SIM_HIST - 1));
         const double ts = s->h_t[j] + T;
         if (ts > t) break;
-        if (in && ts > t_prev && s->h_t[j] >= t0e) ma_fold(s, (hist_interp(s, prev, ts) - s->h_a[j]) / T);
+        if (in && ts > t_prev && s->h_t[j] >= t0e) ma_fold(s, hist_interp(s, prev, ts) - s->h_a[j], T);
         lag += 1;
     }
     s->h_lag = lag;
     /* the new node: A(t - T) from the history segment holding t - T */
     const double tq = t - T;
     if (in && tq >= t0e && s->h_t[(int)(lag & (BC_SIM_HIST - 1))] <= tq + eps) {
-        ma_fold(s, (A - hist_interp(s, lag, tq)) / T);
+        ma_fold(s, A - hist_interp(s, lag, tq), T);
     }
 }
 
@@ -281,6 +289,8 @@ static void metric_start(const bc_sim_config *cfg, bc_sim_state *s, int trace)
     s->m.tau_max = tau;
     s->m.tau_ma_min = HUGE_VAL;
     s->m.tau_ma_max = -HUGE_VAL;
+    s->ma_num_min = HUGE_VAL;
+    s->ma_num_max = -HUGE_VAL;
     s->m.tau_ma_grid_min = HUGE_VAL;
     s->m.tau_ma_grid_max = -HUGE_VAL;
     s->m.tau_s_min = HUGE_VAL;
