@@ -63,13 +63,15 @@ static BC_NOINLINE void cos_sin_libm(double th, double *c, double *sn)
     *sn = sin(th);
 }
 
-static BC_ALWAYS_INLINE int cos_sin(double th, const double *ref, double *c, double *sn)
+static BC_ALWAYS_INLINE int cos_sin(double th, const double *ref, double *c, double *sn, double lim)
 {
     double d = ref ? th - ref[0] : 1.0;
-    if (fabs(d) < 0.03) {
-        double d2 = d * d;
-        double cd = 1.0 - 0.5 * d2 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0));
-        double sd = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0)));
+    if (fabs(d) < lim) {
+        /* the series in Horner form with constant coefficients: multiplications only (a division by 12.0 is not
+         * one by its reciprocal, so the compiler keeps it: five dependent divisions a call cost latency) */
+        const double d2 = d * d;
+        const double cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0)));
+        const double sd = d * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))));
         *c = ref[1] * cd - ref[2] * sd;
         *sn = ref[2] * cd + ref[1] * sd;
         return 1;
@@ -104,6 +106,9 @@ static BC_ALWAYS_INLINE void shapes_at(const bc_plant_params *restrict p, const 
         cs[1] = cs[2] = 0.0;
     }
     const double ks = s->k_scale; /* the magnets' flux at temperature (bc_plant_set_thermal) */
+    /* an evaluation that hands its anchor on (cs: the step ends) takes a new one from libm half-way through the
+     * rotation's range, so that the RK4 stages of the next step, which cannot, stay inside it */
+    const double lim = cs ? 0.015 : 0.03;
     if (s->emf_tables) { /* the usual case (tables and trapezoids): one multiply-add per phase */
         for (int x = 0; x < 3; ++x) {
             const bc_emf_piece *pc = &s->piece[x];
@@ -114,7 +119,7 @@ static BC_ALWAYS_INLINE void shapes_at(const bc_plant_params *restrict p, const 
     }
     if (s->fz_n > 0) { /* three Fourier series in the global angle: one recurrence cos(m th), sin(m th) for all */
         double c, sn;
-        const int rot = cos_sin(th, ref, &c, &sn);
+        const int rot = cos_sin(th, ref, &c, &sn, lim);
         if (cs) cs_anchor(cs, rot, ref, th, c, sn);
         /* m = 0 (cos 0 = 1, sin 0 = 0, no derivative) and m = 1 (cos th, sin th) as the loop would add them */
         double k0 = s->fz_a[0][0], k1 = s->fz_a[1][0], k2 = s->fz_a[2][0], d0 = 0.0, d1 = 0.0, d2 = 0.0;
@@ -155,7 +160,7 @@ static BC_ALWAYS_INLINE void shapes_at(const bc_plant_params *restrict p, const 
             continue;
         }
         if (!trig) {
-            const int rot = cos_sin(th, ref, &c, &sn);
+            const int rot = cos_sin(th, ref, &c, &sn, lim);
             trig = 1;
             if (cs) cs_anchor(cs, rot, ref, th, c, sn);
         }
@@ -257,7 +262,7 @@ static BC_ALWAYS_INLINE void core_at(const bc_plant_params *restrict p, const bc
         }
     }
     dy[Y_TH] = (double)p->p * om;
-    dy[Y_OM] = (p->mech == BC_MECH_DYNAMIC && !s->stuck) ? (tau_net - t_fric - t_fe) / p->J : 0.0;
+    dy[Y_OM] = (p->mech == BC_MECH_DYNAMIC && !s->stuck) ? (tau_net - t_fric - t_fe) * s->work.inv_J : 0.0;
     if (!a) return;
     a->k[0] = k[0];
     a->k[1] = k[1];
@@ -868,7 +873,7 @@ static BC_ALWAYS_INLINE void stage_at(const bc_plant_params *restrict p, const b
     const double tau_net = tau - s->tau_load - t_prop;
     const double t_fric = c->fric ? p->B * om + p->tau_c * c->sgn : 0.0;
     dy[Y_TH] = (double)p->p * om;
-    dy[Y_OM] = c->dyn ? (tau_net - t_fric - t_fe) / p->J : 0.0;
+    dy[Y_OM] = c->dyn ? (tau_net - t_fric - t_fe) * s->work.inv_J : 0.0;
 }
 
 static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
@@ -1858,6 +1863,8 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     s->fe_tc = (double)p->p * p->k_fe_h;
     s->drag_on = p->B > 0.0 || p->tau_c > 0.0 || s->fe_on;
     s->prop_on = p->k_q > 0.0 && p->mech == BC_MECH_DYNAMIC;
+    /* the rotor equation multiplies by 1/J: a division in every derivative evaluation would cost its latency */
+    s->work.inv_J = p->mech == BC_MECH_DYNAMIC ? 1.0 / p->J : 0.0;
     /* the optional lanes integrate when a rate can be nonzero: iron loss, or switching losses on averaged legs
      * (the switching inverter books them at its gate edges) */
     lanes_select(p, s, BC_ACC_ALL);
