@@ -94,26 +94,68 @@ static BC_ALWAYS_INLINE void cs_anchor(double *cs, int rotated, const double *re
     }
 }
 
+/* Sinusoidal shapes (one Fourier order, fz_n = 2) near an anchor {th_a, c_a, s_a}: k_x(th_a + d) = ks (a_x0 +
+ * a_x1 cos(th_a + d) + b_x1 sin(th_a + d)) = al_x + be_x cos d + ga_x sin d, dk_x/dth = ga_x cos d - be_x sin d: the
+ * rotation from the anchor folded into the coefficients, once a step for its four derivative evaluations. */
+typedef struct sin_fold {
+    int on;                      /* 1: set (an anchor and one order) */
+    double th_a, c_a, s_a;       /* the anchor */
+    double al[3], be[3], ga[3];  /* V s/rad */
+} sin_fold;
+
+static BC_ALWAYS_INLINE void sin_fold_init(const bc_plant_state *s, sin_fold *f)
+{
+    const double *cs = s->work.cs;
+    f->on = s->fz_n == 2 && cs[0] != HUGE_VAL;
+    if (!f->on) return;
+    const double ks = s->k_scale;
+    f->th_a = cs[0];
+    f->c_a = cs[1];
+    f->s_a = cs[2];
+    for (int x = 0; x < 3; ++x) {
+        const double a1 = s->fz_a[x][1], b1 = s->fz_b[x][1];
+        f->al[x] = ks * s->fz_a[x][0];
+        f->be[x] = ks * (a1 * cs[1] + b1 * cs[2]);
+        f->ga[x] = ks * (b1 * cs[1] - a1 * cs[2]);
+    }
+}
+
 /* k_x(th) of the three phases and, if dk is non-null, dk_x/dth (tables: the piece's slope; Fourier: the series
  * differentiated term by term, sum_m m (y_m cos - x_m sin)). A Fourier shape needs cos and sin of th: from ref
  * (cos_sin) and, if cs is non-null, its anchor returned there: {th_a, cos th_a, sin th_a} of the libm angle it was
  * rotated from, or of th itself (cs[0] = HUGE_VAL if none was needed). */
 static BC_ALWAYS_INLINE void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s, double th,
-                             double *restrict k, double *restrict dk, const double *ref, double *cs)
+                             double *restrict k, double *restrict dk, const double *ref, double *cs,
+                             const sin_fold *fo)
 {
     if (cs) { /* none (table shapes); the zeros keep the aux fully defined */
         cs[0] = HUGE_VAL;
         cs[1] = cs[2] = 0.0;
     }
     const double ks = s->k_scale; /* the magnets' flux at temperature (bc_plant_set_thermal) */
-    /* an evaluation that hands its anchor on (cs: the step ends) takes a new one from libm half-way through the
-     * rotation's range, so that the RK4 stages of the next step, which cannot, stay inside it */
-    const double lim = cs ? 0.015 : 0.03;
     if (s->emf_tables) { /* the usual case (tables and trapezoids): one multiply-add per phase */
         for (int x = 0; x < 3; ++x) {
             const bc_emf_piece *pc = &s->piece[x];
             k[x] = ks * (pc->k0 + pc->slope * (th - pc->lo));
             if (dk) dk[x] = ks * pc->slope;
+        }
+        return;
+    }
+    /* an evaluation that hands its anchor on (cs: the step ends) takes a new one from libm half-way through the
+     * rotation's range, so that the RK4 stages of the next step, which cannot, stay inside it */
+    const double lim = cs ? 0.015 : 0.03;
+    if (fo && fo->on && fabs(th - fo->th_a) < lim) { /* a sinusoid near the step's anchor (sin_fold) */
+        const double d = th - fo->th_a, d2 = d * d;
+        const double cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0)));
+        const double sd = d * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))));
+        for (int x = 0; x < 3; ++x) k[x] = fo->al[x] + (fo->be[x] * cd + fo->ga[x] * sd);
+        if (dk) {
+            for (int x = 0; x < 3; ++x) dk[x] = fo->ga[x] * cd - fo->be[x] * sd;
+        }
+        if (cs) {
+            cs[0] = fo->th_a;
+            cs[1] = fo->c_a;
+            cs[2] = fo->s_a;
         }
         return;
     }
@@ -212,12 +254,12 @@ static BC_ALWAYS_INLINE void aux_terminals(const bc_plant_params *restrict p, co
 
 static BC_ALWAYS_INLINE void core_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s,
                                      const double *restrict y, double *restrict dy, aux_t *restrict a, int want,
-                                     const double *ref)
+                                     const double *ref, const sin_fold *fo)
 {
     const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
     const double th = y[Y_TH], om = y[Y_OM];
     double k[3], dk[3], cs[3];
-    shapes_at(p, s, th, k, (want & WANT_DK) ? dk : 0, ref, a ? cs : 0);
+    shapes_at(p, s, th, k, (want & WANT_DK) ? dk : 0, ref, a ? cs : 0, fo);
     const double e0 = om * k[0], e1 = om * k[1], e2 = om * k[2];
     if (s->tc_gain != 0.0) {
         const double *B = s->tc_b;
@@ -349,7 +391,7 @@ static BC_ALWAYS_INLINE void aux_terminals(const bc_plant_params *restrict p, co
 static void core(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
                  double *restrict dy, aux_t *restrict a, int want, const double *ref)
 {
-    core_at(p, s, y, dy, a, want, ref);
+    core_at(p, s, y, dy, a, want, ref, 0);
 }
 
 /* d tau_cog/dt = omega_m sum_j amp_j order_j cos(order_j theta_m + phase_j). */
@@ -832,6 +874,7 @@ typedef struct {
     double sgn;    /* the Coulomb-like drags' sign */
     int fric;      /* friction acts */
     int dyn;       /* the speed is a state */
+    const struct sin_fold *fo; /* the step's sinusoid folded with its anchor, or 0 */
 } stage_c;
 
 /* Fourier shapes on the usual plant (no ideal limiter, cogging, fan load or iron loss; a conducting circuit; the
@@ -861,7 +904,7 @@ static BC_ALWAYS_INLINE void stage_at(const bc_plant_params *restrict p, const b
     const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
     const double th = y[Y_TH], om = y[Y_OM];
     double k[3];
-    shapes_at(p, s, th, k, 0, ref, 0);
+    shapes_at(p, s, th, k, 0, ref, 0, c->fo);
     const double e0 = om * k[0], e1 = om * k[1], e2 = om * k[2];
     const double *B = s->tc_b;
     const double eb = s->tc_cn[0] * e0 + s->tc_cn[1] * e1 + s->tc_cn[2] * e2;
@@ -877,12 +920,18 @@ static BC_ALWAYS_INLINE void stage_at(const bc_plant_params *restrict p, const b
 }
 
 static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
-                double *y1)
+                double *y1, const sin_fold *fo)
 {
     double k2[NY], k3[NY], k4[NY], yt[NY];
+    sin_fold own;
+    if (!fo) { /* the caller has none: the same from the same anchor */
+        sin_fold_init(s, &own);
+        fo = &own;
+    }
     if (stage_ok(p, s)) {
         stage_c c;
         stage_init(p, s, &c);
+        c.fo = fo;
         for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
         stage_at(p, s, &c, yt, k2, s->work.cs);
         for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
@@ -891,11 +940,11 @@ static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double 
         stage_at(p, s, &c, yt, k4, s->work.cs);
     } else {
         for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
-        core_at(p, s, yt, k2, 0, 0, s->work.cs);
+        core_at(p, s, yt, k2, 0, 0, s->work.cs, fo);
         for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
-        core_at(p, s, yt, k3, 0, 0, s->work.cs);
+        core_at(p, s, yt, k3, 0, 0, s->work.cs, fo);
         for (int j = 0; j < NY; ++j) yt[j] = y0[j] + h * k3[j];
-        core_at(p, s, yt, k4, 0, 0, s->work.cs);
+        core_at(p, s, yt, k4, 0, 0, s->work.cs, fo);
     }
     for (int j = 0; j < NY; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
     if (p->mech == BC_MECH_IMPOSED) {
@@ -938,12 +987,12 @@ static BC_ALWAYS_INLINE void taylor4(const bc_plant_params *p, const bc_plant_st
 
 /* One step of the five states: taylor4 where the circuit is linear (identical to RK4 there), else rk4. */
 static BC_ALWAYS_INLINE void state_step(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
-                       double *y1)
+                       double *y1, const sin_fold *fo)
 {
     if (linear_step_ok(p, s)) {
         taylor4(p, s, y0, k1, h, y1);
     } else {
-        rk4(p, s, y0, k1, h, y1);
+        rk4(p, s, y0, k1, h, y1, fo);
     }
 }
 
@@ -1624,7 +1673,7 @@ static double watch_at(const bc_plant_params *p, const bc_plant_state *s, const 
                        double c, int w, int dir_om, root_pt *rp)
 {
     double g[NW];
-    state_step(p, s, y0, k1, c, rp->y);
+    state_step(p, s, y0, k1, c, rp->y, 0);
     core(p, s, rp->y, rp->dy, &rp->a, s->lanes_on ? WANT_DK : 0, s->work.cs);
     rp->h = c;
     (void)watch_eval(p, s, rp->y, &rp->a, dir_om, g);
@@ -2310,8 +2359,10 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                 continue;
             }
         }
-        state_step(p, s, y0, s->work.k1, h, y1);
-        core_at(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, s->work.cs);
+        sin_fold fold; /* the step's sinusoid and anchor: its RK4 stages and its end */
+        sin_fold_init(s, &fold);
+        state_step(p, s, y0, s->work.k1, h, y1, &fold);
+        core_at(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, s->work.cs, &fold);
         /* watched functions: the first that goes negative inside the step is an event */
         int dir_om = s->work.wdir;
         const uint32_t neg = watch_eval(p, s, y1, a1, dir_om, g1);
@@ -2346,7 +2397,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                 memcpy(k1n, rbest.dy, sizeof k1n);
                 *a1 = rbest.a;
             } else if (h_hit < h) {
-                state_step(p, s, y0, s->work.k1, h_hit, y1);
+                state_step(p, s, y0, s->work.k1, h_hit, y1, &fold);
                 core(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, 0);
             }
             unpack(s, y1);
