@@ -63,15 +63,23 @@ static BC_NOINLINE void cos_sin_libm(double th, double *c, double *sn)
     *sn = sin(th);
 }
 
+/* cos d and sin d for |d| < 0.03 by their Taylor series to d^6 and d^7 (truncation below 2e-17), with constant
+ * coefficients and split in two halves (d^4 times the higher terms): multiplications only, and a shorter chain of
+ * dependent operations than the nested form (the derivative's evaluations wait on it). A division by 12.0 is not
+ * one by its reciprocal, so the compiler keeps it: the nested form with divisions cost five a call. */
+static BC_ALWAYS_INLINE void cs_series(double d, double *cd, double *sd)
+{
+    const double d2 = d * d, d4 = d2 * d2;
+    *cd = (1.0 - 0.5 * d2) + d4 * (1.0 / 24.0 - d2 * (1.0 / 720.0));
+    *sd = d * ((1.0 - d2 * (1.0 / 6.0)) + d4 * (1.0 / 120.0 - d2 * (1.0 / 5040.0)));
+}
+
 static BC_ALWAYS_INLINE int cos_sin(double th, const double *ref, double *c, double *sn, double lim)
 {
     double d = ref ? th - ref[0] : 1.0;
     if (fabs(d) < lim) {
-        /* the series in Horner form with constant coefficients: multiplications only (a division by 12.0 is not
-         * one by its reciprocal, so the compiler keeps it: five dependent divisions a call cost latency) */
-        const double d2 = d * d;
-        const double cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0)));
-        const double sd = d * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))));
+        double cd, sd;
+        cs_series(d, &cd, &sd);
         *c = ref[1] * cd - ref[2] * sd;
         *sn = ref[2] * cd + ref[1] * sd;
         return 1;
@@ -145,9 +153,8 @@ static BC_ALWAYS_INLINE void shapes_at(const bc_plant_params *restrict p, const 
      * rotation's range, so that the RK4 stages of the next step, which cannot, stay inside it */
     const double lim = cs ? 0.015 : 0.03;
     if (fo && fo->on && fabs(th - fo->th_a) < lim) { /* a sinusoid near the step's anchor (sin_fold) */
-        const double d = th - fo->th_a, d2 = d * d;
-        const double cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0)));
-        const double sd = d * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0))));
+        double cd, sd;
+        cs_series(th - fo->th_a, &cd, &sd);
         for (int x = 0; x < 3; ++x) k[x] = fo->al[x] + (fo->be[x] * cd + fo->ga[x] * sd);
         if (dk) {
             for (int x = 0; x < 3; ++x) dk[x] = fo->ga[x] * cd - fo->be[x] * sd;
@@ -895,8 +902,8 @@ static BC_ALWAYS_INLINE void stage_init(const bc_plant_params *p, const bc_plant
     c->dyn = p->mech == BC_MECH_DYNAMIC && !s->stuck;
 }
 
-/* core_at(p, s, y, dy, 0, 0, ref) where stage_ok: the same expressions in the same order (bit for bit), with the
- * terms that are zero there kept as the zeros core_at adds. */
+/* core_at(p, s, y, dy, 0, 0, ref, fo) where stage_ok, without the terms that are zero there: the currents' rates by the
+ * same expressions, the speed's to rounding (the load and drags summed apart from the torque). */
 static BC_ALWAYS_INLINE void stage_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s,
                                       const stage_c *restrict c, const double *restrict y, double *restrict dy,
                                       const double *ref)
@@ -911,12 +918,11 @@ static BC_ALWAYS_INLINE void stage_at(const bc_plant_params *restrict p, const b
     dy[Y_I] = c->src[0] - (B[0] * i0 + B[1] * i1 + B[2] * i2) - s->tc_pc[0] * (e0 - eb);
     dy[Y_I + 1] = c->src[1] - (B[3] * i0 + B[4] * i1 + B[5] * i2) - s->tc_pc[1] * (e1 - eb);
     dy[Y_I + 2] = c->src[2] - (B[6] * i0 + B[7] * i1 + B[8] * i2) - s->tc_pc[2] * (e2 - eb);
-    const double tau_cog = 0.0, t_prop = 0.0, t_fe = 0.0;
-    const double tau = k[0] * i0 + k[1] * i1 + k[2] * i2 + tau_cog;
-    const double tau_net = tau - s->tau_load - t_prop;
+    /* the rotor: the load and the drags (independent of tau) are added first, off tau's chain of operations */
+    const double tau = k[0] * i0 + k[1] * i1 + k[2] * i2;
     const double t_fric = c->fric ? p->B * om + p->tau_c * c->sgn : 0.0;
     dy[Y_TH] = (double)p->p * om;
-    dy[Y_OM] = c->dyn ? (tau_net - t_fric - t_fe) * s->work.inv_J : 0.0;
+    dy[Y_OM] = c->dyn ? (tau - (s->tau_load + t_fric)) * s->work.inv_J : 0.0;
 }
 
 static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
