@@ -925,6 +925,19 @@ static BC_ALWAYS_INLINE void stage_at(const bc_plant_params *restrict p, const b
     dy[Y_OM] = c->dyn ? (tau - (s->tau_load + t_fric)) * s->work.inv_J : 0.0;
 }
 
+typedef char bc_ny_is_5[NY == 5 ? 1 : -1]; /* axpy5 */
+
+/* yt = y0 + a k over the five states, written out: the loop vectoriser would pack pairs of the stages' k, which are
+ * stored one by one, and the packed loads wait for the stores (a failed store-to-load forwarding, measured) */
+static BC_ALWAYS_INLINE void axpy5(double *restrict yt, const double *restrict y0, double a, const double *restrict k)
+{
+    yt[0] = y0[0] + a * k[0];
+    yt[1] = y0[1] + a * k[1];
+    yt[2] = y0[2] + a * k[2];
+    yt[3] = y0[3] + a * k[3];
+    yt[4] = y0[4] + a * k[4];
+}
+
 static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
                 double *y1, const sin_fold *fo)
 {
@@ -938,21 +951,28 @@ static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double 
         stage_c c;
         stage_init(p, s, &c);
         c.fo = fo;
-        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
+        axpy5(yt, y0, 0.5 * h, k1);
         stage_at(p, s, &c, yt, k2, s->work.cs);
-        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
+        axpy5(yt, y0, 0.5 * h, k2);
         stage_at(p, s, &c, yt, k3, s->work.cs);
-        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + h * k3[j];
+        axpy5(yt, y0, h, k3);
         stage_at(p, s, &c, yt, k4, s->work.cs);
     } else {
-        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
+        axpy5(yt, y0, 0.5 * h, k1);
         core_at(p, s, yt, k2, 0, 0, s->work.cs, fo);
-        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
+        axpy5(yt, y0, 0.5 * h, k2);
         core_at(p, s, yt, k3, 0, 0, s->work.cs, fo);
-        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + h * k3[j];
+        axpy5(yt, y0, h, k3);
         core_at(p, s, yt, k4, 0, 0, s->work.cs, fo);
     }
-    for (int j = 0; j < NY; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
+    const double h6 = h / 6.0;
+#define BC_RK4_SUM(j) y1[j] = y0[j] + h6 * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j])
+    BC_RK4_SUM(0);
+    BC_RK4_SUM(1);
+    BC_RK4_SUM(2);
+    BC_RK4_SUM(3);
+    BC_RK4_SUM(4);
+#undef BC_RK4_SUM
     if (p->mech == BC_MECH_IMPOSED) {
         y1[Y_OM] = y0[Y_OM]; /* exactly constant */
     }
