@@ -423,8 +423,9 @@ static BC_ALWAYS_INLINE void lanes_at(const bc_plant_params *restrict p, const b
                             const double *restrict y, const double *restrict dy, const aux_t *restrict a,
                             double *restrict f, double *restrict fd, const int edge)
 {
-    const double i[3] = {y[Y_I], y[Y_I + 1], y[Y_I + 2]};
-    const double di[3] = {dy[Y_I], dy[Y_I + 1], dy[Y_I + 2]};
+    /* the currents and their rates read in place: copies into local arrays, stored one by one and then loaded in
+     * pairs by the vectorised loops below, would wait for the stores (failed store-to-load forwarding) */
+    const double *i = y + Y_I, *di = dy + Y_I;
     const double om = y[Y_OM], dom = dy[Y_OM], dth = dy[Y_TH];
     const double R = s->r_ph, R_src = p->R_src;
     const uint32_t on = s->acc_mask;
