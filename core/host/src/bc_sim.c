@@ -355,6 +355,9 @@ static void flags_count(bc_sim_state *s, uint32_t flags, double t, int in_window
 
 /* ---- the loop ------------------------------------------------------------------------------------------ */
 
+static const bc_ctrl_in ZERO_IN;   /* all zero: what the measurements and the controller's output start from */
+static const bc_ctrl_out ZERO_OUT;
+
 int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *in, int64_t n, bc_trace_row *rows,
                int64_t rows_cap, int64_t *rows_written)
 {
@@ -386,7 +389,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         /* 2. measure, control */
         /* the measurements and the output are made in place: last_in, last (no copies per sample) */
         bc_ctrl_in *ci = &s->last_in;
-        memset(ci, 0, sizeof *ci);
+        *ci = ZERO_IN; /* a copy, not memset: gcc's `rep stos` for that cannot forward to the loads that follow */
         bc_sensor_measure(cfg->sensors, &s->sensors, ps, bc_plant_vbus(pp, ps), ci);
         if (sense_on(cfg)) bc_sense_fill(cfg->sense, &s->sense, t_k, ci);
         ci->ref = (float)input_at(in->ref, in->ref_c, j);
@@ -394,7 +397,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         ci->temp[0] = s->temp[0];
         ci->temp[1] = s->temp[1];
         bc_ctrl_out *co = &s->last;
-        memset(co, 0, sizeof *co);
+        *co = ZERO_OUT;
         cfg->ctrl.step(cfg->ctrl.params, cfg->ctrl.state, ci, co);
         s->flags_seen |= co->flags;
         flags_count(s, co->flags, t_k, has_window && t_k >= cfg->metric_t0 && t_k < cfg->metric_t1);
