@@ -111,8 +111,17 @@ static void row_open(const bc_sim_config *cfg, bc_sim_state *s)
 
 static void row_close(bc_sim_state *s, bc_trace_row *rows, int64_t cap, int64_t *nw, int *overflow)
 {
+    s->row_open = 0;
+    if (rows == 0) return;
+    if (*nw >= cap) {
+        *overflow = 1;
+        return;
+    }
+    /* the fields set at the row's start are copied, stored long ago; the means are written in place (copying them
+     * just after storing them would wait for the stores: gcc copies the record with `rep movs`) */
+    bc_trace_row *r = &rows[*nw];
+    *r = s->row;
     const bc_plant_state *ps = &s->plant;
-    bc_trace_row *r = &s->row;
     double dt = ps->t - r->t;
     const double *a0 = s->row_acc0, *a1 = ps->acc;
     double inv = dt > 0.0 ? 1.0 / dt : 0.0;
@@ -131,21 +140,15 @@ static void row_close(bc_sim_state *s, bc_trace_row *rows, int64_t cap, int64_t 
     r->v_c = (a1[BC_ACC_VC] - a0[BC_ACC_VC]) * inv;
     r->v_n = (a1[BC_ACC_VN] - a0[BC_ACC_VN]) * inv;
     r->i_dc = (a1[BC_ACC_IDC] - a0[BC_ACC_IDC]) * inv;
-    if (rows != 0 && *nw < cap) {
-        rows[*nw] = *r;
-        *nw += 1;
-        /* the result checks' summary of the rows (bldclab.sim.plausibility), gathered here instead of by strided
-         * passes over the record array */
-        const double pk[4] = {fabs(r->i_a), fabs(r->i_b), fabs(r->i_c), fabs(r->omega_m)};
-        for (int j = 0; j < 4; ++j) {
-            if (pk[j] > s->row_peak[j]) s->row_peak[j] = pk[j];
-        }
-        if (!(isfinite(r->i_a) && isfinite(r->i_b) && isfinite(r->i_c) && isfinite(r->tau_e) && isfinite(r->omega_m)))
-            s->row_nonfinite = 1;
-    } else if (rows != 0) {
-        *overflow = 1;
+    *nw += 1;
+    /* the result checks' summary of the rows (bldclab.sim.plausibility), gathered here instead of by strided passes
+     * over the record array */
+    const double pk[4] = {fabs(r->i_a), fabs(r->i_b), fabs(r->i_c), fabs(r->omega_m)};
+    for (int j = 0; j < 4; ++j) {
+        if (pk[j] > s->row_peak[j]) s->row_peak[j] = pk[j];
     }
-    s->row_open = 0;
+    if (!(isfinite(r->i_a) && isfinite(r->i_b) && isfinite(r->i_c) && isfinite(r->tau_e) && isfinite(r->omega_m)))
+        s->row_nonfinite = 1;
 }
 
 /* ---- continuous moving average ------------------------------------------------------------------------- */
