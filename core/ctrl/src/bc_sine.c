@@ -362,7 +362,7 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->if_trust = 0;
     s->r_obs = p->observer == BC_SINE_OBS_REDUCED ? p->robs.R : p->fobs.R;
     s->r_ui = s->r_ii = 0.0f;
-    s->n_catch = s->w_rev = s->if_wmin = 0.0f;
+    s->n_catch = s->w_rev = s->if_wmin = s->if_tb = s->if_tr = 0.0f;
     s->caught = 0;
     s->derate_on = p->derate.enabled[0] != 0 || p->derate.enabled[1] != 0;
     s->derate_f = 1.0f;
@@ -782,7 +782,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 s->sl_phase = BC_SINE_SL_RAMP;
                 s->sl_t = 0.0f;
                 s->rho_f = 0.0f;
-                s->if_t = 0.0f;
+                s->if_t = s->if_tb = s->if_tr = 0.0f;
                 s->if_wmin = 0.0f;
                 s->if_trust = 0;
             }
@@ -822,7 +822,13 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                     s->if_t = 0.0f;
                 }
                 s->if_t += p->ts;
-                if (adaptive && s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min)
+                s->if_tr += p->ts;
+                if (w < 0.0f) s->if_tb += p->ts;
+                /* and, whatever the lowest speed, against dir for the slowest ramp's time in all, or below
+                 * omega_on for twice it (the slowest ramp from -omega_on): every ramp ends within a bound */
+                float t_min = p->omega_on / p->if_accel_min;
+                if (adaptive && (s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min || s->if_tb >= t_min ||
+                                 s->if_tr >= 2.0f * t_min))
                     sl_desync(p, s, out, BC_FLAG_START_FAIL);
             }
             if (at_top) {
@@ -833,7 +839,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                     s->mode = BC_SINE_MODE_SINE;
                     s->n_lock = 0.0f;
                     s->sl_t = 0.0f;
-                    s->if_t = 0.0f; /* a completed ramp: a later hand-back has the whole budget */
+                    s->if_t = s->if_tb = s->if_tr = 0.0f; /* a completed ramp: a later hand-back has the whole budget */
                     s->w_rev = fabsf(s->omega_f);
                 } else if (s->sl_t >= p->if_hold) {
                     sl_desync(p, s, out, BC_FLAG_START_FAIL);

@@ -224,8 +224,14 @@
  *          -1.5 k_1 if_damp psi_f (omega^ - omega_if) against the rotor's slip (the current's torque is
  *          1.5 k_1 (i_q cos Delta - i_d sin Delta)). Below omega_on for longer than (omega_on - omega_low) /
  *          if_accel_min (the slowest ramp's time from the vector's lowest speed dir omega_low, <= 0, reached
- *          since the ramp's start): BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT. With if_accel_min = if_accel: the
- *          fixed ramp at if_accel, none of this.
+ *          since the ramp's start): BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT. The same end, whatever the
+ *          lowest speed, once the vector has turned against dir for omega_on / if_accel_min in all, or has been
+ *          below omega_on for 2 omega_on / if_accel_min in all (the slowest ramp from -omega_on), since the
+ *          ramp's start (a hand-back's ramp counts on; a completed ramp resets both): every ramp ends within
+ *          2 omega_on / if_accel_min, every start attempt within if_align + 2 omega_on / if_accel_min + if_hold
+ *          (a rotor pushed back ever faster, or a vector that follows an observer misled by a wrong R, would
+ *          otherwise restart the lowest-speed count). With if_accel_min = if_accel: the fixed ramp at if_accel,
+ *          none of this.
  *          At omega_on the lock is checked every sample: |flux / psi_f - 1| <= lock_tol (the observer's flux
  *          output, bc_obs.h), |err| <= lock_tol (its tracking loop's error: rad, or the sine of the angle error)
  *          and dir omega_f >= omega_off (omega_f: omega^ through a low-pass of time constant lock_time). The
@@ -420,6 +426,8 @@ typedef struct {
     float n_lock;      /* time the lock criterion has held (start) or failed (sine), s */
     float omega_f;     /* the observer's speed low-passed (time constant lock_time), electrical rad/s */
     float if_t;        /* RAMP: time below omega_on, s */
+    float if_tb;       /* RAMP: time the vector has turned against dir since the ramp's start, s */
+    float if_tr;       /* RAMP: time below omega_on since the ramp's start, s */
     int32_t if_trust;  /* RAMP: 1 while the observer sees the rotor move (adaptive ramp) */
     float rho_f;       /* RAMP: the torque's share of 1.5 k_1 if_current, cos(theta^ - theta_if) */
     float r_obs;       /* the resistance the observer uses, Ohm (if_r_est: measured in the last ALIGN) */
