@@ -547,6 +547,9 @@ static void test_fuzz_observer(void)
     observer_params(&p, BC_SINE_OBS_FLUX);
     p.if_r_est = 2;
     CHECK(bc_sine_init(&p, &s) == BC_ERR_PARAM, "if_r_est = 2 rejected");
+    observer_params(&p, BC_SINE_OBS_FLUX);
+    p.if_psi_est = 2;
+    CHECK(bc_sine_init(&p, &s) == BC_ERR_PARAM, "if_psi_est = 2 rejected");
 }
 
 /* The resistance measured in ALIGN (if_r_est): a locked rotor (no back-EMF), the windings an R-L load integrated
