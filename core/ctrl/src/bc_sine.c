@@ -364,8 +364,6 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->psi_obs = p->observer == BC_SINE_OBS_REDUCED ? p->robs.psi : p->fobs.psi;
     s->flux_f = s->n_psi = 0.0f;
     s->psi_adapt = 0;
-    s->if_fwd = 0;
-    s->if_floor = 0.0f;
     s->r_ui = s->r_ii = 0.0f;
     s->n_catch = s->w_rev = s->if_wmin = s->if_tb = s->if_tr = 0.0f;
     s->caught = 0;
@@ -718,10 +716,6 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
 
     if (s->mode == BC_SINE_MODE_SINE) {
         s->n_lock = flux_ok ? 0.0f : s->n_lock + p->ts;
-        /* the sine mode held for if_hold since the hand-off: a later hand-back has the ramp's whole budget (a
-         * hand-off followed at once by a hand-back, again and again, spends it and ends in START_FAIL) */
-        s->sl_t += p->ts;
-        if (s->sl_t >= p->if_hold) s->if_t = s->if_tb = s->if_tr = 0.0f;
         float ref0 = p->speed_loop ? in->omega_ref : in->ref;
         /* turning with the reference: w_rev follows the speed; against it (a reversal, a caught rotor braked)
          * the speed must fall: faster than w_rev + omega_off against it, the load outweighs the current limit */
@@ -742,7 +736,6 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             s->sl_t = s->n_lock = s->n_catch = 0.0f; /* if_t goes on: the start's budget (a reset at the top) */
             s->rho_f = 1.0f;
             s->if_trust = 0;
-            s->if_fwd = 0;
             s->if_wmin = fminf(s->if_wmin, (float)s->sl_dir * s->if_omega);
             if (s->rest_on) bc_rest_restart(&s->rest);
         } else if (fabsf(s->omega_f) < p->omega_off) {
@@ -813,7 +806,6 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 s->if_t = s->if_tb = s->if_tr = 0.0f;
                 s->if_wmin = 0.0f;
                 s->if_trust = 0;
-                s->if_fwd = 0;
             }
         } else if (s->sl_phase == BC_SINE_SL_RAMP) {
             /* the load-adaptive ramp (if_accel_min < if_accel; otherwise the fixed ramp at if_accel): the
@@ -839,17 +831,6 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             if (adaptive && !moving) w = fminf(w, 0.05f * p->omega_on);
             /* at the top of the band the vector does not outrun the rotor (the observer's speed) */
             if (s->if_trust && s->rho_f >= BC_SINE_RHO_HI) w = fminf(w, fmaxf(dir * o.omega_e, -p->omega_on));
-            /* once the rotor has broken away forwards (the observer sees it turn with dir), the vector never runs
-             * slower than the slowest ramp from its speed then: a load within the design bound follows it whatever
-             * the observer's low-speed angle error makes of rho */
-            if (adaptive && !s->if_fwd && moving && dir * o.omega_e > 0.0f) {
-                s->if_fwd = 1;
-                s->if_floor = dir * s->if_omega;
-            }
-            if (s->if_fwd) {
-                s->if_floor = fminf(s->if_floor + p->if_accel_min * p->ts, p->omega_on);
-                w = fmaxf(w, s->if_floor);
-            }
             int at_top = w >= p->omega_on;
             s->if_omega = dir * (at_top ? p->omega_on : w);
             s->if_theta = bc_wrap_2pi(s->if_theta + s->if_omega * p->ts);
@@ -879,7 +860,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                     s->mode = BC_SINE_MODE_SINE;
                     s->n_lock = 0.0f;
                     s->sl_t = 0.0f;
-                    /* the ramp's budget (if_t, if_tb, if_tr) is renewed once the sine mode has held for if_hold */
+                    s->if_t = s->if_tb = s->if_tr = 0.0f; /* a completed ramp: a later hand-back has the whole budget */
                     s->w_rev = fabsf(s->omega_f);
                 } else if (s->sl_t >= p->if_hold) {
                     sl_desync(p, s, out, BC_FLAG_START_FAIL);

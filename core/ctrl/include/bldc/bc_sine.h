@@ -218,9 +218,7 @@
  *          vector does not outrun the rotor (dir omega_if <= dir omega^). A rotor the observer sees at rest
  *          (|omega^| < 0.05 omega_on) is evidence of nothing (the observer holds its seed, which a load holding
  *          the rotor leaves off): then a >= if_accel_min and |omega_if| <= 0.05 omega_on (the vector creeps past
- *          the rotor's angle of largest torque, where it breaks away). Once the observer has seen the rotor turn
- *          with dir (at least 0.05 omega_on: broken away forwards), dir omega_if never falls below the slowest
- *          ramp from its value then, w_0 + if_accel_min t (t since then). The swing about the turning vector is
+ *          the rotor's angle of largest torque, where it breaks away). The swing about the turning vector is
  *          braked through the observer while it sees the rotor move: i_d,ref = if_damp psi_f (omega^ - omega_if)
  *          sin Delta / max(sin^2 Delta, 1/16), within +-min(if_current, sqrt(i_s_max^2 - if_current^2)), a torque
  *          -1.5 k_1 if_damp psi_f (omega^ - omega_if) against the rotor's slip (the current's torque is
@@ -229,7 +227,7 @@
  *          since the ramp's start): BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT. The same end, whatever the
  *          lowest speed, once the vector has turned against dir for omega_on / if_accel_min in all, or has been
  *          below omega_on for 2 omega_on / if_accel_min in all (the slowest ramp from -omega_on), since the
- *          ramp's start (a hand-back's ramp counts on; the sine mode held for if_hold resets them): every ramp ends within
+ *          ramp's start (a hand-back's ramp counts on; a completed ramp resets both): every ramp ends within
  *          2 omega_on / if_accel_min, every start attempt within if_align + 2 omega_on / if_accel_min + if_hold
  *          (a rotor pushed back ever faster, or a vector that follows an observer misled by a wrong R, would
  *          otherwise restart the lowest-speed count). With if_accel_min = if_accel: the fixed ramp at if_accel,
@@ -269,8 +267,7 @@
  * RAMP without turning the legs off (the hand-back), the vector on the rotor's q axis as the observer has it
  * (theta_if = theta^, omega_if = omega^ within +-omega_on, dir the reference's sign), so that the I/f current
  * carries the rotor through the speeds the observer cannot see; its time below omega_on goes on counting from
- * the start's (reset at ALIGN and once the sine mode has held for if_hold after a hand-off: a hand-off followed
- * at once by a hand-back, again and again, spends the ramp's budget and ends in START_FAIL). Without the flux in band, or with a zero reference:
+ * the start's (reset at ALIGN and at a hand-off at the top). Without the flux in band, or with a zero reference:
  * BC_FLAG_STALL | BC_FLAG_DESYNC, WAIT. Turning against the reference (a reversal, a caught backward rotor) the
  * speed must fall: |omega_f| above w_rev + omega_off (w_rev: |omega_f| when it last turned with the reference,
  * or at the catch) means the load outweighs the current limit: BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT.
@@ -441,8 +438,6 @@ typedef struct {
     float if_t;        /* RAMP: time below omega_on, s */
     float if_tb;       /* RAMP: time the vector has turned against dir since the ramp's start, s */
     float if_tr;       /* RAMP: time below omega_on since the ramp's start, s */
-    int32_t if_fwd;    /* RAMP: 1 once the observer has seen the rotor turn with dir (broken away forwards) */
-    float if_floor;    /* RAMP, if_fwd: the slowest ramp from the vector's speed then, dir omega, rad/s */
     int32_t if_trust;  /* RAMP: 1 while the observer sees the rotor move (adaptive ramp) */
     float rho_f;       /* RAMP: the torque's share of 1.5 k_1 if_current, cos(theta^ - theta_if) */
     float r_obs;       /* the resistance the observer uses, Ohm (if_r_est: measured in the last ALIGN) */
