@@ -1137,6 +1137,68 @@ static void test_diode_share(void)
 }
 
 /* fast demagnetisation and the demagnetisation limiter on the kinematic rotor (300 Hz, 22 samples a sector) */
+/* SYNC fast demagnetisation with the inverter's dead time (d_diode > 0): the change of chopping leg (the positive
+ * leg's turn-ons to the negative leg's turn-offs, each losing one dead time of the pair's voltage to a diode) costs one
+ * dead time more per episode (docs/sensorless.md, 8); the first whole half period of the fast pattern makes it up,
+ * the negative leg at 1 - m - 2 d_diode, every later one at 1 - m. Engaged mid-sector (fd_after 0.5, a clamp of 0.8 of
+ * the window) and from the commutation (fd_after 0: the leg_at part carries none, the next whole half period does). */
+static void test_fast_demag_dead_time(void)
+{
+    static synth_bemf g;
+    const double w = 2.0 * BC_PI * 300.0;
+    const float q = 0.02f;
+    for (int from_comm = 0; from_comm <= 1; ++from_comm) {
+        bc_bemf_params p = locked(BC_BEMF_COMPARATOR, w);
+        p.chop = BC_CHOP_SYNC;
+        p.fast_demag = 1;
+        p.fd_after = from_comm ? 0.0f : 0.5f;
+        p.d_diode = q;
+        sb_init(&g, TS, F_TICK, 1);
+        kin_rotor(&g, w, 1, 0.0);
+        g.demag = from_comm ? 60e-6 : 0.8 * (BC_PI / 6.0) / w;
+        bc_bemf_state s;
+        CHECK(bc_bemf_init(&p, &s) == BC_OK, "init");
+        long episodes = 0, first = 0, later = 0, bad = 0, nsync = 0, nc = 0;
+        int in_fd = 0;
+        for (long k = 0; k < 2400; ++k) {
+            bc_ctrl_in in;
+            sb_sample(&g, k, &in);
+            in.ref = 0.5f;
+            bc_ctrl_out o;
+            memset(&o, 0, sizeof o);
+            bc_bemf_step(&p, &s, &in, &o);
+            sb_apply(&g, k, &o);
+            if (o.diag[0] != (float)BC_BEMF_CLOSED) continue;
+            ++nc;
+            nsync += !(o.flags & BC_FLAG_DESYNC);
+            int fd = -1; /* the leg complementary below its pair's positive leg held on: the fast pattern's */
+            for (int x = 0; x < 3; ++x)
+                if (o.leg[x].mode == BC_LEG_PWM && o.leg[(x + 1) % 3].mode != BC_LEG_PWM &&
+                    o.leg[(x + 2) % 3].mode != BC_LEG_PWM &&
+                    (o.leg[(x + 1) % 3].mode == BC_LEG_HIGH || o.leg[(x + 2) % 3].mode == BC_LEG_HIGH))
+                    fd = x;
+            if (fd < 0 || o.has_at) {
+                if (fd < 0) in_fd = 0;
+                continue;
+            }
+            double want = 1.0 - (double)o.diag[6];
+            double dd = want - (double)o.leg[fd].duty;
+            if (!in_fd) {
+                ++episodes;
+                first += fabs(dd - 2.0 * (double)q) < 1e-6;
+                bad += fabs(dd - 2.0 * (double)q) >= 1e-6;
+            } else {
+                later += fabs(dd) < 1e-6;
+                bad += fabs(dd) >= 1e-6;
+            }
+            in_fd = 1;
+        }
+        CHECK(nc > 1000 && nsync == nc && episodes > 20 && first == episodes && later > episodes && bad == 0,
+              "fast pattern with dead time (%s): %ld episodes, %ld first halves at 1 - m - 2 d_diode, %ld later at 1 - m, "
+              "%ld wrong", from_comm ? "from the commutation" : "fd_after 0.5", episodes, first, later, bad);
+    }
+}
+
 static void test_fast_demag_and_limiter(void)
 {
     static synth_bemf g;
@@ -1287,5 +1349,6 @@ int main(void)
     test_start_current_limit();
     test_diode_share();
     test_fast_demag_and_limiter();
+    test_fast_demag_dead_time();
     return bc_test_summary("test_bemf");
 }

@@ -187,6 +187,7 @@ static void enter_sector(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctr
     }
     s->first = 0;
     s->fd_on = 0;
+    s->fd_comp = 0;
     s->sector = sector;
     s->t_c = tc;
     float w = omega_of(p, s);
@@ -557,8 +558,8 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
 /* ------------------------------------------------------------------------------------------------------------ */
 
 /* demag: the outgoing phase may still conduct (fast demagnetisation, 8) */
-static void legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector, float m, float travel, int demag,
-                    bc_leg_cmd c[3])
+static int legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector, float m, float travel, int demag,
+                   int comp, bc_leg_cmd c[3])
 {
     int pos, neg;
     (void)bc_sector_phases(sector, &pos, &neg);
@@ -573,17 +574,21 @@ static void legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector,
     if (p->chop == BC_CHOP_PWMPWM) chop_leg = travel < PI6_F ? inc : cont;
     if (demag && s->fd_on && p->chop != BC_CHOP_BIPOLAR && s->incoming >= 0 && s->outgoing >= 0) {
         if (p->chop == BC_CHOP_SYNC && cont == neg) { /* neg complementary at the average (1 - m) V, pos on */
+            /* comp: the change of chopping leg costs one dead time of the pair's voltage (8): made up in the
+             * first whole half period, 2 d_diode (SYNC's d_diode is the dead time's share of a period) */
+            float dc = comp ? 2.0f * p->d_diode : 0.0f;
             bc_pair_legs(BC_CHOP_PWMPWM, pos, neg, neg, m, c);
             c[neg].mode = BC_LEG_PWM;
-            c[neg].duty = bc_clampf(1.0f - m, 0.0f, 1.0f);
-            return;
+            c[neg].duty = bc_clampf(1.0f - m - dc, 0.0f, 1.0f);
+            return 1;
         }
         if (p->chop != BC_CHOP_SYNC) { /* the continuing leg chops with its own switch */
             bc_pair_legs(BC_CHOP_PWMPWM, pos, neg, cont, m, c);
-            return;
+            return 0;
         }
     }
     bc_pair_legs((int)p->chop, pos, neg, chop_leg, m, c);
+    return 0;
 }
 
 /* the demagnetisation of the sector's commutation not yet seen over (no pre level, no crossing) */
@@ -595,7 +600,10 @@ static int demag_now(const bc_bemf_state *s) { return s->det < 2 && !s->dm_known
 static int fd_engage(const bc_bemf_params *p, bc_bemf_state *s, float travel_end)
 {
     int dm = demag_now(s);
-    if (p->fast_demag && dm && !s->fd_on && !(travel_end < p->fd_after * (PI6_F + s->adv_prev))) s->fd_on = 1;
+    if (p->fast_demag && dm && !s->fd_on && !(travel_end < p->fd_after * (PI6_F + s->adv_prev))) {
+        s->fd_on = 1;
+        s->fd_comp = p->chop == BC_CHOP_SYNC;
+    }
     return dm;
 }
 
@@ -827,22 +835,26 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
             float travel = w * tdiff(n.ta, s->t_c) * s->inv_tick;
             if (!fin(travel)) travel = 0.0f;
             if (now && dn >= 0.0f) { /* inside the interval: the commutation timer */
-                legs_of(p, s, s->sector, m, travel, fd_engage(p, s, travel + w * p->ts), out->leg);
+                int dm = fd_engage(p, s, travel + w * p->ts);
+                if (legs_of(p, s, s->sector, m, travel, dm, s->fd_comp, out->leg)) s->fd_comp = 0;
                 shown = s->sector;
                 uint32_t tc = s->t_next;
                 enter_sector(p, s, in, next, tc, -1);
-                legs_of(p, s, next, m, 0.0f, fd_engage(p, s, w * (p->ts - dn * s->inv_tick)), out->leg_at);
+                dm = fd_engage(p, s, w * (p->ts - dn * s->inv_tick));
+                (void)legs_of(p, s, next, m, 0.0f, dm, 0, out->leg_at); /* made up in the next whole half */
                 out->has_at = 1u;
                 out->t_at = bc_clampf(dn * s->inv_tick, 0.0f, p->ts * 0.999999f);
                 s->adv_prev = s->adv;
             } else if (now) { /* already past: at once, from t_a */
                 n.flags |= BC_FLAG_COMM_LATE;
                 enter_sector(p, s, in, next, n.ta, -1);
-                legs_of(p, s, next, m, 0.0f, fd_engage(p, s, w * p->ts), out->leg);
+                int dm = fd_engage(p, s, w * p->ts);
+                if (legs_of(p, s, next, m, 0.0f, dm, s->fd_comp, out->leg)) s->fd_comp = 0;
                 shown = next;
                 s->adv_prev = s->adv;
             } else {
-                legs_of(p, s, s->sector, m, travel, fd_engage(p, s, travel + w * p->ts), out->leg);
+                int dm = fd_engage(p, s, travel + w * p->ts);
+                if (legs_of(p, s, s->sector, m, travel, dm, s->fd_comp, out->leg)) s->fd_comp = 0;
                 shown = s->sector;
             }
             if (now && s->mode == BC_BEMF_RAMP) { /* the next forced commutation */

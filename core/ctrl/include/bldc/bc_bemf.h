@@ -212,6 +212,12 @@
  *     at low duty and high current the difference between a visible crossing and a hidden one. A clamp shorter
  *     than fd_after of the window never sees the pattern change, so the drive's torque is that of the plain
  *     pattern (the fast fall of the outgoing current dips the torque in each commutation).
+ *     Dead time (BC_CHOP_SYNC): a complementary leg loses one dead time a period to a diode, the positive leg (its
+ *     current > 0) at each turn-on of its upper switch, the fast pattern's negative leg (< 0) at each turn-off;
+ *     changing from one to the other costs one dead time more per episode, t_dead (V_dc + V_f) of the pair's
+ *     volt-seconds. The first whole half period the fast pattern is issued in (not the leg_at part of a
+ *     commutation's sample) makes it up: the negative leg at 1 - m - 2 d_diode (SYNC's d_diode, 2, is the dead
+ *     time's share of a period, so 2 d_diode is one dead time in a half period); every later one at 1 - m.
  *     When it chops the negative leg, the pair's off-time holds both its terminals at V_dc, and between the clamp's
  *     end and the sample that sees it the floating phase (still on its pre side, e_F > 0) can clamp to V_dc in the
  *     off-times, where a comparator with an offset reads the post level: in such a sector (cmp_gate = 1; with a
@@ -344,6 +350,7 @@ typedef struct {
     int32_t outgoing;      /* phase that left the pair at the last commutation, -1 none (a start's first sector) */
     int32_t fd_neg;        /* fast demagnetisation chops the negative leg in this sector (its off-time at V_dc) */
     int32_t fd_on;         /* fast demagnetisation engaged in this sector (fd_after reached, the clamp not yet over) */
+    int32_t fd_comp;       /* SYNC: fast demagnetisation newly engaged, its first whole half period not yet issued (8) */
     uint32_t k_samp;       /* samples since init (even: carrier valley, odd: carrier peak) */
     uint32_t t_c;          /* tick of the commutation that began the sector */
     int32_t pending;       /* a commutation is scheduled at t_next */
