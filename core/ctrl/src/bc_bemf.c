@@ -48,6 +48,7 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
         p->adv_max > PI6_F || !(fin(p->t60_gain) && p->t60_gain > 0.0f && p->t60_gain <= 1.0f))
         return BC_ERR_PARAM;
     if (p->method == BC_BEMF_INTEGRATE && !(fin(p->int_limit) && p->int_limit > 0.0f)) return BC_ERR_PARAM;
+    if (!in01(p->grid_gain)) return BC_ERR_PARAM;
     if (!nonneg(p->int_limit) || !(fin(p->zc_timeout) && p->zc_timeout >= 1.05f && p->zc_timeout <= 4.0f) ||
         !(fin(p->jump_max) && p->jump_max > 1.0f) || p->miss_max < 0 || p->miss_max > 100 ||
         !(fin(p->omega_stall) && p->omega_stall > 0.0f))
@@ -465,6 +466,32 @@ static float integrate_predict(const bc_bemf_params *p, const bc_bemf_state *s, 
 
 /* ------------------------------------------------------------------------------------------------------------ */
 
+/* 7, uniform grid: D_s, the lag (s) of this sector's crossing behind the uniform grid through the mean of the six
+ * (0 until twelve intervals have been learned: returns 0 and leaves *tm), at most 10 degrees at w; *tm the grid's
+ * interval, the mean of the six */
+static float grid_lag(const bc_bemf_state *s, float w, float *tm_out)
+{
+    if (s->grid_n < 12 || s->sector < 0 || s->sector > 5) return 0.0f;
+    float tm = 0.0f, pc[6], pm = 0.0f;
+    for (int j = 0; j < 6; ++j) tm += s->grid_t[j];
+    tm *= 1.0f / 6.0f;
+    int at = 0; /* P over the sectors in the order of rotation from sector 0 (forward) or 5 (backward) */
+    pc[0] = 0.0f;
+    for (int r = 1; r < 6; ++r) {
+        int sec = s->dir > 0 ? r : 5 - r;
+        pc[r] = pc[r - 1] + s->grid_t[sec] - tm;
+    }
+    for (int r = 0; r < 6; ++r) {
+        pm += pc[r];
+        if ((s->dir > 0 ? r : 5 - r) == s->sector) at = r;
+    }
+    float d = pc[at] - pm * (1.0f / 6.0f);
+    float lim = (BC_PI_F / 18.0f) / w;
+    if (!fin(d) || !fin(lim) || !(fin(tm) && tm > 0.0f)) return 0.0f;
+    *tm_out = tm;
+    return bc_clampf(d, -lim, lim);
+}
+
 /* 5 and 7: an accepted crossing at x_e (s relative to t_k). */
 static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, float x_e)
 {
@@ -504,6 +531,7 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         /* handover: the throttle ramp starts from the duty the forced ramp applied */
         s->d_cmd = ramp_duty_at(p, omega_of(p, s));
         s->mode = BC_BEMF_CLOSED;
+        s->grid_n = 0;
         s->t_in = 0.0f;
         s->t60 = T;
         s->t_last = T;
@@ -528,6 +556,12 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         if (T > 0.0f && !s->virt) {
             s->t60 += p->t60_gain * (T - s->t60);
             s->t_last = T;
+            if (p->grid_gain > 0.0f && s->sector >= 0 && s->sector < 6) { /* 7: the uniform grid's intervals */
+                float *g = &s->grid_t[s->sector];
+                *g = s->grid_n < 6 ? T : *g + p->grid_gain * (T - *g);
+                if (!fin(*g)) s->grid_n = -1; /* relearn */
+                if (s->grid_n < 1000) s->grid_n += 1;
+            }
         } else {
             s->t_last = 0.0f;
         }
@@ -548,7 +582,9 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         s->t_int_max = tadd(n->tk, (x_zc + PI3_F / w) * p->f_tick);
         x_n = integrate_predict(p, s, n, w);
     } else {
-        x_n = x_zc + (PI6_F - s->adv) / w; /* 30 - adv degrees after the crossing */
+        float t60 = PI3_F / w;
+        float lag = s->mode == BC_BEMF_CLOSED && p->grid_gain > 0.0f ? grid_lag(s, w, &t60) : 0.0f;
+        x_n = x_zc - lag + (PI6_F - s->adv) / PI3_F * t60; /* 30 - adv degrees after the crossing (its grid point) */
     }
     s->t_next = tadd(n->tk, x_n * p->f_tick);
     s->pending = 1;

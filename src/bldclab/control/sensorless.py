@@ -305,6 +305,13 @@ class SixStepSensorless(Control):
         Cap of the total advance (default ``"30 deg"``, the largest).
     interval_gain : float
         Gain in (0, 1] of the crossing-interval filter ``T60 <- T60 + g (T - T60)`` (default 0.5; 1: the last one).
+    grid_gain : float
+        0 (default): commutate ``30 deg - timing`` after each crossing. In (0, 1]: commutate on the uniform
+        60-degree grid phase-locked to the mean of the six crossings (the Hall drive's symmetric placement), each
+        sector's crossing interval filtered with this gain (0.1: about ten electrical periods), applied from the
+        twelfth interval after the handover, the correction at most 10 degrees; for a motor whose phases'
+        back-EMFs differ (shifted, scaled), whose crossings lie off the magnet's grid (docs/sensorless.md, section
+        9). Comparator and ADC methods (the integration method ignores it).
     int_limit : float, optional
         Integration method: the back-EMF integral from the crossing to 30 degrees (V s); default from the drive's
         back-EMF (:func:`integral_to_30`).
@@ -413,6 +420,7 @@ class SixStepSensorless(Control):
     timing_demag: float = 0.0
     timing_max: float | str = "30 deg"
     interval_gain: float = 0.5
+    grid_gain: float = 0.0
     int_limit: float | None = None
     timeout: float = 1.5
     jump: float = 2.0
@@ -486,6 +494,9 @@ class SixStepSensorless(Control):
             raise BldclabError("control.timing", f"must be at most 30 deg (pi/6 rad), got {timing:.4g} rad")
         if self.interval_gain > 1.0:
             raise BldclabError("control.interval_gain", f"must be in (0, 1], got {self.interval_gain!r}")
+        check_number("grid_gain", self.grid_gain, allow_zero=True)
+        if self.grid_gain > 1.0:
+            raise BldclabError("control.grid_gain", f"must be in [0, 1] (0: off), got {self.grid_gain!r}")
         if not 1.05 <= self.timeout <= 4.0:
             raise BldclabError("control.timeout", f"must be in [1.05, 4] crossing intervals, got {self.timeout!r}")
         if self.jump <= 1.0:
@@ -625,6 +636,7 @@ class SixStepSensorless(Control):
             adv_demag=self.timing_demag,
             adv_max=min(float(self.timing_max), math.pi / 6.0 * (1.0 - 1e-6)),  # the C cap, below float pi/6
             t60_gain=self.interval_gain,
+            grid_gain=self.grid_gain,
             int_limit=int_limit,
             zc_timeout=self.timeout,
             jump_max=self.jump,

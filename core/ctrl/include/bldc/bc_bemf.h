@@ -174,6 +174,14 @@
  *         adv = min(adv_angle + Omega adv_time + adv_demag Omega t_demag, adv_max)      (t_demag: last measured, 6)
  *
  *     BC_BEMF_COMPARATOR, BC_BEMF_ADC: the next commutation at  t_zc + (pi/6 - adv) / Omega.
+ *     Uniform grid (grid_gain > 0, comparator and ADC): a motor whose phases' back-EMFs differ (shifted, scaled)
+ *     crosses zero off the magnet's 60-degree grid, and 30 degrees after each crossing is not where a Hall drive
+ *     commutates. Each sector's crossing interval is filtered, T_s <- T_s + grid_gain (T - T_s) (in the order of
+ *     rotation; reset at the handover), and once twelve have been learned the crossing of sector s is placed on the
+ *     uniform grid through the mean of the six: with Tm = mean T_s and P_s the cumulative sum of (T_j - Tm) in the
+ *     order of rotation, D_s = P_s - mean P (the crossing's lead on the grid, at most 10 degrees), the commutation at
+ *     t_zc - D_s + (pi/6 - adv) / Omega: every commutation a uniform 60 degrees apart, phase-locked to the crossings'
+ *     mean, the Hall drive's symmetric placement.
  *     BC_BEMF_INTEGRATE (VESC's BLDC mode): from the crossing the sign-corrected samples are integrated by the
  *     trapezoidal rule (the first piece from t_e, where u = 0),
  *
@@ -330,6 +338,8 @@ typedef struct {
     int32_t cmp_gate;    /* 1: in a fast-demagnetisation sector on the negative leg, the comparator in the on-time only */
     float i_start;       /* start-up current limit (ALIGN, RAMP; use_current), cycle by cycle, A (>= 0; 0: none) */
     float d_diode;       /* the inverter's share (2): align, ramp and dlim duties d -> d_diode + (1 - d_diode) d, [0, 1) */
+    float grid_gain;     /* 7, CLOSED: > 0, commutate on the uniform grid phase-locked to the mean of the six crossings,
+                          * each sector's crossing interval filtered with this gain, [0, 1]; 0: after each crossing */
 } bc_bemf_params;
 
 typedef struct {
@@ -351,6 +361,8 @@ typedef struct {
     int32_t fd_neg;        /* fast demagnetisation chops the negative leg in this sector (its off-time at V_dc) */
     int32_t fd_on;         /* fast demagnetisation engaged in this sector (fd_after reached, the clamp not yet over) */
     int32_t fd_comp;       /* SYNC: fast demagnetisation newly engaged, its first whole half period not yet issued (8) */
+    float grid_t[6];       /* grid_gain: the filtered crossing interval ending in each sector, s */
+    int32_t grid_n;        /* grid_gain: crossing intervals learned since the handover (the grid applies from 12) */
     uint32_t k_samp;       /* samples since init (even: carrier valley, odd: carrier peak) */
     uint32_t t_c;          /* tick of the commutation that began the sector */
     int32_t pending;       /* a commutation is scheduled at t_next */
