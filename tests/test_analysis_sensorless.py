@@ -347,18 +347,29 @@ def test_lu4kw_on_the_uniform_grid_commutates_at_the_hall_angles():
     """grid_gain: the commutations on the uniform grid phase-locked to the mean of lu-4kw's six crossings, the Hall
     drive's symmetric placement. At 160 kHz PWM (no current ripple to beat against the commutations) the torque at
     equal duty is Hall six-step's within 0.5 % at 0.2, 0.5 and 0.9 Omega_0 (30 degrees after each crossing: -1.6,
-    -2.5, -2.8 %); on the drive's 10 kHz the commutation angle against the Hall-exact one is within 1.2 degrees
-    (3.3 after each crossing), and the six sectors' means within 0.25 degree of each other (3.6 after each crossing;
-    docs/sensorless.md, section 9)."""
+    -2.5, -2.8 %); on the drive's 10 kHz the commutation angle against the Hall-exact one is within 1.5 degrees
+    (3.3 after each crossing), and the six sectors' means within 0.5 degree of each other (3.6 after each crossing;
+    docs/sensorless.md, section 9). The grid learns each interval relative to the mean of the last six, so that an
+    accelerating rotor is not taken for an asymmetric one: f60prov-2550kv's hard throttle step (0.25 to 1 in one
+    sample) holds on the grid (with the intervals themselves learned, every such step desynced)."""
     d = bl.load("lu-4kw")
     fine = d.replace(inverter=dataclasses.replace(d.inverter, f_pwm=160e3))
     grid = sl.versus_hall(fine, (0.2, 0.5, 0.9), grid_gain=0.1).to_pandas()
     assert grid["in_sync"].all() and (grid["torque_rel"].abs() < 0.005).all(), grid
     e_grid = sl.angle_error(d, (0.2, 0.5, 0.9), grid_gain=0.1)
     e_zc = sl.angle_error(d, (0.5,))
-    assert max(e_grid.worst) < 1.2 and e_zc.worst[0] > 2.5, (e_grid, e_zc)
+    assert max(e_grid.worst) < 1.5 and e_zc.worst[0] > 2.5, (e_grid, e_zc)
     res, t0 = sl.run_locked(d, 0.5, 0.49, periods=20, grid_gain=0.1)
     c = sl.commutations(res)
     c = c[c["t"] >= t0]
     means = [float(np.degrees(rows["error"]).mean()) for _, rows in c.groupby(c["sector"] % 6)]
-    assert len(means) == 6 and max(means) - min(means) < 0.25, means
+    assert len(means) == 6 and max(means) - min(means) < 0.5, means
+    f60 = bl.load("f60prov-2550kv")
+    dur, t_step = 0.6, 0.3
+    t = np.arange(bl.sim.samples_of(f60, dur)) * 0.5 / f60.inverter.f_pwm
+    ref = np.where(t < t_step, 0.25, 1.0)
+    for theta0 in (0.2, 2.6, 4.6):
+        run = bl.simulate(f60, bl.SixStepSensorless(grid_gain=0.1), bl.Scenario(duration=dur, ref=ref, theta0=theta0),
+                          check="warn")
+        assert "DESYNC" not in run.meta["flags"], (theta0, run.meta["flags"])
+        assert np.mean(np.abs(run.signals["omega_m"][run.t > dur - 0.05])) > 0.45 * f60.Omega_0

@@ -467,29 +467,47 @@ static float integrate_predict(const bc_bemf_params *p, const bc_bemf_state *s, 
 /* ------------------------------------------------------------------------------------------------------------ */
 
 /* 7, uniform grid: D_s, the lag (s) of this sector's crossing behind the uniform grid through the mean of the six
- * (0 until twelve intervals have been learned: returns 0 and leaves *tm), at most 10 degrees at w; *tm the grid's
- * interval, the mean of the six */
-static float grid_lag(const bc_bemf_state *s, float w, float *tm_out)
+ * (0, *tn left, until twelve intervals have been seen), at most 10 degrees; *tn the grid's interval */
+static float grid_lag(const bc_bemf_state *s, float *tn)
 {
-    if (s->grid_n < 12 || s->sector < 0 || s->sector > 5) return 0.0f;
-    float tm = 0.0f, pc[6], pm = 0.0f;
-    for (int j = 0; j < 6; ++j) tm += s->grid_t[j];
-    tm *= 1.0f / 6.0f;
+    if (s->grid_n < 12 || s->sector < 0 || s->sector > 5 || !(fin(s->grid_tn) && s->grid_tn > 0.0f)) return 0.0f;
+    float rm = 0.0f, pc[6], pm = 0.0f;
+    for (int j = 0; j < 6; ++j) rm += s->grid_t[j];
+    rm *= 1.0f / 6.0f;
+    if (!(fin(rm) && rm > 0.0f)) return 0.0f;
     int at = 0; /* P over the sectors in the order of rotation from sector 0 (forward) or 5 (backward) */
     pc[0] = 0.0f;
-    for (int r = 1; r < 6; ++r) {
-        int sec = s->dir > 0 ? r : 5 - r;
-        pc[r] = pc[r - 1] + s->grid_t[sec] - tm;
-    }
+    for (int r = 1; r < 6; ++r) pc[r] = pc[r - 1] + s->grid_t[s->dir > 0 ? r : 5 - r] / rm - 1.0f;
     for (int r = 0; r < 6; ++r) {
         pm += pc[r];
         if ((s->dir > 0 ? r : 5 - r) == s->sector) at = r;
     }
-    float d = pc[at] - pm * (1.0f / 6.0f);
-    float lim = (BC_PI_F / 18.0f) / w;
-    if (!fin(d) || !fin(lim) || !(fin(tm) && tm > 0.0f)) return 0.0f;
-    *tm_out = tm;
-    return bc_clampf(d, -lim, lim);
+    float d = (pc[at] - pm * (1.0f / 6.0f)) * s->grid_tn;
+    if (!fin(d)) return 0.0f;
+    *tn = s->grid_tn;
+    return bc_clampf(d, -s->grid_tn / 6.0f, s->grid_tn / 6.0f);
+}
+
+/* 7, uniform grid: learn from the crossing interval T ending in the current sector */
+static void grid_learn(const bc_bemf_params *p, bc_bemf_state *s, float T)
+{
+    if (s->sector < 0 || s->sector > 5) return;
+    s->grid_ring[s->grid_k] = T;
+    s->grid_k = (s->grid_k + 1) % 6;
+    s->grid_n += s->grid_n < 1000;
+    if (s->grid_n < 6) return;
+    float m6 = 0.0f;
+    for (int j = 0; j < 6; ++j) m6 += s->grid_ring[j];
+    m6 *= 1.0f / 6.0f;
+    float r = T / m6, *g = &s->grid_t[s->sector];
+    *g = s->grid_n <= 12 ? r : *g + p->grid_gain * (r - *g);
+    if (s->grid_n < 12) return;
+    float rm = 0.0f;
+    for (int j = 0; j < 6; ++j) rm += s->grid_t[j];
+    rm *= 1.0f / 6.0f;
+    float tn = T * rm / *g; /* this interval over its sector's ratio */
+    s->grid_tn = s->grid_n == 12 ? m6 : s->grid_tn + p->t60_gain * (tn - s->grid_tn);
+    if (!(fin(s->grid_tn) && s->grid_tn > 0.0f && fin(*g) && *g > 0.0f)) s->grid_n = 0; /* relearn */
 }
 
 /* 5 and 7: an accepted crossing at x_e (s relative to t_k). */
@@ -532,6 +550,7 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         s->d_cmd = ramp_duty_at(p, omega_of(p, s));
         s->mode = BC_BEMF_CLOSED;
         s->grid_n = 0;
+        s->grid_k = 0;
         s->t_in = 0.0f;
         s->t60 = T;
         s->t_last = T;
@@ -556,12 +575,7 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         if (T > 0.0f && !s->virt) {
             s->t60 += p->t60_gain * (T - s->t60);
             s->t_last = T;
-            if (p->grid_gain > 0.0f && s->sector >= 0 && s->sector < 6) { /* 7: the uniform grid's intervals */
-                float *g = &s->grid_t[s->sector];
-                *g = s->grid_n < 6 ? T : *g + p->grid_gain * (T - *g);
-                if (!fin(*g)) s->grid_n = -1; /* relearn */
-                if (s->grid_n < 1000) s->grid_n += 1;
-            }
+            if (p->grid_gain > 0.0f) grid_learn(p, s, T); /* 7: the uniform grid */
         } else {
             s->t_last = 0.0f;
         }
@@ -583,7 +597,7 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         x_n = integrate_predict(p, s, n, w);
     } else {
         float t60 = PI3_F / w;
-        float lag = s->mode == BC_BEMF_CLOSED && p->grid_gain > 0.0f ? grid_lag(s, w, &t60) : 0.0f;
+        float lag = s->mode == BC_BEMF_CLOSED && p->grid_gain > 0.0f ? grid_lag(s, &t60) : 0.0f;
         x_n = x_zc - lag + (PI6_F - s->adv) / PI3_F * t60; /* 30 - adv degrees after the crossing (its grid point) */
     }
     s->t_next = tadd(n->tk, x_n * p->f_tick);

@@ -178,10 +178,13 @@
  *     crosses zero off the magnet's 60-degree grid, and 30 degrees after each crossing is not where a Hall drive
  *     commutates. Each sector's crossing interval is filtered, T_s <- T_s + grid_gain (T - T_s) (in the order of
  *     rotation; reset at the handover), and once twelve have been learned the crossing of sector s is placed on the
- *     uniform grid through the mean of the six: with Tm = mean T_s and P_s the cumulative sum of (T_j - Tm) in the
- *     order of rotation, D_s = P_s - mean P (the crossing's lead on the grid, at most 10 degrees), the commutation at
- *     t_zc - D_s + (pi/6 - adv) / Omega: every commutation a uniform 60 degrees apart, phase-locked to the crossings'
- *     mean, the Hall drive's symmetric placement.
+ *     uniform grid through the mean of the six. Each interval is taken relative to the mean of the last six, r = T /
+ *     mean(T_k-5 .. T_k) (a rotor's acceleration changes every sector's r alike), r_s <- r_s + grid_gain (r - r_s)
+ *     for its sector s; with rho_s = r_s / mean r and P_s the cumulative sum of (rho_j - 1) in the order of rotation,
+ *     D_s = (P_s - mean P) Tn (the crossing's lag behind the grid, at most 10 degrees), where the grid's interval
+ *     Tn <- Tn + t60_gain (T / rho_s - Tn); the commutation at t_zc - D_s + (pi/6 - adv) Tn / (pi/3): every
+ *     commutation a uniform 60 degrees apart, phase-locked to the crossings' mean, the Hall drive's symmetric
+ *     placement.
  *     BC_BEMF_INTEGRATE (VESC's BLDC mode): from the crossing the sign-corrected samples are integrated by the
  *     trapezoidal rule (the first piece from t_e, where u = 0),
  *
@@ -361,8 +364,11 @@ typedef struct {
     int32_t fd_neg;        /* fast demagnetisation chops the negative leg in this sector (its off-time at V_dc) */
     int32_t fd_on;         /* fast demagnetisation engaged in this sector (fd_after reached, the clamp not yet over) */
     int32_t fd_comp;       /* SYNC: fast demagnetisation newly engaged, its first whole half period not yet issued (8) */
-    float grid_t[6];       /* grid_gain: the filtered crossing interval ending in each sector, s */
-    int32_t grid_n;        /* grid_gain: crossing intervals learned since the handover (the grid applies from 12) */
+    float grid_t[6];       /* grid_gain: each sector's filtered crossing interval over the mean of the last six */
+    float grid_ring[6];    /* grid_gain: the last six crossing intervals, s */
+    float grid_tn;         /* grid_gain: the filtered interval of the grid (each interval over its sector's ratio), s */
+    int32_t grid_k;        /* grid_gain: next slot of grid_ring */
+    int32_t grid_n;        /* grid_gain: crossing intervals seen since the handover (the grid applies from 12) */
     uint32_t k_samp;       /* samples since init (even: carrier valley, odd: carrier peak) */
     uint32_t t_c;          /* tick of the commutation that began the sector */
     int32_t pending;       /* a commutation is scheduled at t_next */
