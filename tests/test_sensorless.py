@@ -238,6 +238,8 @@ def test_units_and_defaults_from_the_drive():
     ({"interval_gain": 1.5}, "control.interval_gain"), ({"ramp_duty": 1.2}, "control.ramp_duty"),
     ({"restart_wait": "2 s"}, "control.restart_max"), ({"current_sensing": 1}, "control.current_sensing"),
     ({"comparator_delay": "-1 us"}, "control.comparator_delay"), ({"filter_tau": -1e-6}, "control.filter_tau"),
+    ({"grid_gain": 1.5}, "control.grid_gain"), ({"grid_gain": -0.1}, "control.grid_gain"),
+    ({"grid_gain": math.nan}, "control.grid_gain"),
 ])
 def test_bad_settings_name_the_field(kw, field):
     with pytest.raises(BldclabError, match=field.replace(".", r"\.")):

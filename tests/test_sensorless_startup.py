@@ -24,6 +24,7 @@ from bldclab.analysis.sensorless import (
     startup_grid,
     startup_load_bound,
 )
+from bldclab.control.sensorless import ramp_excess_speed
 from bldclab.errors import BldclabError
 from bldclab.model.analytic import r_total
 
@@ -148,3 +149,80 @@ def test_ramp_current_counts_the_inductance():
     assert ramp_current(d, full, w) == pytest.approx(su["align_current"], rel=1e-9)
     assert ramp_current(d, bare, w) == pytest.approx(su["align_current"] / math.sqrt(1.0 + x * x), rel=1e-9)
     assert startup_load_bound(d, bare) < startup_load_bound(d, full)
+
+
+_GIMBAL = """name = "gimbal"
+description = "a 12 V, 14-pole gimbal motor (2804 class) as a user writes it: high resistance, small inertia"
+[motor]
+poles = 14
+R_ll = "20 Ohm"
+L_ll = "{L_ll}"
+KV = "90 rpm/V"
+V_N = "12 V"
+I_N = "0.5 A"
+[motor.emf]
+kind = "sinusoid"
+[inverter]
+V_dc = "12 V"
+f_pwm = "32 kHz"
+[mechanics]
+J = "{J}"
+tau_c = "2 mN m"
+"""
+
+
+def _gimbal(tmp_path, L_ll: str = "4 mH", J: str = "2e-5 kg m^2") -> bl.Drive:
+    f = tmp_path / "gimbal.toml"
+    f.write_text(_GIMBAL.format(L_ll=L_ll, J=J))
+    return bl.load(f)
+
+
+def test_ramp_excess_speed_is_the_free_runs_closed_form(tmp_path):
+    """Without loads the rotor ahead of the ramp's end runs free by 2 (R + R_on) I / (2 k_phi); with them the
+    returned speed is the fixed point w = D(w) of the excess left after the loads at w."""
+    d = _gimbal(tmp_path)
+    m, i = d.motor, 0.25
+    k, r = 2.0 * m.k_phi, r_total(d)
+    free = dataclasses.replace(d, mechanics=dataclasses.replace(d.mechanics, tau_c=0.0, B=0.0, k_q=0.0))
+    assert ramp_excess_speed(free, i) == pytest.approx(2.0 * r * i / k, rel=1e-9)
+    w = ramp_excess_speed(d, i)
+    assert w == pytest.approx(2.0 * r * (k * i - d.mechanics.tau_c) / k ** 2, rel=1e-9)  # tau_c only here
+    prop = bl.load("mn3110-780kv")
+    w = ramp_excess_speed(prop, 10.0)
+    mech = prop.mechanics
+    k = 2.0 * prop.motor.k_phi
+    assert w == pytest.approx(2.0 * r_total(prop) * (k * 10.0 - mech.tau_c - mech.B * w - mech.k_q * w * w) / k ** 2,
+                              rel=1e-9)
+
+
+@pytest.mark.parametrize(("L_ll", "J", "rate"), [("4 mH", "2e-5 kg m^2", None), ("40 mH", "2e-5 kg m^2", None),
+                                                 ("4 mH", "2e-6 kg m^2", "2 %/ms")])
+def test_high_resistance_gimbal_motor_starts_and_holds(tmp_path, L_ll, J, rate):
+    """A 12 V gimbal motor (10 ohm a phase, KV 90, 2 mN m of friction; L/R 0.2 and 2 ms; J and J / 10): the ramp's
+    duty is mostly the resistive drop (5 V of the pair's 6.2 V at 0.1 Omega_0), so a rotor in step at the ramp's
+    end has the whole torque (12 times the friction) left over and runs ahead of the field, towards five times the
+    ramp's speed. Before (end speed 0.1 Omega_0): the crossings of such a rotor were refused (more than three times
+    the forced speed) and the forced field swung it back (J), or, at J / 10, the rotor swung through every forced
+    sector ahead of its crossing: every start START_FAIL. Now the end speed is at least ramp_excess_speed (0.39
+    Omega_0; the rotor then runs at most twice as fast as the ramp): a run at throttle 0.25 holds closed loop, its
+    crossings at the rotor's speed, and every start within the bound reaches it. The light rotor (J / 10) hands
+    over near 0.8 Omega_0 (the ramp's duty) and a throttle cut to 0.25 at once brakes it faster than the crossing
+    timeout follows (a 30 % longer interval a sector): it holds with the throttle ramped at 2 %/ms, not at 10
+    (docs/sensorless.md, law 5)."""
+    d = _gimbal(tmp_path, L_ll, J)
+    run = bl.simulate(d, bl.SixStepSensorless(throttle_rate=rate), bl.Scenario(duration=1.0, ref=0.25))
+    s = run.signals
+    assert "DESYNC" not in run.meta["flags"]
+    late = s["t"] > 0.7
+    assert (s["state"][late] == 3).all()  # closed loop
+    w_e = d.motor.p * s["omega_m"][late]
+    assert np.mean(w_e) > 0.1 * d.motor.p * d.Omega_0
+    assert np.mean(s["omega_e"][late]) == pytest.approx(np.mean(w_e), rel=0.02)
+    ctl = fixed_start(d)
+    bound = startup_load_bound(d, ctl)
+    assert bound > 0.0
+    res = startup_grid(d, (0.0, 0.5 * bound, 0.9 * bound), (d.mechanics.J,), (0.3, 2.5, 4.4), workers=1)
+    assert res.within_bound() == (9, 9), res.to_pandas()
+    su = ctl.start_up(d)
+    assert su["ramp_end_speed"] == pytest.approx(ramp_excess_speed(d, su["align_current"]))
+    assert su["ramp_end_speed"] > 0.3 * d.Omega_0

@@ -45,6 +45,7 @@ typedef struct {
     double d_cmp, d_adc;
     double demag, demag_long;
     double clamp_pre, clamp_post; /* off-time clamp beyond these |k| (>= 1: none) */
+    double shift[3];              /* each phase's back-EMF delayed by this electrical angle (0: the magnet's grid) */
     long n_long;
     int glitch_x;
     double glitch_t, glitch_len;
@@ -88,6 +89,9 @@ static inline double sb_trap(double th)
     else if (th > 5.0 * BC_PI / 6.0) k = (BC_PI - th) / (BC_PI / 6.0);
     return sgn * k;
 }
+
+/* phase x's back-EMF angle offset: x 2 pi / 3 and its shift */
+static inline double sb_off(const synth_bemf *g, int x) { return (double)x * 2.0 * BC_PI / 3.0 + g->shift[x]; }
 
 static inline void sb_init(synth_bemf *g, double ts, double f_tick, int delay)
 {
@@ -169,7 +173,7 @@ static inline int sb_level(const synth_bemf *g, int x, double t)
     if (x == g->seg_neg[j]) return 0;
     if (x == g->seg_fl[j] && t < g->seg_cl_end[j]) return g->seg_cl[j];
     double w = sb_omega(g, t);
-    double e = w * sb_trap(sb_theta(g, t) - (double)x * 2.0 * BC_PI / 3.0);
+    double e = w * sb_trap(sb_theta(g, t) - sb_off(g, x));
     return e > 0.0 ? 1 : 0;
 }
 
@@ -226,8 +230,8 @@ static inline void sb_integrate(synth_bemf *g, double t)
         int s = sb_seg_at(g, tm);
         double a = -g->damp * g->w - (g->w > 0.0 ? g->load : (g->w < 0.0 ? -g->load : 0.0));
         if (g->seg_pos[s] >= 0 && g->seg_neg[s] >= 0) {
-            double kp = sb_trap(g->th - (double)g->seg_pos[s] * 2.0 * BC_PI / 3.0);
-            double kn = sb_trap(g->th - (double)g->seg_neg[s] * 2.0 * BC_PI / 3.0);
+            double kp = sb_trap(g->th - sb_off(g, g->seg_pos[s]));
+            double kn = sb_trap(g->th - sb_off(g, g->seg_neg[s]));
             double i = (g->seg_m[s] * g->v_dc - g->ke * g->w * (kp - kn)) / g->r2;
             if (i < 0.0) i = 0.0;
             a += g->k_acc * i * (kp - kn);
@@ -257,7 +261,7 @@ static inline void sb_edges(synth_bemf *g, double t1, double t2, int log_zc)
         }
         double a1 = sb_theta(g, t1), a2 = sb_theta(g, t2);
         double lo_a = a1 < a2 ? a1 : a2, hi_a = a1 < a2 ? a2 : a1;
-        double off = (double)x * 2.0 * BC_PI / 3.0;
+        double off = sb_off(g, x);
         if (hi_a > lo_a) {
             for (double n = ceil((lo_a - off) / BC_PI); n * BC_PI + off <= hi_a && nc < 2 * SB_NSEG + 14; n += 1.0) {
                 double tgt = n * BC_PI + off;
@@ -325,7 +329,7 @@ static inline void sb_sample(synth_bemf *g, long k, bc_ctrl_in *in)
             else if (x == g->seg_neg[j]) v = 0.0;
             else if (x == g->seg_fl[j] && tv < g->seg_cl_end[j]) v = g->seg_cl[j] ? g->v_dc : 0.0;
             else {
-                double th = sb_theta(g, tv) - (double)x * 2.0 * BC_PI / 3.0;
+                double th = sb_theta(g, tv) - sb_off(g, x);
                 double k = sb_trap(th), e = g->ke * w * k;
                 /* after the crossing: |k| grows along the motion */
                 int post = fabs(sb_trap(th + (w >= 0.0 ? 1e-6 : -1e-6))) > fabs(k);

@@ -1137,6 +1137,135 @@ static void test_diode_share(void)
 }
 
 /* fast demagnetisation and the demagnetisation limiter on the kinematic rotor (300 Hz, 22 samples a sector) */
+/* 7, uniform grid (grid_gain): phases b and c's back-EMFs delayed by 2 and -1.5 degrees cross zero off the magnet's
+ * grid; 30 degrees after each crossing the six commutations lie 0, +2 and -1.5 degrees off it (a spread of 3.5
+ * degrees). On the grid phase-locked to the mean of the six crossings every commutation lies the crossings' mean
+ * offset, (2 + 2 - 1.5 - 1.5) / 6 = 1/6 degree, off the magnet's grid, whatever its sector. Both directions, 300 Hz,
+ * the comparator. */
+static void test_uniform_grid(void)
+{
+    static synth_bemf g;
+    const double w = 2.0 * BC_PI * 300.0;
+    for (int dir = 1; dir >= -1; dir -= 2) {
+        for (int grid = 0; grid <= 1; ++grid) {
+            bc_bemf_params p = locked(BC_BEMF_COMPARATOR, w);
+            p.grid_gain = grid ? 0.2f : 0.0f;
+            sb_init(&g, TS, F_TICK, 1);
+            kin_rotor(&g, w, dir, 0.0);
+            g.shift[1] = 2.0 * DEG;
+            g.shift[2] = -1.5 * DEG;
+            g.demag = 30e-6;
+            run_stats r = run_kinematic(p, &g, 4000, (float)dir * 0.5f, 0.0, 0.0);
+            double lo[6], hi[6];
+            for (int j = 0; j < 6; ++j) {
+                lo[j] = 1e9;
+                hi[j] = -1e9;
+            }
+            double sum = 0.0;
+            long n = 0;
+            for (long i = 1; i < g.n_comm; ++i) { /* the commutation ending sector (floating fl), 2 periods on */
+                double tc = g.t_comm[i];
+                if (tc < 0.05) continue;
+                int fl = g.comm_fl[i - 1];
+                /* magnet's grid: 30 degrees after fl's unshifted crossing, n pi + fl 2 pi / 3 (+ pi/6 forward) */
+                double th = sb_theta(&g, tc) - (double)fl * 2.0 * BC_PI / 3.0 - (double)dir * BC_PI / 6.0;
+                double e = (double)dir * (th - BC_PI * floor(th / BC_PI + 0.5)); /* > 0: late */
+                int slot = fl + 3 * (int)(fmod(floor(th / BC_PI + 0.5), 2.0) != 0.0);
+                if (slot < 0 || slot > 5) continue;
+                if (e < lo[slot]) lo[slot] = e;
+                if (e > hi[slot]) hi[slot] = e;
+                sum += e;
+                ++n;
+            }
+            double min = 1e9, max = -1e9;
+            for (int j = 0; j < 6; ++j) {
+                if (lo[j] < min) min = lo[j];
+                if (hi[j] > max) max = hi[j];
+            }
+            double mean = n ? sum / (double)n : 0.0;
+            /* a shift delays the crossing in angle: later in time forward, earlier backward */
+            if (grid)
+                CHECK(r.desync == 0 && n > 60 && (max - min) < 0.05 * DEG &&
+                          fabs(mean - (double)dir * DEG / 6.0) < 0.05 * DEG,
+                      "dir %d, grid: commutations %.3f to %.3f deg off the magnet's grid (mean %.3f, expected %.3f; "
+                      "%ld commutations, %ld desyncs)", dir, min / DEG, max / DEG, mean / DEG, (double)dir / 6.0, n,
+                      r.desync);
+            else /* the crossings' 3.5 degrees, and the interval filter's speed from unequal intervals on top */
+                CHECK(r.desync == 0 && n > 60 && (max - min) > 3.4 * DEG,
+                      "dir %d, after each crossing: commutations %.3f to %.3f deg off the magnet's grid", dir,
+                      min / DEG, max / DEG);
+        }
+    }
+    bc_bemf_params p = locked(BC_BEMF_COMPARATOR, w);
+    bc_bemf_state st;
+    p.grid_gain = 1.5f;
+    CHECK(bc_bemf_init(&p, &st) == BC_ERR_PARAM, "grid_gain 1.5 refused");
+    p.grid_gain = NAN;
+    CHECK(bc_bemf_init(&p, &st) == BC_ERR_PARAM, "grid_gain NaN refused");
+}
+
+/* SYNC fast demagnetisation with the inverter's dead time (d_diode > 0): the change of chopping leg (the positive
+ * leg's turn-ons to the negative leg's turn-offs, each losing one dead time of the pair's voltage to a diode) costs one
+ * dead time more per episode (docs/sensorless.md, 8); the first whole half period of the fast pattern makes it up,
+ * the negative leg at 1 - m - 2 d_diode, every later one at 1 - m. Engaged mid-sector (fd_after 0.5, a clamp of 0.8 of
+ * the window) and from the commutation (fd_after 0: the leg_at part carries none, the next whole half period does). */
+static void test_fast_demag_dead_time(void)
+{
+    static synth_bemf g;
+    const double w = 2.0 * BC_PI * 300.0;
+    const float q = 0.02f;
+    for (int from_comm = 0; from_comm <= 1; ++from_comm) {
+        bc_bemf_params p = locked(BC_BEMF_COMPARATOR, w);
+        p.chop = BC_CHOP_SYNC;
+        p.fast_demag = 1;
+        p.fd_after = from_comm ? 0.0f : 0.5f;
+        p.d_diode = q;
+        sb_init(&g, TS, F_TICK, 1);
+        kin_rotor(&g, w, 1, 0.0);
+        g.demag = from_comm ? 60e-6 : 0.8 * (BC_PI / 6.0) / w;
+        bc_bemf_state s;
+        CHECK(bc_bemf_init(&p, &s) == BC_OK, "init");
+        long episodes = 0, first = 0, later = 0, bad = 0, nsync = 0, nc = 0;
+        int in_fd = 0;
+        for (long k = 0; k < 2400; ++k) {
+            bc_ctrl_in in;
+            sb_sample(&g, k, &in);
+            in.ref = 0.5f;
+            bc_ctrl_out o;
+            memset(&o, 0, sizeof o);
+            bc_bemf_step(&p, &s, &in, &o);
+            sb_apply(&g, k, &o);
+            if (o.diag[0] != (float)BC_BEMF_CLOSED) continue;
+            ++nc;
+            nsync += !(o.flags & BC_FLAG_DESYNC);
+            int fd = -1; /* the leg complementary below its pair's positive leg held on: the fast pattern's */
+            for (int x = 0; x < 3; ++x)
+                if (o.leg[x].mode == BC_LEG_PWM && o.leg[(x + 1) % 3].mode != BC_LEG_PWM &&
+                    o.leg[(x + 2) % 3].mode != BC_LEG_PWM &&
+                    (o.leg[(x + 1) % 3].mode == BC_LEG_HIGH || o.leg[(x + 2) % 3].mode == BC_LEG_HIGH))
+                    fd = x;
+            if (fd < 0 || o.has_at) {
+                if (fd < 0) in_fd = 0;
+                continue;
+            }
+            double want = 1.0 - (double)o.diag[6];
+            double dd = want - (double)o.leg[fd].duty;
+            if (!in_fd) {
+                ++episodes;
+                first += fabs(dd - 2.0 * (double)q) < 1e-6;
+                bad += fabs(dd - 2.0 * (double)q) >= 1e-6;
+            } else {
+                later += fabs(dd) < 1e-6;
+                bad += fabs(dd) >= 1e-6;
+            }
+            in_fd = 1;
+        }
+        CHECK(nc > 1000 && nsync == nc && episodes > 20 && first == episodes && later > episodes && bad == 0,
+              "fast pattern with dead time (%s): %ld episodes, %ld first halves at 1 - m - 2 d_diode, %ld later at 1 - m, "
+              "%ld wrong", from_comm ? "from the commutation" : "fd_after 0.5", episodes, first, later, bad);
+    }
+}
+
 static void test_fast_demag_and_limiter(void)
 {
     static synth_bemf g;
@@ -1287,5 +1416,7 @@ int main(void)
     test_start_current_limit();
     test_diode_share();
     test_fast_demag_and_limiter();
+    test_fast_demag_dead_time();
+    test_uniform_grid();
     return bc_test_summary("test_bemf");
 }

@@ -48,6 +48,7 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
         p->adv_max > PI6_F || !(fin(p->t60_gain) && p->t60_gain > 0.0f && p->t60_gain <= 1.0f))
         return BC_ERR_PARAM;
     if (p->method == BC_BEMF_INTEGRATE && !(fin(p->int_limit) && p->int_limit > 0.0f)) return BC_ERR_PARAM;
+    if (!in01(p->grid_gain)) return BC_ERR_PARAM;
     if (!nonneg(p->int_limit) || !(fin(p->zc_timeout) && p->zc_timeout >= 1.05f && p->zc_timeout <= 4.0f) ||
         !(fin(p->jump_max) && p->jump_max > 1.0f) || p->miss_max < 0 || p->miss_max > 100 ||
         !(fin(p->omega_stall) && p->omega_stall > 0.0f))
@@ -187,6 +188,7 @@ static void enter_sector(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctr
     }
     s->first = 0;
     s->fd_on = 0;
+    s->fd_comp = 0;
     s->sector = sector;
     s->t_c = tc;
     float w = omega_of(p, s);
@@ -464,6 +466,50 @@ static float integrate_predict(const bc_bemf_params *p, const bc_bemf_state *s, 
 
 /* ------------------------------------------------------------------------------------------------------------ */
 
+/* 7, uniform grid: D_s, the lag (s) of this sector's crossing behind the uniform grid through the mean of the six
+ * (0, *tn left, until twelve intervals have been seen), at most 10 degrees; *tn the grid's interval */
+static float grid_lag(const bc_bemf_state *s, float *tn)
+{
+    if (s->grid_n < 12 || s->sector < 0 || s->sector > 5 || !(fin(s->grid_tn) && s->grid_tn > 0.0f)) return 0.0f;
+    float rm = 0.0f, pc[6], pm = 0.0f;
+    for (int j = 0; j < 6; ++j) rm += s->grid_t[j];
+    rm *= 1.0f / 6.0f;
+    if (!(fin(rm) && rm > 0.0f)) return 0.0f;
+    int at = 0; /* P over the sectors in the order of rotation from sector 0 (forward) or 5 (backward) */
+    pc[0] = 0.0f;
+    for (int r = 1; r < 6; ++r) pc[r] = pc[r - 1] + s->grid_t[s->dir > 0 ? r : 5 - r] / rm - 1.0f;
+    for (int r = 0; r < 6; ++r) {
+        pm += pc[r];
+        if ((s->dir > 0 ? r : 5 - r) == s->sector) at = r;
+    }
+    float d = (pc[at] - pm * (1.0f / 6.0f)) * s->grid_tn;
+    if (!fin(d)) return 0.0f;
+    *tn = s->grid_tn;
+    return bc_clampf(d, -s->grid_tn / 6.0f, s->grid_tn / 6.0f);
+}
+
+/* 7, uniform grid: learn from the crossing interval T ending in the current sector */
+static void grid_learn(const bc_bemf_params *p, bc_bemf_state *s, float T)
+{
+    if (s->sector < 0 || s->sector > 5) return;
+    s->grid_ring[s->grid_k] = T;
+    s->grid_k = (s->grid_k + 1) % 6;
+    s->grid_n += s->grid_n < 1000;
+    if (s->grid_n < 6) return;
+    float m6 = 0.0f;
+    for (int j = 0; j < 6; ++j) m6 += s->grid_ring[j];
+    m6 *= 1.0f / 6.0f;
+    float r = T / m6, *g = &s->grid_t[s->sector];
+    *g = s->grid_n <= 12 ? r : *g + p->grid_gain * (r - *g);
+    if (s->grid_n < 12) return;
+    float rm = 0.0f;
+    for (int j = 0; j < 6; ++j) rm += s->grid_t[j];
+    rm *= 1.0f / 6.0f;
+    float tn = T * rm / *g; /* this interval over its sector's ratio */
+    s->grid_tn = s->grid_n == 12 ? m6 : s->grid_tn + p->t60_gain * (tn - s->grid_tn);
+    if (!(fin(s->grid_tn) && s->grid_tn > 0.0f && fin(*g) && *g > 0.0f)) s->grid_n = 0; /* relearn */
+}
+
 /* 5 and 7: an accepted crossing at x_e (s relative to t_k). */
 static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, float x_e)
 {
@@ -503,6 +549,8 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         /* handover: the throttle ramp starts from the duty the forced ramp applied */
         s->d_cmd = ramp_duty_at(p, omega_of(p, s));
         s->mode = BC_BEMF_CLOSED;
+        s->grid_n = 0;
+        s->grid_k = 0;
         s->t_in = 0.0f;
         s->t60 = T;
         s->t_last = T;
@@ -527,6 +575,7 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         if (T > 0.0f && !s->virt) {
             s->t60 += p->t60_gain * (T - s->t60);
             s->t_last = T;
+            if (p->grid_gain > 0.0f) grid_learn(p, s, T); /* 7: the uniform grid */
         } else {
             s->t_last = 0.0f;
         }
@@ -547,7 +596,9 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         s->t_int_max = tadd(n->tk, (x_zc + PI3_F / w) * p->f_tick);
         x_n = integrate_predict(p, s, n, w);
     } else {
-        x_n = x_zc + (PI6_F - s->adv) / w; /* 30 - adv degrees after the crossing */
+        float t60 = PI3_F / w;
+        float lag = s->mode == BC_BEMF_CLOSED && p->grid_gain > 0.0f ? grid_lag(s, &t60) : 0.0f;
+        x_n = x_zc - lag + (PI6_F - s->adv) / PI3_F * t60; /* 30 - adv degrees after the crossing (its grid point) */
     }
     s->t_next = tadd(n->tk, x_n * p->f_tick);
     s->pending = 1;
@@ -557,8 +608,8 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
 /* ------------------------------------------------------------------------------------------------------------ */
 
 /* demag: the outgoing phase may still conduct (fast demagnetisation, 8) */
-static void legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector, float m, float travel, int demag,
-                    bc_leg_cmd c[3])
+static int legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector, float m, float travel, int demag,
+                   int comp, bc_leg_cmd c[3])
 {
     int pos, neg;
     (void)bc_sector_phases(sector, &pos, &neg);
@@ -573,17 +624,21 @@ static void legs_of(const bc_bemf_params *p, const bc_bemf_state *s, int sector,
     if (p->chop == BC_CHOP_PWMPWM) chop_leg = travel < PI6_F ? inc : cont;
     if (demag && s->fd_on && p->chop != BC_CHOP_BIPOLAR && s->incoming >= 0 && s->outgoing >= 0) {
         if (p->chop == BC_CHOP_SYNC && cont == neg) { /* neg complementary at the average (1 - m) V, pos on */
+            /* comp: the change of chopping leg costs one dead time of the pair's voltage (8): made up in the
+             * first whole half period, 2 d_diode (SYNC's d_diode is the dead time's share of a period) */
+            float dc = comp ? 2.0f * p->d_diode : 0.0f;
             bc_pair_legs(BC_CHOP_PWMPWM, pos, neg, neg, m, c);
             c[neg].mode = BC_LEG_PWM;
-            c[neg].duty = bc_clampf(1.0f - m, 0.0f, 1.0f);
-            return;
+            c[neg].duty = bc_clampf(1.0f - m - dc, 0.0f, 1.0f);
+            return 1;
         }
         if (p->chop != BC_CHOP_SYNC) { /* the continuing leg chops with its own switch */
             bc_pair_legs(BC_CHOP_PWMPWM, pos, neg, cont, m, c);
-            return;
+            return 0;
         }
     }
     bc_pair_legs((int)p->chop, pos, neg, chop_leg, m, c);
+    return 0;
 }
 
 /* the demagnetisation of the sector's commutation not yet seen over (no pre level, no crossing) */
@@ -595,7 +650,10 @@ static int demag_now(const bc_bemf_state *s) { return s->det < 2 && !s->dm_known
 static int fd_engage(const bc_bemf_params *p, bc_bemf_state *s, float travel_end)
 {
     int dm = demag_now(s);
-    if (p->fast_demag && dm && !s->fd_on && !(travel_end < p->fd_after * (PI6_F + s->adv_prev))) s->fd_on = 1;
+    if (p->fast_demag && dm && !s->fd_on && !(travel_end < p->fd_after * (PI6_F + s->adv_prev))) {
+        s->fd_on = 1;
+        s->fd_comp = p->chop == BC_CHOP_SYNC;
+    }
     return dm;
 }
 
@@ -827,22 +885,26 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
             float travel = w * tdiff(n.ta, s->t_c) * s->inv_tick;
             if (!fin(travel)) travel = 0.0f;
             if (now && dn >= 0.0f) { /* inside the interval: the commutation timer */
-                legs_of(p, s, s->sector, m, travel, fd_engage(p, s, travel + w * p->ts), out->leg);
+                int dm = fd_engage(p, s, travel + w * p->ts);
+                if (legs_of(p, s, s->sector, m, travel, dm, s->fd_comp, out->leg)) s->fd_comp = 0;
                 shown = s->sector;
                 uint32_t tc = s->t_next;
                 enter_sector(p, s, in, next, tc, -1);
-                legs_of(p, s, next, m, 0.0f, fd_engage(p, s, w * (p->ts - dn * s->inv_tick)), out->leg_at);
+                dm = fd_engage(p, s, w * (p->ts - dn * s->inv_tick));
+                (void)legs_of(p, s, next, m, 0.0f, dm, 0, out->leg_at); /* made up in the next whole half */
                 out->has_at = 1u;
                 out->t_at = bc_clampf(dn * s->inv_tick, 0.0f, p->ts * 0.999999f);
                 s->adv_prev = s->adv;
             } else if (now) { /* already past: at once, from t_a */
                 n.flags |= BC_FLAG_COMM_LATE;
                 enter_sector(p, s, in, next, n.ta, -1);
-                legs_of(p, s, next, m, 0.0f, fd_engage(p, s, w * p->ts), out->leg);
+                int dm = fd_engage(p, s, w * p->ts);
+                if (legs_of(p, s, next, m, 0.0f, dm, s->fd_comp, out->leg)) s->fd_comp = 0;
                 shown = next;
                 s->adv_prev = s->adv;
             } else {
-                legs_of(p, s, s->sector, m, travel, fd_engage(p, s, travel + w * p->ts), out->leg);
+                int dm = fd_engage(p, s, travel + w * p->ts);
+                if (legs_of(p, s, s->sector, m, travel, dm, s->fd_comp, out->leg)) s->fd_comp = 0;
                 shown = s->sector;
             }
             if (now && s->mode == BC_BEMF_RAMP) { /* the next forced commutation */

@@ -21,7 +21,9 @@ from ..model.motor import Drive
 from ..model.units import to_si
 from .base import Control, check_number
 
-__all__ = ["SixStepSensorless", "fast_demag_after", "integral_to_30", "inverter_share", "throttle_rate"]
+__all__ = [
+    "SixStepSensorless", "fast_demag_after", "integral_to_30", "inverter_share", "ramp_excess_speed", "throttle_rate",
+]
 
 # the settings' C constants (values read from the library: bldclab._core)
 _METHOD = {"comparator": "BC_BEMF_COMPARATOR", "adc": "BC_BEMF_ADC", "integration": "BC_BEMF_INTEGRATE"}
@@ -134,6 +136,41 @@ def inverter_share(drive: Drive, chopping: str, current: float) -> float:
         v_d = max(inv.V_f + (inv.r_d - inv.R_on) * abs(current), 0.0)
         q = v_d / (v + v_d)
     return min(max(q, 0.0), 0.5)
+
+
+def ramp_excess_speed(drive: Drive, current: float) -> float:
+    """Return how much faster than the forced ramp a rotor in step at its end runs free (mechanical rad/s).
+
+    At the ramp's end speed ``w`` the ramp drives the current ``I`` (``current``: the alignment current) in step,
+    and the rotor no longer accelerates: the torque ``2 k_phi I`` less the drive's loads at ``w`` (``tau_c + B w +
+    k_q w^2``) is left over and pulls it ahead of the forced field, which it follows (the crossings commutate it).
+    Its back-EMF then takes the current down, by ``2 k_phi / (2 (R + R_on))`` per rad/s, until the torque balances
+    the loads: at ``w + D(w)`` with
+
+        D(w) = 2 (R + R_on) (2 k_phi I - tau_c - B w - k_q w^2) / (2 k_phi)^2.
+
+    Returns the smallest ``w >= 0`` with ``w >= D(w)`` (bisection; ``D`` falls with ``w``): from there on a rotor
+    running ahead at most doubles the forced speed. Where the back-EMF dominates the ramp's duty it is below
+    ``0.1 Omega_0`` (lu-4kw 0.003, f60prov-2550kv 0.048, htm-48v 0.05, outrunner-24v 0.086; mn3110-780kv 0.122);
+    on a high-resistance motor (a 12 V, 10-ohm gimbal motor: 0.39 ``Omega_0``) the ramp's duty is mostly the
+    resistive drop, and an end speed of ``0.1 Omega_0`` left the rotor free to run at four times it, swinging
+    through the forced sectors (docs/sensorless.md, law 5).
+    """
+    m, mech = drive.motor, drive.mechanics
+    k = 2.0 * m.k_phi
+    r = r_total(drive)
+
+    def excess(w: float) -> float:
+        return 2.0 * r * (k * current - mech.tau_c - mech.B * w - mech.k_q * w * w) / (k * k)
+
+    lo, hi = 0.0, max(excess(0.0), 0.0)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if mid >= excess(mid):
+            hi = mid
+        else:
+            lo = mid
+    return hi
 
 
 def integral_to_30(drive: Drive, reference: str | None = None, n: int = 721) -> float:
@@ -268,6 +305,13 @@ class SixStepSensorless(Control):
         Cap of the total advance (default ``"30 deg"``, the largest).
     interval_gain : float
         Gain in (0, 1] of the crossing-interval filter ``T60 <- T60 + g (T - T60)`` (default 0.5; 1: the last one).
+    grid_gain : float
+        0 (default): commutate ``30 deg - timing`` after each crossing. In (0, 1]: commutate on the uniform
+        60-degree grid phase-locked to the mean of the six crossings (the Hall drive's symmetric placement), each
+        sector's crossing interval filtered with this gain (0.1: about ten electrical periods), applied from the
+        twelfth interval after the handover, the correction at most 10 degrees; for a motor whose phases'
+        back-EMFs differ (shifted, scaled), whose crossings lie off the magnet's grid (docs/sensorless.md, section
+        9). Comparator and ADC methods (the integration method ignores it).
     int_limit : float, optional
         Integration method: the back-EMF integral from the crossing to 30 degrees (V s); default from the drive's
         back-EMF (:func:`integral_to_30`).
@@ -299,7 +343,9 @@ class SixStepSensorless(Control):
         drop and dead time for the chopping pattern (:func:`inverter_share`; 0 for the ideal inverter).
     ramp_start_speed, ramp_end_speed : float or str, optional
         Forced commutation's speeds (mechanical); defaults 0 (from standstill at the ramp's acceleration: a start speed
-        above what the rotor reaches in the first sector leaves a light rotor behind) and ``0.1 Omega_0``.
+        above what the rotor reaches in the first sector leaves a light rotor behind) and ``0.1 Omega_0`` or, if
+        higher, :func:`ramp_excess_speed` (a high-resistance motor: the speed excess the ramp's unused torque gives
+        a rotor running ahead of it at its end, so that it runs at most twice as fast as the ramp).
     ramp_time : float or str, optional
         Time of the ramp from start to end speed: the acceleration. Default: the acceleration half the alignment
         current's torque ``2 k_phi align_current`` gives the inertia J, within [10 ms, 10 s].
@@ -374,6 +420,7 @@ class SixStepSensorless(Control):
     timing_demag: float = 0.0
     timing_max: float | str = "30 deg"
     interval_gain: float = 0.5
+    grid_gain: float = 0.0
     int_limit: float | None = None
     timeout: float = 1.5
     jump: float = 2.0
@@ -447,6 +494,9 @@ class SixStepSensorless(Control):
             raise BldclabError("control.timing", f"must be at most 30 deg (pi/6 rad), got {timing:.4g} rad")
         if self.interval_gain > 1.0:
             raise BldclabError("control.interval_gain", f"must be in (0, 1], got {self.interval_gain!r}")
+        check_number("grid_gain", self.grid_gain, allow_zero=True)
+        if self.grid_gain > 1.0:
+            raise BldclabError("control.grid_gain", f"must be in [0, 1] (0: off), got {self.grid_gain!r}")
         if not 1.05 <= self.timeout <= 4.0:
             raise BldclabError("control.timeout", f"must be in [1.05, 4] crossing intervals, got {self.timeout!r}")
         if self.jump <= 1.0:
@@ -480,13 +530,16 @@ class SixStepSensorless(Control):
     def speeds(self, drive: Drive) -> tuple[float, float, float]:
         """Return the stall speed, the ramp's start and end speeds (mechanical rad/s) for ``drive``.
 
-        Defaults: ``0.03 Omega_0``, 0 and ``0.1 Omega_0``; the end speed must be at least 1.5 times the stall speed
-        (the controller hands over only above 1.5 times it).
+        Defaults: ``0.03 Omega_0``, 0 and ``0.1 Omega_0`` or, if higher, the ramp's free-running excess
+        :func:`ramp_excess_speed`; the end speed must be at least 1.5 times the stall speed (the controller hands
+        over only above 1.5 times it).
         """
         w0 = drive.Omega_0
         stall = 0.03 * w0 if self.stall_speed is None else float(self.stall_speed)
         start = 0.0 if self.ramp_start_speed is None else float(self.ramp_start_speed)
-        end = 0.1 * w0 if self.ramp_end_speed is None else float(self.ramp_end_speed)
+        i_al = 0.5 * drive.motor.I_N if self.align_current is None else float(self.align_current)
+        end = (max(0.1 * w0, ramp_excess_speed(drive, i_al)) if self.ramp_end_speed is None
+               else float(self.ramp_end_speed))
         if end < start:
             raise BldclabError("control.ramp_end_speed", f"must be at least ramp_start_speed ({start:.4g} rad/s), "
                                f"got {end:.4g} rad/s")
@@ -583,6 +636,7 @@ class SixStepSensorless(Control):
             adv_demag=self.timing_demag,
             adv_max=min(float(self.timing_max), math.pi / 6.0 * (1.0 - 1e-6)),  # the C cap, below float pi/6
             t60_gain=self.interval_gain,
+            grid_gain=self.grid_gain,
             int_limit=int_limit,
             zc_timeout=self.timeout,
             jump_max=self.jump,

@@ -174,6 +174,17 @@
  *         adv = min(adv_angle + Omega adv_time + adv_demag Omega t_demag, adv_max)      (t_demag: last measured, 6)
  *
  *     BC_BEMF_COMPARATOR, BC_BEMF_ADC: the next commutation at  t_zc + (pi/6 - adv) / Omega.
+ *     Uniform grid (grid_gain > 0, comparator and ADC): a motor whose phases' back-EMFs differ (shifted, scaled)
+ *     crosses zero off the magnet's 60-degree grid, and 30 degrees after each crossing is not where a Hall drive
+ *     commutates. Each sector's crossing interval is filtered, T_s <- T_s + grid_gain (T - T_s) (in the order of
+ *     rotation; reset at the handover), and once twelve have been learned the crossing of sector s is placed on the
+ *     uniform grid through the mean of the six. Each interval is taken relative to the mean of the last six, r = T /
+ *     mean(T_k-5 .. T_k) (a rotor's acceleration changes every sector's r alike), r_s <- r_s + grid_gain (r - r_s)
+ *     for its sector s; with rho_s = r_s / mean r and P_s the cumulative sum of (rho_j - 1) in the order of rotation,
+ *     D_s = (P_s - mean P) Tn (the crossing's lag behind the grid, at most 10 degrees), where the grid's interval
+ *     Tn <- Tn + t60_gain (T / rho_s - Tn); the commutation at t_zc - D_s + (pi/6 - adv) Tn / (pi/3): every
+ *     commutation a uniform 60 degrees apart, phase-locked to the crossings' mean, the Hall drive's symmetric
+ *     placement.
  *     BC_BEMF_INTEGRATE (VESC's BLDC mode): from the crossing the sign-corrected samples are integrated by the
  *     trapezoidal rule (the first piece from t_e, where u = 0),
  *
@@ -212,6 +223,12 @@
  *     at low duty and high current the difference between a visible crossing and a hidden one. A clamp shorter
  *     than fd_after of the window never sees the pattern change, so the drive's torque is that of the plain
  *     pattern (the fast fall of the outgoing current dips the torque in each commutation).
+ *     Dead time (BC_CHOP_SYNC): a complementary leg loses one dead time a period to a diode, the positive leg (its
+ *     current > 0) at each turn-on of its upper switch, the fast pattern's negative leg (< 0) at each turn-off;
+ *     changing from one to the other costs one dead time more per episode, t_dead (V_dc + V_f) of the pair's
+ *     volt-seconds. The first whole half period the fast pattern is issued in (not the leg_at part of a
+ *     commutation's sample) makes it up: the negative leg at 1 - m - 2 d_diode (SYNC's d_diode, 2, is the dead
+ *     time's share of a period, so 2 d_diode is one dead time in a half period); every later one at 1 - m.
  *     When it chops the negative leg, the pair's off-time holds both its terminals at V_dc, and between the clamp's
  *     end and the sample that sees it the floating phase (still on its pre side, e_F > 0) can clamp to V_dc in the
  *     off-times, where a comparator with an offset reads the post level: in such a sector (cmp_gate = 1; with a
@@ -324,6 +341,8 @@ typedef struct {
     int32_t cmp_gate;    /* 1: in a fast-demagnetisation sector on the negative leg, the comparator in the on-time only */
     float i_start;       /* start-up current limit (ALIGN, RAMP; use_current), cycle by cycle, A (>= 0; 0: none) */
     float d_diode;       /* the inverter's share (2): align, ramp and dlim duties d -> d_diode + (1 - d_diode) d, [0, 1) */
+    float grid_gain;     /* 7, CLOSED: > 0, commutate on the uniform grid phase-locked to the mean of the six crossings,
+                          * each sector's crossing interval filtered with this gain, [0, 1]; 0: after each crossing */
 } bc_bemf_params;
 
 typedef struct {
@@ -344,6 +363,12 @@ typedef struct {
     int32_t outgoing;      /* phase that left the pair at the last commutation, -1 none (a start's first sector) */
     int32_t fd_neg;        /* fast demagnetisation chops the negative leg in this sector (its off-time at V_dc) */
     int32_t fd_on;         /* fast demagnetisation engaged in this sector (fd_after reached, the clamp not yet over) */
+    int32_t fd_comp;       /* SYNC: fast demagnetisation newly engaged, its first whole half period not yet issued (8) */
+    float grid_t[6];       /* grid_gain: each sector's filtered crossing interval over the mean of the last six */
+    float grid_ring[6];    /* grid_gain: the last six crossing intervals, s */
+    float grid_tn;         /* grid_gain: the filtered interval of the grid (each interval over its sector's ratio), s */
+    int32_t grid_k;        /* grid_gain: next slot of grid_ring */
+    int32_t grid_n;        /* grid_gain: crossing intervals seen since the handover (the grid applies from 12) */
     uint32_t k_samp;       /* samples since init (even: carrier valley, odd: carrier peak) */
     uint32_t t_c;          /* tick of the commutation that began the sector */
     int32_t pending;       /* a commutation is scheduled at t_next */
