@@ -165,6 +165,17 @@ class Metrics:
         power does not cover its own friction at an imposed speed; every watt in ends as loss, so no efficiency is
         defined) or ``"none"`` (no input: ``p_src_total <= 0`` and ``p_shaft >= 0``, a run in which nothing flows
         or stored energy pays the output).
+    zero_current_share : float
+        Share of the window during which every phase current is zero (all three phases open: the diodes that
+        freewheeled the current have turned off), 0 to 1, from the plant's conduction state integrated in C. Above
+        zero in a PWM-period-sized pattern it is discontinuous conduction: the PWM ripple reaches the current's
+        mean, so the current is no longer its period average plus a small ripple and a regulator that samples it
+        at the carrier extremes (every current controller here) does not see its mean
+        (:func:`bldclab.sim.plausibility.check_conduction`). nan for a result saved before it existed.
+    zero_current_intervals : int
+        Intervals of the window with every phase current zero (one running at ``t0`` included): their mean length
+        ``zero_current_share (t1 - t0) / zero_current_intervals`` is under a PWM period in discontinuous conduction,
+        and long when the drive is off (a safe state, zero duty, a fault). 0 for a result saved before it existed.
     """
 
     t0: float
@@ -206,6 +217,8 @@ class Metrics:
     i_peak: tuple[float, float, float]
     efficiency: float
     power_flow: str = "motoring"
+    zero_current_share: float = math.nan
+    zero_current_intervals: int = 0
 
     @classmethod
     def from_c(cls, m: np.void, acc_names: tuple[str, ...], imposed: bool, omega_integral: float) -> Metrics:
@@ -248,7 +261,9 @@ class Metrics:
             balance_electrical=bal_e, balance_mechanical=bal_m,
             i_rms=(math.sqrt(E["i2a"] / dt), math.sqrt(E["i2b"] / dt), math.sqrt(E["i2c"] / dt)),
             i_peak=(float(m["i_peak"][0]), float(m["i_peak"][1]), float(m["i_peak"][2])),
-            efficiency=efficiency_of(p_src_total, shaft)[1], power_flow=efficiency_of(p_src_total, shaft)[0])
+            efficiency=efficiency_of(p_src_total, shaft)[1], power_flow=efficiency_of(p_src_total, shaft)[0],
+            zero_current_share=float(m["t_open1"] - m["t_open0"]) / dt if dt > 0 else math.nan,
+            zero_current_intervals=int(m["n_open1"] - m["n_open0"]))
 
     @property
     def p_shaft(self) -> float:
