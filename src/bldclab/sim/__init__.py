@@ -892,6 +892,7 @@ def _guards_after(drive: Drive, res: SimResult, imposed: bool, check: str,
     findings = _plaus.check_result(drive, res, rows)
     if control is not None:
         findings += _plaus.check_conduction(drive, control, res, ref_max)
+        findings += _plaus.check_current_rating(drive, control, res, rows)
     if not imposed:
         w = [abs(res.meta["final"]["omega_m"])]
         if "omega_m" in res.signals and len(res):

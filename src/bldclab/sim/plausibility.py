@@ -48,6 +48,11 @@ Thresholds and why (``T_pwm = 1 / f_pwm``, ``tau_el = L / R``, ``f_e = p |Omega|
   back-EMF drives them through the diodes. Warning above 1.01 ``i_trip``; error above 2 ``i_trip`` (beyond the
   level the trip protects the switches at: a real inverter would fail). Without a hardware trip: error above
   100 ``I_N`` (ten thousand times the rated copper loss).
+* A drive without a current loop (a duty, an open-loop voltage) whose phase current exceeds ``RATED_CURRENT_WARN``
+  (2) times ``I_N``, or the motor's peak current ``T_peak / (2 k_phi)`` if larger: warning ``result.current_rating``
+  (at stall and full duty only ``2 (R + R_on)`` limits it, ``V_dc / (2 R)``: 10 ``I_N`` on f60prov-2550kv). A
+  hardware trip (``Inverter.i_trip``) that switched the legs off: warning ``result.hardware_trip`` with its time (the
+  run's rest, and the metrics after it, are of a drive switched off).
 * Discontinuous conduction of a six-step current loop (``SixStep``, predictive, PI or hysteresis regulation):
   every phase current zero for more than ``ZERO_CURRENT_WARN`` (0.1 %) of the metric window
   (``Metrics.zero_current_share``, integrated by the plant) in intervals shorter than a PWM period on average (longer
@@ -89,11 +94,37 @@ from ..model.limits import grade as _grade
 from ..model.motor import Drive
 from .results import SimResult
 
-__all__ = ["BALANCE_ERROR", "BALANCE_FLOOR", "BALANCE_WARN", "CHECK_MODES", "PWM_PER_PERIOD_ERROR",
-           "PWM_PER_PERIOD_WARN", "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "ZERO_CURRENT_WARN", "Finding",
-           "RowSummary", "apply", "cause_first", "cause_of", "check_conduction", "check_driven_speed", "check_pwm",
-           "check_reference", "check_result", "check_speed", "check_steady", "collect", "distinct", "pwm_ripple",
-           "summary"]
+__all__ = [
+    "BALANCE_ERROR",
+    "BALANCE_FLOOR",
+    "BALANCE_WARN",
+    "CHECK_MODES",
+    "PWM_PER_PERIOD_ERROR",
+    "PWM_PER_PERIOD_WARN",
+    "PWM_TAU_ERROR",
+    "PWM_TAU_WARN",
+    "RATED_CURRENT_WARN",
+    "SPEED_ERROR_PU",
+    "ZERO_CURRENT_WARN",
+    "Finding",
+    "RowSummary",
+    "apply",
+    "cause_first",
+    "cause_of",
+    "check_conduction",
+    "check_current_rating",
+    "check_driven_speed",
+    "check_pwm",
+    "check_reference",
+    "check_result",
+    "check_speed",
+    "check_steady",
+    "collect",
+    "distinct",
+    "peak_current",
+    "pwm_ripple",
+    "summary",
+]
 
 @dataclass(frozen=True)
 class RowSummary:
@@ -208,6 +239,76 @@ def _nonfinite(res: SimResult, rows: RowSummary | None = None) -> list[str]:
     return bad
 
 
+def peak_current(res: SimResult, rows: RowSummary | None = None) -> float:
+    """Return the largest phase current magnitude of a run (A): its traced rows, metric window and final state."""
+    peaks = [abs(v) for v in res.meta.get("final", {}).get("i", [])]
+    if res.metrics is not None:
+        peaks += list(res.metrics.i_peak)
+    if rows is not None and not rows.nonfinite:
+        peaks += [rows.peak[x] for x, name in enumerate(("i_a", "i_b", "i_c"))
+                  if name in res.signals and res.signals[name].size]
+    else:
+        for name in ("i_a", "i_b", "i_c"):
+            sig = res.signals.get(name)
+            if sig is not None and sig.size:
+                peaks.append(float(np.max(np.abs(sig))))
+    return max(peaks, default=0.0)
+
+
+#: A drive without a current loop whose phase current exceeds this many times the rated current ``I_N`` (or the
+#: motor's peak current ``T_peak / (2 k_phi)`` when larger) is warned about: the limit of :func:`check_reference`'s
+#: default current trip, the short-time rating of a typical motor.
+RATED_CURRENT_WARN = 2.0
+
+
+def check_current_rating(drive: Drive, control: Control, res: SimResult,
+                         rows: RowSummary | None = None) -> list[Finding]:
+    """Check the currents of a drive without a current loop against its rating, and name a hardware trip.
+
+    A duty (an ESC's throttle, :class:`~bldclab.control.SixStepVoltage`, ``SixStep(regulation="duty")``) or an
+    open-loop voltage leaves the current to the winding resistance and the back-EMF: at stall and full duty
+    ``V_dc / (2 R)``, several times the rating (f60prov-2550kv: 522 A, 10 ``I_N``), which a real drive survives only
+    by a current limit or a trip. A current controller trips at its own ``i_max`` instead (:func:`check_reference`).
+
+    Parameters
+    ----------
+    drive : Drive
+    control : Control
+    res : SimResult
+    rows : RowSummary, optional
+        The runner's summary of the trace rows (else the signals are scanned).
+
+    Returns
+    -------
+    list of Finding
+        A warning on ``result.hardware_trip`` when the inverter's trip ``i_trip`` switched every leg off (the rest
+        of the run is a drive switched off), else one on ``result.current_rating`` when a drive without a current
+        loop reached more than ``RATED_CURRENT_WARN`` times ``I_N`` (or more than ``T_peak / (2 k_phi)``).
+    """
+    t_trip = res.meta.get("stats", {}).get("hw_trip")
+    i_trip = drive.inverter.i_trip
+    if t_trip is not None:
+        return [Finding("warning", "result.hardware_trip",
+                        f"the inverter's hardware trip (i_trip = {i_trip:.4g} A, {i_trip / drive.motor.I_N:.3g} times "
+                        f"I_N = {drive.motor.I_N:.4g} A) switched every leg off at t = {t_trip:.4g} s: from then on "
+                        f"the run is a drive switched off and its metrics describe that")]
+    if _reference_kind(control) is not None or getattr(control, "speed_loop", False):
+        return []
+    m = drive.motor
+    limit, what = RATED_CURRENT_WARN * m.I_N, f"{RATED_CURRENT_WARN:g} I_N"
+    if m.T_peak is not None and m.T_peak / (2.0 * m.k_phi) > limit:
+        limit, what = m.T_peak / (2.0 * m.k_phi), "the motor's peak current T_peak / (2 k_phi)"
+    i_pk = peak_current(res, rows)
+    if i_pk <= limit:
+        return []
+    return [Finding("warning", "result.current_rating",
+                    f"a phase current reached {i_pk:.4g} A, {i_pk / m.I_N:.3g} times the rated current I_N = "
+                    f"{m.I_N:.4g} A (warning above {what} = {limit:.4g} A): the drive has no current loop, so only "
+                    f"the winding resistance and the back-EMF limit the current (at stall V_dc / (2 R) = "
+                    f"{drive.inverter.V_dc / (2.0 * (m.R + drive.inverter.R_on)):.4g} A at full duty); a real drive "
+                    f"needs a current limit or a trip (Inverter.i_trip) there")]
+
+
 def check_result(drive: Drive, res: SimResult, rows: RowSummary | None = None) -> list[Finding]:
     """Check a finished run: finite values, energy balance, currents after a hardware trip.
 
@@ -241,18 +342,7 @@ def check_result(drive: Drive, res: SimResult, rows: RowSummary | None = None) -
                                    f"s (limit {BALANCE_WARN:g} for a warning, {BALANCE_ERROR:g} for an error; the "
                                    f"plant closes it to 1e-7 or better when the PWM resolves the electrical "
                                    f"period): the integration did not resolve the run"))
-    peaks = [abs(v) for v in res.meta.get("final", {}).get("i", [])]
-    if m is not None:
-        peaks += list(m.i_peak)
-    if rows is not None and not rows.nonfinite:
-        peaks += [rows.peak[x] for x, name in enumerate(("i_a", "i_b", "i_c"))
-                  if name in res.signals and res.signals[name].size]
-    else:
-        for name in ("i_a", "i_b", "i_c"):
-            sig = res.signals.get(name)
-            if sig is not None and sig.size:
-                peaks.append(float(np.max(np.abs(sig))))
-    i_pk = max(peaks, default=0.0)
+    i_pk = peak_current(res, rows)
     i_trip = drive.inverter.i_trip
     tripped = res.meta.get("stats", {}).get("hw_trip") is not None
     if tripped and i_trip > 0:
