@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from .._files import write_files
-from ..analysis.faults import fault_table
+from ..analysis.faults import detection_notes, fault_table
 from ..model.catalog import load
 from ..sim import plausibility as _plaus
 from .common import control_of, parse_speed, summarise
@@ -39,6 +39,8 @@ def run_command(args: argparse.Namespace) -> int:
     print(f"{drive.name}, {args.control} control at {speed / drive.Omega_0:.2f} p.u.: firmware over-current trip "
           f"{i_max:g} A{trip}; times from the fault in ms")
     print(table.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    for note in detection_notes(drive, i_max):
+        print(f"note: {note}")
     if args.out is not None:
         for path in write_files(args.out, {"faults.csv": table.to_csv(index=False).encode()}):
             print(f"wrote {path}")
