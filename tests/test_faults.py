@@ -94,3 +94,34 @@ def test_faults_say_why_a_high_resistance_motor_hides_a_lost_sensor_and_an_open_
     assert [note.split(":")[0] for note in detection_notes(HTM, 100.0)] == ["faults.lost_sensor", "faults.open_phase"]
     assert main(["faults", str(path), "--control", "sine", "--speed", "0.1 pu"]) == 0
     assert "note: faults.overcurrent_unreachable: " in capsys.readouterr().out
+
+
+def test_no_current_path_test_detects_a_lost_sensor_and_an_open_phase_without_an_over_current(tmp_path):
+    """SixStep(open_detect=0.1) on the gimbal motor at 0.5 Omega_0: the lost sensor and the open phase go to the
+    safe state (bad-input) with every current below the trip, after at least the time its R-L pair circuit needs to
+    reach 2 f I_ref at full voltage from zero (the test's bound: no sooner than physics allows); the healthy drive,
+    a misplaced Hall sensor, a current-sensor offset and a bus sag are not flagged. At 0.9 Omega_0 the bus has no
+    margin over the back-EMF to tell (I_inf = (V_dc - E) / (2 R) below 2 f I_ref): nothing is tested, nothing
+    flagged, as stated."""
+    path = tmp_path / "gimbal.toml"
+    path.write_text(GIMBAL_TOML)
+    gimbal = bl.load(path)
+    m = gimbal.motor
+    i_max = 2.0 * m.I_N
+    f = 0.1
+    ctl = bl.SixStep(open_detect=f)
+    table = fault_table(gimbal, ctl, m.I_N, 0.5 * gimbal.Omega_0, i_max=i_max).set_index("fault")
+    for fault in ("current sensor a lost", "phase b open"):
+        row = table.loc[fault]
+        assert row.detected and row["flags"] == "bad-input" and row.i_peak < i_max
+        u = gimbal.inverter.V_dc - 2.0 * m.k_phi * 0.5 * gimbal.Omega_0
+        t2 = -(m.L / m.R) * math.log(1.0 - 2.0 * f * m.I_N * 2.0 * m.R / u)
+        assert row.t_detect_ms * 1e-3 > t2
+    for fault in ("none", "hall a misplaced 20 deg", "current a offset +20 % I_N", "DC bus sag to 60 %"):
+        assert not table.loc[fault].detected, fault
+    fast = fault_table(gimbal, ctl, m.I_N, 0.9 * gimbal.Omega_0, i_max=i_max,
+                       cases=[c for c in default_faults() if c.name in ("none", "phase b open")])
+    assert (gimbal.inverter.V_dc - 2.0 * m.k_phi * 0.9 * gimbal.Omega_0) / (2.0 * m.R) < 2.0 * f * m.I_N
+    assert not fast.detected.any()
+    with pytest.raises(bl.BldclabError, match=r"control\.open_detect"):
+        bl.SixStep(open_detect=0.5)

@@ -76,27 +76,37 @@ def stall_current(drive: Drive) -> float:
     return drive.inverter.V_dc / (1.5 * (drive.motor.R + drive.inverter.R_on))
 
 
-def detection_notes(drive: Drive, i_max: float) -> list[str]:
+def detection_notes(drive: Drive, i_max: float, open_detect: float = 0.0) -> list[str]:
     """Say which faults the controllers cannot detect on this drive, and why, from its data.
 
-    The controllers' only detections are an invalid Hall code, a bad input (non-finite, bus out of range) and an
-    over-current on the measured currents (``i_max``); a lost current sensor and an open phase have no test of their
-    own, so they are detected only through an over-current they cause. Where the windings' resistance keeps every
-    current at or below ``i_max`` that cannot happen (a high-resistance gimbal motor: 12 V, 10 Ohm, 0.4 A rated,
-    ``i_max = 2 I_N = 0.8 A`` = the stall current ``V_dc / (1.5 R)``).
+    The controllers' general detections are an invalid Hall code, a bad input (non-finite, bus out of range) and an
+    over-current on the measured currents (``i_max``); a lost current sensor and an open phase are detected by them
+    only through an over-current they cause. Where the windings' resistance keeps every current at or below
+    ``i_max`` that cannot happen (a high-resistance gimbal motor: 12 V, 10 Ohm, 0.4 A rated, ``i_max = 2 I_N =
+    0.8 A`` = the stall current ``V_dc / (1.5 R)``). The six-step controller's no-current-path test
+    (``SixStep(open_detect=f)``) detects both without an over-current, where the bus has a voltage margin over the
+    back-EMF.
 
     Parameters
     ----------
     drive : Drive
     i_max : float
         The controller's over-current trip (A).
+    open_detect : float
+        The controller's no-current-path test (``SixStep.open_detect``; 0: none).
 
     Returns
     -------
     list of str
         Notes, each led by its name (``faults.overcurrent_unreachable``, ``faults.lost_sensor``,
-        ``faults.open_phase``); the last two hold for every drive.
+        ``faults.open_phase``, or ``faults.open_detect`` with the test on).
     """
+    if open_detect > 0.0:
+        return [f"faults.open_detect: the six-step controller's no-current-path test (f = {open_detect:g}) detects a "
+                f"lost current sensor and an open phase without an over-current: a current below f I_ref at full "
+                f"voltage for twice the time the windings need to pass 2 f I_ref; it cannot where the bus has no "
+                f"margin over the back-EMF (near Omega_0), before the Hall speed is valid, or where that time "
+                f"exceeds a commutation sector"]
     notes = []
     i_stall = stall_current(drive)
     if i_stall <= i_max:
