@@ -133,15 +133,17 @@ def sensor_errors(names: list[str], speeds: tuple[float, ...] = (0.1, 0.5)) -> N
 RHO_LO, RHO_HI = 0.6, 0.95  # bc_sine.h: the load-adaptive ramp's band (BC_SINE_RHO_LO, BC_SINE_RHO_HI)
 
 
-def startup_bound(st: dict[str, float], J: float, p: int, tau_if: float) -> float:
+def startup_bound(st: dict[str, float], J: float, p: int, tau_if: float, tau_f: float = 0.0) -> float:
     """Return the largest load (a fraction of the I/f torque ``tau_if``) the start is designed to carry.
 
     In the ramp the rotor's torque share ``rho`` (its load angle's cosine) sets the acceleration ``a = a_max (RHO_HI
-    - rho) / (RHO_HI - RHO_LO)``, and ``rho tau_if = tau_L + J a / p``; the ramp fails (START_FAIL) when its mean
+    - rho) / (RHO_HI - RHO_LO)``, and ``rho tau_if = tau_L + tau_f + J a / p`` with ``tau_f`` the drive's own
+    friction at the hand-off speed (``tau_c + B omega_on``, N m); the ramp fails (START_FAIL) when its mean
     acceleration is below ``a_min`` (``omega_on / a_min`` below the top). Equilibrium at ``a = a_min``:
-    ``tau_L / tau_if = RHO_HI - (RHO_HI - RHO_LO) a_min / a_max - J a_min / (p tau_if)``.
+    ``tau_L / tau_if = RHO_HI - (RHO_HI - RHO_LO) a_min / a_max - J a_min / (p tau_if) - tau_f / tau_if``.
     """
-    return RHO_HI - (RHO_HI - RHO_LO) * st["if_accel_min"] / st["if_accel"] - J * st["if_accel_min"] / (p * tau_if)
+    return (RHO_HI - (RHO_HI - RHO_LO) * st["if_accel_min"] / st["if_accel"] - J * st["if_accel_min"] / (p * tau_if)
+            - tau_f / tau_if)
 
 
 def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str) -> dict[str, float]:
@@ -176,7 +178,8 @@ def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str) ->
                  estimate=d)
     on = r["mode"] > 0.5
     ok = bool(on[-1]) and abs(r["omega_m"][-1] / w - 1) < 0.05
-    return {"ok": float(ok), "bound": startup_bound(st, mech.J, p, tau_if),
+    tau_f = d.mechanics.tau_c + d.mechanics.B * ctl.handoff(d)  # the drive's own friction at the hand-off speed
+    return {"ok": float(ok), "bound": startup_bound(st, mech.J, p, tau_if, tau_f),
             "t_lock": float(r["t"][on][0]) if on.any() else math.nan, "restarted": float("DESYNC" in r.flags_raised),
             "tau_if": tau_if, "flags": r.flags_raised}
 

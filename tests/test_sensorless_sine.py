@@ -414,3 +414,75 @@ def test_flying_start_catches_a_turning_rotor(name: str, w0: float) -> None:
     assert ("STALL" in r.flags_raised) == (w0 < 0)
     assert r["mode"][-1] == 1
     assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
+
+
+def start_stretches(r: bl.sim.SimResult) -> list[tuple[float, float]]:
+    """The stretches (first, last time, s) in which the drive is in its start mode with the legs on (alignment and
+    I/f ramp, ``mode`` 0 without SAFE); each ends at the hand-over (``mode`` 1), at a restart (the legs off, SAFE,
+    after a DESYNC) or at the run's end."""
+    t, on = r["t"], (r["mode"] < 0.5) & ((r["ctrl_flags"].astype(np.int64) & 1) == 0)
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], on.astype(np.int8), [0]))))
+    return [(float(t[a]), float(t[b - 1])) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+
+
+@pytest.mark.parametrize("name", ["htm-48v", "servo-2k2", "outrunner-24v"])
+@pytest.mark.parametrize("wrong", [{"emf": 0.75}, {"emf": 1.25}, {"R": 0.5}, {"R": 1.5}],
+                         ids=["psi-25%", "psi+25%", "R-50%", "R+50%"])
+def test_start_with_wrong_parameters_ends_by_name(name: str, wrong: dict[str, float]) -> None:
+    """The controller configured with the flux linkage 25 % off or R 50 % off (``estimate=``), no load, the speed
+    loop to 0.3 Omega_0: every start either hands over or ends by name (START_FAIL or, after a hand-over, LOCK_LOST,
+    each with DESYNC, then a restart) within the slowest unloaded start the drive's data give, ``if_align +
+    omega_on / if_accel_min + if_hold`` (alignment, the ramp at its slowest mean acceleration, the wait for the lock
+    at the top); none sits in the ramp. At the end (twice the longest start the controller allows, ``if_align + 2
+    omega_on / if_accel_min + if_hold``: a hand-off followed at once by a hand-back, again and again, spends the
+    ramp's budget) the drive either runs at the reference (5 %) in the sine mode or has raised such a named
+    failure."""
+    d = bl.load(name)
+    ctl = bl.Sine(angle="observer", speed_loop=True)
+    st = ctl.sensorless_settings(d)
+    w_on = d.motor.p * ctl.handoff(d)
+    bound = st["if_align"] + w_on / st["if_accel_min"] + st["if_hold"]
+    w = 0.3 * d.Omega_0
+    dur = 2 * (st["if_align"] + 2 * w_on / st["if_accel_min"] + st["if_hold"]) \
+        + d.mechanics.J * w / (0.5 * ctl.torque_limit(d))
+    r = simulate(d, ctl, Scenario(duration=dur, omega_ref=w, trace_every=16), estimate=d.scaled(**wrong))
+    longest = max(b - a for a, b in start_stretches(r))
+    assert longest < bound + 2 * st["lock_time"], f"{longest:.2f} s in the start (bound {bound:.2f} s)"
+    flags = r.flags_raised
+    done = r["mode"][-1] == 1 and abs(r["omega_m"][-1] / w - 1) < 0.05
+    named = "DESYNC" in flags and ("START_FAIL" in flags or "LOCK_LOST" in flags)
+    assert done or named, flags
+
+
+@pytest.mark.parametrize("name", ["htm-48v", "servo-2k2", "outrunner-24v"])
+@pytest.mark.parametrize("wrong", [{"emf": 0.75}, {"emf": 1.25}, {"R": 0.5}, {"R": 1.5}],
+                         ids=["psi-25%", "psi+25%", "R-50%", "R+50%"])
+def test_wrong_parameters_start_with_the_estimates(name: str, wrong: dict[str, float]) -> None:
+    """The same wrong data as above, the controller measuring R at its alignment (``if_r_estimate``) and estimating
+    the flux linkage from the flux observer's steady state at the hand-off speed when its flux refutes the
+    configured one (``if_flux_estimate``): every start hands over on its first attempt (no DESYNC), the speed loop
+    reaches the reference (5 %), and the angle error against the plant over the last 0.2 s is the true-parameter
+    case's (same settings) to 0.5 deg, mean and worst (measured: 0.31 deg at most)."""
+    d = bl.load(name)
+    ctl = bl.Sine(angle="observer", speed_loop=True, if_r_estimate=True, if_flux_estimate=True)
+    st = ctl.sensorless_settings(d)
+    w = 0.3 * d.Omega_0
+    dur = st["if_align"] + d.motor.p * ctl.handoff(d) / st["if_accel_min"] + st["if_hold"] \
+        + d.mechanics.J * w / (0.5 * ctl.torque_limit(d)) + 0.5
+
+    def run(estimate: bl.Drive) -> tuple[bl.sim.SimResult, float, float]:
+        r = simulate(d, ctl, Scenario(duration=dur, omega_ref=w, trace_every=4), estimate=estimate)
+        last = r["t"] > r["t"][-1] - 0.2
+        err = np.degrees(angle_error(r, last))
+        return r, float(np.mean(err)), float(np.max(np.abs(err)))
+
+    r, mean, worst = run(d.scaled(**wrong))
+    _, mean0, worst0 = run(d)
+    assert "DESYNC" not in r.flags_raised
+    assert r["mode"][-1] == 1
+    assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
+    assert abs(mean - mean0) < 0.5, (mean, mean0)
+    assert worst < worst0 + 0.5, (worst, worst0)
+    with pytest.raises(BldclabError) as e:
+        bl.Sine(angle="observer", if_flux_estimate=1)  # type: ignore[arg-type]
+    assert e.value.field == "control.if_flux_estimate"

@@ -480,6 +480,7 @@ static void test_fuzz_observer(void)
         p.speed_loop = (variant >> 1) & 1;
         p.tau_max = 40.0f;
         p.if_r_est = variant == 0 || variant == 3; /* the resistance of the alignment, both observers */
+        p.if_psi_est = variant != 3;              /* the flux linkage estimate (no effect on the reduced one) */
         static bc_sine_state s;
         CHECK(bc_sine_init(&p, &s) == BC_OK, "init observer variant %d", variant);
         float phase = 0.0f;
@@ -547,6 +548,9 @@ static void test_fuzz_observer(void)
     observer_params(&p, BC_SINE_OBS_FLUX);
     p.if_r_est = 2;
     CHECK(bc_sine_init(&p, &s) == BC_ERR_PARAM, "if_r_est = 2 rejected");
+    observer_params(&p, BC_SINE_OBS_FLUX);
+    p.if_psi_est = 2;
+    CHECK(bc_sine_init(&p, &s) == BC_ERR_PARAM, "if_psi_est = 2 rejected");
 }
 
 /* The resistance measured in ALIGN (if_r_est): a locked rotor (no back-EMF), the windings an R-L load integrated

@@ -26,6 +26,17 @@ int bc_fluxobs_init(const bc_fluxobs_params *p, bc_fluxobs_state *s)
     return BC_OK;
 }
 
+void bc_fluxobs_set_psi(const bc_fluxobs_params *p, bc_fluxobs_state *s, float psi)
+{
+    if (!finite_pos(psi)) return;
+    float psi2 = psi * psi, hg = 0.5f * p->gain / psi2, w_max = 4.0f * p->v_max / psi, x_max = 4.0f * psi + p->L * p->i_max;
+    if (!isfinite(hg) || !isfinite(w_max) || !isfinite(x_max) || !(psi2 > 0.0f)) return;
+    s->psi2 = psi2;
+    s->half_gamma = hg;
+    s->omega_max = w_max;
+    s->x_max = x_max;
+}
+
 void bc_fluxobs_reset(const bc_fluxobs_params *p, bc_fluxobs_state *s, float theta_e, float omega_e, bc_ab i)
 {
     float th = bc_wrap_2pi(theta_e); /* non-finite: 0 */

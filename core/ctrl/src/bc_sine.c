@@ -318,7 +318,7 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
             !finite_pos(p->if_accel) || !finite_pos(p->if_accel_min) || p->if_accel_min > p->if_accel ||
             !finite_pos(p->if_hold) || !finite_pos(p->lock_time) ||
             !finite_pos(p->lock_tol) || p->lock_tol >= 1.0f || !finite_nonneg(p->restart_wait) || !finite_nonneg(p->if_damp) ||
-            !finite_nonneg(p->t_dead) || p->t_dead >= p->ts || !is_flag(p->if_r_est))
+            !finite_nonneg(p->t_dead) || p->t_dead >= p->ts || !is_flag(p->if_r_est) || !is_flag(p->if_psi_est))
             return BC_ERR_PARAM;
     }
     if (p->emf_ff) {
@@ -361,8 +361,11 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->n_restart = 0u;
     s->if_trust = 0;
     s->r_obs = p->observer == BC_SINE_OBS_REDUCED ? p->robs.R : p->fobs.R;
+    s->psi_obs = p->observer == BC_SINE_OBS_REDUCED ? p->robs.psi : p->fobs.psi;
+    s->flux_f = s->n_psi = 0.0f;
+    s->psi_adapt = 0;
     s->r_ui = s->r_ii = 0.0f;
-    s->n_catch = s->w_rev = s->if_wmin = 0.0f;
+    s->n_catch = s->w_rev = s->if_wmin = s->if_tb = s->if_tr = 0.0f;
     s->caught = 0;
     s->derate_on = p->derate.enabled[0] != 0 || p->derate.enabled[1] != 0;
     s->derate_f = 1.0f;
@@ -620,7 +623,9 @@ static void current_loops(const bc_sine_params *p, bc_sine_state *s, bc_dq idq, 
 static void obs_reset(const bc_sine_params *p, bc_sine_state *s, float theta_e, float omega_e, bc_ab i)
 {
     if (p->observer == BC_SINE_OBS_FLUX) {
-        bc_fluxobs_reset(&p->fobs, &s->fobs, theta_e, omega_e, i);
+        bc_fluxobs_params fp = p->fobs;
+        fp.psi = s->psi_obs; /* seeded on the circle in use */
+        bc_fluxobs_reset(&fp, &s->fobs, theta_e, omega_e, i);
     } else {
         bc_redobs_reset(&p->robs, &s->robs, theta_e, omega_e, i);
     }
@@ -631,6 +636,7 @@ static void obs_run(const bc_sine_params *p, bc_sine_state *s, const bc_obs_in *
     if (p->observer == BC_SINE_OBS_FLUX) {
         bc_fluxobs_params fp = p->fobs;
         fp.R = s->r_obs; /* the configured R, or the one measured in ALIGN (if_r_est) */
+        fp.psi = s->psi_obs; /* the configured psi_f, or the one estimated at omega_on (if_psi_est) */
         bc_fluxobs_step(&fp, &s->fobs, in, o);
     } else {
         bc_redobs_params rp = p->robs;
@@ -639,8 +645,9 @@ static void obs_run(const bc_sine_params *p, bc_sine_state *s, const bc_obs_in *
     }
 }
 
-/* The configured resistance of the observer chosen. */
+/* The configured resistance and flux linkage of the observer chosen. */
 static float obs_r(const bc_sine_params *p) { return p->observer == BC_SINE_OBS_FLUX ? p->fobs.R : p->robs.R; }
+static float obs_psi(const bc_sine_params *p) { return p->observer == BC_SINE_OBS_FLUX ? p->fobs.psi : p->robs.psi; }
 
 /* Legs off in the sensorless start (IDLE, WAIT): the voltage of the coming samples is not known. */
 static void sl_off(bc_sine_state *s, bc_ctrl_out *out)
@@ -690,10 +697,18 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
     s->u_hist[1][1] = s->u_hist[0][1];
     s->u_ok[1] = s->u_ok[0];
     s->u_ok[0] = 0;
-    float psi = p->observer == BC_SINE_OBS_FLUX ? p->fobs.psi : p->robs.psi;
-    int flux_ok = fabsf(o.flux / psi - 1.0f) <= p->lock_tol;
-    /* the observer's speed through a first-order low-pass of time constant lock_time (the rotor's I/f swing out) */
-    s->omega_f += bc_clampf(p->ts / p->lock_time, 0.0f, 1.0f) * (o.omega_e - s->omega_f);
+    int flux_ok = fabsf(o.flux / s->psi_obs - 1.0f) <= p->lock_tol;
+    /* the observer's speed (and flux) through a first-order low-pass of time constant lock_time (the rotor's I/f
+     * swing out) */
+    float k_f = bc_clampf(p->ts / p->lock_time, 0.0f, 1.0f);
+    s->omega_f += k_f * (o.omega_e - s->omega_f);
+    s->flux_f += k_f * (o.flux - s->flux_f);
+    /* if_psi_est (flux observer): its low-passed flux off the configured circle by more than half the band
+     * refutes the configured flux linkage; from then on, until the next ALIGN, a flux off the circle in use by
+     * more than 2 % of the band holds the hand-off and the catch until the flux linkage is estimated (below) */
+    float psi_dev = fabsf(s->flux_f / s->psi_obs - 1.0f);
+    int psi_off = p->if_psi_est && p->observer == BC_SINE_OBS_FLUX &&
+                  psi_dev > (s->psi_adapt ? 0.02f : 0.5f) * p->lock_tol;
 
     float tau, tau_u = 0.0f, e_w = 0.0f, ref = p->speed_loop ? in->omega_ref : in->ref;
     int was = s->mode;
@@ -744,6 +759,12 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             s->if_omega = 0.0f;
             s->n_lock = 0.0f;
             s->r_obs = obs_r(p);
+            if (s->psi_obs != obs_psi(p)) {
+                s->psi_obs = obs_psi(p); /* a new start from the configured flux linkage */
+                if (p->observer == BC_SINE_OBS_FLUX) bc_fluxobs_set_psi(&p->fobs, &s->fobs, s->psi_obs);
+            }
+            s->n_psi = 0.0f;
+            s->psi_adapt = 0;
             s->n_catch = 0.0f;
             s->caught = 0;
             s->if_t = 0.0f;
@@ -782,7 +803,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 s->sl_phase = BC_SINE_SL_RAMP;
                 s->sl_t = 0.0f;
                 s->rho_f = 0.0f;
-                s->if_t = 0.0f;
+                s->if_t = s->if_tb = s->if_tr = 0.0f;
                 s->if_wmin = 0.0f;
                 s->if_trust = 0;
             }
@@ -822,18 +843,24 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                     s->if_t = 0.0f;
                 }
                 s->if_t += p->ts;
-                if (adaptive && s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min)
+                s->if_tr += p->ts;
+                if (w < 0.0f) s->if_tb += p->ts;
+                /* and, whatever the lowest speed, against dir for the slowest ramp's time in all, or below
+                 * omega_on for twice it (the slowest ramp from -omega_on): every ramp ends within a bound */
+                float t_min = p->omega_on / p->if_accel_min;
+                if (adaptive && (s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min || s->if_tb >= t_min ||
+                                 s->if_tr >= 2.0f * t_min))
                     sl_desync(p, s, out, BC_FLAG_START_FAIL);
             }
             if (at_top) {
                 s->sl_t += p->ts;
-                int lock = flux_ok && fabsf(o.err) <= p->lock_tol && s->omega_f * dir >= p->omega_off;
+                int lock = flux_ok && fabsf(o.err) <= p->lock_tol && s->omega_f * dir >= p->omega_off && !psi_off;
                 s->n_lock = lock ? s->n_lock + p->ts : 0.0f;
                 if (s->n_lock >= p->lock_time) {
                     s->mode = BC_SINE_MODE_SINE;
                     s->n_lock = 0.0f;
                     s->sl_t = 0.0f;
-                    s->if_t = 0.0f; /* a completed ramp: a later hand-back has the whole budget */
+                    s->if_t = s->if_tb = s->if_tr = 0.0f; /* a completed ramp: a later hand-back has the whole budget */
                     s->w_rev = fabsf(s->omega_f);
                 } else if (s->sl_t >= p->if_hold) {
                     sl_desync(p, s, out, BC_FLAG_START_FAIL);
@@ -847,7 +874,23 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
          * rotor turning when the drive starts, or pushed by an active load): the sine mode at once, whose speed
          * loop brakes or drives it with the whole current limit */
         int turning = !s->caught && flux_ok && fabsf(o.err) <= p->lock_tol && fabsf(s->omega_f) >= p->omega_on;
-        s->n_catch = turning ? s->n_catch + p->ts : 0.0f;
+        s->n_catch = turning && !psi_off ? s->n_catch + p->ts : 0.0f;
+        /* the flux linkage from the flux observer's steady state (if_psi_est; bc_sine.h, RAMP): the observer
+         * consistent on a rotor turning at least at omega_off, its flux off the circle for 3 lock_time: psi^ =
+         * rho sqrt(1 + (k / omega)^2), k = (lambda / 2)(1 - rho^2 / psi_c^2) */
+        int steady = fabsf(o.err) <= p->lock_tol && fabsf(s->omega_f) >= p->omega_off;
+        s->n_psi = steady && psi_off ? s->n_psi + p->ts : 0.0f;
+        if (s->n_psi >= 3.0f * p->lock_time) {
+            float rr = s->flux_f / s->psi_obs, k = 0.5f * p->fobs.gain * (1.0f - rr * rr);
+            float kw = k / fabsf(s->omega_f);
+            float est = s->flux_f * sqrtf(1.0f + kw * kw);
+            if (isfinite(est) && est >= 0.5f * p->fobs.psi && est <= 2.0f * p->fobs.psi) {
+                s->psi_adapt = 1;
+                s->psi_obs = est;
+                bc_fluxobs_set_psi(&p->fobs, &s->fobs, est);
+            }
+            s->n_psi = 0.0f;
+        }
         if (s->n_catch >= p->lock_time) {
             s->mode = BC_SINE_MODE_SINE;
             s->n_lock = s->sl_t = s->n_catch = 0.0f;
@@ -886,7 +929,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             /* the swing braked through the observer: i_d = if_damp psi_f (omega^ - omega_if) / sin Delta makes
              * the torque -1.5 k_1 if_damp psi_f (omega^ - omega_if) (bc_sine.h, RAMP); near sin Delta = 0 (the
              * rotor at the I/f current's largest torque) it fades: sin Delta / max(sin^2 Delta, 1/16) */
-            float psi = p->observer == BC_SINE_OBS_FLUX ? p->fobs.psi : p->robs.psi;
+            float psi = s->psi_obs;
             float sdl = sinf(o.theta - s->if_theta);
             float id_max = sqrtf(fmaxf(p->i_s_max * p->i_s_max - p->if_current * p->if_current, 0.0f));
             id_max = fminf(id_max, p->if_current) * s->derate_f;

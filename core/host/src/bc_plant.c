@@ -63,13 +63,23 @@ static BC_NOINLINE void cos_sin_libm(double th, double *c, double *sn)
     *sn = sin(th);
 }
 
-static BC_ALWAYS_INLINE int cos_sin(double th, const double *ref, double *c, double *sn)
+/* cos d and sin d for |d| < 0.03 by their Taylor series to d^6 and d^7 (truncation below 2e-17), with constant
+ * coefficients and split in two halves (d^4 times the higher terms): multiplications only, and a shorter chain of
+ * dependent operations than the nested form (the derivative's evaluations wait on it). A division by 12.0 is not
+ * one by its reciprocal, so the compiler keeps it: the nested form with divisions cost five a call. */
+static BC_ALWAYS_INLINE void cs_series(double d, double *cd, double *sd)
+{
+    const double d2 = d * d, d4 = d2 * d2;
+    *cd = (1.0 - 0.5 * d2) + d4 * (1.0 / 24.0 - d2 * (1.0 / 720.0));
+    *sd = d * ((1.0 - d2 * (1.0 / 6.0)) + d4 * (1.0 / 120.0 - d2 * (1.0 / 5040.0)));
+}
+
+static BC_ALWAYS_INLINE int cos_sin(double th, const double *ref, double *c, double *sn, double lim)
 {
     double d = ref ? th - ref[0] : 1.0;
-    if (fabs(d) < 0.03) {
-        double d2 = d * d;
-        double cd = 1.0 - 0.5 * d2 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0));
-        double sd = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0)));
+    if (fabs(d) < lim) {
+        double cd, sd;
+        cs_series(d, &cd, &sd);
         *c = ref[1] * cd - ref[2] * sd;
         *sn = ref[2] * cd + ref[1] * sd;
         return 1;
@@ -92,12 +102,39 @@ static BC_ALWAYS_INLINE void cs_anchor(double *cs, int rotated, const double *re
     }
 }
 
+/* Sinusoidal shapes (one Fourier order, fz_n = 2) near an anchor {th_a, c_a, s_a}: k_x(th_a + d) = ks (a_x0 +
+ * a_x1 cos(th_a + d) + b_x1 sin(th_a + d)) = al_x + be_x cos d + ga_x sin d, dk_x/dth = ga_x cos d - be_x sin d: the
+ * rotation from the anchor folded into the coefficients, once a step for its four derivative evaluations. */
+typedef struct sin_fold {
+    int on;                      /* 1: set (an anchor and one order) */
+    double th_a, c_a, s_a;       /* the anchor */
+    double al[3], be[3], ga[3];  /* V s/rad */
+} sin_fold;
+
+static BC_ALWAYS_INLINE void sin_fold_init(const bc_plant_state *s, sin_fold *f)
+{
+    const double *cs = s->work.cs;
+    f->on = s->fz_n == 2 && cs[0] != HUGE_VAL;
+    if (!f->on) return;
+    const double ks = s->k_scale;
+    f->th_a = cs[0];
+    f->c_a = cs[1];
+    f->s_a = cs[2];
+    for (int x = 0; x < 3; ++x) {
+        const double a1 = s->fz_a[x][1], b1 = s->fz_b[x][1];
+        f->al[x] = ks * s->fz_a[x][0];
+        f->be[x] = ks * (a1 * cs[1] + b1 * cs[2]);
+        f->ga[x] = ks * (b1 * cs[1] - a1 * cs[2]);
+    }
+}
+
 /* k_x(th) of the three phases and, if dk is non-null, dk_x/dth (tables: the piece's slope; Fourier: the series
  * differentiated term by term, sum_m m (y_m cos - x_m sin)). A Fourier shape needs cos and sin of th: from ref
  * (cos_sin) and, if cs is non-null, its anchor returned there: {th_a, cos th_a, sin th_a} of the libm angle it was
  * rotated from, or of th itself (cs[0] = HUGE_VAL if none was needed). */
 static BC_ALWAYS_INLINE void shapes_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s, double th,
-                             double *restrict k, double *restrict dk, const double *ref, double *cs)
+                             double *restrict k, double *restrict dk, const double *ref, double *cs,
+                             const sin_fold *fo)
 {
     if (cs) { /* none (table shapes); the zeros keep the aux fully defined */
         cs[0] = HUGE_VAL;
@@ -112,9 +149,26 @@ static BC_ALWAYS_INLINE void shapes_at(const bc_plant_params *restrict p, const 
         }
         return;
     }
+    /* an evaluation that hands its anchor on (cs: the step ends) takes a new one from libm half-way through the
+     * rotation's range, so that the RK4 stages of the next step, which cannot, stay inside it */
+    const double lim = cs ? 0.015 : 0.03;
+    if (fo && fo->on && fabs(th - fo->th_a) < lim) { /* a sinusoid near the step's anchor (sin_fold) */
+        double cd, sd;
+        cs_series(th - fo->th_a, &cd, &sd);
+        for (int x = 0; x < 3; ++x) k[x] = fo->al[x] + (fo->be[x] * cd + fo->ga[x] * sd);
+        if (dk) {
+            for (int x = 0; x < 3; ++x) dk[x] = fo->ga[x] * cd - fo->be[x] * sd;
+        }
+        if (cs) {
+            cs[0] = fo->th_a;
+            cs[1] = fo->c_a;
+            cs[2] = fo->s_a;
+        }
+        return;
+    }
     if (s->fz_n > 0) { /* three Fourier series in the global angle: one recurrence cos(m th), sin(m th) for all */
         double c, sn;
-        const int rot = cos_sin(th, ref, &c, &sn);
+        const int rot = cos_sin(th, ref, &c, &sn, lim);
         if (cs) cs_anchor(cs, rot, ref, th, c, sn);
         /* m = 0 (cos 0 = 1, sin 0 = 0, no derivative) and m = 1 (cos th, sin th) as the loop would add them */
         double k0 = s->fz_a[0][0], k1 = s->fz_a[1][0], k2 = s->fz_a[2][0], d0 = 0.0, d1 = 0.0, d2 = 0.0;
@@ -155,7 +209,7 @@ static BC_ALWAYS_INLINE void shapes_at(const bc_plant_params *restrict p, const 
             continue;
         }
         if (!trig) {
-            const int rot = cos_sin(th, ref, &c, &sn);
+            const int rot = cos_sin(th, ref, &c, &sn, lim);
             trig = 1;
             if (cs) cs_anchor(cs, rot, ref, th, c, sn);
         }
@@ -207,12 +261,12 @@ static BC_ALWAYS_INLINE void aux_terminals(const bc_plant_params *restrict p, co
 
 static BC_ALWAYS_INLINE void core_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s,
                                      const double *restrict y, double *restrict dy, aux_t *restrict a, int want,
-                                     const double *ref)
+                                     const double *ref, const sin_fold *fo)
 {
     const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
     const double th = y[Y_TH], om = y[Y_OM];
     double k[3], dk[3], cs[3];
-    shapes_at(p, s, th, k, (want & WANT_DK) ? dk : 0, ref, a ? cs : 0);
+    shapes_at(p, s, th, k, (want & WANT_DK) ? dk : 0, ref, a ? cs : 0, fo);
     const double e0 = om * k[0], e1 = om * k[1], e2 = om * k[2];
     if (s->tc_gain != 0.0) {
         const double *B = s->tc_b;
@@ -257,7 +311,7 @@ static BC_ALWAYS_INLINE void core_at(const bc_plant_params *restrict p, const bc
         }
     }
     dy[Y_TH] = (double)p->p * om;
-    dy[Y_OM] = (p->mech == BC_MECH_DYNAMIC && !s->stuck) ? (tau_net - t_fric - t_fe) / p->J : 0.0;
+    dy[Y_OM] = (p->mech == BC_MECH_DYNAMIC && !s->stuck) ? (tau_net - t_fric - t_fe) * s->work.inv_J : 0.0;
     if (!a) return;
     a->k[0] = k[0];
     a->k[1] = k[1];
@@ -344,7 +398,7 @@ static BC_ALWAYS_INLINE void aux_terminals(const bc_plant_params *restrict p, co
 static void core(const bc_plant_params *restrict p, const bc_plant_state *restrict s, const double *restrict y,
                  double *restrict dy, aux_t *restrict a, int want, const double *ref)
 {
-    core_at(p, s, y, dy, a, want, ref);
+    core_at(p, s, y, dy, a, want, ref, 0);
 }
 
 /* d tau_cog/dt = omega_m sum_j amp_j order_j cos(order_j theta_m + phase_j). */
@@ -369,8 +423,9 @@ static BC_ALWAYS_INLINE void lanes_at(const bc_plant_params *restrict p, const b
                             const double *restrict y, const double *restrict dy, const aux_t *restrict a,
                             double *restrict f, double *restrict fd, const int edge)
 {
-    const double i[3] = {y[Y_I], y[Y_I + 1], y[Y_I + 2]};
-    const double di[3] = {dy[Y_I], dy[Y_I + 1], dy[Y_I + 2]};
+    /* the currents and their rates read in place: copies into local arrays, stored one by one and then loaded in
+     * pairs by the vectorised loops below, would wait for the stores (failed store-to-load forwarding) */
+    const double *i = y + Y_I, *di = dy + Y_I;
     const double om = y[Y_OM], dom = dy[Y_OM], dth = dy[Y_TH];
     const double R = s->r_ph, R_src = p->R_src;
     const uint32_t on = s->acc_mask;
@@ -827,6 +882,7 @@ typedef struct {
     double sgn;    /* the Coulomb-like drags' sign */
     int fric;      /* friction acts */
     int dyn;       /* the speed is a state */
+    const struct sin_fold *fo; /* the step's sinusoid folded with its anchor, or 0 */
 } stage_c;
 
 /* Fourier shapes on the usual plant (no ideal limiter, cogging, fan load or iron loss; a conducting circuit; the
@@ -847,8 +903,8 @@ static BC_ALWAYS_INLINE void stage_init(const bc_plant_params *p, const bc_plant
     c->dyn = p->mech == BC_MECH_DYNAMIC && !s->stuck;
 }
 
-/* core_at(p, s, y, dy, 0, 0, ref) where stage_ok: the same expressions in the same order (bit for bit), with the
- * terms that are zero there kept as the zeros core_at adds. */
+/* core_at(p, s, y, dy, 0, 0, ref, fo) where stage_ok, without the terms that are zero there: the currents' rates by the
+ * same expressions, the speed's to rounding (the load and drags summed apart from the torque). */
 static BC_ALWAYS_INLINE void stage_at(const bc_plant_params *restrict p, const bc_plant_state *restrict s,
                                       const stage_c *restrict c, const double *restrict y, double *restrict dy,
                                       const double *ref)
@@ -856,43 +912,68 @@ static BC_ALWAYS_INLINE void stage_at(const bc_plant_params *restrict p, const b
     const double i0 = y[Y_I], i1 = y[Y_I + 1], i2 = y[Y_I + 2];
     const double th = y[Y_TH], om = y[Y_OM];
     double k[3];
-    shapes_at(p, s, th, k, 0, ref, 0);
+    shapes_at(p, s, th, k, 0, ref, 0, c->fo);
     const double e0 = om * k[0], e1 = om * k[1], e2 = om * k[2];
     const double *B = s->tc_b;
     const double eb = s->tc_cn[0] * e0 + s->tc_cn[1] * e1 + s->tc_cn[2] * e2;
     dy[Y_I] = c->src[0] - (B[0] * i0 + B[1] * i1 + B[2] * i2) - s->tc_pc[0] * (e0 - eb);
     dy[Y_I + 1] = c->src[1] - (B[3] * i0 + B[4] * i1 + B[5] * i2) - s->tc_pc[1] * (e1 - eb);
     dy[Y_I + 2] = c->src[2] - (B[6] * i0 + B[7] * i1 + B[8] * i2) - s->tc_pc[2] * (e2 - eb);
-    const double tau_cog = 0.0, t_prop = 0.0, t_fe = 0.0;
-    const double tau = k[0] * i0 + k[1] * i1 + k[2] * i2 + tau_cog;
-    const double tau_net = tau - s->tau_load - t_prop;
+    /* the rotor: the load and the drags (independent of tau) are added first, off tau's chain of operations */
+    const double tau = k[0] * i0 + k[1] * i1 + k[2] * i2;
     const double t_fric = c->fric ? p->B * om + p->tau_c * c->sgn : 0.0;
     dy[Y_TH] = (double)p->p * om;
-    dy[Y_OM] = c->dyn ? (tau_net - t_fric - t_fe) / p->J : 0.0;
+    dy[Y_OM] = c->dyn ? (tau - (s->tau_load + t_fric)) * s->work.inv_J : 0.0;
+}
+
+typedef char bc_ny_is_5[NY == 5 ? 1 : -1]; /* axpy5 */
+
+/* yt = y0 + a k over the five states, written out: the loop vectoriser would pack pairs of the stages' k, which are
+ * stored one by one, and the packed loads wait for the stores (a failed store-to-load forwarding, measured) */
+static BC_ALWAYS_INLINE void axpy5(double *restrict yt, const double *restrict y0, double a, const double *restrict k)
+{
+    yt[0] = y0[0] + a * k[0];
+    yt[1] = y0[1] + a * k[1];
+    yt[2] = y0[2] + a * k[2];
+    yt[3] = y0[3] + a * k[3];
+    yt[4] = y0[4] + a * k[4];
 }
 
 static void rk4(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
-                double *y1)
+                double *y1, const sin_fold *fo)
 {
     double k2[NY], k3[NY], k4[NY], yt[NY];
+    sin_fold own;
+    if (!fo) { /* the caller has none: the same from the same anchor */
+        sin_fold_init(s, &own);
+        fo = &own;
+    }
     if (stage_ok(p, s)) {
         stage_c c;
         stage_init(p, s, &c);
-        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
+        c.fo = fo;
+        axpy5(yt, y0, 0.5 * h, k1);
         stage_at(p, s, &c, yt, k2, s->work.cs);
-        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
+        axpy5(yt, y0, 0.5 * h, k2);
         stage_at(p, s, &c, yt, k3, s->work.cs);
-        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + h * k3[j];
+        axpy5(yt, y0, h, k3);
         stage_at(p, s, &c, yt, k4, s->work.cs);
     } else {
-        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k1[j];
-        core_at(p, s, yt, k2, 0, 0, s->work.cs);
-        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + 0.5 * h * k2[j];
-        core_at(p, s, yt, k3, 0, 0, s->work.cs);
-        for (int j = 0; j < NY; ++j) yt[j] = y0[j] + h * k3[j];
-        core_at(p, s, yt, k4, 0, 0, s->work.cs);
+        axpy5(yt, y0, 0.5 * h, k1);
+        core_at(p, s, yt, k2, 0, 0, s->work.cs, fo);
+        axpy5(yt, y0, 0.5 * h, k2);
+        core_at(p, s, yt, k3, 0, 0, s->work.cs, fo);
+        axpy5(yt, y0, h, k3);
+        core_at(p, s, yt, k4, 0, 0, s->work.cs, fo);
     }
-    for (int j = 0; j < NY; ++j) y1[j] = y0[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
+    const double h6 = h / 6.0;
+#define BC_RK4_SUM(j) y1[j] = y0[j] + h6 * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j])
+    BC_RK4_SUM(0);
+    BC_RK4_SUM(1);
+    BC_RK4_SUM(2);
+    BC_RK4_SUM(3);
+    BC_RK4_SUM(4);
+#undef BC_RK4_SUM
     if (p->mech == BC_MECH_IMPOSED) {
         y1[Y_OM] = y0[Y_OM]; /* exactly constant */
     }
@@ -933,12 +1014,12 @@ static BC_ALWAYS_INLINE void taylor4(const bc_plant_params *p, const bc_plant_st
 
 /* One step of the five states: taylor4 where the circuit is linear (identical to RK4 there), else rk4. */
 static BC_ALWAYS_INLINE void state_step(const bc_plant_params *p, const bc_plant_state *s, const double *y0, const double *k1, double h,
-                       double *y1)
+                       double *y1, const sin_fold *fo)
 {
     if (linear_step_ok(p, s)) {
         taylor4(p, s, y0, k1, h, y1);
     } else {
-        rk4(p, s, y0, k1, h, y1);
+        rk4(p, s, y0, k1, h, y1, fo);
     }
 }
 
@@ -1165,8 +1246,9 @@ static void wrap_angle(const bc_plant_params *p, bc_plant_state *s)
     s->work.out_ok = 0; /* the cached circuit quantities were computed at the unwrapped angle */
 }
 
-/* Time to the next angle bound, or HUGE_VAL. *th_ev receives the bound. */
-static double angle_event(const bc_plant_params *p, bc_plant_state *s, double *th_ev)
+/* Time to the next angle bound, or HUGE_VAL. *th_ev receives the bound. A bound the rotor cannot reach within twice
+ * h_lim (the step's length without it) ends no step, so its time is not solved for (HUGE_VAL): the step is the same. */
+static double angle_event(const bc_plant_params *p, bc_plant_state *s, double *th_ev, double h_lim)
 {
     double om = s->omega;
     if (s->stuck || (p->mech == BC_MECH_IMPOSED && om == 0.0)) {
@@ -1191,15 +1273,22 @@ static double angle_event(const bc_plant_params *p, bc_plant_state *s, double *t
         s->work.th_ok = 1;
     }
     *th_ev = target;
-    double delta = (target - s->theta) * (double)s->dir / (double)p->p; /* mechanical angle to go, >= 0 */
+    const double d_e = (target - s->theta) * (double)s->dir; /* electrical angle to go */
+    double w0 = om * (double)s->dir;
+    double acc = p->mech == BC_MECH_IMPOSED ? 0.0 : s->work.k1[Y_OM] * (double)s->dir;
+    /* out of reach: at most p (|w0| t + |acc| t^2 / 2) in t = 2 h_lim (the 1 % covers the rounding of the time the
+     * code below solves for, which then exceeds 2 h_lim > h_lim by far more than a rounding of the clock) */
+    const double hb = 2.0 * h_lim;
+    if (d_e > 1.01 * (double)p->p * (fabs(w0) + 0.5 * fabs(acc) * hb) * hb) {
+        return HUGE_VAL;
+    }
+    double delta = d_e / (double)p->p; /* mechanical angle to go, >= 0 */
     if (!(delta >= 0.0)) {
         return 0.0;
     }
-    double w0 = om * (double)s->dir;
     if (p->mech == BC_MECH_IMPOSED) {
         return w0 > 0.0 ? delta / w0 : HUGE_VAL;
     }
-    double acc = s->work.k1[Y_OM] * (double)s->dir;
     double disc = w0 * w0 + 2.0 * acc * delta;
     if (disc < 0.0) {
         return HUGE_VAL; /* stops before the bound: the speed zero crossing comes first */
@@ -1611,7 +1700,7 @@ static double watch_at(const bc_plant_params *p, const bc_plant_state *s, const 
                        double c, int w, int dir_om, root_pt *rp)
 {
     double g[NW];
-    state_step(p, s, y0, k1, c, rp->y);
+    state_step(p, s, y0, k1, c, rp->y, 0);
     core(p, s, rp->y, rp->dy, &rp->a, s->lanes_on ? WANT_DK : 0, s->work.cs);
     rp->h = c;
     (void)watch_eval(p, s, rp->y, &rp->a, dir_om, g);
@@ -1850,6 +1939,8 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     s->fe_tc = (double)p->p * p->k_fe_h;
     s->drag_on = p->B > 0.0 || p->tau_c > 0.0 || s->fe_on;
     s->prop_on = p->k_q > 0.0 && p->mech == BC_MECH_DYNAMIC;
+    /* the rotor equation multiplies by 1/J: a division in every derivative evaluation would cost its latency */
+    s->work.inv_J = p->mech == BC_MECH_DYNAMIC ? 1.0 / p->J : 0.0;
     /* the optional lanes integrate when a rate can be nonzero: iron loss, or switching losses on averaged legs
      * (the switching inverter books them at its gate edges) */
     lanes_select(p, s, BC_ACC_ALL);
@@ -2173,6 +2264,11 @@ static BC_ALWAYS_INLINE void hermite_extremes(double h, double f0, double f1, do
 {
     double m0 = h * d0, m1 = h * d1, D = f1 - f0;
     double c2 = 3.0 * D - 2.0 * m0 - m1, c3 = m0 + m1 - 2.0 * D;
+    /* q'(u) in Bernstein form on [0, 1] has the coefficients m0, m0 + c2, m1: all three of one sign, with a margin far
+     * above the rounding of the roots below, leave no turning point inside (a torque monotonic over the step, the
+     * common case) and nothing to solve for */
+    const double mu = 1e-6 * (fabs(m0) + fabs(m1) + fabs(D)), b1 = m0 + c2;
+    if ((m0 > mu && m1 > mu && b1 > mu) || (m0 < -mu && m1 < -mu && b1 < -mu)) return;
     /* q'(u) = m0 + 2 c2 u + 3 c3 u^2 */
     double a = 3.0 * c3, b = 2.0 * c2, c = m0;
     double u[2];
@@ -2276,7 +2372,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
         if (tf < t_stop) t_stop = tf;
         if (s->t + hmax < t_stop) t_stop = s->t + hmax;
         double th_ev = 0.0;
-        double ha = angle_event(p, s, &th_ev);
+        double ha = angle_event(p, s, &th_ev, t_stop - s->t);
         int angle_step = 0;
         if (s->t + ha < t_stop) {
             t_stop = s->t + ha;
@@ -2298,8 +2394,10 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                 continue;
             }
         }
-        state_step(p, s, y0, s->work.k1, h, y1);
-        core_at(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, s->work.cs);
+        sin_fold fold; /* the step's sinusoid and anchor: its RK4 stages and its end */
+        sin_fold_init(s, &fold);
+        state_step(p, s, y0, s->work.k1, h, y1, &fold);
+        core_at(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, s->work.cs, &fold);
         /* watched functions: the first that goes negative inside the step is an event */
         int dir_om = s->work.wdir;
         const uint32_t neg = watch_eval(p, s, y1, a1, dir_om, g1);
@@ -2334,7 +2432,7 @@ void bc_plant_advance(const bc_plant_params *p, bc_plant_state *s, double t_end)
                 memcpy(k1n, rbest.dy, sizeof k1n);
                 *a1 = rbest.a;
             } else if (h_hit < h) {
-                state_step(p, s, y0, s->work.k1, h_hit, y1);
+                state_step(p, s, y0, s->work.k1, h_hit, y1, &fold);
                 core(p, s, y1, k1n, a1, s->lanes_on ? WANT_DK : 0, 0);
             }
             unpack(s, y1);

@@ -111,8 +111,17 @@ static void row_open(const bc_sim_config *cfg, bc_sim_state *s)
 
 static void row_close(bc_sim_state *s, bc_trace_row *rows, int64_t cap, int64_t *nw, int *overflow)
 {
+    s->row_open = 0;
+    if (rows == 0) return;
+    if (*nw >= cap) {
+        *overflow = 1;
+        return;
+    }
+    /* the fields set at the row's start are copied, stored long ago; the means are written in place (copying them
+     * just after storing them would wait for the stores: gcc copies the record with `rep movs`) */
+    bc_trace_row *r = &rows[*nw];
+    *r = s->row;
     const bc_plant_state *ps = &s->plant;
-    bc_trace_row *r = &s->row;
     double dt = ps->t - r->t;
     const double *a0 = s->row_acc0, *a1 = ps->acc;
     double inv = dt > 0.0 ? 1.0 / dt : 0.0;
@@ -131,21 +140,15 @@ static void row_close(bc_sim_state *s, bc_trace_row *rows, int64_t cap, int64_t 
     r->v_c = (a1[BC_ACC_VC] - a0[BC_ACC_VC]) * inv;
     r->v_n = (a1[BC_ACC_VN] - a0[BC_ACC_VN]) * inv;
     r->i_dc = (a1[BC_ACC_IDC] - a0[BC_ACC_IDC]) * inv;
-    if (rows != 0 && *nw < cap) {
-        rows[*nw] = *r;
-        *nw += 1;
-        /* the result checks' summary of the rows (bldclab.sim.plausibility), gathered here instead of by strided
-         * passes over the record array */
-        const double pk[4] = {fabs(r->i_a), fabs(r->i_b), fabs(r->i_c), fabs(r->omega_m)};
-        for (int j = 0; j < 4; ++j) {
-            if (pk[j] > s->row_peak[j]) s->row_peak[j] = pk[j];
-        }
-        if (!(isfinite(r->i_a) && isfinite(r->i_b) && isfinite(r->i_c) && isfinite(r->tau_e) && isfinite(r->omega_m)))
-            s->row_nonfinite = 1;
-    } else if (rows != 0) {
-        *overflow = 1;
+    *nw += 1;
+    /* the result checks' summary of the rows (bldclab.sim.plausibility), gathered here instead of by strided passes
+     * over the record array */
+    const double pk[4] = {fabs(r->i_a), fabs(r->i_b), fabs(r->i_c), fabs(r->omega_m)};
+    for (int j = 0; j < 4; ++j) {
+        if (pk[j] > s->row_peak[j]) s->row_peak[j] = pk[j];
     }
-    s->row_open = 0;
+    if (!(isfinite(r->i_a) && isfinite(r->i_b) && isfinite(r->i_c) && isfinite(r->tau_e) && isfinite(r->omega_m)))
+        s->row_nonfinite = 1;
 }
 
 /* ---- continuous moving average ------------------------------------------------------------------------- */
@@ -172,10 +175,18 @@ static BC_ALWAYS_INLINE double hist_interp(const bc_sim_state *s, int64_t a, dou
     return s->h_a[ja] + u * (m0 + u * (3.0 * D - 2.0 * m0 - m1 + u * (m0 + m1 - 2.0 * D)));
 }
 
-static void ma_fold(bc_sim_state *s, double ma)
+/* Fold MA = num / T into the extremes. Division by T > 0 is monotonic (correctly rounded), so the extreme of the
+ * quotients is the quotient of the extreme numerator: the division is made only where an extreme moves. */
+static void ma_fold(bc_sim_state *s, double num, double T)
 {
-    if (ma < s->m.tau_ma_min) s->m.tau_ma_min = ma;
-    if (ma > s->m.tau_ma_max) s->m.tau_ma_max = ma;
+    if (num < s->ma_num_min) {
+        s->ma_num_min = num;
+        s->m.tau_ma_min = num / T;
+    }
+    if (num > s->ma_num_max) {
+        s->ma_num_max = num;
+        s->m.tau_ma_max = num / T;
+    }
     s->m.n_ma += 1;
 }
 
@@ -234,14 +245,14 @@ static void sim_on_step(void *ctx, double t, const double *acc, double tau)
         const int j = (int)((lag + 1) & (BC_SIM_HIST - 1));
         const double ts = s->h_t[j] + T;
         if (ts > t) break;
-        if (in && ts > t_prev && s->h_t[j] >= t0e) ma_fold(s, (hist_interp(s, prev, ts) - s->h_a[j]) / T);
+        if (in && ts > t_prev && s->h_t[j] >= t0e) ma_fold(s, hist_interp(s, prev, ts) - s->h_a[j], T);
         lag += 1;
     }
     s->h_lag = lag;
     /* the new node: A(t - T) from the history segment holding t - T */
     const double tq = t - T;
     if (in && tq >= t0e && s->h_t[(int)(lag & (BC_SIM_HIST - 1))] <= tq + eps) {
-        ma_fold(s, (A - hist_interp(s, lag, tq)) / T);
+        ma_fold(s, A - hist_interp(s, lag, tq), T);
     }
 }
 
@@ -284,6 +295,8 @@ static void metric_start(const bc_sim_config *cfg, bc_sim_state *s, int trace)
     s->m.tau_max = tau;
     s->m.tau_ma_min = HUGE_VAL;
     s->m.tau_ma_max = -HUGE_VAL;
+    s->ma_num_min = HUGE_VAL;
+    s->ma_num_max = -HUGE_VAL;
     s->m.tau_ma_grid_min = HUGE_VAL;
     s->m.tau_ma_grid_max = -HUGE_VAL;
     s->m.tau_s_min = HUGE_VAL;
@@ -350,6 +363,9 @@ static void flags_count(bc_sim_state *s, uint32_t flags, double t, int in_window
 
 /* ---- the loop ------------------------------------------------------------------------------------------ */
 
+static const bc_ctrl_in ZERO_IN;   /* all zero: what the measurements and the controller's output start from */
+static const bc_ctrl_out ZERO_OUT;
+
 int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *in, int64_t n, bc_trace_row *rows,
                int64_t rows_cap, int64_t *rows_written)
 {
@@ -381,7 +397,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         /* 2. measure, control */
         /* the measurements and the output are made in place: last_in, last (no copies per sample) */
         bc_ctrl_in *ci = &s->last_in;
-        memset(ci, 0, sizeof *ci);
+        *ci = ZERO_IN; /* a copy, not memset: gcc's `rep stos` for that cannot forward to the loads that follow */
         bc_sensor_measure(cfg->sensors, &s->sensors, ps, bc_plant_vbus(pp, ps), ci);
         if (sense_on(cfg)) bc_sense_fill(cfg->sense, &s->sense, t_k, ci);
         ci->ref = (float)input_at(in->ref, in->ref_c, j);
@@ -389,7 +405,7 @@ int bc_sim_run(const bc_sim_config *cfg, bc_sim_state *s, const bc_sim_inputs *i
         ci->temp[0] = s->temp[0];
         ci->temp[1] = s->temp[1];
         bc_ctrl_out *co = &s->last;
-        memset(co, 0, sizeof *co);
+        *co = ZERO_OUT;
         cfg->ctrl.step(cfg->ctrl.params, cfg->ctrl.state, ci, co);
         s->flags_seen |= co->flags;
         flags_count(s, co->flags, t_k, has_window && t_k >= cfg->metric_t0 && t_k < cfg->metric_t1);

@@ -101,7 +101,9 @@ class Sine(Control):
     if_accel_min : float, optional
         The load-adaptive ramp's slowest mean acceleration (rad/s^2, mechanical), at most ``if_accel``; default
         ``if_accel / 20``: a ramp that takes longer than ``omega_on / if_accel_min`` (from its lowest speed, if it
-        followed a rotor pushed back: ``(omega_on - omega_low) / if_accel_min``) ends in ``START_FAIL``. The
+        followed a rotor pushed back: ``(omega_on - omega_low) / if_accel_min``; whatever that lowest speed, one
+        that has turned backwards for ``omega_on / if_accel_min`` in all or been below ``omega_on`` for twice that)
+        ends in ``START_FAIL``. The
         start is designed for a load ``tau_L / tau_if <= 0.95 - 0.35 if_accel_min / if_accel - J if_accel_min /
         tau_if`` (``tau_if = 1.5 k_1 if_current``; docs/sensorless-sine.md). ``if_accel_min = if_accel``: the
         fixed ramp at ``if_accel``, no adaptation.
@@ -119,6 +121,13 @@ class Sine(Control):
         the configured R where the measurement is implausible (outside ``[R/4, 4 R]``). A wrong R biases the
         observer most at low speed, where the load-adaptive ramp reads it. Default ``False`` (the drive data's R);
         measured on the catalog drives to 0.002-2 % (docs/sensorless-sine.md).
+    if_flux_estimate : bool
+        The flux observer estimates the flux linkage it uses when, at the hand-off speed, it is consistent (tracking
+        error and speed) but its flux is outside the lock band of the configured ``psi_f``: from its own steady
+        state, ``psi = rho sqrt(1 + (k / omega)^2)``, ``k = (lambda / 2)(1 - rho^2 / psi_c^2)`` (``rho`` its flux,
+        ``psi_c`` the flux linkage in use), taken within ``[psi_f / 2, 2 psi_f]``; kept until the next alignment.
+        The lock then checks against it. Default ``False`` (a flux out of band ends the start in ``START_FAIL``);
+        no effect with ``observer="reduced"`` (docs/sensorless-sine.md, "Wrong parameters at the start").
     lock_tolerance : float
         Band of the lock criterion (-), in (0, 1): the observer's flux within it of ``psi_f`` (relative) and its
         tracking error within it (rad) for the hand-off; its flux out of it too long is a lost lock.
@@ -240,6 +249,7 @@ class Sine(Control):
     if_align: float | None = None
     if_align_current: float | None = None
     if_r_estimate: bool = False
+    if_flux_estimate: bool = False
     lock_tolerance: float = 0.2
     restart_wait: float = 0.1
     derate: TemperatureDerating | None = None
@@ -289,6 +299,8 @@ class Sine(Control):
                 check_number(name, getattr(self, name), allow_zero=name == "if_align")
         if not isinstance(self.if_r_estimate, bool):
             raise BldclabError("control.if_r_estimate", f"must be True or False, got {self.if_r_estimate!r}")
+        if not isinstance(self.if_flux_estimate, bool):
+            raise BldclabError("control.if_flux_estimate", f"must be True or False, got {self.if_flux_estimate!r}")
         check_number("lock_tolerance", self.lock_tolerance)
         if self.lock_tolerance >= 1:
             raise BldclabError("control.lock_tolerance", f"must be in (0, 1), got {self.lock_tolerance!r}")
@@ -428,7 +440,8 @@ class Sine(Control):
                 "if_accel": st["if_accel"], "if_accel_min": min(st["if_accel_min"], st["if_accel"]),
                 "if_hold": st["if_hold"], "lock_time": st["lock_time"],
                 "lock_tol": self.lock_tolerance, "restart_wait": self.restart_wait, "if_damp": st["if_damp"],
-                "t_dead": inv.t_dead, "if_r_est": int(self.if_r_estimate)}
+                "t_dead": inv.t_dead, "if_r_est": int(self.if_r_estimate),
+                "if_psi_est": int(self.if_flux_estimate)}
 
     def _r_design(self, drive: Drive, scale: float) -> float:
         """Design resistance of a loop of ``scale`` phases in series (Ohm)."""

@@ -88,6 +88,11 @@ int bc_fluxobs_init(const bc_fluxobs_params *p, bc_fluxobs_state *s);
  * (cos(theta_e - pi), sin(theta_e - pi)), the PLL at (theta_e, omega_e). Non-finite arguments count as 0. */
 void bc_fluxobs_reset(const bc_fluxobs_params *p, bc_fluxobs_state *s, float theta_e, float omega_e, bc_ab i);
 
+/* Change the flux linkage psi_f the observer pulls eta to (the circle's radius, gamma = lambda / psi^2, the
+ * clamps), keeping its state x^ and PLL; with p the params it was initialised with (p->psi replaced by psi). A psi
+ * that is not finite and positive, or that would make a derived value non-finite: nothing changes. */
+void bc_fluxobs_set_psi(const bc_fluxobs_params *p, bc_fluxobs_state *s, float psi);
+
 /* One sample: the voltage applied over the last sample period and the current now in, the estimate out. */
 void bc_fluxobs_step(const bc_fluxobs_params *p, bc_fluxobs_state *s, const bc_obs_in *in, bc_obs_out *out);
 

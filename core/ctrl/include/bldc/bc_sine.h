@@ -224,8 +224,14 @@
  *          -1.5 k_1 if_damp psi_f (omega^ - omega_if) against the rotor's slip (the current's torque is
  *          1.5 k_1 (i_q cos Delta - i_d sin Delta)). Below omega_on for longer than (omega_on - omega_low) /
  *          if_accel_min (the slowest ramp's time from the vector's lowest speed dir omega_low, <= 0, reached
- *          since the ramp's start): BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT. With if_accel_min = if_accel: the
- *          fixed ramp at if_accel, none of this.
+ *          since the ramp's start): BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT. The same end, whatever the
+ *          lowest speed, once the vector has turned against dir for omega_on / if_accel_min in all, or has been
+ *          below omega_on for 2 omega_on / if_accel_min in all (the slowest ramp from -omega_on), since the
+ *          ramp's start (a hand-back's ramp counts on; a completed ramp resets both): every ramp ends within
+ *          2 omega_on / if_accel_min, every start attempt within if_align + 2 omega_on / if_accel_min + if_hold
+ *          (a rotor pushed back ever faster, or a vector that follows an observer misled by a wrong R, would
+ *          otherwise restart the lowest-speed count). With if_accel_min = if_accel: the fixed ramp at if_accel,
+ *          none of this.
  *          At omega_on the lock is checked every sample: |flux / psi_f - 1| <= lock_tol (the observer's flux
  *          output, bc_obs.h), |err| <= lock_tol (its tracking loop's error: rad, or the sine of the angle error)
  *          and dir omega_f >= omega_off (omega_f: omega^ through a low-pass of time constant lock_time). The
@@ -236,6 +242,14 @@
  *          hand-off below (from the current measured in the observer's frame), the speed PI's integrator at the
  *          torque 1.5 k_1 i_q that current makes. Not locked within if_hold at omega_on: BC_FLAG_START_FAIL |
  *          BC_FLAG_DESYNC, WAIT.
+ *          With if_psi_est = 1 (flux observer): at omega_on, when the observer is consistent (|err| <= lock_tol,
+ *          dir omega_f >= omega_off) but its flux is out of the band for 3 lock_time, the flux linkage it uses
+ *          (and the lock checks against) becomes psi^ = rho sqrt(1 + (k / omega_f)^2), k = (lambda / 2)
+ *          (1 - rho^2 / psi_c^2), with rho the flux low-passed like omega_f and psi_c the one in use: the
+ *          observer's steady state on a rotor turning with the true flux psi_t is rho = psi_t omega /
+ *          sqrt(omega^2 + k^2), so psi^ is psi_t when R and L are right. Taken if within [psi_f / 2, 2 psi_f] of
+ *          the configured one; repeated every 3 lock_time while the condition holds; kept through the sine mode
+ *          until the next ALIGN, which starts from the configured psi_f again.
  *   WAIT   legs off for restart_wait, then IDLE (and a new ALIGN).
  *
  *   CATCH  (in ALIGN and RAMP, once a start) the observer runs from the first sample of ALIGN; when it is
@@ -374,6 +388,8 @@ typedef struct {
     float t_dead;       /* the inverter's dead time, s (0 <= t_dead < ts): the observer's voltage is corrected */
     int32_t if_r_est;   /* 1: the observers use the resistance measured in ALIGN (section "Sensorless"); 0: R of
                            fobs / robs */
+    int32_t if_psi_est; /* 1: the flux observer's psi_f estimated at omega_on when its flux is out of the lock band
+                           (section "Sensorless", RAMP); 0: psi of fobs. No effect with the reduced-order observer */
     bc_derate_params derate; /* temperature derating of the current limit i_s_max (bc_derate.h) from in->temp; no
                                 channel enabled (all zero): none. The start controller derates by six.derate. */
     bc_rest_params rest; /* the winding resistance during operation (bc_rest.h): in sine mode i_d,ref is its square
@@ -420,9 +436,15 @@ typedef struct {
     float n_lock;      /* time the lock criterion has held (start) or failed (sine), s */
     float omega_f;     /* the observer's speed low-passed (time constant lock_time), electrical rad/s */
     float if_t;        /* RAMP: time below omega_on, s */
+    float if_tb;       /* RAMP: time the vector has turned against dir since the ramp's start, s */
+    float if_tr;       /* RAMP: time below omega_on since the ramp's start, s */
     int32_t if_trust;  /* RAMP: 1 while the observer sees the rotor move (adaptive ramp) */
     float rho_f;       /* RAMP: the torque's share of 1.5 k_1 if_current, cos(theta^ - theta_if) */
     float r_obs;       /* the resistance the observer uses, Ohm (if_r_est: measured in the last ALIGN) */
+    float psi_obs;     /* the flux linkage the observer uses and the lock checks, V s (if_psi_est: estimated) */
+    float flux_f;      /* the observer's flux through the low-pass of omega_f, V s */
+    float n_psi;       /* ALIGN, RAMP: time consistent with the flux off the circle since the last estimate, s */
+    int32_t psi_adapt; /* if_psi_est: 1 once this start has estimated the flux linkage */
     float r_ui, r_ii;  /* ALIGN: sums of u.i (W) and i.i (A^2) over its last quarter */
     float n_catch;     /* ALIGN, RAMP: time the observer has held a consistent lock at |omega_f| >= omega_on, s */
     int32_t caught;    /* this start has caught a turning rotor (once a start) */

@@ -336,6 +336,7 @@ typedef struct {
     int32_t th_ok;              /* 1: th_next holds the next angle bound in the direction of motion */
     double th_next;             /* the nearest bound of the back-EMF pieces and Hall intervals ahead, rad (kept
                                    while the pieces and intervals are; an angle event recomputes it) */
+    double inv_J;               /* 1 / J with rotor dynamics (set at init), 1/(kg m^2) */
 } bc_plant_work;
 
 typedef struct {

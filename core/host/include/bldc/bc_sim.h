@@ -178,6 +178,8 @@ typedef struct {
     double h_t[BC_SIM_HIST];   /* history ring: time, s */
     double h_a[BC_SIM_HIST];   /* acc[BC_ACC_TAU], N m s */
     double h_tau[BC_SIM_HIST]; /* tau_e, N m */
+    double ma_num_min, ma_num_max; /* extremes of T MA (the moving average's numerators), N m s: m.tau_ma_min, _max
+                                      are these over T */
     double half_tau0;          /* acc[TAU] at the start of the current half period */
     int32_t half_in;           /* current half period started inside the window */
     int32_t row_open;          /* a trace row is being accumulated */
