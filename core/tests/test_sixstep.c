@@ -86,7 +86,7 @@ static void test_init(void)
     struct {
         const char *what;
         bc_sixstep_params q;
-    } bad[27];
+    } bad[30];
     int n = 0;
 #define BAD(field, value)                    \
     bad[n].what = #field " = " #value;       \
@@ -94,6 +94,9 @@ static void test_init(void)
     bad[n].q.field = value;                  \
     ++n
     BAD(reg, BC_SIXSTEP_IDEAL + 1);
+    BAD(open_frac, -0.1f);
+    BAD(open_frac, 0.5f);
+    BAD(open_frac, nan);
     BAD(timed, 2);
     BAD(comm, 2);
     BAD(adv_angle, -0.1f);
@@ -303,10 +306,12 @@ static void test_fuzz(void)
             for (int delay = 0; delay <= 1; ++delay) {
                 bc_sixstep_params p = params(reg, chop);
                 p.delay = delay;
+                p.open_frac = delay ? 0.2f : 0.0f; /* the no-current-path test fed garbage too */
                 bc_sixstep_state s;
                 CHECK(bc_sixstep_init(&p, &s) == BC_OK, "init");
                 uint32_t ticks = 0u, edges = 0u;
                 for (int k = 0; k < 20000; ++k) {
+                    if (s.open_n < 0) CHECK(bc_sixstep_init(&p, &s) == BC_OK, "re-init after a latched detection");
                     bc_ctrl_in in;
                     memset(&in, 0, sizeof in);
                     uint64_t r = rng_next(&x);
