@@ -216,6 +216,21 @@ def test_the_light_commands_load_no_heavy_module(tmp_path: Path) -> None:
 
 
 
+def test_python_m_bldclab_runs_the_command(tmp_path: Path) -> None:
+    """``python -m bldclab`` is the ``bldclab`` command (it had no ``__main__``: "No module named bldclab.__main__"),
+    with the same output and exit codes as ``python -m bldclab.cli``: 0 for a listing, 2 for a bad option."""
+    env = {**os.environ, "PYTHONPATH": str(Path(bl.__file__).parent.parent)}
+    runs = {}
+    for module in ("bldclab", "bldclab.cli"):
+        for argv in (["drives"], ["drives", "--no-such-option"]):
+            proc = subprocess.run([sys.executable, "-m", module, *argv], capture_output=True, text=True, timeout=120,
+                                  check=False, env=env, cwd=tmp_path)
+            runs[module, len(argv)] = (proc.returncode, proc.stdout, proc.stderr)
+    assert runs["bldclab", 1][0] == 0 and "htm-48v" in runs["bldclab", 1][1]
+    assert runs["bldclab", 2][0] == 2 and runs["bldclab", 2][2].startswith("bldclab: error:")
+    assert runs["bldclab", 1] == runs["bldclab.cli", 1] and runs["bldclab", 2] == runs["bldclab.cli", 2]
+
+
 def test_drives_lists_every_built_in_drive(capsys: pytest.CaptureFixture[str]) -> None:
     rc, out, err = run_main(capsys, "drives")
     assert rc == 0 and err == ""

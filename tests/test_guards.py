@@ -350,3 +350,47 @@ def test_rotor_driven_somewhat_beyond_no_load_speed_warns():
     sc = bl.Scenario(duration=0.3, ref=drive.T_N, load_torque=3 * drive.T_N, window=(0.25, 0.3))
     with pytest.warns(PlausibilityWarning, match=r"scenario\.load_torque: the rotor reached"):
         bl.simulate(drive, bl.Sine(), sc, check="warn")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# currents of a drive without a current loop against its rating; the hardware trip named
+
+
+def _warned(drive: bl.Drive, control: bl.Control, sc: bl.Scenario) -> tuple[bl.SimResult, list[str]]:
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always", PlausibilityWarning)
+        res = bl.simulate(drive, control, sc)
+    return res, [str(w.message) for w in rec]
+
+
+def test_full_duty_at_stall_warns_of_the_current_rating_and_a_fraction_of_it_does_not(capsys):
+    """Full duty, rotor held (1 rpm): only 2 (R + R_on) limits the pair current, V_dc / (2 (R + R_on)) = 522 A on
+    f60prov-2550kv (10 I_N; it has no hardware trip), reached to 1e-3 within the window and named
+    `result.current_rating` with the multiple of I_N; at a duty whose stall current d V_dc / (2 R) is I_N nothing is
+    said. The CLI prints the warning."""
+    drive = bl.load("f60prov-2550kv")
+    m = drive.motor
+    i_stall = drive.inverter.V_dc / (2.0 * (m.R + drive.inverter.R_on))
+    assert drive.inverter.i_trip == 0 and i_stall > 2 * m.I_N
+    sc = bl.Scenario(duration=0.02, speed=2 * math.pi / 60, window=(0.015, 0.02), trace=False)
+    res, caught = _warned(drive, bl.SixStepVoltage(), dataclasses.replace(sc, ref=1.0))
+    assert max(res.metrics.i_peak) == pytest.approx(i_stall, rel=1e-3)
+    named = [w for w in caught if w.startswith("result.current_rating")]
+    assert len(named) == 1 and f"{max(res.metrics.i_peak) / m.I_N:.3g} times the rated current" in named[0]
+    assert named[0] in res.meta["warnings"]
+    res, caught = _warned(drive, bl.SixStepVoltage(), dataclasses.replace(sc, ref=m.I_N / i_stall))
+    assert max(res.metrics.i_peak) < 1.1 * m.I_N
+    assert not [w for w in caught if w.startswith("result.")]
+    assert main(["simulate", "f60prov-2550kv", "--control", "sixv", "--duty", "1", "--speed", "1 rpm",
+                 "--duration", "0.02 s", "--no-trace"]) == 0
+    assert "bldclab: warning: result.current_rating: a phase current reached" in capsys.readouterr().err
+
+
+def test_a_hardware_trip_is_named():
+    """htm-48v trips at 150 A: full duty at stall switches every leg off within a millisecond, and the run says so
+    (its metrics then describe a drive switched off: zero current), with the trip's time."""
+    sc = bl.Scenario(duration=0.005, speed=2 * math.pi / 60, ref=1.0, window=(0.004, 0.005), trace=False)
+    res, caught = _warned(HTM, bl.SixStepVoltage(), sc)
+    assert res.meta["stats"]["hw_trip"] is not None and max(res.metrics.i_peak) == 0.0
+    named = [w for w in caught if w.startswith("result.hardware_trip")]
+    assert len(named) == 1 and f"t = {res.meta['stats']['hw_trip']:.4g} s" in named[0]

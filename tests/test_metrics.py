@@ -228,3 +228,29 @@ def test_simulated_base_speed_of_lu4kw_is_at_the_no_load_speed(supply):
 def test_base_speed_bad_supply_is_named():
     with pytest.raises(bl.BldclabError, match="supply"):
         base_speed(HTM, "trapezoid")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# efficiency in the direction of the power flow
+
+
+def test_efficiency_follows_the_power_flow_and_is_undefined_when_both_sides_feed_the_machine():
+    """Motoring: shaft over bus power; generating (a braking current at speed, the bus receives): bus over shaft
+    power, both closing the energy balance with the losses (1 - eta = losses / input); both sides feeding the
+    machine (a six-step duty below the line back-EMF's, so the rotor drives current against the bus's pulses: every
+    watt ends as loss) has no efficiency: nan and said so, where it read a negative number (-2.1 here, -14 in a
+    user's run)."""
+    w = 0.5 * HTM.Omega_0
+    ctl = bl.SixStep()
+    for ref, flow in ((20.0, "motoring"), (-20.0, "generating")):
+        m = steady_state(HTM, ctl, w, ref)[0].metrics
+        losses = m.p_Rsrc + m.p_cu + m.p_sw + m.p_diode + m.p_swloss + m.p_rr + m.p_fric + m.p_fe
+        p_in = m.p_src_total if flow == "motoring" else -m.p_shaft
+        assert m.power_flow == flow
+        assert 0.5 < m.efficiency < 1.0
+        assert abs((1.0 - m.efficiency) - losses / p_in) < 1e-3 * (1.0 + losses / p_in)  # dW_L: a periodic window
+    m = steady_state(HTM, bl.SixStepVoltage(), 0.2 * HTM.Omega_0, 0.05)[0].metrics
+    assert m.p_src_total > 0.0 and m.p_shaft < 0.0
+    assert m.power_flow == "dissipating" and math.isnan(m.efficiency)
+    losses = m.p_Rsrc + m.p_cu + m.p_sw + m.p_diode + m.p_swloss + m.p_rr + m.p_fric + m.p_fe
+    assert math.isclose(m.p_src_total - m.p_shaft, losses, rel_tol=1e-3)  # every watt in, from both sides, is lost

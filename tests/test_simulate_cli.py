@@ -214,13 +214,15 @@ def _strict_json(text: str) -> dict:
 
 def test_json_output_is_standard_json_when_a_quantity_is_undefined(tmp_path: Path,
                                                                     capsys: pytest.CaptureFixture[str]) -> None:
-    """Duty 0 at half speed draws no power from the bus (p_dc ~ -5e-5 W): the efficiency is undefined. Python's
-    json wrote it as NaN, which jq and JavaScript refuse; it must be null, on stdout and in metrics.json."""
-    rc = main(["simulate", "htm-48v", "--control", "sixv", "--duty", "0", "--speed", "0.5 pu", "--no-trace",
-               "--format", "json", "--out", str(tmp_path / "o")])
+    """Duty 0.05 at 0.2 Omega_0: the bus (1.1 W) and the shaft (2.3 W, the dynamometer covering the friction the
+    weak torque does not) both feed the machine, so the efficiency is undefined. Python's json wrote it as NaN, which
+    jq and JavaScript refuse; it must be null, on stdout and in metrics.json."""
+    rc = main(["simulate", "htm-48v", "--control", "sixv", "--duty", "0.05", "--speed", "0.2 pu", "--periods", "2",
+               "--no-trace", "--format", "json", "--out", str(tmp_path / "o")])
     assert rc == 0
     out = _strict_json(capsys.readouterr().out)
-    assert out["p_dc_W"] <= 0 and out["efficiency"] is None
+    assert out["p_dc_W"] > 0 and out["p_shaft_W"] < 0 and out["power_flow"] == "dissipating"
+    assert out["efficiency"] is None
     saved = _strict_json((tmp_path / "o" / "metrics.json").read_text())
     assert saved["efficiency"] is None and saved["metrics"]["efficiency"] is None
 

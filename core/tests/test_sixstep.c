@@ -86,7 +86,7 @@ static void test_init(void)
     struct {
         const char *what;
         bc_sixstep_params q;
-    } bad[27];
+    } bad[30];
     int n = 0;
 #define BAD(field, value)                    \
     bad[n].what = #field " = " #value;       \
@@ -94,6 +94,9 @@ static void test_init(void)
     bad[n].q.field = value;                  \
     ++n
     BAD(reg, BC_SIXSTEP_IDEAL + 1);
+    BAD(open_frac, -0.1f);
+    BAD(open_frac, 0.5f);
+    BAD(open_frac, nan);
     BAD(timed, 2);
     BAD(comm, 2);
     BAD(adv_angle, -0.1f);
@@ -303,10 +306,12 @@ static void test_fuzz(void)
             for (int delay = 0; delay <= 1; ++delay) {
                 bc_sixstep_params p = params(reg, chop);
                 p.delay = delay;
+                p.open_frac = delay ? 0.2f : 0.0f; /* the no-current-path test fed garbage too */
                 bc_sixstep_state s;
                 CHECK(bc_sixstep_init(&p, &s) == BC_OK, "init");
                 uint32_t ticks = 0u, edges = 0u;
                 for (int k = 0; k < 20000; ++k) {
+                    if (s.open_n < 0) CHECK(bc_sixstep_init(&p, &s) == BC_OK, "re-init after a latched detection");
                     bc_ctrl_in in;
                     memset(&in, 0, sizeof in);
                     uint64_t r = rng_next(&x);
@@ -374,6 +379,49 @@ static void test_average_model(void)
 
 /* Predictive law in two-phase conduction on the flat tops: i(k+1) = i + T (m V - 2 R i - 2 E) / (2 L), solved for
  * the m that gives I at the sample after next (delay 1) or the next (delay 0). */
+/* No current path (open_frac): zero measured currents at full voltage, a valid speed and a voltage margin: safe
+ * state with BC_FLAG_BAD_INPUT after 2 t_2 + 4 T_s, t_2 = -(L/R) ln(1 - 2 f I_ref 2R / u), latched; never with the
+ * test off or with the current following the reference. */
+static void test_open_detect(void)
+{
+    const double w_e = 300.0, V = 48.0, I = 24.0, f = 0.1;
+    const double u = V - 0.64 * w_e / 8.0;                        /* margin over the flat-top line back-EMF */
+    const double t2 = -(75e-6 / 0.05) * log(1.0 - 2.0 * f * I * 2.0 * 0.05 / u);
+    for (int variant = 0; variant < 3; ++variant) { /* 0: open, test on; 1: open, test off; 2: healthy, on */
+        bc_sixstep_params p = params(BC_SIXSTEP_PRED, BC_SIXSTEP_PWMPWM);
+        p.open_frac = variant == 1 ? 0.0f : (float)f;
+        bc_sixstep_state s;
+        CHECK(bc_sixstep_init(&p, &s) == BC_OK, "init");
+        bc_ctrl_out o;
+        double t_flag = -1.0, t_valid = -1.0;
+        int stays = 1;
+        for (double t = 0.0; t < 6.0 * (BC_PI / 3.0) / w_e; t += TS) {
+            bc_ctrl_in in = input(0u, 0.0f, 0.0f, (float)V, (float)I);
+            hall_at(t, w_e, 0, &in);
+            if (variant == 2) {
+                static const int pos_t[6] = {0, 0, 1, 1, 2, 2}, neg_t[6] = {1, 2, 2, 0, 0, 1};
+                int sec = bc_hall_sector(in.hall);
+                in.i_abc[0] = in.i_abc[1] = in.i_abc[2] = 0.0f;
+                in.i_abc[pos_t[sec]] = (float)I;
+                in.i_abc[neg_t[sec]] = (float)-I;
+                in.i_mask = 7u;
+            }
+            bc_sixstep_step(&p, &s, &in, &o);
+            if (t_valid < 0.0 && o.diag[4] != 0.0f) t_valid = t;
+            if (t_flag >= 0.0 && !(o.flags & BC_FLAG_BAD_INPUT)) stays = 0;
+            if (t_flag < 0.0 && (o.flags & BC_FLAG_BAD_INPUT)) t_flag = t;
+        }
+        if (variant == 0) {
+            CHECK(t_valid >= 0.0 && t_flag > t_valid + 2.0 * t2, "not before 2 t_2 of full voltage: %g", t_flag);
+            CHECK(t_flag <= t_valid + 2.0 * t2 + 7.0 * TS, "within 2 t_2 + 4 T_s (+ the sample grid): %g after %g",
+                  t_flag, t_valid);
+            CHECK(stays && all_off(&o) && (o.flags & BC_FLAG_SAFE), "latched in the safe state");
+        } else {
+            CHECK(t_flag < 0.0, "variant %d: no detection (flag at %g)", variant, t_flag);
+        }
+    }
+}
+
 static void test_predictive_two_phase(void)
 {
     static const int pos_t[6] = {0, 0, 1, 1, 2, 2}, neg_t[6] = {1, 2, 2, 0, 0, 1};
@@ -869,6 +917,7 @@ int main(void)
     test_init();
     test_commutation_table();
     test_safe_states();
+    test_open_detect();
     test_fuzz();
     test_average_model();
     test_predictive_two_phase();

@@ -31,6 +31,9 @@ int bc_sixstep_init(const bc_sixstep_params *p, bc_sixstep_state *s)
     if (!(p->ts > 0.0f) || p->R < 0.0f || !(p->L > 0.0f) || !(p->k_e > 0.0f) || p->kp < 0.0f || p->ki < 0.0f ||
         !(p->band > 0.0f) || !(p->i_max > 0.0f) || !(p->v_max > 0.0f))
         return BC_ERR_PARAM;
+    if (!fin(p->open_frac) || p->open_frac < 0.0f || !(p->open_frac < 0.5f)) return BC_ERR_PARAM;
+    s->open_n = 0;
+    s->open_acc = 0.0f;
     s->hall_p = (bc_hall_params){.f_tick = p->f_tick, .omega_min = p->omega_min, .theta_offset = p->theta_offset,
                                  .mode = p->hall_mode, .pll_edges = p->hall_pll_edges, .table = p->hall_table};
     if (bc_hall_init(&s->hall_p, &s->hall) != BC_OK) return BC_ERR_PARAM;
@@ -323,6 +326,7 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
     float v = in->v_dc;
     if (!h.valid) why |= BC_FLAG_HALL_INVALID;
     if (!fin(in->ref)) why |= BC_FLAG_BAD_INPUT;
+    if (s->open_n < 0) why |= BC_FLAG_BAD_INPUT; /* no current path found: latched */
     if (why) {
         safe(s, out, why);
         return;
@@ -447,6 +451,44 @@ void bc_sixstep_step(const bc_sixstep_params *p, bc_sixstep_state *s, const bc_c
         bc_pi_update(&s->pi_p, &s->pi, err / v, mu, m);
     }
     m = fin(m) ? bc_clampf(m, m_lo, 1.0f) : 0.0f;
+
+    /* no current path (an open phase, a lost current sensor): a current loop driving the pair with the voltage
+     * u = m V_dc - |e_pos - e_neg| (this sample's command over the line back-EMF estimate) whose regulated current
+     * stays below f I_ref (f = open_frac), where the pair's R-L circuit would reach 2 f I_ref from zero within
+     *     t_2 = -(L/R) ln(1 - 2 f I_ref / I_inf),  I_inf = u / (2 R)     (t_2 = 4 L f I_ref / u for R = 0).
+     * Over consecutive such samples the sum of T_s / t_2 is the share of that time the applied voltage has had:
+     * past 2 (twice the time) and 4 samples (the delay, a commutation) the current has no path: safe state,
+     * BC_FLAG_BAD_INPUT, latched. Not tested where I_inf <= 2 f I_ref (no margin to tell), nor without a speed
+     * estimate (before the Hall speed is valid the back-EMF, hence the margin, is unknown). */
+    if (p->open_frac > 0.0f && i_ref > 0.0f && (h.speed_valid || p->comm == BC_SIXSTEP_COMM_ENCODER) &&
+        (p->reg == BC_SIXSTEP_PRED || p->reg == BC_SIXSTEP_PI || p->reg == BC_SIXSTEP_HYST)) {
+        float thr = p->open_frac * i_ref;
+        float u = m * v - fabsf(e1[pos] - e1[neg]);
+        float t2 = -1.0f;
+        if (u > 0.0f) {
+            if (p->R > 0.0f) {
+                float q = 2.0f * thr * 2.0f * p->R / u; /* 2 f I_ref / I_inf */
+                if (q < 1.0f) t2 = -(p->L / p->R) * logf(1.0f - q);
+            } else {
+                t2 = 4.0f * p->L * thr / u;
+            }
+        }
+        if (t2 > 0.0f && fin(t2) && i_reg < thr) {
+            s->open_n += 1;
+            s->open_acc += ts / t2;
+            if (s->open_acc > 2.0f && s->open_n > 4) {
+                s->open_n = -1;
+                safe(s, out, BC_FLAG_BAD_INPUT);
+                return;
+            }
+        } else {
+            s->open_n = 0;
+            s->open_acc = 0.0f;
+        }
+    } else {
+        s->open_n = 0;
+        s->open_acc = 0.0f;
+    }
 
     if (p->reg == BC_SIXSTEP_IDEAL) {
         build_ideal(pos, neg, x, i_ref, out->leg, &out->i_hold);

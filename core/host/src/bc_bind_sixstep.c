@@ -23,6 +23,7 @@ static const bc_field_desc SIXSTEP_FIELDS[] = {
     F(bc_sixstep_params, hall_pll_edges, "f4"),
     F(bc_sixstep_params, hall_table, "bc_hall_table"),
     F(bc_sixstep_params, derate, "bc_derate_params"),
+    F(bc_sixstep_params, open_frac, "f4"),
 };
 static const bc_struct_desc SIXSTEP_STRUCTS[] = {BC_BIND_STRUCT(bc_sixstep_params), BC_BIND_STRUCT(bc_sixstep_state)};
 static int sixstep_init(const void *p, void *s) { return bc_sixstep_init(p, s); }

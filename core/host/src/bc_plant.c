@@ -2323,6 +2323,14 @@ static BC_ALWAYS_INLINE void step_done(const bc_plant_params *p, bc_plant_state 
             double v = fabs(s->i[x]);
             if (v > s->i_peak[x]) s->i_peak[x] = v;
         }
+        /* the step's conduction state (apply_event changes it after this call): with two phases open the third
+         * carries no current either (no neutral wire), whatever its switches do */
+        int open3 = (s->cond[0] == BC_COND_OPEN) + (s->cond[1] == BC_COND_OPEN) + (s->cond[2] == BC_COND_OPEN) >= 2;
+        if (open3 && h > 0.0) {
+            s->t_open3 += h;
+            if (!s->open3) s->n_open3 += 1;
+        }
+        if (h > 0.0) s->open3 = open3;
     }
     if (s->on_step) s->on_step(s->on_step_ctx, s->t, s->acc, a1->tau);
 }

@@ -460,9 +460,14 @@ def _speed_si(key: str, value: Any, Omega_0: float) -> float:
 
 
 def _metrics_row(m: Metrics, row: dict[str, float | int]) -> None:
-    """Add every metric not yet in ``row``; per-phase tuples become ``name_a``, ``name_b``, ``name_c``."""
+    """Add every numeric metric not yet in ``row``; per-phase tuples become ``name_a``, ``name_b``, ``name_c``.
+
+    ``power_flow`` (text) is left out: the signs of ``p_src_total`` and the shaft power in the row give it.
+    """
     for f in dataclasses.fields(m):
         v = getattr(m, f.name)
+        if isinstance(v, str):
+            continue
         if isinstance(v, tuple):
             for x, comp in zip("abc", v, strict=True):
                 row.setdefault(f"{f.name}_{x}", float(comp))

@@ -22,7 +22,7 @@ from ..model.motor import Drive
 from ..sim import Fault, Scenario, simulate
 from .experiments import electrical_period
 
-__all__ = ["FaultCase", "default_faults", "fault_table"]
+__all__ = ["FaultCase", "default_faults", "detection_notes", "fault_table", "stall_current"]
 
 #: The controller flags that mean "fault detected" (``bc_types.h`` names; their values come from the library) and
 #: how the table names them
@@ -65,6 +65,65 @@ def default_faults() -> list[FaultCase]:
         FaultCase("DC bus sag to 60 %", v_dc_factor=0.6),
         FaultCase("phase b open", (Fault("phase_open", "b", 0.0),)),
     ]
+
+
+def stall_current(drive: Drive) -> float:
+    """Return the largest current the bus can drive through the windings of a rotor at rest (A).
+
+    One phase against the other two in parallel (an inverter vector such as 100), ``V_dc / (1.5 (R + R_on))``: no
+    back-EMF, so only the resistance limits it (two phases in series, the six-step pair, ``V_dc / (2 (R + R_on))``).
+    """
+    return drive.inverter.V_dc / (1.5 * (drive.motor.R + drive.inverter.R_on))
+
+
+def detection_notes(drive: Drive, i_max: float, open_detect: float = 0.0) -> list[str]:
+    """Say which faults the controllers cannot detect on this drive, and why, from its data.
+
+    The controllers' general detections are an invalid Hall code, a bad input (non-finite, bus out of range) and an
+    over-current on the measured currents (``i_max``); a lost current sensor and an open phase are detected by them
+    only through an over-current they cause. Where the windings' resistance keeps every current at or below
+    ``i_max`` that cannot happen (a high-resistance gimbal motor: 12 V, 10 Ohm, 0.4 A rated, ``i_max = 2 I_N =
+    0.8 A`` = the stall current ``V_dc / (1.5 R)``). The six-step controller's no-current-path test
+    (``SixStep(open_detect=f)``) detects both without an over-current, where the bus has a voltage margin over the
+    back-EMF.
+
+    Parameters
+    ----------
+    drive : Drive
+    i_max : float
+        The controller's over-current trip (A).
+    open_detect : float
+        The controller's no-current-path test (``SixStep.open_detect``; 0: none).
+
+    Returns
+    -------
+    list of str
+        Notes, each led by its name (``faults.overcurrent_unreachable``, ``faults.lost_sensor``,
+        ``faults.open_phase``, or ``faults.open_detect`` with the test on).
+    """
+    if open_detect > 0.0:
+        return [f"faults.open_detect: the six-step controller's no-current-path test (f = {open_detect:g}) detects a "
+                f"lost current sensor and an open phase without an over-current: a current below f I_ref at full "
+                f"voltage for twice the time the windings need to pass 2 f I_ref; it cannot where the bus has no "
+                f"margin over the back-EMF (near Omega_0), before the Hall speed is valid, or where that time "
+                f"exceeds a commutation sector"]
+    notes = []
+    i_stall = stall_current(drive)
+    if i_stall <= i_max:
+        notes.append(f"faults.overcurrent_unreachable: the windings limit every current the bus can drive at "
+                     f"standstill to V_dc / (1.5 (R + R_on)) = {i_stall:.4g} A, {i_stall / i_max:.3g} times the "
+                     f"firmware trip i_max = {i_max:.4g} A: a fault whose only symptom is an over-current (a lost "
+                     f"current sensor, an open phase) cannot lift a measured current above the trip but by what the "
+                     f"back-EMF adds to a misdirected voltage at speed: on this drive it is not detected")
+    hw = (f"the hardware trip i_trip = {drive.inverter.i_trip:.4g} A acts on the true currents"
+          if drive.inverter.i_trip > 0 else "this drive has no hardware trip (Inverter.i_trip = 0) to end it")
+    notes.append(f"faults.lost_sensor: a lost current sensor reads zero, so the firmware trip does not see the "
+                 f"current of its phase (i_peak is the true current, it may exceed i_max undetected); {hw}; no "
+                 f"controller here checks its sensors' plausibility")
+    notes.append("faults.open_phase: an open phase draws no over-current and no controller here tests for a phase "
+                 "whose current stays zero while it is driven: not detected on any drive (the torque after it, "
+                 "tau_mean_after, shows the loss)")
+    return notes
 
 
 def _shift(f: Fault, t: float, I_N: float) -> Fault:

@@ -10,9 +10,8 @@ comparison) both read them from here, so a loss the plant adds (a new ``Metrics`
 from __future__ import annotations
 
 import dataclasses
-import math
 
-from ..sim.results import Metrics
+from ..sim.results import Metrics, efficiency_of
 
 __all__ = ["LOSS_BUCKETS", "NOT_LOSSES", "copper_only_efficiency", "efficiency", "loss_buckets", "point_losses"]
 
@@ -45,13 +44,10 @@ def efficiency(p_in: float, p_out: float) -> float:
     Returns
     -------
     float
-        Efficiency (-), nan when the two powers have different signs (no meaningful efficiency).
+        Efficiency (-), nan when both powers flow into the machine or neither does (no meaningful efficiency):
+        :func:`bldclab.sim.results.efficiency_of`, the definition :attr:`Metrics.efficiency` uses.
     """
-    if p_in > 0.0 and p_out > 0.0:
-        return p_out / p_in
-    if p_in < 0.0 and p_out < 0.0:
-        return p_in / p_out
-    return math.nan
+    return efficiency_of(p_in, p_out)[1]
 
 
 def point_losses(m: Metrics, buckets: tuple[str, ...] | None = None) -> dict[str, float]:

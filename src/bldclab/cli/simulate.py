@@ -445,9 +445,11 @@ def run_command(args: argparse.Namespace) -> int:
         "tau_mean_N_m": m.tau_mean, "tau_mean_pu": m.tau_mean / drive.T_N, "ripple_N_m": m.ripple,
         "ripple_pwm_averaged_N_m": m.ripple_ma, "ripple_pct_of_mean": 100 * m.ripple / abs(m.tau_mean)
         if m.tau_mean else math.nan, "tau_rms_deviation_N_m": m.tau_std, "efficiency": m.efficiency,
+        "power_flow": m.power_flow, "p_shaft_W": m.p_shaft,
         "p_dc_W": m.p_src_total, "p_copper_W": m.p_cu,
         "p_inverter_W": m.p_sw + m.p_diode + m.p_Rsrc + m.p_swloss + m.p_rr, "p_iron_W": m.p_fe,
-        "i_rms_A": list(m.i_rms), "i_peak_A": list(m.i_peak), "energy_balance_residue": m.balance_electrical,
+        "i_rms_A": list(m.i_rms), "i_peak_A": list(m.i_peak),
+        "zero_current_pct": 100.0 * m.zero_current_share, "energy_balance_residue": m.balance_electrical,
         "flags_summary": res.flags_summary(), "flags": res.meta["flags"],
         "controller_flags": decode_flags(flags) or "none", "controller_flags_bits": flags,
         "trace_rows": len(res),

@@ -121,6 +121,13 @@ class SixStep(Control):
     derate : TemperatureDerating, optional
         Derate the reference's current limit ``i_max`` with the temperature inputs (firmware derating,
         :mod:`bldclab.control.derate`); ``None``: none.
+    open_detect : float
+        Detect a missing current path (an open phase, a lost current sensor reading zero), 0 (default) for off,
+        else a fraction ``f`` in (0, 0.5): a current loop at full voltage whose regulated current stays below
+        ``f I_ref`` for twice the time the pair's R-L circuit needs, with the back-EMF estimate's voltage margin, to
+        reach ``2 f I_ref`` from zero (plus four samples) goes to the safe state with ``BC_FLAG_BAD_INPUT``, latched
+        (``bc_sixstep.h``; docs/sixstep.md, "Detecting a missing current path"). It needs no over-current, so it
+        works on high-resistance motors whose windings keep every current below the trip.
     """
 
     regulation: Literal["predictive", "pi", "hysteresis", "duty", "ideal"] = "predictive"
@@ -146,6 +153,7 @@ class SixStep(Control):
     pll_edges: float = 3.0
     hall_table: tuple[float, ...] | None = None
     derate: TemperatureDerating | None = None
+    open_detect: float = 0.0
     c_name: ClassVar[str] = "sixstep"
     ref_meaning: ClassVar[str] = "current amplitude, A (or torque, N m)"
 
@@ -177,6 +185,10 @@ class SixStep(Control):
             raise BldclabError("control.theta_offset", f"must be a finite number, got {self.theta_offset!r}")
         check_hall_options(self.pll_edges, self.hall_angle)
         object.__setattr__(self, "hall_table", normalize_table(self.hall_table))
+        if (isinstance(self.open_detect, bool) or not isinstance(self.open_detect, int | float)
+                or not 0.0 <= self.open_detect < 0.5):
+            raise BldclabError("control.open_detect", f"must be 0 (off) or a fraction in (0, 0.5), got "
+                               f"{self.open_detect!r}")
         if self.derate is not None and not isinstance(self.derate, TemperatureDerating):
             raise BldclabError("control.derate", f"must be a TemperatureDerating, got {type(self.derate).__name__}")
 
@@ -234,4 +246,5 @@ class SixStep(Control):
             theta_offset=self.theta_offset,
             **hall_record(core, self.hall_angle == "pll", self.pll_edges, self.hall_table),
             derate=derate_record(core, self.derate, 0.5 / inv.f_pwm),
+            open_frac=float(self.open_detect),
         ))

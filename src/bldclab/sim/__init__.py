@@ -807,7 +807,7 @@ def _run(drive: Drive, control: Control, scenario: Scenario, check: str, estimat
     rows_summary = _plaus.RowSummary((float(pk[0]), float(pk[1]), float(pk[2]), float(pk[3])),
                                      bool(int(st["row_nonfinite"])))
     try:
-        meta["warnings"] = issued + _guards_after(drive, res, imposed, check, rows_summary)
+        meta["warnings"] = issued + _guards_after(drive, res, imposed, check, rows_summary, control, peak["ref"])
     except PlausibilityError as exc:  # the inputs' warnings are its cause: they lead the message
         raise _plaus.cause_first(exc, issued) from None
     res.metrics = metrics
@@ -880,11 +880,19 @@ def _guards_before(drive: Drive, control: Control, cparams: np.ndarray, imposed:
 
 
 def _guards_after(drive: Drive, res: SimResult, imposed: bool, check: str,
-                  rows: _plaus.RowSummary | None = None) -> list[str]:
-    """Plausibility checks on the result (``rows``: the runner's summary of its trace rows); return the warnings."""
+                  rows: _plaus.RowSummary | None = None, control: Control | None = None,
+                  ref_max: float = math.nan) -> list[str]:
+    """Plausibility checks on the result; return the warnings.
+
+    ``rows``: the runner's summary of its trace rows; ``control`` and ``ref_max`` (its largest reference
+    magnitude): for the conduction check.
+    """
     if check == "off":
         return []
     findings = _plaus.check_result(drive, res, rows)
+    if control is not None:
+        findings += _plaus.check_conduction(drive, control, res, ref_max)
+        findings += _plaus.check_current_rating(drive, control, res, rows)
     if not imposed:
         w = [abs(res.meta["final"]["omega_m"])]
         if "omega_m" in res.signals and len(res):

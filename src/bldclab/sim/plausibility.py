@@ -48,6 +48,20 @@ Thresholds and why (``T_pwm = 1 / f_pwm``, ``tau_el = L / R``, ``f_e = p |Omega|
   back-EMF drives them through the diodes. Warning above 1.01 ``i_trip``; error above 2 ``i_trip`` (beyond the
   level the trip protects the switches at: a real inverter would fail). Without a hardware trip: error above
   100 ``I_N`` (ten thousand times the rated copper loss).
+* A drive without a current loop (a duty, an open-loop voltage) whose phase current exceeds ``RATED_CURRENT_WARN``
+  (2) times ``I_N``, or the motor's peak current ``T_peak / (2 k_phi)`` if larger: warning ``result.current_rating``
+  (at stall and full duty only ``2 (R + R_on)`` limits it, ``V_dc / (2 R)``: 10 ``I_N`` on f60prov-2550kv). A
+  hardware trip (``Inverter.i_trip``) that switched the legs off: warning ``result.hardware_trip`` with its time (the
+  run's rest, and the metrics after it, are of a drive switched off).
+* Discontinuous conduction of a six-step current loop (``SixStep``, predictive, PI or hysteresis regulation):
+  every phase current zero for more than ``ZERO_CURRENT_WARN`` (0.1 %) of the metric window
+  (``Metrics.zero_current_share``, integrated by the plant) in intervals shorter than a PWM period on average (longer
+  ones are a drive switched off): warning ``result.discontinuous_conduction``. Without it, the estimated PWM ripple of
+  the pair current (:func:`pwm_ripple`, ``V_dc d (1 - d) / (2 L f_pwm)``) above the reference current: warning
+  ``result.current_ripple``. The regulators sample the current at the carrier extremes, its period mean only while
+  the ripple is small against it; below that the mean torque misses the reference (a 30 uH, 16 kHz drive at half
+  its no-load speed: 3.1 times the reference's torque at 0.5 A, 1.08 at 2 A, within 4 % from 3 A, the ripple being
+  4.4 A peak-to-peak).
 * Steady state of the metric window with rotor dynamics: the relative speed change across the window,
   ``|dW_kin| / (J Omega_mean^2)``, above 1 %, or the mean torques of the window's two halves differing by more
   than 5 % of ``max(|tau_mean|, 0.1 T_N)``: warning (the window still holds a run-up).
@@ -80,12 +94,37 @@ from ..model.limits import grade as _grade
 from ..model.motor import Drive
 from .results import SimResult
 
-__all__ = ["BALANCE_ERROR", "BALANCE_FLOOR", "BALANCE_WARN", "CHECK_MODES", "PWM_PER_PERIOD_ERROR",
-           "PWM_PER_PERIOD_WARN", "PWM_TAU_ERROR", "PWM_TAU_WARN", "SPEED_ERROR_PU", "Finding", "RowSummary", "apply",
-           "cause_first",
-           "cause_of", "check_driven_speed", "check_pwm", "check_reference", "check_result", "check_speed",
-           "check_steady", "collect",
-           "distinct", "summary"]
+__all__ = [
+    "BALANCE_ERROR",
+    "BALANCE_FLOOR",
+    "BALANCE_WARN",
+    "CHECK_MODES",
+    "PWM_PER_PERIOD_ERROR",
+    "PWM_PER_PERIOD_WARN",
+    "PWM_TAU_ERROR",
+    "PWM_TAU_WARN",
+    "RATED_CURRENT_WARN",
+    "SPEED_ERROR_PU",
+    "ZERO_CURRENT_WARN",
+    "Finding",
+    "RowSummary",
+    "apply",
+    "cause_first",
+    "cause_of",
+    "check_conduction",
+    "check_current_rating",
+    "check_driven_speed",
+    "check_pwm",
+    "check_reference",
+    "check_result",
+    "check_speed",
+    "check_steady",
+    "collect",
+    "distinct",
+    "peak_current",
+    "pwm_ripple",
+    "summary",
+]
 
 @dataclass(frozen=True)
 class RowSummary:
@@ -120,6 +159,9 @@ TRIP_ERROR = 2.0
 CURRENT_ERROR_IN = 100.0
 STEADY_SPEED = 0.01
 STEADY_TORQUE = 0.05
+#: Share of the metric window with every phase current zero above which a current-regulated run is reported as
+#: discontinuous conduction (``Metrics.zero_current_share``; 0 in continuous conduction, whatever the drive).
+ZERO_CURRENT_WARN = 1e-3
 
 
 def _reference_kind(control: Control) -> str | None:
@@ -197,6 +239,76 @@ def _nonfinite(res: SimResult, rows: RowSummary | None = None) -> list[str]:
     return bad
 
 
+def peak_current(res: SimResult, rows: RowSummary | None = None) -> float:
+    """Return the largest phase current magnitude of a run (A): its traced rows, metric window and final state."""
+    peaks = [abs(v) for v in res.meta.get("final", {}).get("i", [])]
+    if res.metrics is not None:
+        peaks += list(res.metrics.i_peak)
+    if rows is not None and not rows.nonfinite:
+        peaks += [rows.peak[x] for x, name in enumerate(("i_a", "i_b", "i_c"))
+                  if name in res.signals and res.signals[name].size]
+    else:
+        for name in ("i_a", "i_b", "i_c"):
+            sig = res.signals.get(name)
+            if sig is not None and sig.size:
+                peaks.append(float(np.max(np.abs(sig))))
+    return max(peaks, default=0.0)
+
+
+#: A drive without a current loop whose phase current exceeds this many times the rated current ``I_N`` (or the
+#: motor's peak current ``T_peak / (2 k_phi)`` when larger) is warned about: the limit of :func:`check_reference`'s
+#: default current trip, the short-time rating of a typical motor.
+RATED_CURRENT_WARN = 2.0
+
+
+def check_current_rating(drive: Drive, control: Control, res: SimResult,
+                         rows: RowSummary | None = None) -> list[Finding]:
+    """Check the currents of a drive without a current loop against its rating, and name a hardware trip.
+
+    A duty (an ESC's throttle, :class:`~bldclab.control.SixStepVoltage`, ``SixStep(regulation="duty")``) or an
+    open-loop voltage leaves the current to the winding resistance and the back-EMF: at stall and full duty
+    ``V_dc / (2 R)``, several times the rating (f60prov-2550kv: 522 A, 10 ``I_N``), which a real drive survives only
+    by a current limit or a trip. A current controller trips at its own ``i_max`` instead (:func:`check_reference`).
+
+    Parameters
+    ----------
+    drive : Drive
+    control : Control
+    res : SimResult
+    rows : RowSummary, optional
+        The runner's summary of the trace rows (else the signals are scanned).
+
+    Returns
+    -------
+    list of Finding
+        A warning on ``result.hardware_trip`` when the inverter's trip ``i_trip`` switched every leg off (the rest
+        of the run is a drive switched off), else one on ``result.current_rating`` when a drive without a current
+        loop reached more than ``RATED_CURRENT_WARN`` times ``I_N`` (or more than ``T_peak / (2 k_phi)``).
+    """
+    t_trip = res.meta.get("stats", {}).get("hw_trip")
+    i_trip = drive.inverter.i_trip
+    if t_trip is not None:
+        return [Finding("warning", "result.hardware_trip",
+                        f"the inverter's hardware trip (i_trip = {i_trip:.4g} A, {i_trip / drive.motor.I_N:.3g} times "
+                        f"I_N = {drive.motor.I_N:.4g} A) switched every leg off at t = {t_trip:.4g} s: from then on "
+                        f"the run is a drive switched off and its metrics describe that")]
+    if _reference_kind(control) is not None or getattr(control, "speed_loop", False):
+        return []
+    m = drive.motor
+    limit, what = RATED_CURRENT_WARN * m.I_N, f"{RATED_CURRENT_WARN:g} I_N"
+    if m.T_peak is not None and m.T_peak / (2.0 * m.k_phi) > limit:
+        limit, what = m.T_peak / (2.0 * m.k_phi), "the motor's peak current T_peak / (2 k_phi)"
+    i_pk = peak_current(res, rows)
+    if i_pk <= limit:
+        return []
+    return [Finding("warning", "result.current_rating",
+                    f"a phase current reached {i_pk:.4g} A, {i_pk / m.I_N:.3g} times the rated current I_N = "
+                    f"{m.I_N:.4g} A (warning above {what} = {limit:.4g} A): the drive has no current loop, so only "
+                    f"the winding resistance and the back-EMF limit the current (at stall V_dc / (2 R) = "
+                    f"{drive.inverter.V_dc / (2.0 * (m.R + drive.inverter.R_on)):.4g} A at full duty); a real drive "
+                    f"needs a current limit or a trip (Inverter.i_trip) there")]
+
+
 def check_result(drive: Drive, res: SimResult, rows: RowSummary | None = None) -> list[Finding]:
     """Check a finished run: finite values, energy balance, currents after a hardware trip.
 
@@ -230,18 +342,7 @@ def check_result(drive: Drive, res: SimResult, rows: RowSummary | None = None) -
                                    f"s (limit {BALANCE_WARN:g} for a warning, {BALANCE_ERROR:g} for an error; the "
                                    f"plant closes it to 1e-7 or better when the PWM resolves the electrical "
                                    f"period): the integration did not resolve the run"))
-    peaks = [abs(v) for v in res.meta.get("final", {}).get("i", [])]
-    if m is not None:
-        peaks += list(m.i_peak)
-    if rows is not None and not rows.nonfinite:
-        peaks += [rows.peak[x] for x, name in enumerate(("i_a", "i_b", "i_c"))
-                  if name in res.signals and res.signals[name].size]
-    else:
-        for name in ("i_a", "i_b", "i_c"):
-            sig = res.signals.get(name)
-            if sig is not None and sig.size:
-                peaks.append(float(np.max(np.abs(sig))))
-    i_pk = max(peaks, default=0.0)
+    i_pk = peak_current(res, rows)
     i_trip = drive.inverter.i_trip
     tripped = res.meta.get("stats", {}).get("hw_trip") is not None
     if tripped and i_trip > 0:
@@ -256,6 +357,110 @@ def check_result(drive: Drive, res: SimResult, rows: RowSummary | None = None) -
                            f"a phase current reached {i_pk:.4g} A, {i_pk / drive.motor.I_N:.3g} times I_N = "
                            f"{drive.motor.I_N:.4g} A (error above {CURRENT_ERROR_IN:g} I_N)"))
     return out
+
+
+def pwm_ripple(drive: Drive, omega: float, i_ref: float, chopping: str,
+               v_dc: float | None = None) -> tuple[float, float]:
+    """Estimate the peak-to-peak PWM ripple of a six-step drive's pair current in steady two-phase conduction.
+
+    The pair (two phases in series, ``2 R``, ``2 L``) sees ``V_dc`` for ``d T_pwm`` and the freewheel's 0 V (the
+    unipolar patterns ``high``, ``pwm-on-pwm``, ``sync``) or ``-V_dc`` (``bipolar``) for the rest of the period,
+    against the line back-EMF ``E = 2 k_phi |omega|``; the average holds ``u = E + 2 R I``. Then
+    ``Delta I_pp = (V_dc - u) d T_pwm / (2 L)``: ``V_dc d (1 - d) / (2 L f_pwm)`` with ``d = u / V_dc`` (unipolar),
+    twice that with ``d = (1 + u / V_dc) / 2`` (bipolar). The commutation and a non-flat back-EMF are left out.
+
+    Parameters
+    ----------
+    drive : Drive
+    omega : float
+        Mechanical speed (rad/s).
+    i_ref : float
+        The pair current (A).
+    chopping : str
+        The chopping pattern (:class:`~bldclab.control.SixStep`'s ``chopping``).
+    v_dc : float, optional
+        Bus voltage (V); default the inverter's.
+
+    Returns
+    -------
+    tuple of float
+        ``(Delta I_pp, d)``: the ripple (A) and the duty it was evaluated at.
+    """
+    v = drive.inverter.V_dc if v_dc is None else v_dc
+    m = drive.motor
+    u = 2.0 * m.k_phi * abs(omega) + 2.0 * (m.R + drive.inverter.R_on) * abs(i_ref)
+    t_pwm = 1.0 / drive.inverter.f_pwm
+    if chopping == "bipolar":
+        d = min(max(0.5 * (1.0 + u / v), 0.0), 1.0)
+        return 2.0 * v * d * (1.0 - d) * t_pwm / (2.0 * m.L), d
+    d = min(max(u / v, 0.0), 1.0)
+    return v * d * (1.0 - d) * t_pwm / (2.0 * m.L), d
+
+
+def check_conduction(drive: Drive, control: Control, res: SimResult, ref_max: float) -> list[Finding]:
+    """Check a current-regulated run for discontinuous conduction and a PWM ripple larger than the reference.
+
+    Every current controller here samples the current at the carrier's valleys and peaks, where a current that is its
+    PWM-period mean plus a small linear ripple crosses that mean. When the ripple is as large as the current that no
+    longer holds: with a diode freewheel (``pwm-on-pwm``, ``high``, ``bipolar``) the current falls to zero and
+    stays there for part of each period (discontinuous conduction, measured: ``Metrics.zero_current_share``), with
+    complementary chopping (``sync``) it reverses; either way the mean current and torque are not what the
+    reference asked for (f60prov-2550kv at 0.5 ``Omega_0``: 1.1 to 6 times the reference's torque below 5 A).
+
+    Parameters
+    ----------
+    drive : Drive
+    control : Control
+    res : SimResult
+        The run, with its metrics.
+    ref_max : float
+        Largest magnitude of the reference over the run (A or N m).
+
+    Returns
+    -------
+    list of Finding
+        A warning on ``result.discontinuous_conduction`` when every phase current is zero for more than
+        ``ZERO_CURRENT_WARN`` of the metric window in intervals shorter than a PWM period on average (longer ones
+        are a drive switched off: a safe state, a fault); otherwise one on ``result.current_ripple`` when
+        :func:`pwm_ripple` at the window's mean speed exceeds the reference current. Only for a controller that
+        regulates its sampled current (:class:`~bldclab.control.SixStep` with ``regulation`` predictive, pi or
+        hysteresis; paper 2's :class:`~bldclab.control.Lu` controls the torque from a model of the discontinuous
+        current and holds it there, ``tests/test_lu.py``).
+    """
+    m = res.metrics
+    kind = _reference_kind(control)
+    if (m is None or kind is None or not math.isfinite(ref_max)
+            or getattr(control, "regulation", None) not in ("predictive", "pi", "hysteresis")):
+        return []
+    k_phi = drive.motor.k_phi
+    i_ref = ref_max if kind == "current" else ref_max / (2.0 * k_phi)
+    chopping = getattr(control, "chopping", None)
+    ripple = None
+    if isinstance(chopping, str) and math.isfinite(m.omega_mean):
+        ripple = pwm_ripple(drive, m.omega_mean, i_ref, chopping)
+    tau_ref = 2.0 * k_phi * i_ref
+    torque = (f"; mean torque {m.tau_mean:.4g} N m, {100 * m.tau_mean / tau_ref:.3g} % of 2 k_phi I_ref = "
+              f"{tau_ref:.4g} N m" if tau_ref > 0 else "")
+    est = ""
+    if ripple is not None:
+        est = (f"; estimated PWM ripple {ripple[0]:.3g} A peak-to-peak (V_dc d (1 - d) / (2 L f_pwm) for the pair, "
+               f"d = {ripple[1]:.3g}, L = {drive.motor.L:.3g} H, f_pwm = {drive.inverter.f_pwm:g} Hz)")
+    share = m.zero_current_share
+    mean_gap = share * (m.t1 - m.t0) / max(m.zero_current_intervals, 1)
+    if math.isfinite(share) and share > ZERO_CURRENT_WARN and mean_gap < 1.0 / drive.inverter.f_pwm:
+        return [Finding("warning", "result.discontinuous_conduction",
+                        f"every phase current is zero for {100 * share:.3g} % of the metric window (discontinuous "
+                        f"conduction: the PWM ripple reaches the {i_ref:.4g} A reference{est}): the controller "
+                        f"samples the current at the carrier extremes, which are no longer its mean, so the mean "
+                        f"current and torque are not the reference's{torque}; raise f_pwm or L (a series choke), or "
+                        f"run above about half the ripple (warning above {100 * ZERO_CURRENT_WARN:g} % of the window)")]
+    if ripple is not None and ripple[0] > i_ref:
+        return [Finding("warning", "result.current_ripple",
+                        f"the PWM current ripple exceeds the reference current {i_ref:.4g} A{est}: the current is not "
+                        f"its mean plus a small ripple (with chopping '{chopping}' it "
+                        f"{'reverses' if chopping == 'sync' else 'nearly reaches zero'} within PWM periods) and the "
+                        f"regulation of its mean is approximate{torque}; raise f_pwm or L, or the current")]
+    return []
 
 
 #: With rotor dynamics, a peak speed above this many ``Omega_0`` is a warning (the drive alone reaches about 1.05:

@@ -17,7 +17,7 @@ from .._files import write_atomic
 from ..errors import BldclabError
 from ..svg import Series, svg_plot
 
-__all__ = ["Metrics", "SimResult"]
+__all__ = ["Metrics", "SimResult", "efficiency_of"]
 
 #: Old signal names still accepted by ``res[...]`` / ``res.<name>``
 _ALIASES = {"flags": "ctrl_flags", "ctrl_flags": "flags"}
@@ -44,6 +44,33 @@ def balance_scales(src: float, emf: float, fric: float, fe: float, load: float, 
         gross)`` (:class:`Metrics`, ``balance_electrical`` and ``balance_mechanical``).
     """
     return max(abs(src), abs(emf)), max(abs(emf), abs(fric), abs(fe), abs(load), abs(kin), gross)
+
+
+def efficiency_of(p_src: float, p_shaft: float) -> tuple[str, float]:
+    """Return the direction of the power flow and the efficiency in that direction.
+
+    Parameters
+    ----------
+    p_src : float
+        Mean power out of the DC bus into the drive (W; negative: the drive feeds the bus).
+    p_shaft : float
+        Mean shaft power out of the machine (W; negative: the load drives the shaft).
+
+    Returns
+    -------
+    tuple of (str, float)
+        ``("motoring", p_shaft / p_src)`` when the bus supplies and the shaft delivers; ``("generating",
+        p_src / p_shaft)`` (the bus's received power over the shaft's input, 0 when the losses take it all) when
+        the shaft supplies; ``("dissipating", nan)`` when both feed the machine (there is no output, every watt in is
+        lost); ``("none", nan)`` when neither feeds it.
+    """
+    if p_src > 0.0 and p_shaft >= 0.0:
+        return "motoring", p_shaft / p_src
+    if p_shaft < 0.0 and p_src <= 0.0:
+        return "generating", p_src / p_shaft
+    if p_src > 0.0:
+        return "dissipating", math.nan
+    return "none", math.nan
 
 
 @dataclass(frozen=True)
@@ -126,7 +153,29 @@ class Metrics:
     i_rms, i_peak : tuple of float
         Per-phase rms and peak current (A).
     efficiency : float
-        Shaft power ``p_emf + p_cog - p_fric - p_fe`` over ``p_src_total`` (motoring; nan if ``p_src_total <= 0``).
+        Output over input power in the direction the power flows (:func:`efficiency_of`), with the shaft power
+        ``p_shaft = p_emf + p_cog - p_fric - p_fe`` (positive out of the shaft) and the bus power ``p_src_total``
+        (positive out of the bus): motoring ``p_shaft / p_src_total``, generating ``p_src_total / p_shaft`` (both
+        between 0 and 1); nan where neither side is an output (:attr:`power_flow` says why).
+    power_flow : str
+        Which way the power flows over the window: ``"motoring"`` (the bus supplies, the shaft delivers:
+        ``p_src_total > 0``, ``p_shaft >= 0``), ``"generating"`` (the shaft supplies, the bus receives, or nothing
+        when the losses take it all: ``p_shaft < 0``, ``p_src_total <= 0``), ``"dissipating"`` (both the bus and the
+        shaft feed the machine, ``p_src_total > 0``, ``p_shaft < 0``: plugging, or a motor whose electromagnetic
+        power does not cover its own friction at an imposed speed; every watt in ends as loss, so no efficiency is
+        defined) or ``"none"`` (no input: ``p_src_total <= 0`` and ``p_shaft >= 0``, a run in which nothing flows
+        or stored energy pays the output).
+    zero_current_share : float
+        Share of the window during which every phase current is zero (all three phases open: the diodes that
+        freewheeled the current have turned off), 0 to 1, from the plant's conduction state integrated in C. Above
+        zero in a PWM-period-sized pattern it is discontinuous conduction: the PWM ripple reaches the current's
+        mean, so the current is no longer its period average plus a small ripple and a regulator that samples it
+        at the carrier extremes (every current controller here) does not see its mean
+        (:func:`bldclab.sim.plausibility.check_conduction`). nan for a result saved before it existed.
+    zero_current_intervals : int
+        Intervals of the window with every phase current zero (one running at ``t0`` included): their mean length
+        ``zero_current_share (t1 - t0) / zero_current_intervals`` is under a PWM period in discontinuous conduction,
+        and long when the drive is off (a safe state, zero duty, a fault). 0 for a result saved before it existed.
     """
 
     t0: float
@@ -167,6 +216,9 @@ class Metrics:
     i_rms: tuple[float, float, float]
     i_peak: tuple[float, float, float]
     efficiency: float
+    power_flow: str = "motoring"
+    zero_current_share: float = math.nan
+    zero_current_intervals: int = 0
 
     @classmethod
     def from_c(cls, m: np.void, acc_names: tuple[str, ...], imposed: bool, omega_integral: float) -> Metrics:
@@ -209,7 +261,14 @@ class Metrics:
             balance_electrical=bal_e, balance_mechanical=bal_m,
             i_rms=(math.sqrt(E["i2a"] / dt), math.sqrt(E["i2b"] / dt), math.sqrt(E["i2c"] / dt)),
             i_peak=(float(m["i_peak"][0]), float(m["i_peak"][1]), float(m["i_peak"][2])),
-            efficiency=shaft / p_src_total if p_src_total > 0.0 else math.nan)
+            efficiency=efficiency_of(p_src_total, shaft)[1], power_flow=efficiency_of(p_src_total, shaft)[0],
+            zero_current_share=float(m["t_open1"] - m["t_open0"]) / dt if dt > 0 else math.nan,
+            zero_current_intervals=int(m["n_open1"] - m["n_open0"]))
+
+    @property
+    def p_shaft(self) -> float:
+        """Shaft power ``p_emf + p_cog - p_fric - p_fe`` (W), positive out of the shaft (motoring)."""
+        return self.p_emf + self.p_cog - self.p_fric - self.p_fe
 
     def balance_flows(self) -> tuple[float, float]:
         """Return the flows the two energy-balance residues are relative to, as mean powers (W).
@@ -367,7 +426,8 @@ class SimResult:
         if self.metrics is not None:
             rows = []
             for k, v in asdict(self.metrics).items():
-                text = ", ".join(f"{x:.6g}" for x in v) if isinstance(v, list | tuple) else f"{v:.6g}"
+                text = (", ".join(f"{x:.6g}" for x in v) if isinstance(v, list | tuple)
+                        else v if isinstance(v, str) else f"{v:.6g}")
                 rows.append(f"<tr><td>{k}</td><td style=\"text-align: right\">{text}</td><td>{_metric_unit(k)}</td>"
                             "</tr>")
             parts.append("<table><thead><tr><th>metric</th><th>value</th><th>unit</th></tr></thead><tbody>"
@@ -544,6 +604,9 @@ class SimResult:
             kw.setdefault("p_rr", 0.0)
             kw.setdefault("p_src_total", kw.get("p_src"))
             kw.setdefault("p_fe", 0.0)  # ... and before the iron loss
+            if "power_flow" not in kw:  # ... and before the efficiency took the power flow's direction
+                kw["power_flow"], kw["efficiency"] = efficiency_of(
+                    kw["p_src_total"], kw["p_emf"] + kw["p_cog"] - kw["p_fric"] - kw["p_fe"])
             for f in fields(Metrics):
                 if f.name in ("i_rms", "i_peak"):
                     kw[f.name] = tuple(kw[f.name])
@@ -591,7 +654,7 @@ def _metric_unit(name: str) -> str:
         return "J"
     if name.startswith("i_"):
         return "A"
-    return "-"
+    return "" if name == "power_flow" else "-"
 
 
 def _json_default(obj: object) -> object:

@@ -188,6 +188,7 @@ typedef struct {
     bc_hall_table hall_table; /* calibrated edge angles (set = 0: nominal; bc_hallcal.h) */
     bc_derate_params derate;  /* temperature derating of the current reference's limit i_max (bc_derate.h) from
                                  in->temp; no channel enabled (all zero): none */
+    float open_frac;          /* no-current-path detection (0: off; else in (0, 0.5)): see bc_sixstep_step */
 } bc_sixstep_params;
 
 typedef struct {
@@ -207,6 +208,8 @@ typedef struct {
     bc_derate_state derate;  /* the derating's filter */
     int32_t derate_on;       /* a derating channel is enabled */
     float derate_f;          /* its factor at the last sample (1 without) */
+    int32_t open_n;          /* no-current-path detection: samples counted; -1 latched (safe until init) */
+    float open_acc;          /* ... and the sum of T_s / t_2 over them (bc_sixstep_step) */
 } bc_sixstep_state;
 
 /* Validate the parameters (finite, in range) and reset the state. BC_OK or BC_ERR_PARAM. */
