@@ -226,6 +226,7 @@ static void test_fuzz(void)
         p.i_limit = 20.0f;
         p.k_limit = 1.0f;
         p.align_time = (rnd(&seed) % 2u) ? 0.0f : 1e-3f;
+        p.grid_gain = (rnd(&seed) % 2u) ? 0.2f : 0.0f; /* the uniform grid's code fuzzed too */
         bc_bemf_state s;
         if (bc_bemf_init(&p, &s) != BC_OK) {
             ++bad;
