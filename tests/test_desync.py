@@ -362,7 +362,8 @@ def test_bad_map_inputs(f60):
 def test_cli_writes_the_table_csv_json_and_figures(tmp_path, capsys):
     out = tmp_path / "m"
     argv = ["sensorless", "f60prov-2550kv", "--timing", "0,20 deg", "--rate", "20", "--start", "0.3", "--end", "0.7",
-            "--direct-start", "--settle", "20 ms", "--observe", "50 ms", "--workers", "1", "--out", str(out)]
+            "--direct-start", "--settle", "20 ms", "--observe", "50 ms", "--workers", "1", "--grid", "0.1",
+            "--out", str(out)]
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert "desync map" in text and "timing (deg)" in text and "outcomes:" in text
@@ -370,6 +371,7 @@ def test_cli_writes_the_table_csv_json_and_figures(tmp_path, capsys):
     summary = json.loads((out / "desync.json").read_text())
     assert summary["x"] == {"name": "timing", "unit": "deg", "values": [0.0, 20.0]}
     assert summary["y"] is None
+    assert summary["control"]["grid_gain"] == 0.1 and "--grid=0.1" in summary["command"]
     assert pd.read_csv(out / "desync.csv").shape[0] == 2
 
 
@@ -382,7 +384,8 @@ def test_cli_writes_the_table_csv_json_and_figures(tmp_path, capsys):
     (["--settle", "3 V"], "--settle"), (["--observe", "0 s"], "--observe"), (["--inertia", "2 kg"], "--inertia"),
     (["--workers", "0"], "--workers"), (["--fast-demag", "yes"], "--fast-demag"),
     (["--demag-limit", "-0.1"], "--demag-limit"), (["--duty-limit", "-3 A"], "--duty-limit"),
-    (["--duty-limit", "3 V"], "--duty-limit"),
+    (["--duty-limit", "3 V"], "--duty-limit"), (["--grid", "1.5"], "--grid"), (["--grid", "nan"], "--grid"),
+    (["--grid", "x"], "--grid"),
 ])
 def test_cli_bad_input_exits_2_names_the_option_and_writes_nothing(tmp_path, capsys, args, option):
     out = tmp_path / "m"
@@ -457,3 +460,14 @@ def test_the_truth_agrees_with_the_sensorless_studies_commutations():
     assert (both.sector == both.sector_s).all()
     assert np.allclose(both.err, -both.error - adv, atol=1e-6)
     assert (both.certain == both.err.abs()).all()
+
+
+def test_a_sensorless_trip_is_named_by_its_flag_not_by_the_current_rating_warning():
+    """lu-4kw's default throttle step trips the ESC's own ``i_max`` (2 ``I_N``): the phase current passes 2 ``I_N``
+    in the sample before the trip, which the run names ``OVERCURRENT``; the plausibility warning for a drive without
+    any current limit (``result.current_rating``) must not fire for it."""
+    drive = bl.load("lu-4kw")
+    res = desync_map(drive, Axis("timing", (0.0,)), Axis("rate", (math.inf,)), control=bl.SixStepSensorless(),
+                     workers=1, summarise=False)
+    assert res.points.reason.iloc[0] == "OVERCURRENT", res.points.iloc[0].to_dict()
+    assert not [w for w in res.warnings if "result.current_rating" in w], res.warnings

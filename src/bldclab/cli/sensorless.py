@@ -71,6 +71,10 @@ def configure_command(p: argparse.ArgumentParser) -> None:
                         "(default demag)")
     p.add_argument("--direct-start", action="store_true",
                    help="no rotor alignment before the forced ramp, as drone firmware starts")
+    p.add_argument("--grid", default="0", metavar="GAIN",
+                   help="commutate on a uniform 60-degree grid locked to the mean of the six crossings, learning "
+                        "each crossing's offset with this gain in [0, 1] (0: off, 30 deg after each crossing; 0.1 "
+                        "suits motors whose phases' back-EMFs differ; docs/sensorless.md, 'Uniform grid')")
     p.add_argument("--workers", type=positive_int, help="processes, >= 1 (default: all cores; 1: serial)")
     add_inverter_option(p)
     add_verbose_option(p)
@@ -157,8 +161,14 @@ def _parse(args: argparse.Namespace) -> tuple[list[Axis], dict[str, Any], Thrott
     except BldclabError as exc:
         opt = {"step.start": "--start", "step.end": "--end"}.get(exc.field, exc.field)
         raise BldclabError(opt, exc.problem) from None
+    try:
+        grid = float(args.grid)
+    except ValueError:
+        raise BldclabError("--grid", f"cannot read {args.grid!r}: a gain in [0, 1]") from None
+    if not 0.0 <= grid <= 1.0:
+        raise BldclabError("--grid", f"must be a gain in [0, 1] (0: off), got {args.grid!r}")
     control = SixStepSensorless(method=args.method, blanking=args.blanking,
-                                align_time=0.0 if args.direct_start else None)
+                                align_time=0.0 if args.direct_start else None, grid_gain=grid)
     return axes, single, step, control, math.radians(bound)
 
 
@@ -243,7 +253,7 @@ def _summary(res: DesyncMapResult, args: argparse.Namespace) -> dict[str, Any]:
                         "chopping": res.control.chopping, "align_time": res.control.align_time,
                         "timing_rad": res.control.timing, "throttle_rate_per_s": res.control.throttle_rate,
                         "fast_demag": res.control.fast_demag, "demag_limit": res.control.demag_limit,
-                        "note": "the controller before the axes' changes"},
+                        "grid_gain": res.control.grid_gain, "note": "the controller before the axes' changes"},
             "outcomes": counts, "summary": res.summary(), "table": res.table().splitlines(),
             "boundary": [[str(y), None if x is None else str(x)] for y, x in res.boundary()],
             "seconds": res.seconds, "command": "bldclab sensorless " + " ".join(_argv(args))}
@@ -255,4 +265,6 @@ def _argv(args: argparse.Namespace) -> list[str]:
         v = getattr(args, opt[2:].replace("-", "_"))
         if v is not None:
             out.append(f"{opt}={v}")
+    if float(args.grid) > 0.0:
+        out.append(f"--grid={args.grid}")
     return out
