@@ -2325,12 +2325,12 @@ static BC_ALWAYS_INLINE void step_done(const bc_plant_params *p, bc_plant_state 
         }
         /* the step's conduction state (apply_event changes it after this call): with two phases open the third
          * carries no current either (no neutral wire), whatever its switches do */
-        int open3 = (s->cond[0] == BC_COND_OPEN) + (s->cond[1] == BC_COND_OPEN) + (s->cond[2] == BC_COND_OPEN) >= 2;
-        if (open3 && h > 0.0) {
-            s->t_open3 += h;
-            if (!s->open3) s->n_open3 += 1;
+        int zero_i = (s->cond[0] == BC_COND_OPEN) + (s->cond[1] == BC_COND_OPEN) + (s->cond[2] == BC_COND_OPEN) >= 2;
+        if (zero_i && h > 0.0) {
+            s->t_zero_i += h;
+            if (!s->zero_i) s->n_zero_i += 1;
         }
-        if (h > 0.0) s->open3 = open3;
+        if (h > 0.0) s->zero_i = zero_i;
     }
     if (s->on_step) s->on_step(s->on_step_ctx, s->t, s->acc, a1->tau);
 }

@@ -288,9 +288,9 @@ static void metric_start(const bc_sim_config *cfg, bc_sim_state *s, int trace)
     s->m.w_kin0 = w_kin(cfg->plant, ps);
     angle_track(s);
     s->m.th0 = s->th_run;
-    s->m.t_open0 = ps->t_open3;
-    ps->open3 = 0; /* a zero-current interval running at t0 counts as one of the window's */
-    s->m.n_open0 = ps->n_open3;
+    s->m.t_zero_i0 = ps->t_zero_i;
+    ps->zero_i = 0; /* a zero-current interval running at t0 counts as one of the window's */
+    s->m.n_zero_i0 = ps->n_zero_i;
     s->m.tau_min = tau;
     s->m.tau_max = tau;
     s->m.tau_ma_min = HUGE_VAL;
@@ -322,8 +322,8 @@ static void metric_stop(const bc_sim_config *cfg, bc_sim_state *s, int trace)
     s->m.w_kin1 = w_kin(cfg->plant, ps);
     angle_track(s);
     s->m.th1 = s->th_run;
-    s->m.t_open1 = ps->t_open3;
-    s->m.n_open1 = ps->n_open3;
+    s->m.t_zero_i1 = ps->t_zero_i;
+    s->m.n_zero_i1 = ps->n_zero_i;
     s->m.state = 2;
     if (!trace) bc_plant_set_accumulate(cfg->plant, &s->plant, BC_ACC_OFF); /* nothing reads acc[] any more */
 }

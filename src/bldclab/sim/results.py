@@ -262,8 +262,8 @@ class Metrics:
             i_rms=(math.sqrt(E["i2a"] / dt), math.sqrt(E["i2b"] / dt), math.sqrt(E["i2c"] / dt)),
             i_peak=(float(m["i_peak"][0]), float(m["i_peak"][1]), float(m["i_peak"][2])),
             efficiency=efficiency_of(p_src_total, shaft)[1], power_flow=efficiency_of(p_src_total, shaft)[0],
-            zero_current_share=float(m["t_open1"] - m["t_open0"]) / dt if dt > 0 else math.nan,
-            zero_current_intervals=int(m["n_open1"] - m["n_open0"]))
+            zero_current_share=float(m["t_zero_i1"] - m["t_zero_i0"]) / dt if dt > 0 else math.nan,
+            zero_current_intervals=int(m["n_zero_i1"] - m["n_zero_i0"]))
 
     @property
     def p_shaft(self) -> float:

@@ -449,11 +449,11 @@ typedef struct {
                                 a step, at the turning points of the cubic Hermite interpolant of tau_e through
                                 its end values and exact time derivatives (error O(h^4), as the RK4 step) */
     double i_peak[3];        /* largest |i_x| since then */
-    double t_open3;          /* time with at least two phases open (then every current is zero, no neutral wire:
+    double t_zero_i;         /* time with at least two phases open (then every current is zero, no neutral wire:
                                 discontinuous conduction), s, integrated while acc_on (each step's conduction
                                 state: the events that change it end the steps) */
-    int64_t n_open3;         /* intervals of it begun while acc_on (t_open3 / n_open3: their mean length) */
-    int32_t open3;           /* 1 while in such an interval (the last step integrated had every current zero) */
+    int64_t n_zero_i;        /* intervals of it begun while acc_on (t_zero_i / n_zero_i: their mean length) */
+    int32_t zero_i;          /* 1 while in such an interval (the last step integrated had every current zero) */
     bc_plant_step_fn on_step; /* NULL or called after every accepted step (not copied meaningfully: a runner sets it) */
     void *on_step_ctx;        /* ... and of on_term */
     bc_plant_term_fn on_term; /* NULL or called with the terminal voltages over every step while term_on */

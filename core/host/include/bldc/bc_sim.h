@@ -107,8 +107,8 @@ typedef struct {
     double w_l0, w_l1;       /* magnetic energy at t0, t1, J */
     double w_kin0, w_kin1;   /* J omega^2 / 2 at t0, t1, J (dynamic mechanics) */
     double th0, th1;         /* electrical angle travelled since the start (unwrapped) at t0, t1, rad */
-    double t_open0, t_open1; /* the plant's t_open3 (time with every phase current zero) at t0, t1, s */
-    int64_t n_open0, n_open1; /* the plant's n_open3 (intervals of it) at t0, t1 */
+    double t_zero_i0, t_zero_i1; /* the plant's t_zero_i (time with every phase current zero) at t0, t1, s */
+    int64_t n_zero_i0, n_zero_i1; /* the plant's n_zero_i (intervals of it) at t0, t1 */
     double tau_min, tau_max; /* extremes of the instantaneous torque, N m */
     double tau_ma_min;       /* extremes of the continuous one-PWM-period moving average of the torque, N m */
     double tau_ma_max;
