@@ -1137,7 +1137,6 @@ static void test_diode_share(void)
     CHECK(bc_bemf_init(&p1, &s1) == BC_ERR_PARAM, "d_diode NaN refused");
 }
 
-/* fast demagnetisation and the demagnetisation limiter on the kinematic rotor (300 Hz, 22 samples a sector) */
 /* 7, uniform grid (grid_gain): phases b and c's back-EMFs delayed by 2 and -1.5 degrees cross zero off the magnet's
  * grid; 30 degrees after each crossing the six commutations lie 0, +2 and -1.5 degrees off it (a spread of 3.5
  * degrees). On the grid phase-locked to the mean of the six crossings every commutation lies the crossings' mean
@@ -1267,6 +1266,7 @@ static void test_fast_demag_dead_time(void)
     }
 }
 
+/* fast demagnetisation and the demagnetisation limiter on the kinematic rotor (300 Hz, 22 samples a sector) */
 static void test_fast_demag_and_limiter(void)
 {
     static synth_bemf g;
