@@ -51,7 +51,11 @@ def angle_error(drive: bl.Drive, control: bl.Sine, speed: float, torque: float, 
     on = last & (r["mode"] > 0.5)
     err = np.degrees(np.angle(np.exp(1j * (r["theta"] - r["theta_e"]))))[on]
     m = r.metrics
+    mode = r["mode"] > 0.5
+    t_lock = float(t[int(np.argmax(mode))]) if mode.any() else math.nan
+    restarts = float(r.meta.get("flags", {}).get("DESYNC", {}).get("run", {}).get("samples", 0))
     return {"rms": float(np.sqrt(np.mean(err**2))) if err.size else math.nan,
+            "t_lock": t_lock, "restarts": restarts,
             "mean": float(np.mean(err)) if err.size else math.nan,
             "worst": float(np.max(np.abs(err))) if err.size else math.nan,
             "sine": float(on.sum() / max(last.sum(), 1)), "tau": m.tau_mean, "eff": m.efficiency}
@@ -82,6 +86,50 @@ def sensitivity(names: list[str]) -> None:
             b = angle_error(d, ctl, w, torque, t_load, t_ramp, dur, estimate=e.drive) if e and e.ok else None
             after = f"{b['rms']:11.3f} {b['worst']:8.3f} {b['tau']:9.4g}" if b else f"{'-':>11s} {'-':>8s} {'-':>9s}"
             print(f"{name:16s} {label:12s} {a['rms']:8.3f} {a['worst']:8.3f} {a['tau']:9.4g} {after}")
+
+
+ESTIMATE_CASES = (("true", {}), ("psi +25 %", {"emf": 1.25}), ("psi -25 %", {"emf": 0.75}), ("R +50 %", {"R": 1.5}),
+                  ("R -50 %", {"R": 0.5}), ("L +30 %", {"L": 1.3}), ("L -30 %", {"L": 0.7}))
+ESTIMATE_VARIANTS = (("none", {"if_flux_estimate": False, "if_r_estimate": False}),
+                     ("flux", {"if_flux_estimate": True, "if_r_estimate": False}),
+                     ("flux+R", {"if_flux_estimate": True, "if_r_estimate": True}))
+
+
+def estimates(names: list[str]) -> None:
+    """Print, per drive and wrong parameter, the start and the angle error without the controller's own estimates,
+    with the flux linkage estimate (``if_flux_estimate``) and with it and the alignment's resistance
+    (``if_r_estimate``), at two points: 0.5 Omega_0 under half the rated load (as :func:`sensitivity`, its hand-off
+    speed) and 0.3 Omega_0 unloaded (the drive's default hand-off, as the start tests). Columns: the time of the
+    first hand-off (s), the restarts (DESYNC), the angle error (deg, rms / worst over the last 20 electrical periods,
+    sine mode only), the window's share in the sine mode and the mean torque (N m)."""
+    print(f"\n{'drive':16s} {'point':9s} {'case':10s} {'estimates':9s} {'t_lock':>7s} {'restarts':>8s} "
+          f"{'rms deg':>8s} {'worst':>8s} {'sine':>5s} {'tau':>9s}")
+    for name in names:
+        d = bl.load(name)
+        torque = 0.5 * 1.5 * bl.control.sine.fundamental_k1(d) * i_sN(d)
+        w = 0.5 * d.Omega_0
+        on = min(0.1 * d.motor.Omega_nominal, 0.5 * w)
+        ctl = bl.Sine(angle="observer", handoff_speed=on, handoff_hysteresis=0.5)
+        st = ctl.sensorless_settings(d)
+        t_load = st["if_align"] + d.motor.p * on / st["if_accel"] + 2 * st["lock_time"] \
+            + d.mechanics.J * w / torque + 0.3
+        wb = 2 * math.pi * ctl.speed_bandwidth_hz
+        t_ramp = max(0.3, torque / (d.mechanics.J * wb**2 / 4 * 0.2 * w))
+        dur = t_load + t_ramp + 0.3 + 20 * 2 * math.pi / (d.motor.p * w)
+        ctl3 = bl.Sine(angle="observer")
+        st3 = ctl3.sensorless_settings(d)
+        w3 = 0.3 * d.Omega_0
+        dur3 = st3["if_align"] + d.motor.p * ctl3.handoff(d) / st3["if_accel_min"] + st3["if_hold"] \
+            + d.mechanics.J * w3 / (0.5 * ctl3.torque_limit(d)) + 0.5
+        points = (("0.5 load", ctl, w, torque, t_load, t_ramp, dur), ("0.3 none", ctl3, w3, 0.0, dur3, 1.0, dur3))
+        for point, c0, wp, tq, tl, tr, du in points:
+            for label, kw in ESTIMATE_CASES:
+                wrong = d.scaled(**kw) if kw else None
+                for vlabel, vkw in ESTIMATE_VARIANTS:
+                    c = dataclasses.replace(c0, **vkw)  # type: ignore[arg-type]
+                    a = angle_error(d, c, wp, tq, tl, tr, du, estimate=wrong)
+                    print(f"{name:16s} {point:9s} {label:10s} {vlabel:9s} {a['t_lock']:7.2f} {a['restarts']:8.0f} "
+                          f"{a['rms']:8.3f} {a['worst']:8.3f} {a['sine']:5.2f} {a['tau']:9.4g}", flush=True)
 
 
 STARTUP_LOADS = (0.0, 0.5, 0.75, 0.9, 0.95, 1.0)  # of the I/f torque 1.5 k_1 if_current
@@ -248,6 +296,10 @@ def main(names: list[str]) -> None:
 if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] == "--sensors":
         sensor_errors(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v"])
+        raise SystemExit(0)
+    if len(sys.argv) > 1 and sys.argv[1] == "--estimates":
+        estimates(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv",
+                                   "f60prov-2550kv"])
         raise SystemExit(0)
     if len(sys.argv) > 1 and sys.argv[1] == "--startup":
         startup_map(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v"])

@@ -363,7 +363,8 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->r_obs = p->observer == BC_SINE_OBS_REDUCED ? p->robs.R : p->fobs.R;
     s->psi_obs = p->observer == BC_SINE_OBS_REDUCED ? p->robs.psi : p->fobs.psi;
     s->flux_f = s->n_psi = 0.0f;
-    s->psi_adapt = 0;
+    s->psi_adapt = s->psi_done = 0;
+    s->n_zero = s->z_flux = s->z_w = s->z_n = s->z_tgt = s->z_u[0] = s->z_u[1] = 0.0f;
     s->r_ui = s->r_ii = 0.0f;
     s->n_catch = s->w_rev = s->if_wmin = s->if_tb = s->if_tr = 0.0f;
     s->caught = 0;
@@ -703,12 +704,11 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
     float k_f = bc_clampf(p->ts / p->lock_time, 0.0f, 1.0f);
     s->omega_f += k_f * (o.omega_e - s->omega_f);
     s->flux_f += k_f * (o.flux - s->flux_f);
-    /* if_psi_est (flux observer): its low-passed flux off the configured circle by more than half the band
-     * refutes the configured flux linkage; from then on, until the next ALIGN, a flux off the circle in use by
-     * more than 2 % of the band holds the hand-off and the catch until the flux linkage is estimated (below) */
-    float psi_dev = fabsf(s->flux_f / s->psi_obs - 1.0f);
-    int psi_off = p->if_psi_est && p->observer == BC_SINE_OBS_FLUX &&
-                  psi_dev > (s->psi_adapt ? 0.02f : 0.5f) * p->lock_tol;
+    /* if_psi_est (flux observer), in RAMP: its low-passed flux off the configured circle by more than half the
+     * band holds the hand-off until the flux has been read at zero current (below), once a start */
+    int psi_off = p->if_psi_est && p->observer == BC_SINE_OBS_FLUX && !s->psi_done &&
+                  s->mode == BC_SINE_MODE_START && s->sl_phase == BC_SINE_SL_RAMP &&
+                  (s->n_zero > 0.0f || fabsf(s->flux_f / s->psi_obs - 1.0f) > 0.5f * p->lock_tol);
 
     float tau, tau_u = 0.0f, e_w = 0.0f, ref = p->speed_loop ? in->omega_ref : in->ref;
     int was = s->mode;
@@ -763,8 +763,8 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 s->psi_obs = obs_psi(p); /* a new start from the configured flux linkage */
                 if (p->observer == BC_SINE_OBS_FLUX) bc_fluxobs_set_psi(&p->fobs, &s->fobs, s->psi_obs);
             }
-            s->n_psi = 0.0f;
-            s->psi_adapt = 0;
+            s->n_psi = s->n_zero = 0.0f;
+            s->psi_adapt = s->psi_done = 0;
             s->n_catch = 0.0f;
             s->caught = 0;
             s->if_t = 0.0f;
@@ -875,21 +875,53 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
          * loop brakes or drives it with the whole current limit */
         int turning = !s->caught && flux_ok && fabsf(o.err) <= p->lock_tol && fabsf(s->omega_f) >= p->omega_on;
         s->n_catch = turning && !psi_off ? s->n_catch + p->ts : 0.0f;
-        /* the flux linkage from the flux observer's steady state (if_psi_est; bc_sine.h, RAMP): the observer
-         * consistent on a rotor turning at least at omega_off, its flux off the circle for 3 lock_time: psi^ =
-         * rho sqrt(1 + (k / omega)^2), k = (lambda / 2)(1 - rho^2 / psi_c^2) */
-        int steady = fabsf(o.err) <= p->lock_tol && fabsf(s->omega_f) >= p->omega_off;
-        s->n_psi = steady && psi_off ? s->n_psi + p->ts : 0.0f;
-        if (s->n_psi >= 3.0f * p->lock_time) {
-            float rr = s->flux_f / s->psi_obs, k = 0.5f * p->fobs.gain * (1.0f - rr * rr);
-            float kw = k / fabsf(s->omega_f);
-            float est = s->flux_f * sqrtf(1.0f + kw * kw);
-            if (isfinite(est) && est >= 0.5f * p->fobs.psi && est <= 2.0f * p->fobs.psi) {
-                s->psi_adapt = 1;
-                s->psi_obs = est;
-                bc_fluxobs_set_psi(&p->fobs, &s->fobs, est);
+        /* the flux linkage read at zero current (if_psi_est; bc_sine.h, RAMP): the flux off the circle for 2
+         * lock_time at the top of the ramp, the observer consistent on a rotor turning at least at omega_off,
+         * starts the reading: i = 0, and once the current has settled (t_set) the current loops' voltage is the
+         * back-EMF alone (R i and L di/dt zero, whatever R and L), psi^ = sum |u| T_s / (the angle u turned) */
+        int steady = fabsf(o.err) <= p->lock_tol && (float)s->sl_dir * s->omega_f >= p->omega_off;
+        int top = s->sl_phase == BC_SINE_SL_RAMP && fabsf(s->if_omega) >= p->omega_on;
+        if (s->n_zero > 0.0f) {
+            if (!steady || !top || !u_obs_ok) {
+                s->n_zero = s->n_psi = 0.0f; /* dropped: the current back on, the count from 0 */
+            } else {
+                s->n_zero += p->ts;
+                /* the current's settling: lock_time / 2, at least ten of the current loop's time constants L / k_p */
+                float t_set = fmaxf(0.5f * p->lock_time, p->kp > 0.0f ? 10.0f * p->L / p->kp : 0.0f);
+                if (s->n_zero > t_set) {
+                    /* the back-EMF's length times T_s, and the angle it has turned (from the last sample's) */
+                    if (s->z_n > 0.0f) {
+                        float cr = s->z_u[0] * u_obs[1] - s->z_u[1] * u_obs[0];
+                        float dt = s->z_u[0] * u_obs[0] + s->z_u[1] * u_obs[1];
+                        s->z_flux += p->ts * sqrtf(u_obs[0] * u_obs[0] + u_obs[1] * u_obs[1]);
+                        s->z_w += atan2f(cr, dt);
+                    }
+                    s->z_u[0] = u_obs[0];
+                    s->z_u[1] = u_obs[1];
+                    s->z_n += 1.0f;
+                }
+                /* ends after lock_time / 2 of it, on a whole number of turns of u (the ripple of |u| that a
+                 * trapezoidal or tabulated back-EMF gives averages out), at the latest after 4 lock_time */
+                if (s->z_tgt <= 0.0f && s->n_zero >= t_set + 0.5f * p->lock_time)
+                    s->z_tgt = fmaxf(ceilf(fabsf(s->z_w) / BC_TWO_PI_F), 1.0f) * BC_TWO_PI_F;
+                if ((s->z_tgt > 0.0f && fabsf(s->z_w) >= s->z_tgt) || s->n_zero >= t_set + 4.0f * p->lock_time) {
+                    float est = s->z_flux / fmaxf(fabsf(s->z_w), 1e-30f); /* psi^ = sum |u| T_s / angle */
+                    if (isfinite(est) && est >= 0.5f * p->fobs.psi && est <= 2.0f * p->fobs.psi &&
+                        fabsf(est / s->psi_obs - 1.0f) > 0.02f * p->lock_tol) {
+                        s->psi_adapt = 1;
+                        s->psi_obs = est;
+                        bc_fluxobs_set_psi(&p->fobs, &s->fobs, est);
+                    }
+                    s->psi_done = 1;
+                    s->n_zero = s->n_psi = 0.0f;
+                }
             }
-            s->n_psi = 0.0f;
+        } else {
+            s->n_psi = steady && top && psi_off ? s->n_psi + p->ts : 0.0f;
+            if (s->n_psi >= 2.0f * p->lock_time) {
+                s->n_zero = p->ts; /* the reading starts: i = 0 from the next sample's current loops on */
+                s->z_flux = s->z_w = s->z_n = s->z_tgt = 0.0f;
+            }
         }
         if (s->n_catch >= p->lock_time) {
             s->mode = BC_SINE_MODE_SINE;
@@ -936,6 +968,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             id_ref = s->if_trust ? bc_clampf(p->if_damp * psi * (o.omega_e - s->if_omega) * sdl /
                                                  fmaxf(sdl * sdl, 0.0625f), -id_max, id_max)
                                  : 0.0f;
+            if (s->n_zero > 0.0f) id_ref = iq_ref = 0.0f; /* the zero-current reading (if_psi_est) */
         }
         out->flags |= BC_FLAG_OPEN_LOOP;
     } else {

@@ -122,12 +122,17 @@ class Sine(Control):
         observer most at low speed, where the load-adaptive ramp reads it. Default ``False`` (the drive data's R);
         measured on the catalog drives to 0.002-2 % (docs/sensorless-sine.md).
     if_flux_estimate : bool
-        The flux observer estimates the flux linkage it uses when, at the hand-off speed, it is consistent (tracking
-        error and speed) but its flux is outside the lock band of the configured ``psi_f``: from its own steady
-        state, ``psi = rho sqrt(1 + (k / omega)^2)``, ``k = (lambda / 2)(1 - rho^2 / psi_c^2)`` (``rho`` its flux,
-        ``psi_c`` the flux linkage in use), taken within ``[psi_f / 2, 2 psi_f]``; kept until the next alignment.
-        The lock then checks against it. Default ``False`` (a flux out of band ends the start in ``START_FAIL``);
-        no effect with ``observer="reduced"`` (docs/sensorless-sine.md, "Wrong parameters at the start").
+        The flux observer's flux linkage read at zero current: when, at the top of the I/f ramp, the observer is
+        consistent (tracking error and speed) but its flux is off the configured ``psi_f`` by more than half the lock
+        band for two lock times, the current loops hold ``i = 0`` for about a lock time and a whole turn (the
+        vector turning on), and the flux linkage is the back-EMF they then apply over the angle it turns, ``psi =
+        sum |u| T_s / angle`` (``R i`` and ``L di/dt`` are zero: neither a wrong R nor a wrong L enters it); taken
+        within ``[psi_f / 2, 2 psi_f]`` when it differs from the one in use by more than 0.4 %, once a start, kept
+        until the next alignment; the lock then checks against it. With the current on, a wrong L alone moves the
+        observer's flux by ``(L_c - L) i_d`` (the I/f current of an unloaded rotor lies on its d axis), which the
+        reading confirms as no flux error. Default ``True``; ``False``: a flux out of band ends the start in
+        ``START_FAIL``. No effect with ``observer="reduced"`` (docs/sensorless-sine.md, "Wrong parameters at the
+        start").
     lock_tolerance : float
         Band of the lock criterion (-), in (0, 1): the observer's flux within it of ``psi_f`` (relative) and its
         tracking error within it (rad) for the hand-off; its flux out of it too long is a lost lock.
@@ -249,7 +254,7 @@ class Sine(Control):
     if_align: float | None = None
     if_align_current: float | None = None
     if_r_estimate: bool = False
-    if_flux_estimate: bool = False
+    if_flux_estimate: bool = True
     lock_tolerance: float = 0.2
     restart_wait: float = 0.1
     derate: TemperatureDerating | None = None

@@ -242,14 +242,24 @@
  *          hand-off below (from the current measured in the observer's frame), the speed PI's integrator at the
  *          torque 1.5 k_1 i_q that current makes. Not locked within if_hold at omega_on: BC_FLAG_START_FAIL |
  *          BC_FLAG_DESYNC, WAIT.
- *          With if_psi_est = 1 (flux observer): at omega_on, when the observer is consistent (|err| <= lock_tol,
- *          dir omega_f >= omega_off) but its flux is out of the band for 3 lock_time, the flux linkage it uses
- *          (and the lock checks against) becomes psi^ = rho sqrt(1 + (k / omega_f)^2), k = (lambda / 2)
- *          (1 - rho^2 / psi_c^2), with rho the flux low-passed like omega_f and psi_c the one in use: the
- *          observer's steady state on a rotor turning with the true flux psi_t is rho = psi_t omega /
- *          sqrt(omega^2 + k^2), so psi^ is psi_t when R and L are right. Taken if within [psi_f / 2, 2 psi_f] of
- *          the configured one; repeated every 3 lock_time while the condition holds; kept through the sine mode
- *          until the next ALIGN, which starts from the configured psi_f again.
+ *          With if_psi_est = 1 (flux observer), once a start: at omega_on, when the observer is consistent
+ *          (|err| <= lock_tol, dir omega_f >= omega_off) but its flux rho (low-passed like omega_f) is off the
+ *          configured psi_f by more than lock_tol / 2 for 2 lock_time, the hand-off waits and the current loops
+ *          hold i = 0 (the I/f vector turning on at omega_on): the zero-current reading. With i = 0 the voltage
+ *          they apply is the back-EMF alone (R i and L di/dt are zero, whatever R and L); after t_set =
+ *          max(lock_time / 2, 10 L / k_p) for the current to settle, psi^ = sum |u| T_s / (the angle u has
+ *          turned), summed over at least lock_time / 2 and a whole number of turns of u (the ripple of |u| of a
+ *          non-sinusoidal back-EMF averages out; at most t_set + 4 lock_time in all); u the applied voltage the
+ *          observer takes (the observer's own speed is not used: its angle settles meanwhile). Why not from the observer with the current on: its steady state on a
+ *          rotor turning with the true flux psi_t is rho e^(j phi) = psi_a omega / (omega + j k), k = (lambda / 2)
+ *          (1 - rho^2 / psi_c^2), with the apparent flux psi_a = psi_t - (L_c - L_t - j (R_c - R_t) / omega) i
+ *          in the rotor's frame: the I/f current of an unloaded rotor lies on its d axis, and a wrong L moves
+ *          |psi_a| by -(L_c - L_t) i_d, which a reading with the current on takes for a flux error. psi^
+ *          becomes the flux linkage the observer uses and the lock checks if it is within [psi_f / 2, 2 psi_f]
+ *          and off the one in use by more than 2 % of lock_tol; the reading is not repeated until the next ALIGN
+ *          (which starts from the configured psi_f again), and the flux no longer holds the hand-off. A reading
+ *          during which the observer loses its consistency, the rotor falls below omega_off or the vector leaves
+ *          omega_on is dropped (the current back on, the count from 0).
  *   WAIT   legs off for restart_wait, then IDLE (and a new ALIGN).
  *
  *   CATCH  (in ALIGN and RAMP, once a start) the observer runs from the first sample of ALIGN; when it is
@@ -445,6 +455,12 @@ typedef struct {
     float flux_f;      /* the observer's flux through the low-pass of omega_f, V s */
     float n_psi;       /* ALIGN, RAMP: time consistent with the flux off the circle since the last estimate, s */
     int32_t psi_adapt; /* if_psi_est: 1 once this start has estimated the flux linkage */
+    int32_t psi_done;  /* if_psi_est: 1 once this start has read the flux at zero current (estimate final) */
+    float n_zero;      /* RAMP, if_psi_est: time in the zero-current reading, s (0: none) */
+    float z_flux, z_w; /* RAMP, if_psi_est: the reading's sums of |u| T_s (V s) and of the angle u turned (rad) */
+    float z_n;         /* RAMP, if_psi_est: the samples in those sums */
+    float z_u[2];      /* RAMP, if_psi_est: the last sample's voltage in the reading, V (alpha, beta) */
+    float z_tgt;       /* RAMP, if_psi_est: the angle u is to turn in the reading, rad (0: not yet set) */
     float r_ui, r_ii;  /* ALIGN: sums of u.i (W) and i.i (A^2) over its last quarter */
     float n_catch;     /* ALIGN, RAMP: time the observer has held a consistent lock at |omega_f| >= omega_on, s */
     int32_t caught;    /* this start has caught a turning rotor (once a start) */
