@@ -481,6 +481,7 @@ static void test_fuzz_observer(void)
         p.tau_max = 40.0f;
         p.if_r_est = variant == 0 || variant == 3; /* the resistance of the alignment, both observers */
         p.if_psi_est = variant != 3;              /* the flux linkage estimate (no effect on the reduced one) */
+        p.zc_catch = variant == 1 || variant == 2; /* the zero-current catch */
         static bc_sine_state s;
         CHECK(bc_sine_init(&p, &s) == BC_OK, "init observer variant %d", variant);
         float phase = 0.0f;

@@ -318,7 +318,8 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
             !finite_pos(p->if_accel) || !finite_pos(p->if_accel_min) || p->if_accel_min > p->if_accel ||
             !finite_pos(p->if_hold) || !finite_pos(p->lock_time) ||
             !finite_pos(p->lock_tol) || p->lock_tol >= 1.0f || !finite_nonneg(p->restart_wait) || !finite_nonneg(p->if_damp) ||
-            !finite_nonneg(p->t_dead) || p->t_dead >= p->ts || !is_flag(p->if_r_est) || !is_flag(p->if_psi_est))
+            !finite_nonneg(p->t_dead) || p->t_dead >= p->ts || !is_flag(p->if_r_est) || !is_flag(p->if_psi_est) ||
+            !is_flag(p->zc_catch))
             return BC_ERR_PARAM;
     }
     if (p->emf_ff) {
@@ -364,7 +365,7 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->psi_obs = p->observer == BC_SINE_OBS_REDUCED ? p->robs.psi : p->fobs.psi;
     s->flux_f = s->n_psi = 0.0f;
     s->psi_adapt = s->psi_done = 0;
-    s->n_zero = s->z_flux = s->z_w = s->z_n = s->z_tgt = s->z_u[0] = s->z_u[1] = 0.0f;
+    s->n_zero = s->z_flux = s->z_w = s->z_n = s->z_tgt = s->z_u[0] = s->z_u[1] = s->n_zc = 0.0f;
     s->r_ui = s->r_ii = 0.0f;
     s->n_catch = s->w_rev = s->if_wmin = s->if_tb = s->if_tr = 0.0f;
     s->caught = 0;
@@ -678,6 +679,12 @@ static float torque_ref(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl
     return bc_pi_limit(&s->piw_p, *tau_u);
 }
 
+/* ALIGN's zero-current catch window (zc_catch): the first 3 lock_time of each alignment, once a start. */
+static int zc_window(const bc_sine_params *p, const bc_sine_state *s)
+{
+    return p->zc_catch && !s->caught && s->n_zc < 3.0f * p->lock_time;
+}
+
 /* Sensorless sample (bc_sine.h, "Sensorless"): observer, I/f start-up, handover, loss of lock. */
 static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *in, bc_abc i,
                             bc_ctrl_out *out)
@@ -763,7 +770,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 s->psi_obs = obs_psi(p); /* a new start from the configured flux linkage */
                 if (p->observer == BC_SINE_OBS_FLUX) bc_fluxobs_set_psi(&p->fobs, &s->fobs, s->psi_obs);
             }
-            s->n_psi = s->n_zero = 0.0f;
+            s->n_psi = s->n_zero = s->n_zc = 0.0f;
             s->psi_adapt = s->psi_done = 0;
             s->n_catch = 0.0f;
             s->caught = 0;
@@ -774,7 +781,14 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             bc_pi_reset(&s->pi_p, &s->pi_q, 0.0f);
         }
         float dir = (float)s->sl_dir;
-        if (s->sl_phase == BC_SINE_SL_ALIGN) {
+        if (s->sl_phase == BC_SINE_SL_ALIGN && zc_window(p, s)) {
+            /* zc_catch: the alignment waits while the current loops hold i = 0 in the observer's frame (below) */
+            s->n_zc += p->ts;
+            if (!zc_window(p, s)) {
+                bc_pi_reset(&s->pi_p, &s->pi_d, 0.0f); /* no catch: the alignment from a clean start */
+                bc_pi_reset(&s->pi_p, &s->pi_q, 0.0f);
+            }
+        } else if (s->sl_phase == BC_SINE_SL_ALIGN) {
             s->sl_t += p->ts;
             /* two steps: the vector at pi/2 for the first third, then at 0 (a rotor at the unstable point of
              * one, or held by friction near it, is a quarter turn from the other's) */
@@ -940,13 +954,20 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
     }
 
     float id_ref = 0.0f, iq_ref;
-    int handoff = 0;
+    int handoff = 0, zc = 0;
     if (s->mode == BC_SINE_MODE_START) {
         /* I/f: the current vector on the q axis of theta_if */
         theta = s->if_theta;
         omega_e = s->if_omega;
         iq_ref = (float)s->sl_dir * p->if_current * s->derate_f; /* derated like the current limit */
-        if (s->sl_phase == BC_SINE_SL_ALIGN) {
+        if (s->sl_phase == BC_SINE_SL_ALIGN && zc_window(p, s)) {
+            /* the zero-current catch (zc_catch): i = 0 in the observer's frame, with the back-EMF feed-forward;
+             * the voltage is then the back-EMF of a turning rotor, which the observer locks onto */
+            theta = o.theta;
+            omega_e = o.omega_e;
+            id_ref = iq_ref = 0.0f;
+            zc = 1;
+        } else if (s->sl_phase == BC_SINE_SL_ALIGN) {
             /* the current rises over a tenth of if_align (enough holding torque early against an active load), and
              * the rotor's swing is braked: its back-EMF lies on d of theta_if (the rotor's q axis there, either
              * direction), seen in the d integrator; i_d,ref = -if_damp (x_d - R i_d) */
@@ -987,7 +1008,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
     out->diag[1] = idq.q;
     if (s->mode == BC_SINE_MODE_SINE && s->rest_on) id_ref = bc_rest_ref(&p->rest, &s->rest);
     current_loops(p, s, idq, id_ref, iq_ref, theta, omega_e, in->v_dc,
-                  s->mode == BC_SINE_MODE_SINE ? p->emf_ff : 0, handoff, out);
+                  s->mode == BC_SINE_MODE_SINE || zc ? p->emf_ff : 0, handoff, out);
     if (s->rest_on) {
         if (s->mode == BC_SINE_MODE_SINE) {
             int32_t ok = !handoff && !(out->flags & BC_FLAG_SATURATED);

@@ -133,6 +133,12 @@ class Sine(Control):
         reading confirms as no flux error. Default ``True``; ``False``: a flux out of band ends the start in
         ``START_FAIL``. No effect with ``observer="reduced"`` (docs/sensorless-sine.md, "Wrong parameters at the
         start").
+    catch_zero_current : bool
+        Each alignment (until a turning rotor is caught) starts with ``3 lock_time`` at zero current: the current
+        loops in the observer's frame hold ``i = 0`` (with the back-EMF feed-forward), so that the voltage is the
+        back-EMF of a rotor already turning and the observer locks on it without the alignment current's torque
+        pulsating on the slipping rotor (a flying start); no catch in that time, the alignment as usual. Default
+        ``False`` (the catch with the alignment's current on; docs/sensorless-sine.md, "Catch").
     lock_tolerance : float
         Band of the lock criterion (-), in (0, 1): the observer's flux within it of ``psi_f`` (relative) and its
         tracking error within it (rad) for the hand-off; its flux out of it too long is a lost lock.
@@ -255,6 +261,7 @@ class Sine(Control):
     if_align_current: float | None = None
     if_r_estimate: bool = False
     if_flux_estimate: bool = True
+    catch_zero_current: bool = False
     lock_tolerance: float = 0.2
     restart_wait: float = 0.1
     derate: TemperatureDerating | None = None
@@ -306,6 +313,9 @@ class Sine(Control):
             raise BldclabError("control.if_r_estimate", f"must be True or False, got {self.if_r_estimate!r}")
         if not isinstance(self.if_flux_estimate, bool):
             raise BldclabError("control.if_flux_estimate", f"must be True or False, got {self.if_flux_estimate!r}")
+        if not isinstance(self.catch_zero_current, bool):
+            raise BldclabError("control.catch_zero_current",
+                               f"must be True or False, got {self.catch_zero_current!r}")
         check_number("lock_tolerance", self.lock_tolerance)
         if self.lock_tolerance >= 1:
             raise BldclabError("control.lock_tolerance", f"must be in (0, 1), got {self.lock_tolerance!r}")
@@ -446,7 +456,7 @@ class Sine(Control):
                 "if_hold": st["if_hold"], "lock_time": st["lock_time"],
                 "lock_tol": self.lock_tolerance, "restart_wait": self.restart_wait, "if_damp": st["if_damp"],
                 "t_dead": inv.t_dead, "if_r_est": int(self.if_r_estimate),
-                "if_psi_est": int(self.if_flux_estimate)}
+                "if_psi_est": int(self.if_flux_estimate), "zc_catch": int(self.catch_zero_current)}
 
     def _r_design(self, drive: Drive, scale: float) -> float:
         """Design resistance of a loop of ``scale`` phases in series (Ohm)."""

@@ -268,7 +268,11 @@
  *          hand-off below): a rotor turning when the drive starts (a flying start), or one an active load has
  *          pushed through the alignment vector's unstable point and spins backwards (the alignment's stationary
  *          vector cannot catch it: its torque averages zero on a slipping rotor), is driven or braked by the speed
- *          loop with the whole current limit.
+ *          loop with the whole current limit. With zc_catch = 1 each ALIGN (until a catch) first holds i = 0 for
+ *          3 lock_time: the current loops in the observer's frame (theta^, omega^) with the back-EMF feed-forward,
+ *          the alignment's clock stopped; their voltage is then the back-EMF of a turning rotor, the observer locks
+ *          on it without the alignment current's torque pulsating on the slipping rotor; no catch in the window:
+ *          the integrators reset and the alignment as above (a rotor at rest, or slower than omega_on).
  *
  * In the sine mode the lock is checked every sample with the same band (the speed against itself: only the flux
  * magnitude); violated for lock_time: BC_FLAG_LOCK_LOST | BC_FLAG_DESYNC, legs off, WAIT, then a new start
@@ -398,8 +402,11 @@ typedef struct {
     float t_dead;       /* the inverter's dead time, s (0 <= t_dead < ts): the observer's voltage is corrected */
     int32_t if_r_est;   /* 1: the observers use the resistance measured in ALIGN (section "Sensorless"); 0: R of
                            fobs / robs */
-    int32_t if_psi_est; /* 1: the flux observer's psi_f estimated at omega_on when its flux is out of the lock band
-                           (section "Sensorless", RAMP); 0: psi of fobs. No effect with the reduced-order observer */
+    int32_t if_psi_est; /* 1: the flux observer's psi_f read at zero current at omega_on when its flux is off the
+                           lock band's half (section "Sensorless", RAMP); 0: psi of fobs. No effect with the
+                           reduced-order observer */
+    int32_t zc_catch;   /* 1: each ALIGN starts with 3 lock_time at zero current (the catch, section "Sensorless",
+                           CATCH); 0: the catch with the alignment's current on */
     bc_derate_params derate; /* temperature derating of the current limit i_s_max (bc_derate.h) from in->temp; no
                                 channel enabled (all zero): none. The start controller derates by six.derate. */
     bc_rest_params rest; /* the winding resistance during operation (bc_rest.h): in sine mode i_d,ref is its square
@@ -461,6 +468,7 @@ typedef struct {
     float z_n;         /* RAMP, if_psi_est: the samples in those sums */
     float z_u[2];      /* RAMP, if_psi_est: the last sample's voltage in the reading, V (alpha, beta) */
     float z_tgt;       /* RAMP, if_psi_est: the angle u is to turn in the reading, rad (0: not yet set) */
+    float n_zc;        /* ALIGN, zc_catch: time at zero current in this alignment, s */
     float r_ui, r_ii;  /* ALIGN: sums of u.i (W) and i.i (A^2) over its last quarter */
     float n_catch;     /* ALIGN, RAMP: time the observer has held a consistent lock at |omega_f| >= omega_on, s */
     int32_t caught;    /* this start has caught a turning rotor (once a start) */
