@@ -888,7 +888,9 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
          * rotor turning when the drive starts, or pushed by an active load): the sine mode at once, whose speed
          * loop brakes or drives it with the whole current limit */
         int turning = !s->caught && flux_ok && fabsf(o.err) <= p->lock_tol && fabsf(s->omega_f) >= p->omega_on;
-        s->n_catch = turning && !psi_off ? s->n_catch + p->ts : 0.0f;
+        /* (a flux off the circle holds the catch of a rotor turning with the ramp until it is read, not that of
+         * a rotor turning against it: the reading needs the ramp's direction) */
+        s->n_catch = turning && !(psi_off && (float)s->sl_dir * s->omega_f > 0.0f) ? s->n_catch + p->ts : 0.0f;
         /* the flux linkage read at zero current (if_psi_est; bc_sine.h, RAMP): the flux off the circle for 2
          * lock_time at the top of the ramp, the observer consistent on a rotor turning at least at omega_off,
          * starts the reading: i = 0, and once the current has settled (t_set) the current loops' voltage is the
