@@ -92,6 +92,7 @@ __all__ = [
     "commutation_errors",
     "desync_map",
     "observe",
+    "out_of_sync",
     "steady_since",
 ]
 
@@ -275,12 +276,15 @@ AXES: dict[str, _AxisKind] = {
                              lambda d, c, s, v: (d, replace(c, demag_limit=v), s)),
     "duty_limit": _AxisKind("A", "speed-dependent duty limit's current (A; 0: off)",
                             lambda d, c, s, v: (d, replace(c, duty_limit_current=v), s)),
+    "delay": _AxisKind("samples", "controller delay (samples: 1 next sample, 0 within it)",
+                       lambda d, c, s, v: (d, replace(c, delay=int(v)), s)),
 }
 _CHOICES = {"chopping": ("sync", "high", "pwm-on-pwm", "bipolar"), "fast_demag": ("on", "off")}
 #: Range of each numeric axis: (low, high, low included, high included); the others: positive.
 _LIMITS = {"timing": (0.0, 30.0, True, True), "end": (0.0, 1.0, False, True), "start": (0.0, 1.0, True, False),
            "blank": (0.0, 60.0, True, True), "theta0": (-360.0, 360.0, True, True),
-           "demag_limit": (0.0, 1.0, True, False), "duty_limit": (0.0, math.inf, True, False)}
+           "demag_limit": (0.0, 1.0, True, False), "duty_limit": (0.0, math.inf, True, False),
+           "delay": (0.0, 1.0, True, True)}
 
 
 @dataclass(frozen=True)
@@ -294,7 +298,8 @@ class Axis:
         ``start`` (throttle), ``k_q`` (N m s^2/rad^2), ``J`` (kg m^2), ``blank`` (deg), ``f_pwm`` (kHz), ``v_dc``
         (V), ``chopping`` (``sync``, ``high``, ``pwm-on-pwm``, ``bipolar``), ``theta0`` (deg), ``fast_demag``
         (``on``, ``off``), ``demag_limit`` (share of the window in [0, 1); 0: the limiter off), ``duty_limit``
-        (the current of the controller's speed-dependent duty limit, A; 0: off).
+        (the current of the controller's speed-dependent duty limit, A; 0: off), ``delay`` (samples between the
+        controller's computing and applying an output: 1, a sampled controller, or 0, within the sample).
     values : sequence
         Distinct values (numbers in the unit above; names for ``chopping``).
     """
@@ -317,6 +322,8 @@ class Axis:
             for v in nums:
                 if math.isnan(v) or (math.isinf(v) and self.name != "rate"):
                     raise BldclabError(self.name, f"values must be finite, got {v!r}")
+                if self.name == "delay" and v not in (0.0, 1.0):
+                    raise BldclabError(self.name, f"values must be 0 or 1 sample, got {v:g}")
                 lo, hi, lo_in, hi_in = _LIMITS.get(self.name, (0.0, math.inf, False, True))
                 inside = (lo < v or (lo_in and v == lo)) and (v < hi or (hi_in and v == hi))
                 if not inside and not (self.name == "rate" and math.isinf(v)):
@@ -393,7 +400,8 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
         ``direction``, ``err_lo``, ``err_hi`` (rad: the true error at the start and the end of that sample,
         positive = early; both the error at the commutation's instant when the trace has ``t_at``, the commutation
         timer's instant, or the sample's start for a change applied there), ``err`` (their middle), ``certain``
-        (the smallest ``|error|`` over the sample: 0 if it changes sign); the demagnetisation of the phase switched
+        (the smallest ``|error|`` over the sample: 0 if it changes sign), ``adv`` (rad: the controller's advance
+        there); the demagnetisation of the phase switched
         off (now floating) from the plant's currents:
         ``demag`` (rad: the rotor's travel from the commutation, ``err``'s instant, to the end of its current),
         ``margin`` (rad: from the end of that current to the zero crossing of the floating phase's back-EMF at the
@@ -465,11 +473,36 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
             demag = dirn * (th_end - th_comm)
             margin = dirn * _wrap(crossing - th_end)
         speed = abs(thu[r] - thu[j]) / (t[r] - t[j])
-        rows.append((t[r], s, dirn, e0, e1, 0.5 * (e0 + e1), certain, demag, margin,
+        rows.append((t[r], s, dirn, e0, e1, 0.5 * (e0 + e1), certain, adv, demag, margin,
                      margin / speed if speed > 0.0 else math.nan, ended))
     types = {"t": float, "sector": int, "direction": int, "err_lo": float, "err_hi": float, "err": float,
-             "certain": float, "demag": float, "margin": float, "margin_time": float, "ended": bool}
+             "certain": float, "adv": float, "demag": float, "margin": float, "margin_time": float, "ended": bool}
     return pd.DataFrame(rows, columns=list(types)).astype(types)
+
+
+def out_of_sync(comms: pd.DataFrame, bound: float = DEFAULT_BOUND) -> np.ndarray:
+    """Which commutations of :func:`commutation_errors` are certainly out of sync.
+
+    A commutation is out of sync when its whole sample lies more than ``bound`` *earlier* than the angle the
+    controller meant (its advance included), or more than ``bound`` *later* than the rotor's own sector boundary
+    (the Hall-exact angle, ``adv`` after the meant one). A late commutation that only loses part of a meant advance
+    (``COMM_LATE`` with a large timing at few samples per sector) still feeds the pair of the rotor's sector: it
+    costs torque, not synchronisation. With no advance both sides are the same angle.
+
+    Parameters
+    ----------
+    comms : pandas.DataFrame
+        From :func:`commutation_errors` (``err_lo``, ``err_hi``, ``adv``; rad, positive = early).
+    bound : float
+        Half-width of the band, rad (default 30 deg: half a sector).
+
+    Returns
+    -------
+    numpy.ndarray of bool
+    """
+    lo = np.minimum(comms.err_lo.to_numpy(), comms.err_hi.to_numpy())
+    hi = np.maximum(comms.err_lo.to_numpy(), comms.err_hi.to_numpy())
+    return (lo > bound) | (hi < -(bound + np.maximum(comms.adv.to_numpy(), 0.0)))
 
 
 def _wrap(x: float) -> float:
@@ -601,7 +634,7 @@ def observe(signals: dict[str, np.ndarray], t_step: float, *, settle: float = 0.
     edges = np.flatnonzero(np.diff(np.concatenate(([0], closed.astype(np.int8), [0]))))
     spans = tuple((float(t[a]), float(t[b - 1]) + t_half) for a, b in zip(edges[::2], edges[1::2], strict=True))
     comms = commutation_errors(signals, direction)
-    out = tuple(float(x) for x in comms.t[comms.certain > bound])
+    out = tuple(float(x) for x in comms.t[out_of_sync(comms, bound)])
     return Observation(t_step=t_step, t_end=float(t[-1]) + t_half, desyncs=desyncs, closed=spans, out_of_sync=out,
                        commutations=tuple(float(x) for x in comms.t), settle=settle), comms
 
@@ -638,7 +671,7 @@ def _run_point(job: DesyncJob) -> dict[str, Any]:
             t_step = 0.0
             if not step.is_start:  # where the drive has been steady at `start` for `settle`: the step's instant
                 pre = simulate(drive, control, Scenario(duration=step.start_time(drive, control), ref=step.start,
-                                                        theta0=step.theta0), check="warn")
+                                                        theta0=step.theta0, delay=control.delay), check="warn")
                 found = steady_since(pre.signals, settle)
                 if found is None:
                     obs, _ = observe(pre.signals, float(pre.signals["t"][-1]), settle=settle, bound=bound,
@@ -651,7 +684,8 @@ def _run_point(job: DesyncJob) -> dict[str, Any]:
             t_end = t_step + step.observe_time(drive, control)
             ref: Any = (step.end if step.is_start else
                         (lambda tt, a=step.start, b=step.end, ts=t_step: np.where(tt < ts, a, b)))
-            res = simulate(drive, control, Scenario(duration=t_end, ref=ref, theta0=step.theta0), check="warn")
+            res = simulate(drive, control, Scenario(duration=t_end, ref=ref, theta0=step.theta0, delay=control.delay),
+                           check="warn")
     except (PlausibilityError, BldclabError) as exc:
         row["outcome"] = "refused"
         row["note"] = f"refused: {exc}"
