@@ -422,6 +422,8 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
     theta = signals["theta_e"]
     thu = np.unwrap(theta)
     t_at = signals.get("t_at")
+    t_iz = (np.vstack([signals["t_iz_a"], signals["t_iz_b"], signals["t_iz_c"]])
+            if all(f"t_iz_{x}" in signals for x in "abc") else None)
     at = 0.5
     n = t.size
     ends = np.append(k[1:] + 1, n) if k.size else k  # each sector's rows: from its commutation row to the next one's
@@ -454,19 +456,45 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
         demag = margin = math.nan
         ended = False
         i0 = float(i_f[0]) if i_f.size else 0.0
-        if abs(i0) > 0.0:
-            low = np.flatnonzero(np.sign(i0) * i_f <= 0.02 * abs(i0))
+        i_pre = float(cur[f[r], j])  # the phase's current while it was still driven, the row before the change
+        if t_iz is not None and (abs(i0) > 0.0 or abs(i_pre) > 0.0):
+            # the plant's own instant of the current's end (its diode turning off, an event it located): the first
+            # after the commutation, in the commutation's row or a later one of the sector
+            tc = float(t_at[j]) if t_at is not None and t[j] <= t_at[j] < t[r] else float(t[r])
+            ends = t_iz[f[r], j:last + 1]
+            after = np.flatnonzero(ends >= tc)
+            if after.size:
+                ended = True
+                th_end = float(np.interp(ends[after[0]], t[j:last + 2], thu[j:last + 2]))
+            else:
+                th_end = thu[last]
+            crossing = math.pi / 3.0 + s * math.pi / 3.0
+            demag = dirn * (th_end - th_comm)
+            margin = dirn * _wrap(crossing - th_end)
+        elif abs(i0) > 0.0 or abs(i_pre) > 0.0:
+            # the current's magnitude from the commutation on: at the commutation instant about i_pre (when the
+            # first row after it shows less: the fall began inside that sample), then the rows
+            ref = i_pre if abs(i_pre) > abs(i0) else i0
+            g = np.sign(ref) * i_f
+            ths = thu[r:last + 1]
+            if abs(i_pre) > abs(i0):
+                g = np.concatenate(([abs(i_pre)], g))
+                ths = np.concatenate(([th_comm], ths))
+            low = np.flatnonzero(g <= 0.02 * abs(ref))
             if low.size:
                 q = int(low[0])
                 ended = True
-                g = np.sign(i0) * i_f
                 if q >= 1 and g[q] > 0.0:  # still a little current: the zero of the line through q - 1, q, ahead
-                    frac = 1.0 + min(g[q] / (g[q - 1] - g[q]), 1.0) if g[q - 1] > g[q] else 1.0
-                elif q >= 2 and g[q - 2] > g[q - 1]:  # ended inside the sample: from the slope of the two before
-                    frac = min(g[q - 1] / (g[q - 2] - g[q - 1]), 1.0)
+                    frac = min(g[q] / (g[q - 1] - g[q]), 1.0) if g[q - 1] > g[q] else 0.0
+                    th_end = ths[q] + frac * (ths[q] - ths[q - 1])
+                elif q >= 2 and g[q - 2] > g[q - 1]:  # ended before row q: along the slope of the two before
+                    frac = min(g[q - 1] * (ths[q - 1] - ths[q - 2]) / ((g[q - 2] - g[q - 1]) * (ths[q] - ths[q - 1])),
+                               1.0)
+                    th_end = ths[q - 1] + frac * (ths[q] - ths[q - 1])
+                elif q >= 1:  # the line through q - 1 and q (q at or below zero)
+                    th_end = ths[q - 1] + (ths[q] - ths[q - 1]) * g[q - 1] / (g[q - 1] - g[q])
                 else:
-                    frac = 1.0
-                th_end = (thu[r + q - 1] + frac * (thu[r + q] - thu[r + q - 1])) if q >= 1 else thu[r]
+                    th_end = ths[0]
             else:
                 th_end = thu[last]
             crossing = math.pi / 3.0 + s * math.pi / 3.0
