@@ -388,7 +388,8 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
     signals : dict of numpy.ndarray
         ``SimResult.signals`` of a :class:`~bldclab.control.SixStepSensorless` run with one trace row per sample:
         ``t``, ``theta_e``, ``mode_a`` .. ``mode_c``, ``i_a`` .. ``i_c``, ``state``, ``omega_e``, ``advance``, and
-        ``t_at`` if there is one (else a commutation is located within its sample only).
+        ``t_at`` if there is one (else a commutation is located within its sample only), ``t_iz_a`` .. ``t_iz_c`` if
+        there are (else the currents' ends are read from the rows).
     direction : int
         +1 or -1 for a known direction; 0: the sign of the controller's ``omega_e`` at each commutation.
 
@@ -408,10 +409,12 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
         sector's middle, ``pi/3 + s pi/3``; negative: the demagnetisation hid the crossing), ``margin_time`` (s: the
         same at the rotor's speed over the commutation's sample) and ``ended`` (False:
         the current still flowed at the next commutation or the end of the closed loop, and ``margin`` is an upper
-        bound). The end is where the current has fallen below 2 % of its value after the commutation (a floating
-        phase clamped in the off-time carries a little), located on the straight line through the two rows before
-        it (or through that row and the one before, when a little current is left): the current falls at a nearly
-        constant rate (paper 1's commutation interval), so this is exact to the curvature over one sample.
+        bound). The end is the plant's own instant of it (``t_iz_a`` .. ``t_iz_c``: the first end of the phase's
+        current after the commutation, its diode turning off, an event the plant locates), the rotor's angle there
+        interpolated between the rows. A trace without those signals is read from its rows: where the current has
+        fallen below 2 % of its value at the commutation (a floating phase clamped in the off-time carries a
+        little), located on the straight line through the two points before it (the commutation instant with the
+        current of the row before it, then the rows): exact to the curvature over one row.
     """
     t = signals["t"]
     modes = np.vstack([signals["mode_a"], signals["mode_b"], signals["mode_c"]]).astype(int)
