@@ -899,7 +899,9 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
         int top = s->sl_phase == BC_SINE_SL_RAMP && fabsf(s->if_omega) >= p->omega_on;
         if (s->n_zero > 0.0f) {
             if (!steady || !top || !u_obs_ok) {
-                s->n_zero = s->n_psi = 0.0f; /* dropped: the current back on, the count from 0 */
+                /* dropped: the current back on, and the flux no longer holds the hand-off (as without the reading) */
+                s->n_zero = s->n_psi = 0.0f;
+                s->psi_done = 1;
             } else {
                 s->n_zero += p->ts;
                 /* the current's settling: lock_time / 2, at least ten of the current loop's time constants L / k_p */
@@ -923,7 +925,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 if ((s->z_tgt > 0.0f && fabsf(s->z_w) >= s->z_tgt) || s->n_zero >= t_set + 4.0f * p->lock_time) {
                     float est = s->z_flux / fmaxf(fabsf(s->z_w), 1e-30f); /* psi^ = sum |u| T_s / angle */
                     if (isfinite(est) && est >= 0.5f * p->fobs.psi && est <= 2.0f * p->fobs.psi &&
-                        fabsf(est / s->psi_obs - 1.0f) > 0.02f * p->lock_tol) {
+                        fabsf(est / s->psi_obs - 1.0f) > 0.5f * p->lock_tol) {
                         s->psi_adapt = 1;
                         s->psi_obs = est;
                         bc_fluxobs_set_psi(&p->fobs, &s->fobs, est);

@@ -127,10 +127,10 @@ class Sine(Control):
         band for two lock times, the current loops hold ``i = 0`` for about a lock time and a whole turn (the
         vector turning on), and the flux linkage is the back-EMF they then apply over the angle it turns, ``psi =
         sum |u| T_s / angle`` (``R i`` and ``L di/dt`` are zero: neither a wrong R nor a wrong L enters it); taken
-        within ``[psi_f / 2, 2 psi_f]`` when it differs from the one in use by more than 0.4 %, once a start, kept
-        until the next alignment; the lock then checks against it. With the current on, a wrong L alone moves the
-        observer's flux by ``(L_c - L) i_d`` (the I/f current of an unloaded rotor lies on its d axis), which the
-        reading confirms as no flux error. Default ``True``; ``False``: a flux out of band ends the start in
+        within ``[psi_f / 2, 2 psi_f]`` when it differs from the one in use by more than half the lock band, once a
+        start, kept until the next alignment; the lock then checks against it. With the current on, a wrong L alone
+        moves the observer's flux by ``(L_c - L) i_d`` (the I/f current of an unloaded rotor lies on its d axis),
+        which the reading confirms as no flux error. Default ``True``; ``False``: a flux out of band ends the start in
         ``START_FAIL``. No effect with ``observer="reduced"`` (docs/sensorless-sine.md, "Wrong parameters at the
         start").
     catch_zero_current : bool

@@ -256,10 +256,10 @@
  *          in the rotor's frame: the I/f current of an unloaded rotor lies on its d axis, and a wrong L moves
  *          |psi_a| by -(L_c - L_t) i_d, which a reading with the current on takes for a flux error. psi^
  *          becomes the flux linkage the observer uses and the lock checks if it is within [psi_f / 2, 2 psi_f]
- *          and off the one in use by more than 2 % of lock_tol; the reading is not repeated until the next ALIGN
+ *          and off the one in use by more than lock_tol / 2; the reading is not repeated until the next ALIGN
  *          (which starts from the configured psi_f again), and the flux no longer holds the hand-off. A reading
  *          during which the observer loses its consistency, the rotor falls below omega_off or the vector leaves
- *          omega_on is dropped (the current back on, the count from 0).
+ *          omega_on is dropped (the current back on) and ends the hold too (as without if_psi_est).
  *   WAIT   legs off for restart_wait, then IDLE (and a new ALIGN).
  *
  *   CATCH  (in ALIGN and RAMP, once a start) the observer runs from the first sample of ALIGN; when it is
