@@ -215,8 +215,13 @@
  *          a = if_accel clamp((BC_SINE_RHO_HI - rho) / (BC_SINE_RHO_HI - BC_SINE_RHO_LO), -1, 1): the full ramp
  *          while the torque is at most RHO_LO of the I/f torque, none at RHO_HI, and above it the vector slows
  *          (down to dir omega_if = -omega_on, following a rotor an active load pushes back); at rho >= RHO_HI the
- *          vector does not outrun the rotor (dir omega_if <= dir omega^). A rotor the observer sees at rest
- *          (|omega^| < 0.05 omega_on) is evidence of nothing (the observer holds its seed, which a load holding
+ *          vector does not outrun the rotor (dir omega_if <= dir omega^). A rotor that keeps up with a vector
+ *          turning forwards (the observer sees it move, dir omega_if > 0, dir omega_f >= dir omega_if - 0.05
+ *          omega_on) carries the slowest ramp whatever the observer's angle says: then a >= if_accel_min and the
+ *          vector may run ahead of omega^ (below about lambda the observer keeps the error of its seed, which
+ *          decays at omega^2 / lambda; a friction load leaves the rotor up to asin(tau_load / (1.5 k_1
+ *          if_align_current)) off the seed, read as torque margin the rotor does not have). A rotor the
+ *          observer sees at rest (|omega^| < 0.05 omega_on) is evidence of nothing (the observer holds its seed, which a load holding
  *          the rotor leaves off): then a >= if_accel_min and |omega_if| <= 0.05 omega_on (the vector creeps past
  *          the rotor's angle of largest torque, where it breaks away). The swing about the turning vector is
  *          braked through the observer while it sees the rotor move: i_d,ref = if_damp psi_f (omega^ - omega_if)
