@@ -856,8 +856,12 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 /* and, whatever the lowest speed, against dir for the slowest ramp's time in all, or below
                  * omega_on for twice it (the slowest ramp from -omega_on): every ramp ends within a bound */
                 float t_min = p->omega_on / p->if_accel_min;
-                if (adaptive && (s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min || s->if_tb >= t_min ||
-                                 s->if_tr >= 2.0f * t_min))
+                /* plus the creep's sweep: a rotor held at the seed's rest angle moves once the vector has turned
+                 * from there to its breakaway angle acos(tau_load / tau_if), at most a quarter turn, at the creep's
+                 * speed 0.05 omega_on: t_sw = (pi / 2) / (0.05 omega_on) */
+                float t_sw = 10.0f * BC_PI_F / p->omega_on;
+                if (adaptive && (s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min + t_sw ||
+                                 s->if_tb >= t_min || s->if_tr >= 2.0f * t_min + t_sw))
                     sl_desync(p, s, out, BC_FLAG_START_FAIL);
             }
             if (at_top) {
