@@ -15,7 +15,9 @@ wrong data; and the commissioning accuracy (R, L, psi_f against the plant's) wit
 Then the current-sensor errors (``--sensors [DRIVE ...]`` alone): an offset on phase a and white noise on the
 measured phases, the controller unaware of them. And the start-up map (``--startup [DRIVE ...]`` alone): load kind x
 load x inertia x initial angle, with the design bound of the load-adaptive ramp; ``--kinds passive,brake``,
-``--inertias 1,5``, ``--loads 0.75,0.9`` select a part of it.
+``--inertias 1,5``, ``--loads 0.75,0.9`` select a part of it. And the controller's own estimates (``--estimates
+[DRIVE ...]`` alone): each wrong parameter without them, with the zero-current flux reading (``if_flux_estimate``) and
+with it and the alignment's resistance (``if_r_estimate``).
 
 Run: ``PYTHONPATH=src python benchmarks/sensorless_sine.py [DRIVE ...]``.
 """
