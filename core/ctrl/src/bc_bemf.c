@@ -510,6 +510,68 @@ static void grid_learn(const bc_bemf_params *p, bc_bemf_state *s, float T)
     if (!(fin(s->grid_tn) && s->grid_tn > 0.0f && fin(*g) && *g > 0.0f)) s->grid_n = 0; /* relearn */
 }
 
+/* 5. The handover's fit: the largest distance (rad) of the last min(valid, BC_BEMF_HO_FIT) crossings from the
+ * least-squares constant-acceleration rotor through them (angle k pi/3 at the k-th, a quadratic in time). A turning
+ * rotor's crossings lie on it within its back-EMF's asymmetry; those of a rotor that does not turn (its floating
+ * phase at the reference, the sign of a vibration's back-EMF) do not. Fewer than four crossings: 0 (no check). */
+static float handover_fit(const bc_bemf_state *s, float *acc)
+{
+    *acc = 0.0f;
+    int m = s->valid < BC_BEMF_HO_FIT ? (int)s->valid : BC_BEMF_HO_FIT;
+    if (m < 4) return 0.0f;
+    int last = (int)((s->valid - 1) % BC_BEMF_HO_FIT);
+    float u[BC_BEMF_HO_FIT];
+    for (int k = 0; k < m; ++k) { /* time of the k-th crossing relative to the last, s */
+        int j = (last - (m - 1 - k) + 2 * BC_BEMF_HO_FIT) % BC_BEMF_HO_FIT;
+        u[k] = tdiff(s->ho_ring[j], s->ho_ring[last]) * s->inv_tick;
+    }
+    float tm = -u[0] / (float)(m - 1); /* the mean interval: times in intervals, centred */
+    if (!(fin(tm) && tm > 0.0f)) return BC_PI_F;
+    float um = 0.0f;
+    for (int k = 0; k < m; ++k) {
+        u[k] /= tm;
+        um += u[k];
+    }
+    um /= (float)m;
+    float s2 = 0.0f, s3 = 0.0f, s4 = 0.0f, y0 = 0.0f, y1 = 0.0f, y2 = 0.0f;
+    for (int k = 0; k < m; ++k) {
+        float x = u[k] - um, x2 = x * x, y = (float)k;
+        s2 += x2;
+        s3 += x2 * x;
+        s4 += x2 * x2;
+        y0 += y;
+        y1 += y * x;
+        y2 += y * x2;
+    }
+    /* normal equations [m 0 s2; 0 s2 s3; s2 s3 s4] c = [y0 y1 y2], Cramer's rule */
+    float fm = (float)m;
+    float det = fm * (s2 * s4 - s3 * s3) + s2 * (-s2 * s2);
+    if (!(fin(det) && fabsf(det) > 1e-12f)) return BC_PI_F;
+    float c0 = (y0 * (s2 * s4 - s3 * s3) + s2 * (y1 * s3 - s2 * y2)) / det;
+    float c1 = (fm * (y1 * s4 - s3 * y2) + y0 * s2 * s3 - s2 * s2 * y1) / det;
+    float c2 = (fm * (s2 * y2 - s3 * y1) - s2 * s2 * y0) / det;
+    float worst = 0.0f;
+    for (int k = 0; k < m; ++k) {
+        float x = u[k] - um;
+        worst = fmaxf(worst, fabsf(c0 + c1 * x + c2 * x * x - (float)k));
+    }
+    worst *= PI3_F;
+    *acc = 2.0f * c2 * PI3_F / (tm * tm);
+    if (!fin(*acc)) return BC_PI_F;
+    return fin(worst) ? worst : BC_PI_F;
+}
+
+/* 5. The handover's plausibility: the crossings lie on a turning rotor's path within what the closed loop's jump
+ * check tolerates (a crossing (pi/6) (jump - 1) / (jump + 1) off), at an acceleration the start-up can give
+ * (at most BC_BEMF_HO_ACC ramp_accel either way). */
+static int plausible(const bc_bemf_params *p, const bc_bemf_state *s)
+{
+    float acc;
+    float r = handover_fit(s, &acc);
+    float r_max = PI6_F * (p->jump_max - 1.0f) / (p->jump_max + 1.0f);
+    return r <= r_max && !(p->ramp_accel > 0.0f && fabsf(acc) > BC_BEMF_HO_ACC * p->ramp_accel);
+}
+
 /* 5 and 7: an accepted crossing at x_e (s relative to t_k). */
 static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, float x_e)
 {
@@ -528,7 +590,8 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         s->valid += 1;
         s->t_zc = tadd(n->tk, x_zc * p->f_tick);
         s->have_zc = 1;
-        if (!(s->valid >= p->n_handover && T > 0.0f && PI3_F / T >= 1.5f * p->omega_stall)) {
+        s->ho_ring[(s->valid - 1) % BC_BEMF_HO_FIT] = s->t_zc;
+        if (!(s->valid >= p->n_handover && T > 0.0f && PI3_F / T >= 1.5f * p->omega_stall && plausible(p, s))) {
             /* not yet: the crossing commutates the forced sector 30 degrees after it, if that comes before the
              * forced instant, at the speed from the crossing interval (two crossings in a row), else from the 30
              * degrees between the sector's start and its crossing, at most twice the forced speed: a rotor that

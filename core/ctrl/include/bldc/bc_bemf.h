@@ -107,8 +107,13 @@
  *     scheduled with the commutation timer (8). The zero-crossing detector (6) runs in every forced sector (its
  *     speed: w, or the speed from the last forced sector's crossing if higher). A sector with an accepted crossing
  *     counts as valid, one without resets the count. At a crossing:
- *       - handover to CLOSED when it makes n_handover consecutive valid sectors and the speed from its crossing
- *         interval T (two valid sectors in a row) is at least 1.5 omega_stall (a margin above the stall limit):
+ *       - handover to CLOSED when it makes n_handover consecutive valid sectors, the speed from its crossing
+ *         interval T (two valid sectors in a row) is at least 1.5 omega_stall (a margin above the stall limit),
+ *         and the crossings are a turning rotor's: the last m = min(valid, BC_BEMF_HO_FIT) of them (m >= 4; fewer:
+ *         no check), at angles k pi/3, fitted by least squares with the constant-acceleration path c0 + c1 t +
+ *         c2 t^2, each lie within (pi/6) (jump_max - 1) / (jump_max + 1) of it (the displacement of alternate
+ *         crossings the closed loop's jump check tolerates) and |2 c2| <= BC_BEMF_HO_ACC ramp_accel (if
+ *         ramp_accel > 0): a held rotor's twitch gives crossings that are not (docs/sensorless.md, law 5).
  *         T60 = T, and the commutation is scheduled from that crossing as in 7;
  *       - else the crossing commutates the forced sector pi/6 / w_c after it if that comes before the forced instant
  *         (w_c = (pi/3) / T, or (pi/6) / (t_zc - t_c) without T: the rotor crossed 30 degrees after the sector
@@ -289,6 +294,11 @@
 #define BC_BEMF_REASON_STALL 4
 #define BC_BEMF_REASON_START 5
 
+/* crossings fitted at the handover (5): the last six crossing intervals */
+#define BC_BEMF_HO_FIT 7
+/* the largest acceleration of a handover's fit, in ramp_accel (5) */
+#define BC_BEMF_HO_ACC 4.0f
+
 typedef struct {
     int32_t method;      /* BC_BEMF_COMPARATOR, _ADC, _INTEGRATE */
     int32_t chop;        /* BC_CHOP_BIPOLAR, _HIGH, _PWMPWM, _SYNC (bc_commutation.h) */
@@ -394,6 +404,7 @@ typedef struct {
     float tau_ol;          /* duration of the forced sector, s */
     float w_zc;            /* speed from the last forced sector's crossing, electrical rad/s (0: none) */
     int32_t valid;         /* consecutive forced sectors with a crossing */
+    uint32_t ho_ring[BC_BEMF_HO_FIT]; /* ticks of the last crossings of those sectors (the handover's fit, 5) */
     int32_t hold;          /* forced sectors at ramp_w1 */
     int32_t sector_ok;     /* the current forced sector had a crossing */
     int32_t first;         /* the first forced sector after an alignment (no crossing read) */
