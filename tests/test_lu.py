@@ -74,6 +74,20 @@ def test_mean_torque_holds_the_reference_in_discontinuous_conduction(load, rpm):
     assert old.tau_mean / tq > 1.03, old
 
 
+def test_dcm_share_is_the_time_without_current_of_a_fine_trace():
+    """dcm_share is the plant's integrated zero-current time: a 64-rows-a-sample trace's share of rows with every
+    phase current exactly zero agrees within 0.005 (a threshold at 1 % of I_N, as before, counts 0.016 more)."""
+    tq, om = 0.25 * LU.T_N, 3000 * 2.0 * math.pi / 60.0
+    res = paper2.operating_point(LU, "lu", tq, om, trace_sub=64)
+    m = res.metrics
+    inside = (res.t >= m.t0) & (res.t < m.t1)
+    i_abc = np.stack([np.asarray(res[f"i_{x}"])[inside] for x in "abc"])
+    exact_zero = float(np.mean(np.all(i_abc == 0.0, axis=0)))
+    dcm = paper2.ripple_stats(res, LU).dcm_share
+    assert dcm > 0.01
+    assert abs(dcm - exact_zero) < 0.005, (dcm, exact_zero)
+
+
 def test_torque_control_warns_and_names_the_cause(capsys):
     """rect at 25 % load (discontinuous current, sampled-current PI) misses its reference: the CLI says why; lu does
     not get a warning; a saturated duty is named as the DC bus's limit."""

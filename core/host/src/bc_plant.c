@@ -1814,11 +1814,13 @@ static void apply_event(const bc_plant_params *p, bc_plant_state *s, int w, cons
             if (z != x && s->cond[z] != BC_COND_OPEN) s->i[z] += r / others;
         }
         s->cond[x] = BC_COND_OPEN;
+        if (s->t_iz[x] < 0.0) s->t_iz[x] = s->t;
         if (others == 1) { /* the last pair stopped: the other phase stops too */
             for (int z = 0; z < 3; ++z) {
                 if (z != x && s->cond[z] != BC_COND_OPEN && fabs(s->i[z]) < 1e-9) {
                     s->i[z] = 0.0;
                     if (s->cond[z] == BC_COND_D_L || s->cond[z] == BC_COND_D_U) s->cond[z] = BC_COND_OPEN;
+                    if (s->t_iz[z] < 0.0) s->t_iz[z] = s->t;
                 }
             }
         }
@@ -1929,6 +1931,7 @@ int bc_plant_init(const bc_plant_params *p, bc_plant_state *s, double t0, double
     memset(s, 0, sizeof *s);
     s->tc_cond[0] = s->tc_cond[1] = s->tc_cond[2] = -1; /* no conduction coefficients computed yet */
     s->hold_x = -1; /* no ideal current limiter */
+    s->t_iz[0] = s->t_iz[1] = s->t_iz[2] = -1.0;
     s->r_ph = p->R; /* at the parameters' temperature (bc_plant_set_thermal) */
     s->r_on = p->R_on;
     s->k_scale = 1.0;

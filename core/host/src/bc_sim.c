@@ -103,6 +103,7 @@ static void row_open(const bc_sim_config *cfg, bc_sim_state *s)
     r->flags = (double)s->last.flags;
     r->hw_trip = (double)ps->tripped;
     r->t_at = -1.0;
+    for (int x = 0; x < 3; ++x) s->plant.t_iz[x] = -1.0; /* the plant notes the first current end from here */
     memcpy(s->row_acc0, ps->acc, sizeof s->row_acc0);
     s->row_tmin = po.tau_e;
     s->row_tmax = po.tau_e;
@@ -135,6 +136,9 @@ static void row_close(bc_sim_state *s, bc_trace_row *rows, int64_t cap, int64_t 
     r->p_inv = (a1[BC_ACC_SW] - a0[BC_ACC_SW] + a1[BC_ACC_DIODE] - a0[BC_ACC_DIODE] + a1[BC_ACC_RSRC] -
                 a0[BC_ACC_RSRC]) * inv + r->p_swloss;
     r->p_emf = (a1[BC_ACC_EMF] - a0[BC_ACC_EMF]) * inv;
+    r->t_iz_a = ps->t_iz[0];
+    r->t_iz_b = ps->t_iz[1];
+    r->t_iz_c = ps->t_iz[2];
     r->v_a = (a1[BC_ACC_VA] - a0[BC_ACC_VA]) * inv;
     r->v_b = (a1[BC_ACC_VB] - a0[BC_ACC_VB]) * inv;
     r->v_c = (a1[BC_ACC_VC] - a0[BC_ACC_VC]) * inv;

@@ -92,6 +92,7 @@ __all__ = [
     "commutation_errors",
     "desync_map",
     "observe",
+    "out_of_sync",
     "steady_since",
 ]
 
@@ -275,12 +276,15 @@ AXES: dict[str, _AxisKind] = {
                              lambda d, c, s, v: (d, replace(c, demag_limit=v), s)),
     "duty_limit": _AxisKind("A", "speed-dependent duty limit's current (A; 0: off)",
                             lambda d, c, s, v: (d, replace(c, duty_limit_current=v), s)),
+    "delay": _AxisKind("samples", "controller delay (samples: 1 next sample, 0 within it)",
+                       lambda d, c, s, v: (d, replace(c, delay=int(v)), s)),
 }
 _CHOICES = {"chopping": ("sync", "high", "pwm-on-pwm", "bipolar"), "fast_demag": ("on", "off")}
 #: Range of each numeric axis: (low, high, low included, high included); the others: positive.
 _LIMITS = {"timing": (0.0, 30.0, True, True), "end": (0.0, 1.0, False, True), "start": (0.0, 1.0, True, False),
            "blank": (0.0, 60.0, True, True), "theta0": (-360.0, 360.0, True, True),
-           "demag_limit": (0.0, 1.0, True, False), "duty_limit": (0.0, math.inf, True, False)}
+           "demag_limit": (0.0, 1.0, True, False), "duty_limit": (0.0, math.inf, True, False),
+           "delay": (0.0, 1.0, True, True)}
 
 
 @dataclass(frozen=True)
@@ -294,7 +298,8 @@ class Axis:
         ``start`` (throttle), ``k_q`` (N m s^2/rad^2), ``J`` (kg m^2), ``blank`` (deg), ``f_pwm`` (kHz), ``v_dc``
         (V), ``chopping`` (``sync``, ``high``, ``pwm-on-pwm``, ``bipolar``), ``theta0`` (deg), ``fast_demag``
         (``on``, ``off``), ``demag_limit`` (share of the window in [0, 1); 0: the limiter off), ``duty_limit``
-        (the current of the controller's speed-dependent duty limit, A; 0: off).
+        (the current of the controller's speed-dependent duty limit, A; 0: off), ``delay`` (samples between the
+        controller's computing and applying an output: 1, a sampled controller, or 0, within the sample).
     values : sequence
         Distinct values (numbers in the unit above; names for ``chopping``).
     """
@@ -317,6 +322,8 @@ class Axis:
             for v in nums:
                 if math.isnan(v) or (math.isinf(v) and self.name != "rate"):
                     raise BldclabError(self.name, f"values must be finite, got {v!r}")
+                if self.name == "delay" and v not in (0.0, 1.0):
+                    raise BldclabError(self.name, f"values must be 0 or 1 sample, got {v:g}")
                 lo, hi, lo_in, hi_in = _LIMITS.get(self.name, (0.0, math.inf, False, True))
                 inside = (lo < v or (lo_in and v == lo)) and (v < hi or (hi_in and v == hi))
                 if not inside and not (self.name == "rate" and math.isinf(v)):
@@ -381,7 +388,8 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
     signals : dict of numpy.ndarray
         ``SimResult.signals`` of a :class:`~bldclab.control.SixStepSensorless` run with one trace row per sample:
         ``t``, ``theta_e``, ``mode_a`` .. ``mode_c``, ``i_a`` .. ``i_c``, ``state``, ``omega_e``, ``advance``, and
-        ``t_at`` if there is one (else a commutation is located within its sample only).
+        ``t_at`` if there is one (else a commutation is located within its sample only), ``t_iz_a`` .. ``t_iz_c`` if
+        there are (else the currents' ends are read from the rows).
     direction : int
         +1 or -1 for a known direction; 0: the sign of the controller's ``omega_e`` at each commutation.
 
@@ -393,17 +401,20 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
         ``direction``, ``err_lo``, ``err_hi`` (rad: the true error at the start and the end of that sample,
         positive = early; both the error at the commutation's instant when the trace has ``t_at``, the commutation
         timer's instant, or the sample's start for a change applied there), ``err`` (their middle), ``certain``
-        (the smallest ``|error|`` over the sample: 0 if it changes sign); the demagnetisation of the phase switched
+        (the smallest ``|error|`` over the sample: 0 if it changes sign), ``adv`` (rad: the controller's advance
+        there); the demagnetisation of the phase switched
         off (now floating) from the plant's currents:
         ``demag`` (rad: the rotor's travel from the commutation, ``err``'s instant, to the end of its current),
         ``margin`` (rad: from the end of that current to the zero crossing of the floating phase's back-EMF at the
         sector's middle, ``pi/3 + s pi/3``; negative: the demagnetisation hid the crossing), ``margin_time`` (s: the
         same at the rotor's speed over the commutation's sample) and ``ended`` (False:
         the current still flowed at the next commutation or the end of the closed loop, and ``margin`` is an upper
-        bound). The end is where the current has fallen below 2 % of its value after the commutation (a floating
-        phase clamped in the off-time carries a little), located on the straight line through the two rows before
-        it (or through that row and the one before, when a little current is left): the current falls at a nearly
-        constant rate (paper 1's commutation interval), so this is exact to the curvature over one sample.
+        bound). The end is the plant's own instant of it (``t_iz_a`` .. ``t_iz_c``: the first end of the phase's
+        current after the commutation, its diode turning off, an event the plant locates), the rotor's angle there
+        interpolated between the rows. A trace without those signals is read from its rows: where the current has
+        fallen below 2 % of its value at the commutation (a floating phase clamped in the off-time carries a
+        little), located on the straight line through the two points before it (the commutation instant with the
+        current of the row before it, then the rows): exact to the curvature over one row.
     """
     t = signals["t"]
     modes = np.vstack([signals["mode_a"], signals["mode_b"], signals["mode_c"]]).astype(int)
@@ -414,6 +425,8 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
     theta = signals["theta_e"]
     thu = np.unwrap(theta)
     t_at = signals.get("t_at")
+    t_iz = (np.vstack([signals["t_iz_a"], signals["t_iz_b"], signals["t_iz_c"]])
+            if all(f"t_iz_{x}" in signals for x in "abc") else None)
     at = 0.5
     n = t.size
     ends = np.append(k[1:] + 1, n) if k.size else k  # each sector's rows: from its commutation row to the next one's
@@ -446,30 +459,81 @@ def commutation_errors(signals: dict[str, np.ndarray], direction: int = 0) -> pd
         demag = margin = math.nan
         ended = False
         i0 = float(i_f[0]) if i_f.size else 0.0
-        if abs(i0) > 0.0:
-            low = np.flatnonzero(np.sign(i0) * i_f <= 0.02 * abs(i0))
+        i_pre = float(cur[f[r], j])  # the phase's current while it was still driven, the row before the change
+        if t_iz is not None and (abs(i0) > 0.0 or abs(i_pre) > 0.0):
+            # the plant's own instant of the current's end (its diode turning off, an event it located): the first
+            # after the commutation, in the commutation's row or a later one of the sector
+            tc = float(t_at[j]) if t_at is not None and t[j] <= t_at[j] < t[r] else float(t[r])
+            ends = t_iz[f[r], j:last + 1]
+            after = np.flatnonzero(ends >= tc)
+            if after.size:
+                ended = True
+                th_end = float(np.interp(ends[after[0]], t[j:last + 2], thu[j:last + 2]))
+            else:
+                th_end = thu[last]
+            crossing = math.pi / 3.0 + s * math.pi / 3.0
+            demag = dirn * (th_end - th_comm)
+            margin = dirn * _wrap(crossing - th_end)
+        elif abs(i0) > 0.0 or abs(i_pre) > 0.0:
+            # the current's magnitude from the commutation on: at the commutation instant about i_pre (when the
+            # first row after it shows less: the fall began inside that sample), then the rows
+            ref = i_pre if abs(i_pre) > abs(i0) else i0
+            g = np.sign(ref) * i_f
+            ths = thu[r:last + 1]
+            if abs(i_pre) > abs(i0):
+                g = np.concatenate(([abs(i_pre)], g))
+                ths = np.concatenate(([th_comm], ths))
+            low = np.flatnonzero(g <= 0.02 * abs(ref))
             if low.size:
                 q = int(low[0])
                 ended = True
-                g = np.sign(i0) * i_f
                 if q >= 1 and g[q] > 0.0:  # still a little current: the zero of the line through q - 1, q, ahead
-                    frac = 1.0 + min(g[q] / (g[q - 1] - g[q]), 1.0) if g[q - 1] > g[q] else 1.0
-                elif q >= 2 and g[q - 2] > g[q - 1]:  # ended inside the sample: from the slope of the two before
-                    frac = min(g[q - 1] / (g[q - 2] - g[q - 1]), 1.0)
+                    frac = min(g[q] / (g[q - 1] - g[q]), 1.0) if g[q - 1] > g[q] else 0.0
+                    th_end = ths[q] + frac * (ths[q] - ths[q - 1])
+                elif q >= 2 and g[q - 2] > g[q - 1]:  # ended before row q: along the slope of the two before
+                    frac = min(g[q - 1] * (ths[q - 1] - ths[q - 2]) / ((g[q - 2] - g[q - 1]) * (ths[q] - ths[q - 1])),
+                               1.0)
+                    th_end = ths[q - 1] + frac * (ths[q] - ths[q - 1])
+                elif q >= 1:  # the line through q - 1 and q (q at or below zero)
+                    th_end = ths[q - 1] + (ths[q] - ths[q - 1]) * g[q - 1] / (g[q - 1] - g[q])
                 else:
-                    frac = 1.0
-                th_end = (thu[r + q - 1] + frac * (thu[r + q] - thu[r + q - 1])) if q >= 1 else thu[r]
+                    th_end = ths[0]
             else:
                 th_end = thu[last]
             crossing = math.pi / 3.0 + s * math.pi / 3.0
             demag = dirn * (th_end - th_comm)
             margin = dirn * _wrap(crossing - th_end)
         speed = abs(thu[r] - thu[j]) / (t[r] - t[j])
-        rows.append((t[r], s, dirn, e0, e1, 0.5 * (e0 + e1), certain, demag, margin,
+        rows.append((t[r], s, dirn, e0, e1, 0.5 * (e0 + e1), certain, adv, demag, margin,
                      margin / speed if speed > 0.0 else math.nan, ended))
     types = {"t": float, "sector": int, "direction": int, "err_lo": float, "err_hi": float, "err": float,
-             "certain": float, "demag": float, "margin": float, "margin_time": float, "ended": bool}
+             "certain": float, "adv": float, "demag": float, "margin": float, "margin_time": float, "ended": bool}
     return pd.DataFrame(rows, columns=list(types)).astype(types)
+
+
+def out_of_sync(comms: pd.DataFrame, bound: float = DEFAULT_BOUND) -> np.ndarray:
+    """Which commutations of :func:`commutation_errors` are certainly out of sync.
+
+    A commutation is out of sync when its whole sample lies more than ``bound`` *earlier* than the angle the
+    controller meant (its advance included), or more than ``bound`` *later* than the rotor's own sector boundary
+    (the Hall-exact angle, ``adv`` after the meant one). A late commutation that only loses part of a meant advance
+    (``COMM_LATE`` with a large timing at few samples per sector) still feeds the pair of the rotor's sector: it
+    costs torque, not synchronisation. With no advance both sides are the same angle.
+
+    Parameters
+    ----------
+    comms : pandas.DataFrame
+        From :func:`commutation_errors` (``err_lo``, ``err_hi``, ``adv``; rad, positive = early).
+    bound : float
+        Half-width of the band, rad (default 30 deg: half a sector).
+
+    Returns
+    -------
+    numpy.ndarray of bool
+    """
+    lo = np.minimum(comms.err_lo.to_numpy(), comms.err_hi.to_numpy())
+    hi = np.maximum(comms.err_lo.to_numpy(), comms.err_hi.to_numpy())
+    return (lo > bound) | (hi < -(bound + np.maximum(comms.adv.to_numpy(), 0.0)))
 
 
 def _wrap(x: float) -> float:
@@ -601,7 +665,7 @@ def observe(signals: dict[str, np.ndarray], t_step: float, *, settle: float = 0.
     edges = np.flatnonzero(np.diff(np.concatenate(([0], closed.astype(np.int8), [0]))))
     spans = tuple((float(t[a]), float(t[b - 1]) + t_half) for a, b in zip(edges[::2], edges[1::2], strict=True))
     comms = commutation_errors(signals, direction)
-    out = tuple(float(x) for x in comms.t[comms.certain > bound])
+    out = tuple(float(x) for x in comms.t[out_of_sync(comms, bound)])
     return Observation(t_step=t_step, t_end=float(t[-1]) + t_half, desyncs=desyncs, closed=spans, out_of_sync=out,
                        commutations=tuple(float(x) for x in comms.t), settle=settle), comms
 
@@ -638,7 +702,7 @@ def _run_point(job: DesyncJob) -> dict[str, Any]:
             t_step = 0.0
             if not step.is_start:  # where the drive has been steady at `start` for `settle`: the step's instant
                 pre = simulate(drive, control, Scenario(duration=step.start_time(drive, control), ref=step.start,
-                                                        theta0=step.theta0), check="warn")
+                                                        theta0=step.theta0, delay=control.delay), check="warn")
                 found = steady_since(pre.signals, settle)
                 if found is None:
                     obs, _ = observe(pre.signals, float(pre.signals["t"][-1]), settle=settle, bound=bound,
@@ -651,7 +715,8 @@ def _run_point(job: DesyncJob) -> dict[str, Any]:
             t_end = t_step + step.observe_time(drive, control)
             ref: Any = (step.end if step.is_start else
                         (lambda tt, a=step.start, b=step.end, ts=t_step: np.where(tt < ts, a, b)))
-            res = simulate(drive, control, Scenario(duration=t_end, ref=ref, theta0=step.theta0), check="warn")
+            res = simulate(drive, control, Scenario(duration=t_end, ref=ref, theta0=step.theta0, delay=control.delay),
+                           check="warn")
     except (PlausibilityError, BldclabError) as exc:
         row["outcome"] = "refused"
         row["note"] = f"refused: {exc}"

@@ -91,7 +91,8 @@ class RippleStats:
     do_share : float
         Share of samples in ``D_o`` mode (-).
     dcm_share : float
-        Share of the window with every phase current below 1 % of ``I_N`` (discontinuous conduction) (-).
+        Share of the window with every phase current zero (discontinuous conduction) (-): the plant's exact
+        ``Metrics.zero_current_share``, integrated between its events, not read from the trace.
     sat_share : float
         Share of samples whose duty was clamped to [0, 1] (``BC_FLAG_SATURATED``: the DC bus cannot drive what the
         law asks) (-).
@@ -262,9 +263,6 @@ def ripple_stats(res: SimResult, drive: Drive) -> RippleStats:
         rel.append((level - low) / level if level > 0 else math.nan)
     mode = np.asarray(res["mode"][: n * sub: sub]) if "mode" in res.signals else np.zeros(n)
     flags = np.asarray(res["ctrl_flags"][: n * sub: sub]).astype(np.int64)
-    i_all = np.stack([res[f"i_{x}"] for x in "abc"])
-    t_in = (t >= m.t0) & (t < m.t1)
-    dcm = np.all(np.abs(i_all[:, t_in]) < 0.01 * drive.motor.I_N, axis=0)
     saturated = core().const("BC_FLAG_SATURATED")  # the duty was clamped to [0, 1]
     return RippleStats(
         tau_mean=tau_mean,
@@ -276,7 +274,7 @@ def ripple_stats(res: SimResult, drive: Drive) -> RippleStats:
         dip_pct=100.0 * float(np.nanmean(rel)) if rel else math.nan,
         n_commutations=len(dips),
         do_share=float(np.mean(mode[inside] == 2.0)) if np.any(inside) else math.nan,
-        dcm_share=float(np.mean(dcm)) if dcm.size else math.nan,
+        dcm_share=m.zero_current_share,
         sat_share=float(np.mean((flags[inside] & saturated) != 0)) if np.any(inside) else math.nan,
     )
 

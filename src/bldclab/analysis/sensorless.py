@@ -222,7 +222,7 @@ def run_locked(drive: Drive, speed_pu: float, duty: float, *, periods: float = 2
         # after the lock, where the point itself holds with its clamp at 0.4 of the window)
         ref = lambda t: duty * (w_lock + (w_e - w_lock) * np.clip(t / t_up, 0.0, 1.0)) / w_e  # noqa: E731
     res = simulate(drive, ctl, Scenario(duration=dur, speed=speed, ref=ref, theta0=th0, trace_sub=trace_sub,
-                                        window=(t0, dur)), check="warn")
+                                        window=(t0, dur), delay=int(getattr(ctl, "delay", 1))), check="warn")
     return res, t0
 
 
@@ -720,15 +720,16 @@ def demag_times(res: SimResult, drive: Drive, *, chopping: str, fast_demag: bool
                 ) -> DemagResult:
     """Measure the demagnetisation time after each commutation of a run and put the closed forms beside it.
 
-    The measured time runs from the commutation (:func:`commutations`) to the zero of the outgoing current: the
-    first trace row after it where that current is exactly zero (the plant opens the phase there), located inside
-    the row before by extrapolating the last two rows' currents linearly to zero (with ``trace_sub`` rows per sample
-    the line is short). The duty is the controller's (diag ``duty``) at the commutation, the speed the plant's.
+    The measured time runs from the commutation (:func:`commutations`) to the end of the outgoing current: the
+    plant's own instant of it (trace signals ``t_iz_a`` .. ``t_iz_c``: the diode turning off, an event the plant
+    locates), or on a trace without them the first row where that current is exactly zero, located inside the row
+    before by extrapolating the last two rows' currents linearly to zero. The duty is the controller's (diag
+    ``duty``) at the commutation, the speed the plant's.
 
     Parameters
     ----------
     res : SimResult
-        A sensorless run with a full trace; ``trace_sub`` of 8 or more for a fine measurement.
+        A sensorless run with a full trace (one row per sample is enough: the end is the plant's event).
     drive : Drive
         The drive of the run.
     chopping : {"sync", "high", "pwm-on-pwm", "bipolar"}
@@ -747,6 +748,7 @@ def demag_times(res: SimResult, drive: Drive, *, chopping: str, fast_demag: bool
     s = res.signals
     t = np.asarray(res.t, dtype=float)
     cur = np.stack([s["i_a"], s["i_b"], s["i_c"]])
+    t_iz = np.stack([s["t_iz_a"], s["t_iz_b"], s["t_iz_c"]]) if "t_iz_a" in s else None
     duty = np.asarray(s["duty"], dtype=float)
     w_e = drive.motor.p * np.asarray(s["omega_m"], dtype=float)
     tau = drive.motor.L / r_total(drive)
@@ -755,19 +757,26 @@ def demag_times(res: SimResult, drive: Drive, *, chopping: str, fast_demag: bool
         if abs(i0) < 1e-6:
             continue
         j = int(np.searchsorted(t, tc, side="right"))
-        ii = cur[int(out)]
-        k = j
-        while k < len(t) and ii[k] != 0.0:
-            k += 1
-        if k >= len(t) or k < j + 1:
-            continue
-        # last two nonzero rows before the zero: extrapolate to zero
-        x0, x1, y0, y1 = t[k - 2], t[k - 1], ii[k - 2], ii[k - 1]
-        if k - 2 < j - 1 or y0 == y1:
-            t_zero = t[k]
+        if t_iz is not None:  # the plant's own instant: the first end of the outgoing current after the commutation
+            ends = t_iz[int(out), max(j - 1, 0):]
+            hit = np.flatnonzero(ends >= tc)
+            if not hit.size:
+                continue
+            t_zero = float(ends[hit[0]])
         else:
-            t_zero = float(x1 - y1 * (x1 - x0) / (y1 - y0))
-            t_zero = min(max(t_zero, x1), t[k])
+            ii = cur[int(out)]
+            k = j
+            while k < len(t) and ii[k] != 0.0:
+                k += 1
+            if k >= len(t) or k < j + 1:
+                continue
+            # last two nonzero rows before the zero: extrapolate to zero
+            x0, x1, y0, y1 = t[k - 2], t[k - 1], ii[k - 2], ii[k - 1]
+            if k - 2 < j - 1 or y0 == y1:
+                t_zero = t[k]
+            else:
+                t_zero = float(x1 - y1 * (x1 - x0) / (y1 - y0))
+                t_zero = min(max(t_zero, x1), t[k])
         sign = 1 if i0 > 0 else -1
         jd = max(0, min(len(t) - 1, int(np.searchsorted(t, tc)) - 1))
         d = float(duty[jd])
@@ -965,7 +974,8 @@ _StartJob = tuple[Drive, SixStepSensorless, float, float, float]
 
 def _run_start(job: _StartJob) -> dict[str, Any]:
     drive, ctl, throttle, angle, duration = job
-    res = simulate(drive, ctl, Scenario(duration=duration, ref=throttle, theta0=angle, trace_every=4), check="warn")
+    res = simulate(drive, ctl, Scenario(duration=duration, ref=throttle, theta0=angle, trace_every=4, delay=ctl.delay),
+                   check="warn")
     st = np.asarray(res.signals["state"])
     t = np.asarray(res.t)
     closed = st == 3

@@ -41,6 +41,9 @@ OPTIONS: dict[str, tuple[str, str, str | None, str]] = {
                                                "0.6)"),
     "--duty-limit": ("duty_limit", "current", None, "current of the speed-dependent duty limit, A (or '30 A'; 0: off; "
                                                     "default I_N)"),
+    "--delay": ("delay", "", None, "controller delay, samples: 1 (an output computed at a sample applies from the "
+                                   "next one, as a sampled controller) or 0 (within the sample, as an ESC's "
+                                   "interrupt-driven commutation timer) (default 1)"),
 }
 #: The unit a value without one is read in (the axis's), as the factor of that unit to SI.
 _TO_AXIS = {"angle": math.pi / 180.0, "frequency": 1e3, "voltage": 1.0, "inertia": 1.0, "propeller": 1.0,
@@ -253,7 +256,8 @@ def _summary(res: DesyncMapResult, args: argparse.Namespace) -> dict[str, Any]:
                         "chopping": res.control.chopping, "align_time": res.control.align_time,
                         "timing_rad": res.control.timing, "throttle_rate_per_s": res.control.throttle_rate,
                         "fast_demag": res.control.fast_demag, "demag_limit": res.control.demag_limit,
-                        "grid_gain": res.control.grid_gain, "note": "the controller before the axes' changes"},
+                        "grid_gain": res.control.grid_gain, "delay": res.control.delay,
+                        "note": "the controller before the axes' changes"},
             "outcomes": counts, "summary": res.summary(), "table": res.table().splitlines(),
             "boundary": [[str(y), None if x is None else str(x)] for y, x in res.boundary()],
             "seconds": res.seconds, "command": "bldclab sensorless " + " ".join(_argv(args))}

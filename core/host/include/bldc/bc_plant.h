@@ -454,6 +454,8 @@ typedef struct {
                                 state: the events that change it end the steps) */
     int64_t n_zero_i;        /* intervals of it begun while acc_on (t_zero_i / n_zero_i: their mean length) */
     int32_t zero_i;          /* 1 while in such an interval (the last step integrated had every current zero) */
+    double t_iz[3];          /* instant of the first end of each phase's current (a diode's, located as an event)
+                                since the runner last set it to -1 (bc_sim: at each trace row); -1: none */
     bc_plant_step_fn on_step; /* NULL or called after every accepted step (not copied meaningfully: a runner sets it) */
     void *on_step_ctx;        /* ... and of on_term */
     bc_plant_term_fn on_term; /* NULL or called with the terminal voltages over every step while term_on */

@@ -77,7 +77,10 @@
     X(d7, "-", "controller diagnostic 7")                                                           \
     X(flags, "-", "controller flags")                                                               \
     X(hw_trip, "-", "1 once the inverter's hardware over-current trip has switched it off")          \
-    X(t_at, "s", "instant of the commutation timer's leg change in the row (bc_ctrl_out.has_at); -1: none")
+    X(t_at, "s", "instant of the commutation timer's leg change in the row (bc_ctrl_out.has_at); -1: none") \
+    X(t_iz_a, "s", "instant phase a's current first ended in the row (its diode turned off); -1: none")   \
+    X(t_iz_b, "s", "the same for phase b")                                                        \
+    X(t_iz_c, "s", "the same for phase c")
 
 typedef struct {
 #define BC_TRACE_MEMBER(name, unit, doc) double name;
