@@ -128,11 +128,11 @@ def test_held_rotor_never_hands_over(j_rel, angle):
     field turns, a few rad/s either way). Its floating phase has no back-EMF to speak of (millivolts) and the ideal
     comparator reads the sign of the twitch's: "crossings" at the rotor's velocity reversals, which follow the
     commutations, in every forced sector. Before the handover's fit these four starts handed over on them and ended
-    ZC_HIDDEN or ZC_TIMEOUT within a millisecond (the catalog's first two, the denser grid's last two). The
-    crossings lie 6 to 26 degrees off the best constant-acceleration path through them, or on one at 10 to 120
-    times the ramp's acceleration (a turning rotor's starts over the catalog: within 7.4 degrees and 2.1 times);
-    now the ramp goes on and the start fails by name, START_FAIL, with no closed-loop sample (docs/sensorless.md,
-    law 5)."""
+    ZC_HIDDEN or ZC_TIMEOUT within a millisecond (the catalog's first two, the denser grid's last two). Their
+    crossings lie more than 10 degrees (the closed loop's jump tolerance) off the best path of a rotor at constant
+    acceleration through them, or on one at 16 to 124 times the ramp's acceleration (a turning rotor's handovers
+    over the catalog: within 8.2 degrees and 2.1 times); now the ramp goes on and the start fails by name,
+    START_FAIL, with no closed-loop sample (docs/sensorless.md, law 5)."""
     d = bl.load("f60prov-2550kv")
     ctl = fixed_start(d)
     su = ctl.start_up(d)

@@ -510,15 +510,18 @@ static void grid_learn(const bc_bemf_params *p, bc_bemf_state *s, float T)
     if (!(fin(s->grid_tn) && s->grid_tn > 0.0f && fin(*g) && *g > 0.0f)) s->grid_n = 0; /* relearn */
 }
 
-/* 5. The handover's fit: the largest distance (rad) of the last min(valid, BC_BEMF_HO_FIT) crossings from the
- * least-squares constant-acceleration rotor through them (angle k pi/3 at the k-th, a quadratic in time). A turning
- * rotor's crossings lie on it within its back-EMF's asymmetry; those of a rotor that does not turn (its floating
- * phase at the reference, the sign of a vibration's back-EMF) do not. Fewer than four crossings: 0 (no check). */
-static float handover_fit(const bc_bemf_state *s, float *acc)
+/* 5. The handover's fit. The last m = min(valid, BC_BEMF_HO_FIT) crossings (angle k pi/3 at the k-th) against the
+ * least-squares path of a rotor at constant acceleration whose rising and falling crossings may be displaced
+ * oppositely (a comparator offset, an asymmetric back-EMF): k pi/3 = c0 + c1 u + c2 u^2 + c3 (-1)^k, u the time in
+ * mean intervals. Returns 0 with, in rad, *alt = |c3| pi/3, *res the largest distance of a crossing from the path
+ * and *acc = 2 c2 pi/3 / T^2 (rad/s^2); 1 with m < 5 (no check); -1 if the fit is degenerate. */
+static int handover_fit(const bc_bemf_state *s, float *alt, float *res, float *acc)
 {
+    *alt = 0.0f;
+    *res = 0.0f;
     *acc = 0.0f;
     int m = s->valid < BC_BEMF_HO_FIT ? (int)s->valid : BC_BEMF_HO_FIT;
-    if (m < 4) return 0.0f;
+    if (m < 5) return 1;
     int last = (int)((s->valid - 1) % BC_BEMF_HO_FIT);
     float u[BC_BEMF_HO_FIT];
     for (int k = 0; k < m; ++k) { /* time of the k-th crossing relative to the last, s */
@@ -526,50 +529,63 @@ static float handover_fit(const bc_bemf_state *s, float *acc)
         u[k] = tdiff(s->ho_ring[j], s->ho_ring[last]) * s->inv_tick;
     }
     float tm = -u[0] / (float)(m - 1); /* the mean interval: times in intervals, centred */
-    if (!(fin(tm) && tm > 0.0f)) return BC_PI_F;
+    if (!(fin(tm) && tm > 0.0f)) return -1;
     float um = 0.0f;
     for (int k = 0; k < m; ++k) {
         u[k] /= tm;
         um += u[k];
     }
     um /= (float)m;
-    float s2 = 0.0f, s3 = 0.0f, s4 = 0.0f, y0 = 0.0f, y1 = 0.0f, y2 = 0.0f;
+    float a[4][5] = {{0.0f}}; /* the normal equations, augmented */
     for (int k = 0; k < m; ++k) {
-        float x = u[k] - um, x2 = x * x, y = (float)k;
-        s2 += x2;
-        s3 += x2 * x;
-        s4 += x2 * x2;
-        y0 += y;
-        y1 += y * x;
-        y2 += y * x2;
+        float x = u[k] - um;
+        float f[4] = {1.0f, x, x * x, (k & 1) ? -1.0f : 1.0f};
+        for (int r = 0; r < 4; ++r) {
+            for (int c = 0; c < 4; ++c) a[r][c] += f[r] * f[c];
+            a[r][4] += f[r] * (float)k;
+        }
     }
-    /* normal equations [m 0 s2; 0 s2 s3; s2 s3 s4] c = [y0 y1 y2], Cramer's rule */
-    float fm = (float)m;
-    float det = fm * (s2 * s4 - s3 * s3) + s2 * (-s2 * s2);
-    if (!(fin(det) && fabsf(det) > 1e-12f)) return BC_PI_F;
-    float c0 = (y0 * (s2 * s4 - s3 * s3) + s2 * (y1 * s3 - s2 * y2)) / det;
-    float c1 = (fm * (y1 * s4 - s3 * y2) + y0 * s2 * s3 - s2 * s2 * y1) / det;
-    float c2 = (fm * (s2 * y2 - s3 * y1) - s2 * s2 * y0) / det;
+    for (int c = 0; c < 4; ++c) { /* Gauss-Jordan, partial pivoting */
+        int piv = c;
+        for (int r = c + 1; r < 4; ++r)
+            if (fabsf(a[r][c]) > fabsf(a[piv][c])) piv = r;
+        if (!(fabsf(a[piv][c]) > 1e-9f)) return -1;
+        for (int q = 0; q < 5; ++q) {
+            float t = a[c][q];
+            a[c][q] = a[piv][q];
+            a[piv][q] = t;
+        }
+        for (int r = 0; r < 4; ++r) {
+            if (r == c) continue;
+            float g = a[r][c] / a[c][c];
+            for (int q = c; q < 5; ++q) a[r][q] -= g * a[c][q];
+        }
+    }
+    float cf[4];
+    for (int r = 0; r < 4; ++r) cf[r] = a[r][4] / a[r][r];
     float worst = 0.0f;
     for (int k = 0; k < m; ++k) {
         float x = u[k] - um;
-        worst = fmaxf(worst, fabsf(c0 + c1 * x + c2 * x * x - (float)k));
+        float y = cf[0] + cf[1] * x + cf[2] * x * x + cf[3] * ((k & 1) ? -1.0f : 1.0f);
+        worst = fmaxf(worst, fabsf(y - (float)k));
     }
-    worst *= PI3_F;
-    *acc = 2.0f * c2 * PI3_F / (tm * tm);
-    if (!fin(*acc)) return BC_PI_F;
-    return fin(worst) ? worst : BC_PI_F;
+    *alt = fabsf(cf[3]) * PI3_F;
+    *res = worst * PI3_F;
+    *acc = 2.0f * cf[2] * PI3_F / (tm * tm);
+    return fin(*alt) && fin(*res) && fin(*acc) ? 0 : -1;
 }
 
-/* 5. The handover's plausibility: the crossings lie on a turning rotor's path within what the closed loop's jump
- * check tolerates (a crossing (pi/6) (jump - 1) / (jump + 1) off), at an acceleration the start-up can give
- * (at most BC_BEMF_HO_ACC ramp_accel either way). */
+/* 5. The handover's plausibility: the crossings lie on a turning rotor's path, their alternate displacement and the
+ * distance of each from the path within what the closed loop's jump check tolerates (alternate crossings (pi/6)
+ * (jump - 1) / (jump + 1) off), at an acceleration the start-up can give (at most BC_BEMF_HO_ACC ramp_accel either
+ * way). */
 static int plausible(const bc_bemf_params *p, const bc_bemf_state *s)
 {
-    float acc;
-    float r = handover_fit(s, &acc);
-    float r_max = PI6_F * (p->jump_max - 1.0f) / (p->jump_max + 1.0f);
-    return r <= r_max && !(p->ramp_accel > 0.0f && fabsf(acc) > BC_BEMF_HO_ACC * p->ramp_accel);
+    float alt, res, acc;
+    int f = handover_fit(s, &alt, &res, &acc);
+    if (f != 0) return f > 0;
+    float d_max = PI6_F * (p->jump_max - 1.0f) / (p->jump_max + 1.0f);
+    return alt <= d_max && res <= d_max && !(p->ramp_accel > 0.0f && fabsf(acc) > BC_BEMF_HO_ACC * p->ramp_accel);
 }
 
 /* 5 and 7: an accepted crossing at x_e (s relative to t_k). */

@@ -109,9 +109,10 @@
  *     counts as valid, one without resets the count. At a crossing:
  *       - handover to CLOSED when it makes n_handover consecutive valid sectors, the speed from its crossing
  *         interval T (two valid sectors in a row) is at least 1.5 omega_stall (a margin above the stall limit),
- *         and the crossings are a turning rotor's: the last m = min(valid, BC_BEMF_HO_FIT) of them (m >= 4; fewer:
- *         no check), at angles k pi/3, fitted by least squares with the constant-acceleration path c0 + c1 t +
- *         c2 t^2, each lie within (pi/6) (jump_max - 1) / (jump_max + 1) of it (the displacement of alternate
+ *         and the crossings are a turning rotor's: the last m = min(valid, BC_BEMF_HO_FIT) of them (m >= 5; fewer:
+ *         no check), at angles k pi/3, fitted by least squares with c0 + c1 t + c2 t^2 + c3 (-1)^k (a constant
+ *         acceleration, rising and falling crossings displaced oppositely by c3): |c3| and each crossing's
+ *         distance from the fit within (pi/6) (jump_max - 1) / (jump_max + 1) (the displacement of alternate
  *         crossings the closed loop's jump check tolerates) and |2 c2| <= BC_BEMF_HO_ACC ramp_accel (if
  *         ramp_accel > 0): a held rotor's twitch gives crossings that are not (docs/sensorless.md, law 5).
  *         T60 = T, and the commutation is scheduled from that crossing as in 7;
