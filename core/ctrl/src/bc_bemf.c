@@ -50,7 +50,9 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
     if (p->method == BC_BEMF_INTEGRATE && !(fin(p->int_limit) && p->int_limit > 0.0f)) return BC_ERR_PARAM;
     if (!in01(p->grid_gain)) return BC_ERR_PARAM;
     if (!nonneg(p->int_limit) || !(fin(p->zc_timeout) && p->zc_timeout >= 1.05f && p->zc_timeout <= 4.0f) ||
-        !(fin(p->jump_max) && p->jump_max > 1.0f) || p->miss_max < 0 || p->miss_max > 100 ||
+        !(fin(p->jump_max) && p->jump_max > 1.0f) || !nonneg(p->brake_tau) || !nonneg(p->brake_acc) ||
+        !nonneg(p->brake_q) ||
+        p->miss_max < 0 || p->miss_max > 100 ||
         !(fin(p->omega_stall) && p->omega_stall > 0.0f))
         return BC_ERR_PARAM;
     if (!nonneg(p->align_time) || !in01(p->align_duty) || !nonneg(p->ramp_w0) || !(fin(p->ramp_w1) && p->ramp_w1 > 0.0f) ||
@@ -588,6 +590,37 @@ static int plausible(const bc_bemf_params *p, const bc_bemf_state *s)
     return alt <= d_max && res <= d_max && !(p->ramp_accel > 0.0f && fabsf(acc) > BC_BEMF_HO_ACC * p->ramp_accel);
 }
 
+/* 9. The timeout after the crossing at t_zc (s): zc_timeout T60, or, with brake_tau, at least the latest the next
+ * crossing can come for a rotor braked as hard as the drive can brake it, dw/dt = -w / tau - brake_acc from
+ * the speed w0 of the last interval (1 / tau = 1 / brake_tau + brake_q w0), plus the same margin (zc_timeout - 1)
+ * T60: its angle c tau (1 - e^(-t/tau)) -
+ * a tau t (c = w0 + a tau) reaches pi/3 (Newton from t = 0: the angle is concave, the steps approach from below),
+ * or, if the rotor falls below omega_stall first, the time it takes to. */
+static float timeout_of(const bc_bemf_params *p, const bc_bemf_state *s)
+{
+    float t = p->zc_timeout * s->t60;
+    if (!(p->brake_tau > 0.0f) || !(s->t60 > 0.0f)) return t;
+    float tl = s->t_last > 0.0f ? s->t_last : s->t60;
+    float w0 = PI3_F / tl, a = p->brake_acc;
+    float tau = p->brake_tau / (1.0f + p->brake_q * w0 * p->brake_tau); /* the propeller's drag k_q w <= k_q w0 */
+    float c = w0 + a * tau;
+    float ts = tau * logf(c / (p->omega_stall + a * tau)); /* to the stall speed */
+    if (!(fin(ts) && ts > 0.0f)) return t;
+    float tb = 0.0f;
+    for (int k = 0; k < 8; ++k) {
+        float e = expf(-tb / tau);
+        float f = c * tau * (1.0f - e) - a * tau * tb - PI3_F, d = c * e - a * tau; /* angle, speed */
+        if (!(d > 0.0f) || f >= 0.0f) break;
+        tb -= f / d;
+        if (!(tb < ts)) {
+            tb = ts;
+            break;
+        }
+    }
+    float tw = tb + (p->zc_timeout - 1.0f) * s->t60;
+    return fin(tw) && tw > t ? tw : t;
+}
+
 /* 5 and 7: an accepted crossing at x_e (s relative to t_k). */
 static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, float x_e)
 {
@@ -898,7 +931,7 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
             s->t_next = s->t_int_max; /* not reached 60 degrees after the crossing: at once */
         /* 9. timeout */
         if (s->mode == BC_BEMF_CLOSED && s->det < 2 && s->have_zc &&
-            tdiff(n.tk, s->t_zc) >= p->zc_timeout * s->t60 * p->f_tick) {
+            tdiff(n.tk, s->t_zc) >= timeout_of(p, s) * p->f_tick) {
             if (s->misses < p->miss_max) { /* a blind commutation at once, a virtual crossing */
                 s->misses += 1;
                 s->d_dm *= 0.7f;

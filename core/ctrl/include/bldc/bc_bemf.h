@@ -243,8 +243,12 @@
  *     valleys for the complementary negative leg of BC_CHOP_SYNC, the peaks for a lower switch chopping; the
  *     first sample is taken to be at a valley) until the crossing.
  *
- *  9. Timeout (CLOSED). No crossing accepted by t_zc,prev + zc_timeout T60 (zc_timeout = 1.5: when the next
- *     commutation would be due without advance): with fewer than miss_max misses in a row, a blind commutation at
+ *  9. Timeout (CLOSED). No crossing accepted by t_zc,prev + max(zc_timeout T60, T_b + (zc_timeout - 1) T60)
+ *     (zc_timeout = 1.5: when the next commutation would be due without advance; T_b, with brake_tau > 0: the
+ *     latest the next crossing can come for a rotor braked as hard as the drive can, dw/dt = -w / tau - brake_acc,
+ *     1 / tau = 1 / brake_tau + brake_q w0, from w0 = (pi/3) / T, T the last interval (T60 without one): its angle (w0 + a tau) tau (1 -
+ *     exp(-t / tau)) - a tau t reaches pi/3 at T_b, or, if its speed falls below omega_stall first, T_b is the time
+ *     to it): with fewer than miss_max misses in a row, a blind commutation at
  *     once (BC_FLAG_COMM_LATE) and a virtual crossing t_zc,prev += T60 (T60 kept; no jump check on the next
  *     interval); otherwise a desync, BC_FLAG_ZC_HIDDEN if F never showed the pre level in the window (the
  *     demagnetisation outlasted the crossing, or the crossing came before the window), else BC_FLAG_ZC_TIMEOUT (it
@@ -354,6 +358,10 @@ typedef struct {
     float d_diode;       /* the inverter's share (2): align, ramp and dlim duties d -> d_diode + (1 - d_diode) d, [0, 1) */
     float grid_gain;     /* 7, CLOSED: > 0, commutate on the uniform grid phase-locked to the mean of the six crossings,
                           * each sector's crossing interval filtered with this gain, [0, 1]; 0: after each crossing */
+    float brake_tau;     /* 9: time constant of the fastest fall of the rotor's speed, s (the pair shorted: J / (D + B),
+                            D = k_pair^2 / (2 (R + R_on))); 0: the timeout is zc_timeout T60 only */
+    float brake_acc;     /* 9: and its speed-independent part (Coulomb friction p tau_c / J), electrical rad/s^2 */
+    float brake_q;       /* 9: and the propeller's, k_q / (p J): 1 / tau grows by brake_q w0 (w0: electrical), 1/rad */
 } bc_bemf_params;
 
 typedef struct {
