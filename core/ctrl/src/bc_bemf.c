@@ -703,7 +703,11 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
     }
     s->adv = advance_of(p, s, w);
     float x_n;
-    if (p->method == BC_BEMF_INTEGRATE) {
+    /* with sync or high chopping the floating phase conducts in every off-time after a falling crossing (its
+     * terminal pushed below 0 V, its lower diode on) and the filter carries that dip into each conversion: those
+     * samples are not its back-EMF, and the integration commutates from the crossing at the measured speed */
+    int dipped = p->tau_filter > 0.0f && (p->chop == BC_CHOP_SYNC || p->chop == BC_CHOP_HIGH) && !(s->sector & 1);
+    if (p->method == BC_BEMF_INTEGRATE && !dipped) {
         s->integ = 1;
         s->t_int_max = tadd(n->tk, (x_zc + PI3_F / w) * p->f_tick);
         x_n = integrate_predict(p, s, n, w);

@@ -192,7 +192,9 @@
  *     commutation a uniform 60 degrees apart, phase-locked to the crossings' mean, the Hall drive's symmetric
  *     placement.
  *     BC_BEMF_INTEGRATE (VESC's BLDC mode): from the crossing the sign-corrected samples are integrated by the
- *     trapezoidal rule (the first piece from t_e, where u = 0),
+ *     trapezoidal rule (the first piece from t_e, where u = 0); except after a falling crossing (sectors 0, 2, 4)
+ *     with chop BC_CHOP_SYNC or BC_CHOP_HIGH and tau_filter > 0, which commutate as BC_BEMF_ADC does: there the
+ *     floating phase conducts in every off-time and the filter carries that into each conversion,
  *
  *         lambda(t) = integral from t_e to t of u dt,      commutation when  lambda = int_limit ((pi/6 - adv)/(pi/6))^2
  *
