@@ -538,38 +538,40 @@ static int handover_fit(const bc_bemf_state *s, float *alt, float *res, float *a
         um += u[k];
     }
     um /= (float)m;
-    float a[4][5] = {{0.0f}}; /* the normal equations, augmented */
+    float a[4][4] = {{0.0f}}, y[4] = {0.0f, 0.0f, 0.0f, 0.0f}; /* the normal equations (lower triangle) */
     for (int k = 0; k < m; ++k) {
         float x = u[k] - um;
         float f[4] = {1.0f, x, x * x, (k & 1) ? -1.0f : 1.0f};
         for (int r = 0; r < 4; ++r) {
-            for (int c = 0; c < 4; ++c) a[r][c] += f[r] * f[c];
-            a[r][4] += f[r] * (float)k;
+            for (int c = 0; c <= r; ++c) a[r][c] += f[r] * f[c];
+            y[r] += f[r] * (float)k;
         }
     }
-    for (int c = 0; c < 4; ++c) { /* Gauss-Jordan, partial pivoting */
-        int piv = c;
-        for (int r = c + 1; r < 4; ++r)
-            if (fabsf(a[r][c]) > fabsf(a[piv][c])) piv = r;
-        if (!(fabsf(a[piv][c]) > 1e-9f)) return -1;
-        for (int q = 0; q < 5; ++q) {
-            float t = a[c][q];
-            a[c][q] = a[piv][q];
-            a[piv][q] = t;
-        }
-        for (int r = 0; r < 4; ++r) {
-            if (r == c) continue;
-            float g = a[r][c] / a[c][c];
-            for (int q = c; q < 5; ++q) a[r][q] -= g * a[c][q];
+    for (int c = 0; c < 4; ++c) { /* Cholesky, a = L L^T (symmetric positive definite for distinct times) */
+        for (int q = 0; q < c; ++q) a[c][c] -= a[c][q] * a[c][q];
+        if (!(a[c][c] > 1e-9f)) return -1;
+        a[c][c] = sqrtf(a[c][c]);
+        for (int r = c + 1; r < 4; ++r) {
+            for (int q = 0; q < c; ++q) a[r][c] -= a[r][q] * a[c][q];
+            a[r][c] /= a[c][c];
         }
     }
     float cf[4];
-    for (int r = 0; r < 4; ++r) cf[r] = a[r][4] / a[r][r];
+    for (int r = 0; r < 4; ++r) { /* L z = y */
+        float v = y[r];
+        for (int q = 0; q < r; ++q) v -= a[r][q] * cf[q];
+        cf[r] = v / a[r][r];
+    }
+    for (int r = 3; r >= 0; --r) { /* L^T c = z */
+        float v = cf[r];
+        for (int q = r + 1; q < 4; ++q) v -= a[q][r] * cf[q];
+        cf[r] = v / a[r][r];
+    }
     float worst = 0.0f;
     for (int k = 0; k < m; ++k) {
         float x = u[k] - um;
-        float y = cf[0] + cf[1] * x + cf[2] * x * x + cf[3] * ((k & 1) ? -1.0f : 1.0f);
-        worst = fmaxf(worst, fabsf(y - (float)k));
+        float fit = cf[0] + cf[1] * x + cf[2] * x * x + cf[3] * ((k & 1) ? -1.0f : 1.0f);
+        worst = fmaxf(worst, fabsf(fit - (float)k));
     }
     *alt = fabsf(cf[3]) * PI3_F;
     *res = worst * PI3_F;
@@ -619,6 +621,18 @@ static float timeout_of(const bc_bemf_params *p, const bc_bemf_state *s)
     }
     float tw = tb + (p->zc_timeout - 1.0f) * s->t60;
     return fin(tw) && tw > t ? tw : t;
+}
+
+/* timeout_of, computed again only when T60 or the last interval changed (at a crossing; its exp/log cost once a
+ * sector, not every sample) */
+static float timeout_cached(const bc_bemf_params *p, bc_bemf_state *s)
+{
+    if (!(s->to_t60 == s->t60 && s->to_tl == s->t_last)) {
+        s->to_t60 = s->t60;
+        s->to_tl = s->t_last;
+        s->to_val = timeout_of(p, s);
+    }
+    return s->to_val;
 }
 
 /* 5 and 7: an accepted crossing at x_e (s relative to t_k). */
@@ -935,7 +949,7 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
             s->t_next = s->t_int_max; /* not reached 60 degrees after the crossing: at once */
         /* 9. timeout */
         if (s->mode == BC_BEMF_CLOSED && s->det < 2 && s->have_zc &&
-            tdiff(n.tk, s->t_zc) >= timeout_of(p, s) * p->f_tick) {
+            tdiff(n.tk, s->t_zc) >= timeout_cached(p, s) * p->f_tick) {
             if (s->misses < p->miss_max) { /* a blind commutation at once, a virtual crossing */
                 s->misses += 1;
                 s->d_dm *= 0.7f;

@@ -416,6 +416,7 @@ typedef struct {
     float w_zc;            /* speed from the last forced sector's crossing, electrical rad/s (0: none) */
     int32_t valid;         /* consecutive forced sectors with a crossing */
     uint32_t ho_ring[BC_BEMF_HO_FIT]; /* ticks of the last crossings of those sectors (the handover's fit, 5) */
+    float to_t60, to_tl, to_val; /* 9: the timeout (s) and the T60 and last interval it was computed for */
     int32_t hold;          /* forced sectors at ramp_w1 */
     int32_t sector_ok;     /* the current forced sector had a crossing */
     int32_t first;         /* the first forced sector after an alignment (no crossing read) */
