@@ -14,7 +14,8 @@ wrong data; and the commissioning accuracy (R, L, psi_f against the plant's) wit
 
 Then the current-sensor errors (``--sensors [DRIVE ...]`` alone): an offset on phase a and white noise on the
 measured phases, the controller unaware of them. And the start-up map (``--startup [DRIVE ...]`` alone): load kind x
-load x inertia x initial angle, with the design bound of the load-adaptive ramp.
+load x inertia x initial angle, with the design bound of the load-adaptive ramp; ``--kinds passive,brake``,
+``--inertias 1,5``, ``--loads 0.75,0.9`` select a part of it.
 
 Run: ``PYTHONPATH=src python benchmarks/sensorless_sine.py [DRIVE ...]``.
 """
@@ -154,8 +155,9 @@ def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str) ->
     rotor at rest while the motor's torque is below it), ``brake`` an active constant load released at the end of
     the alignment (a brake), ``active`` an active constant load from t = 0 (the legs still off). Returns ``ok``
     (1: in the sine mode at the end, the speed within 5 %), ``bound`` (the load fraction the start is designed
-    for, :func:`startup_bound`), ``t_lock`` (s, the first sample in the sine mode), ``restarted`` (1: a DESYNC, a
-    failed start or a lost lock, before the end), ``flags`` and the I/f torque ``tau_if`` (N m).
+    for, :func:`startup_bound` with the drive's own friction; ``bound0`` without it), ``t_lock`` (s, the first
+    sample in the sine mode), ``restarted`` (1: a DESYNC, a failed start or a lost lock, before the end), ``flags``
+    and the I/f torque ``tau_if`` (N m).
     """
     ctl = bl.Sine(angle="observer", speed_loop=True)
     st = ctl.sensorless_settings(d)
@@ -180,25 +182,35 @@ def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str) ->
     ok = bool(on[-1]) and abs(r["omega_m"][-1] / w - 1) < 0.05
     tau_f = d.mechanics.tau_c + d.mechanics.B * ctl.handoff(d)  # the drive's own friction at the hand-off speed
     return {"ok": float(ok), "bound": startup_bound(st, mech.J, p, tau_if, tau_f),
+            "bound0": startup_bound(st, mech.J, p, tau_if),
             "t_lock": float(r["t"][on][0]) if on.any() else math.nan, "restarted": float("DESYNC" in r.flags_raised),
             "tau_if": tau_if, "flags": r.flags_raised}
 
 
-def startup_map(names: list[str]) -> None:
+def startup_map(names: list[str], kinds: tuple[str, ...] = STARTUP_KINDS, inertias: tuple[float, ...] = STARTUP_J,
+                loads: tuple[float, ...] = STARTUP_LOADS) -> None:
     """Print the start-up's success over load torque x inertia x initial angle, per load kind (``startup_case``).
 
     One line per drive, load kind, inertia and load: the starts that succeeded out of the initial angles, the
-    bound (the load fraction within which the start is designed to succeed), the time to the hand-off (s, range)
-    and the starts that restarted at least once (DESYNC); failures are named by their flags.
+    bound (the load fraction within which the start is designed to succeed, counting the drive's own friction),
+    the time to the hand-off (s, range) and the starts that restarted at least once (DESYNC); failures are named by
+    their flags. Then, per load kind, the starts that succeeded within the bound without and with the drive's own
+    friction (``startup_bound``). ``kinds``, ``inertias`` and ``loads`` select a part of the map.
     """
     print(f"\n{'drive':16s} {'load kind':9s} {'J/J_nom':>7s} {'load/tau_if':>11s} {'bound':>6s} {'ok':>5s} "
           f"{'t_lock s':>13s} {'restarts':>8s}  flags of the failures")
+    within: dict[tuple[str, str], list[int]] = {}
     for name in names:
         d = bl.load(name)
-        for kind in STARTUP_KINDS:
-            for kj in STARTUP_J:
-                for fl in STARTUP_LOADS:
+        for kind in kinds:
+            for kj in inertias:
+                for fl in loads:
                     runs = [startup_case(d, fl, kj, th, kind) for th in STARTUP_ANGLES]
+                    for label, b in (("without", runs[0]["bound0"]), ("with", runs[0]["bound"])):
+                        if fl <= b:
+                            n_ok = within.setdefault((kind, label), [0, 0])
+                            n_ok[0] += sum(int(r["ok"]) for r in runs)
+                            n_ok[1] += len(runs)
                     good = [r for r in runs if r["ok"]]
                     tl = [r["t_lock"] for r in good]
                     tls = f"{min(tl):.2f}-{max(tl):.2f}" if tl else "-"
@@ -206,6 +218,10 @@ def startup_map(names: list[str]) -> None:
                     print(f"{name:16s} {kind:9s} {kj:7.1f} {fl:11.2f} {runs[0]['bound']:6.3f} "
                           f"{len(good):>2d}/{len(runs):<2d} {tls:>13s} {sum(r['restarted'] for r in runs):8.0f}  "
                           f"{'; '.join(fails)}", flush=True)
+    print("\nwithin the bound (without / with the drive's own friction), starts that succeeded:")
+    for kind in kinds:
+        a, b = within.get((kind, "without"), [0, 0]), within.get((kind, "with"), [0, 0])
+        print(f"{kind:9s} {a[0]:4d} / {a[1]:<4d} {b[0]:4d} / {b[1]:<4d}")
 
 
 def commissioning(names: list[str]) -> None:
@@ -250,7 +266,16 @@ if __name__ == "__main__":
         sensor_errors(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v"])
         raise SystemExit(0)
     if len(sys.argv) > 1 and sys.argv[1] == "--startup":
-        startup_map(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v"])
+        args, sel = sys.argv[2:], {}
+        for opt in ("--kinds", "--inertias", "--loads"):
+            if opt in args:
+                k = args.index(opt)
+                sel[opt] = args[k + 1].split(",")
+                del args[k:k + 2]
+        startup_map(args or ["htm-48v", "servo-2k2", "outrunner-24v"],
+                    kinds=tuple(sel.get("--kinds", STARTUP_KINDS)),
+                    inertias=tuple(float(x) for x in sel.get("--inertias", STARTUP_J)),
+                    loads=tuple(float(x) for x in sel.get("--loads", STARTUP_LOADS)))
         raise SystemExit(0)
     drives = sys.argv[1:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv", "f60prov-2550kv"]
     main(drives)

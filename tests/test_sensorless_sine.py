@@ -213,6 +213,33 @@ def test_start_within_the_bound(kind: str, kj: float) -> None:
     assert "DESYNC" not in r.flags_raised
 
 
+@pytest.mark.parametrize(("name", "theta0"), [("htm-48v", 1.5 * math.pi + 0.05), ("servo-2k2", 0.5 * math.pi)])
+def test_friction_load_near_the_bound_starts(name: str, theta0: float) -> None:
+    """A friction-type load of 0.9 of the I/f torque (the plant's Coulomb friction raised by it; within the bound
+    that counts the drive's own friction, 0.915 on htm-48v and 0.926 on servo-2k2 at the nominal inertia), from the
+    start-up map's initial angles that failed before (``START_FAIL`` after the ramp's time, retried without success).
+    The alignment leaves the rotor up to ``asin(tau_L / tau_align)`` (30 deg) from the observer's seed and, below
+    about ``lambda``, the observer keeps that error (it decays at ``omega^2 / lambda``): it reads the rotor's load
+    angle 8-25 deg too small, the torque share above RHO_HI, and the vector waited at the rotor's stick-slip speed.
+    A rotor that keeps up with the turning vector carries the slowest ramp: the start hands over on its first
+    attempt and the speed loop holds the reference."""
+    d = bl.load(name)
+    ctl = bl.Sine(angle="observer", speed_loop=True)
+    st = ctl.sensorless_settings(d)
+    tau_if = 1.5 * fundamental_k1(d) * st["if_current"]
+    load = 0.9 * tau_if
+    plant = start_plant(d, 1.0, load)
+    w = 0.3 * d.Omega_0
+    t_start = st["if_align"] + d.motor.p * ctl.handoff(d) / st["if_accel_min"] + st["if_hold"]
+    dur = t_start + plant.mechanics.J * w / (ctl.torque_limit(d) - load) + 0.5
+    r = simulate(plant, ctl, Scenario(duration=dur, omega_ref=w, theta0=theta0, trace_every=16), estimate=d)
+    assert "DESYNC" not in r.flags_raised
+    on = r["mode"] == 1
+    assert on.any() and r["t"][on][0] < t_start
+    assert r["mode"][-1] == 1
+    assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
+
+
 def test_start_against_a_load_above_the_if_torque_fails_by_name() -> None:
     """A load above the I/f current's largest torque ``1.5 k_1 if_current`` (here 1.3 times it, active from t = 0)
     cannot be started: it pushes the rotor backwards, the start catches it (the sine mode brakes it with the whole

@@ -1210,6 +1210,62 @@ static void test_uniform_grid(void)
     CHECK(bc_bemf_init(&p, &st) == BC_ERR_PARAM, "grid_gain NaN refused");
 }
 
+/* 7, the uniform grid bounded by the demagnetisation. Phases b and c 2 and -1.5 degrees off as above, and a clamp of
+ * 18 degrees (0.6 of the 30-degree window) against demag_max 0.6: a commutation must leave the next crossing at least
+ * 18 / 0.6 = 30 degrees (the clamp at most demag_max of the window), and the next crossing is expected one T60 after
+ * this one at the latest, so no grid point may come later than the plain instant, 30 degrees (at T60) after its
+ * crossing. After c's crossings (1.5 degrees early) and a's (on the magnet's grid) the grid point is later than that:
+ * those commutations stay at the plain instant, where the drive after each crossing puts them; after b's (2 degrees
+ * late: its grid point is earlier) on the grid, 1/6 degree off the magnet's grid. Unbounded every commutation was
+ * 1/6 degree off; with a short clamp (30 us) it still is (the bound does not act). Forward, 300 Hz. */
+static void grid_offsets(int grid, double demag, double m[3], double hi[3], long *desync)
+{
+    static synth_bemf g;
+    const double w = 2.0 * BC_PI * 300.0;
+    bc_bemf_params p = locked(BC_BEMF_COMPARATOR, w);
+    p.grid_gain = grid ? 0.2f : 0.0f;
+    p.demag_max = 0.6f;
+    sb_init(&g, TS, F_TICK, 1);
+    kin_rotor(&g, w, 1, 0.0);
+    g.shift[1] = 2.0 * DEG;
+    g.shift[2] = -1.5 * DEG;
+    g.demag = demag;
+    run_stats r = run_kinematic(p, &g, 4000, 0.5f, 0.0, 0.0);
+    *desync = r.desync;
+    double sum[3] = {0.0, 0.0, 0.0};
+    long n[3] = {0, 0, 0};
+    for (int x = 0; x < 3; ++x) hi[x] = -1e9;
+    for (long i = 1; i < g.n_comm; ++i) { /* the commutation ending the sector in which fl floats */
+        double tc = g.t_comm[i];
+        int fl = g.comm_fl[i - 1];
+        if (tc < 0.05 || fl < 0 || fl > 2) continue;
+        double th = sb_theta(&g, tc) - (double)fl * 2.0 * BC_PI / 3.0 - BC_PI / 6.0;
+        double e = (th - BC_PI * floor(th / BC_PI + 0.5)) / DEG; /* > 0: late against the magnet's grid */
+        sum[fl] += e;
+        n[fl] += 1;
+        if (e > hi[fl]) hi[fl] = e;
+    }
+    for (int x = 0; x < 3; ++x) m[x] = n[x] > 20 ? sum[x] / (double)n[x] : 1e9;
+}
+
+static void test_uniform_grid_demag_bound(void)
+{
+    const double w = 2.0 * BC_PI * 300.0, clamp = 0.6 * (BC_PI / 6.0) / w;
+    double pm[3], ph[3], gm[3], gh[3], sm[3], sh[3];
+    long pd, gd, sd;
+    grid_offsets(0, clamp, pm, ph, &pd);
+    grid_offsets(1, clamp, gm, gh, &gd);
+    grid_offsets(1, 30e-6, sm, sh, &sd);
+    CHECK(pd == 0 && gd == 0 && fabs(gm[0] - pm[0]) < 0.02 && fabs(gm[2] - pm[2]) < 0.02 && gh[0] < ph[0] + 0.02 &&
+              gh[2] < ph[2] + 0.02 && fabs(gm[1] - 1.0 / 6.0) < 0.05,
+          "grid bounded by an 18-degree clamp: after a, b, c's crossings %.3f, %.3f, %.3f deg off the magnet's grid "
+          "(latest %.3f, %.3f, %.3f); after each crossing %.3f, %.3f, %.3f (latest %.3f, -, %.3f); %ld, %ld desyncs",
+          gm[0], gm[1], gm[2], gh[0], gh[1], gh[2], pm[0], pm[1], pm[2], ph[0], ph[2], pd, gd);
+    CHECK(sd == 0 && fabs(sm[0] - 1.0 / 6.0) < 0.05 && fabs(sm[1] - 1.0 / 6.0) < 0.05 && fabs(sm[2] - 1.0 / 6.0) < 0.05,
+          "grid with a 30-us clamp (the bound idle): after a, b, c's crossings %.3f, %.3f, %.3f deg off the magnet's "
+          "grid (1/6 expected)", sm[0], sm[1], sm[2]);
+}
+
 /* SYNC fast demagnetisation with the inverter's dead time (d_diode > 0): the change of chopping leg (the positive
  * leg's turn-ons to the negative leg's turn-offs, each losing one dead time of the pair's voltage to a diode) costs one
  * dead time more per episode (docs/sensorless.md, 8); the first whole half period of the fast pattern makes it up,
@@ -1425,5 +1481,6 @@ int main(void)
     test_fast_demag_and_limiter();
     test_fast_demag_dead_time();
     test_uniform_grid();
+    test_uniform_grid_demag_bound();
     return bc_test_summary("test_bemf");
 }

@@ -468,11 +468,11 @@ static float integrate_predict(const bc_bemf_params *p, const bc_bemf_state *s, 
 
 /* ------------------------------------------------------------------------------------------------------------ */
 
-/* 7, uniform grid: D_s, the lag (s) of this sector's crossing behind the uniform grid through the mean of the six
+/* 7, uniform grid: D_s, the lag (s) of sector sec's crossing behind the uniform grid through the mean of the six
  * (0, *tn left, until twelve intervals have been seen), at most 10 degrees; *tn the grid's interval */
-static float grid_lag(const bc_bemf_state *s, float *tn)
+static float grid_lag(const bc_bemf_state *s, int sec, float *tn)
 {
-    if (s->grid_n < 12 || s->sector < 0 || s->sector > 5 || !(fin(s->grid_tn) && s->grid_tn > 0.0f)) return 0.0f;
+    if (s->grid_n < 12 || sec < 0 || sec > 5 || !(fin(s->grid_tn) && s->grid_tn > 0.0f)) return 0.0f;
     float rm = 0.0f, pc[6], pm = 0.0f;
     for (int j = 0; j < 6; ++j) rm += s->grid_t[j];
     rm *= 1.0f / 6.0f;
@@ -482,12 +482,30 @@ static float grid_lag(const bc_bemf_state *s, float *tn)
     for (int r = 1; r < 6; ++r) pc[r] = pc[r - 1] + s->grid_t[s->dir > 0 ? r : 5 - r] / rm - 1.0f;
     for (int r = 0; r < 6; ++r) {
         pm += pc[r];
-        if ((s->dir > 0 ? r : 5 - r) == s->sector) at = r;
+        if ((s->dir > 0 ? r : 5 - r) == sec) at = r;
     }
     float d = (pc[at] - pm * (1.0f / 6.0f)) * s->grid_tn;
     if (!fin(d)) return 0.0f;
     *tn = s->grid_tn;
     return bc_clampf(d, -s->grid_tn / 6.0f, s->grid_tn / 6.0f);
+}
+
+/* 7, uniform grid, bounded by the demagnetisation: the latest commutation (s relative to t_k) that leaves the next
+ * crossing visible. The next crossing is expected at the earlier of the plain estimate (one T60 after this one) and
+ * the grid's (this crossing's grid point plus Tn plus the next sector's lag); the window from the commutation to it
+ * must hold the longest demagnetisation measured over the last six sectors as at most demag_max of it (the share the
+ * limiter of 2 keeps; the whole window without the limiter), and the blanking, plus min_pulse. */
+static float grid_latest(const bc_bemf_params *p, const bc_bemf_state *s, float x_zc, float lag, float tn, float w)
+{
+    float t60 = PI3_F / w, tn1 = tn;
+    int next = (s->sector + (s->dir > 0 ? 1 : 5)) % 6;
+    float lag1 = grid_lag(s, next, &tn1);
+    float x_z1 = x_zc + fminf(t60, tn - lag + lag1);
+    float dm = 0.0f;
+    for (int j = 0; j < 6; ++j) dm = fmaxf(dm, s->grid_dm[j]);
+    float blank = fmaxf(p->blank_angle / w, p->blank_time);
+    float need = fmaxf(p->demag_max > 0.0f ? dm / p->demag_max : dm, blank) + p->min_pulse;
+    return x_z1 - need;
 }
 
 /* 7, uniform grid: learn from the crossing interval T ending in the current sector */
@@ -677,6 +695,7 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         s->mode = BC_BEMF_CLOSED;
         s->grid_n = 0;
         s->grid_k = 0;
+        for (int j = 0; j < 6; ++j) s->grid_dm[j] = 0.0f;
         s->t_in = 0.0f;
         s->t60 = T;
         s->t_last = T;
@@ -709,6 +728,12 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         s->misses = 0;
         s->t_zc = tadd(n->tk, x_zc * p->f_tick);
         s->have_zc = 1;
+        if (p->grid_gain > 0.0f && s->sector >= 0 && s->sector <= 5) { /* this sector's demagnetisation (the bound) */
+            /* not seen at a sample: the pre level lasted less than one, the clamp ended within the sample before */
+            float since = x_zc - tdiff(s->t_c, n->tk) * s->inv_tick;
+            float dm = s->dm_known ? s->t_demag : since - p->ts;
+            s->grid_dm[s->sector] = fin(dm) && dm > 0.0f ? dm : 0.0f;
+        }
     }
     float w = omega_of(p, s);
     if (!(w >= p->omega_stall)) {
@@ -727,8 +752,13 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         x_n = integrate_predict(p, s, n, w);
     } else {
         float t60 = PI3_F / w;
-        float lag = s->mode == BC_BEMF_CLOSED && p->grid_gain > 0.0f ? grid_lag(s, &t60) : 0.0f;
-        x_n = x_zc - lag + (PI6_F - s->adv) / PI3_F * t60; /* 30 - adv degrees after the crossing (its grid point) */
+        x_n = x_zc + (PI6_F - s->adv) / PI3_F * t60; /* 30 - adv degrees after the crossing */
+        if (s->mode == BC_BEMF_CLOSED && p->grid_gain > 0.0f) { /* its grid point, no later than the bound */
+            float tn = t60;
+            float lag = grid_lag(s, s->sector, &tn);
+            float x_g = x_zc - lag + (PI6_F - s->adv) / PI3_F * tn;
+            x_n = x_g > x_n ? fmaxf(x_n, fminf(x_g, grid_latest(p, s, x_zc, lag, tn, w))) : x_g;
+        }
     }
     s->t_next = tadd(n->tk, x_n * p->f_tick);
     s->pending = 1;

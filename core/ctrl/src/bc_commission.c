@@ -16,7 +16,8 @@ int bc_commission_init(const bc_commission_params *p, bc_commission_state *s)
         !finite_nonneg(p->t_ramp) || !finite_nonneg(p->t_settle) || !finite_pos(p->t_window) ||
         !finite_pos(p->v_pulse) || !finite_pos(p->i_if) || !finite_pos(p->if_accel) || !finite_pos(p->w_spin) ||
         !finite_pos(p->t_spin) || !finite_pos(p->psi_min) || !finite_pos(p->tol_move) ||
-        !finite_pos(p->tol_follow) || !finite_pos(p->i_max) || !finite_pos(p->v_max) || !finite_nonneg(p->k_damp))
+        !finite_pos(p->tol_follow) || !finite_pos(p->i_max) || !finite_pos(p->v_max) || !finite_nonneg(p->k_damp) ||
+        !finite_nonneg(p->t_dead) || !(p->t_dead < p->ts) || !finite_nonneg(p->v_diode))
         return BC_ERR_PARAM;
     if (p->n_pulse < 1 || p->n_pulse > 1000 || p->pulse_len < 1 || p->pulse_len > 1000) return BC_ERR_PARAM;
     if (p->i_test >= p->i_max || p->i_if >= p->i_max) return BC_ERR_PARAM;
@@ -272,7 +273,23 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
         out->leg[x].mode = BC_LEG_PWM;
         out->leg[x].duty = duty[x];
     }
-    bc_ab ua = bc_clarke((bc_abc){duty[0] * in->v_dc, duty[1] * in->v_dc, duty[2] * in->v_dc});
+    /* the voltage these duties apply, the dead time's loss or gain at each leg's edges (bc_commission.h), with the
+     * currents of the interval they apply to (the vector turned 1.5 samples on) */
+    float vt = (in->v_dc + 2.0f * p->v_diode) * p->t_dead / (2.0f * ts), b = 0.02f * fmaxf(p->i_test, p->i_if);
+    float kr = s->L > 0.0f ? in->v_dc * ts / (3.0f * s->L) : 0.0f;
+    float cr = cosf(1.5f * s->w_phi * ts), sr = sinf(1.5f * s->w_phi * ts);
+    bc_abc ia = bc_clarke_inv((bc_ab){cr * i.alpha - sr * i.beta, sr * i.alpha + cr * i.beta});
+    float ix[3] = {ia.a, ia.b, ia.c}, vx[3];
+    for (int x = 0; x < 3; ++x) {
+        float dx = duty[x], rho = 2.0f * dx * (1.0f - dx);
+        for (int y = 0; y < 3; ++y) {
+            if (y != x) rho -= fminf(dx, duty[y]) - dx * duty[y];
+        }
+        rho = fmaxf(kr * rho, 0.0f);
+        float w = bc_clampf((ix[x] - rho) / b, -1.0f, 1.0f) + bc_clampf((ix[x] + rho) / b, -1.0f, 1.0f);
+        vx[x] = dx * in->v_dc - 0.5f * vt * w;
+    }
+    bc_ab ua = bc_clarke((bc_abc){vx[0], vx[1], vx[2]});
     s->u_hist[1][0] = s->u_hist[0][0];
     s->u_hist[1][1] = s->u_hist[0][1];
     s->phi_hist[1] = s->phi_hist[0];

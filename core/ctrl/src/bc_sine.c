@@ -820,9 +820,16 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
              * if_accel_min at least, the swing is not braked */
             int moving = fabsf(o.omega_e) >= 0.05f * p->omega_on;
             s->if_trust = adaptive && moving;
+            /* the rotor keeps up with a vector turning forwards (its low-passed speed within the trust threshold
+             * of the vector's): it carries the slowest ramp, whatever the observer's angle says. Below about
+             * lambda the observer's angle keeps its seed's error (it decays at omega^2 / lambda), which a friction
+             * load held in the alignment makes up to asin(tau_L / tau_align) and the ramp reads as torque margin
+             * the rotor does not have: without this the vector waits at the rotor's stick-slip speed */
+            int sync = s->if_trust && dir * s->if_omega > 0.0f &&
+                       dir * s->omega_f >= dir * s->if_omega - 0.05f * p->omega_on;
             if (adaptive) {
                 a *= bc_clampf((BC_SINE_RHO_HI - s->rho_f) / (BC_SINE_RHO_HI - BC_SINE_RHO_LO), -1.0f, 1.0f);
-                if (!moving) a = fmaxf(a, p->if_accel_min);
+                if (!moving || sync) a = fmaxf(a, p->if_accel_min);
             }
             /* omega_if += dir a T_s within dir [-omega_on, omega_on] (a rotor pushed back by an active load is
              * followed back); theta_if += omega_if T_s */
@@ -830,7 +837,8 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             /* a rotor at rest is passed slowly (it breaks away where the torque is largest): at most a creep */
             if (adaptive && !moving) w = fminf(w, 0.05f * p->omega_on);
             /* at the top of the band the vector does not outrun the rotor (the observer's speed) */
-            if (s->if_trust && s->rho_f >= BC_SINE_RHO_HI) w = fminf(w, fmaxf(dir * o.omega_e, -p->omega_on));
+            if (s->if_trust && s->rho_f >= BC_SINE_RHO_HI && !sync)
+                w = fminf(w, fmaxf(dir * o.omega_e, -p->omega_on));
             int at_top = w >= p->omega_on;
             s->if_omega = dir * (at_top ? p->omega_on : w);
             s->if_theta = bc_wrap_2pi(s->if_theta + s->if_omega * p->ts);
@@ -848,8 +856,12 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 /* and, whatever the lowest speed, against dir for the slowest ramp's time in all, or below
                  * omega_on for twice it (the slowest ramp from -omega_on): every ramp ends within a bound */
                 float t_min = p->omega_on / p->if_accel_min;
-                if (adaptive && (s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min || s->if_tb >= t_min ||
-                                 s->if_tr >= 2.0f * t_min))
+                /* plus the creep's sweep: a rotor held at the seed's rest angle moves once the vector has turned
+                 * from there to its breakaway angle acos(tau_load / tau_if), at most a quarter turn, at the creep's
+                 * speed 0.05 omega_on: t_sw = (pi / 2) / (0.05 omega_on) */
+                float t_sw = 10.0f * BC_PI_F / p->omega_on;
+                if (adaptive && (s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min + t_sw ||
+                                 s->if_tb >= t_min || s->if_tr >= 2.0f * t_min + t_sw))
                     sl_desync(p, s, out, BC_FLAG_START_FAIL);
             }
             if (at_top) {

@@ -15,7 +15,8 @@ static const bc_field_desc COMM_FIELDS[] = {
     F(bc_commission_params, psi_min, "f4"),   F(bc_commission_params, tol_move, "f4"),
     F(bc_commission_params, tol_follow, "f4"), F(bc_commission_params, k_damp, "f4"),
     F(bc_commission_params, i_max, "f4"),
-    F(bc_commission_params, v_max, "f4"),
+    F(bc_commission_params, v_max, "f4"),     F(bc_commission_params, t_dead, "f4"),
+    F(bc_commission_params, v_diode, "f4"),
 };
 static const bc_struct_desc COMM_STRUCTS[] = {BC_BIND_STRUCT(bc_commission_params),
                                               BC_BIND_STRUCT(bc_commission_state)};

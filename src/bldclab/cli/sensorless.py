@@ -77,7 +77,8 @@ def configure_command(p: argparse.ArgumentParser) -> None:
     p.add_argument("--grid", default="0", metavar="GAIN",
                    help="commutate on a uniform 60-degree grid locked to the mean of the six crossings, learning "
                         "each crossing's offset with this gain in [0, 1] (0: off, 30 deg after each crossing; 0.1 "
-                        "suits motors whose phases' back-EMFs differ; docs/sensorless.md, 'Uniform grid')")
+                        "suits motors whose phases' back-EMFs differ; a grid point past 30 deg after its crossing is "
+                        "bounded by the measured demagnetisation; docs/sensorless.md, 'Uniform grid')")
     p.add_argument("--workers", type=positive_int, help="processes, >= 1 (default: all cores; 1: serial)")
     add_inverter_option(p)
     add_verbose_option(p)

@@ -113,6 +113,7 @@ class Commission(Control):
         rec = core.filled(
             "bc_commission_params", kp=kp, ki=ki, n_pulse=self.pulses, pulse_len=self.pulse_samples,
             tol_move=self.tol_move, tol_follow=self.tol_follow, i_max=i_max, v_max=2.0 * drive.inverter.V_dc,
+            t_dead=drive.inverter.t_dead, v_diode=drive.inverter.V_f,
             **{k: st[k] for k in ("ts", "i_test", "t_ramp", "t_settle", "t_window", "v_pulse", "i_if", "if_accel",
                                   "w_spin", "t_spin", "psi_min", "k_damp")})
         return CParams(rec, [])

@@ -336,7 +336,10 @@ class SixStepSensorless(Control):
         sector's crossing interval filtered with this gain (0.1: about ten electrical periods), applied from the
         twelfth interval after the handover, the correction at most 10 degrees; for a motor whose phases'
         back-EMFs differ (shifted, scaled), whose crossings lie off the magnet's grid (docs/sensorless.md, section
-        9). Comparator and ADC methods (the integration method ignores it).
+        9). A grid point later than 30 degrees after the crossing is bounded by the measured demagnetisation: never
+        so late that the next crossing's window holds the longest clamp of the last six sectors as more than
+        ``demag_limit`` of it (docs/sensorless.md, law 7). Comparator and ADC methods (the integration method
+        ignores it).
     int_limit : float, optional
         Integration method: the back-EMF integral from the crossing to 30 degrees (V s); default from the drive's
         back-EMF (:func:`integral_to_30`).

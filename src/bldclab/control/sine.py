@@ -100,10 +100,11 @@ class Sine(Control):
         rotor above that.
     if_accel_min : float, optional
         The load-adaptive ramp's slowest mean acceleration (rad/s^2, mechanical), at most ``if_accel``; default
-        ``if_accel / 20``: a ramp that takes longer than ``omega_on / if_accel_min`` (from its lowest speed, if it
-        followed a rotor pushed back: ``(omega_on - omega_low) / if_accel_min``; whatever that lowest speed, one
-        that has turned backwards for ``omega_on / if_accel_min`` in all or been below ``omega_on`` for twice that)
-        ends in ``START_FAIL``. The
+        ``if_accel / 20``: a ramp that takes longer than ``omega_on / if_accel_min + t_sw`` (from its lowest speed,
+        if it followed a rotor pushed back: ``(omega_on - omega_low) / if_accel_min + t_sw``; ``t_sw = (pi / 2) /
+        (0.05 omega_on)`` the creep's sweep to the breakaway angle of a rotor held at rest; whatever that lowest
+        speed, one that has turned backwards for ``omega_on / if_accel_min`` in all or been below ``omega_on`` for
+        ``2 omega_on / if_accel_min + t_sw``) ends in ``START_FAIL``. The
         start is designed for a load ``tau_L / tau_if <= 0.95 - 0.35 if_accel_min / if_accel - J if_accel_min /
         tau_if`` (``tau_if = 1.5 k_1 if_current``; docs/sensorless-sine.md). ``if_accel_min = if_accel``: the
         fixed ramp at ``if_accel``, no adaptation.

@@ -190,7 +190,18 @@
  *     D_s = (P_s - mean P) Tn (the crossing's lag behind the grid, at most 10 degrees), where the grid's interval
  *     Tn <- Tn + t60_gain (T / rho_s - Tn); the commutation at t_zc - D_s + (pi/6 - adv) Tn / (pi/3): every
  *     commutation a uniform 60 degrees apart, phase-locked to the crossings' mean, the Hall drive's symmetric
- *     placement.
+ *     placement. Bounded by the demagnetisation: a grid point later than the plain instant t_zc + (pi/6 - adv) /
+ *     Omega is taken only up to the latest instant that leaves the next crossing visible, t_z1 - need, never
+ *     earlier than the plain instant (a grid point earlier than it is taken as it is: it lengthens the window).
+ *     t_z1 = t_zc + min(T60, Tn - D_s + D_s+1), the next crossing by the earlier of the two estimates; need =
+ *     max(dm / demag_max (dm without the limiter), blanking) + min_pulse, dm the longest demagnetisation measured
+ *     in the last six sectors (both crossing directions; a sector whose pre level no sample saw: the time from its
+ *     commutation to its crossing less one sample). The window then holds the clamp as at most the share the
+ *     limiter of 2 keeps. Steady, with each phase's two crossings equally off the magnet's grid (a shifted phase),
+ *     the grid's shortest window is never shorter than the plain one's (30 degrees plus the smallest offset less
+ *     their mean, against at most the smallest less the largest) and the bound rarely acts; it acts in a
+ *     transient, where the grid's interval lags the rotor (servo-2k2's throttle step at zero advance: up to 12
+ *     degrees late unbounded, the crossing hidden).
  *     BC_BEMF_INTEGRATE (VESC's BLDC mode): from the crossing the sign-corrected samples are integrated by the
  *     trapezoidal rule (the first piece from t_e, where u = 0); except after a falling crossing (sectors 0, 2, 4)
  *     with chop BC_CHOP_SYNC or BC_CHOP_HIGH and tau_filter > 0, which commutate as BC_BEMF_ADC does: there the
@@ -388,6 +399,7 @@ typedef struct {
     float grid_t[6];       /* grid_gain: each sector's filtered crossing interval over the mean of the last six */
     float grid_ring[6];    /* grid_gain: the last six crossing intervals, s */
     float grid_tn;         /* grid_gain: the filtered interval of the grid (each interval over its sector's ratio), s */
+    float grid_dm[6];      /* grid_gain: each sector's last measured demagnetisation (the grid's bound), s */
     int32_t grid_k;        /* grid_gain: next slot of grid_ring */
     int32_t grid_n;        /* grid_gain: crossing intervals seen since the handover (the grid applies from 12) */
     uint32_t k_samp;       /* samples since init (even: carrier valley, odd: carrier peak) */

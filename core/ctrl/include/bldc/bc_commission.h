@@ -6,7 +6,19 @@
  * Frames: amplitude-invariant alpha-beta (bc_transform.h). The controller drives a current vector i_ref e^(j phi)
  * with two PIs in the frame of phi (the same gains for both axes), the voltage rotated back with the loop's delay
  * compensated (phi + 1.5 omega_phi T_s) and min-max SVM. The voltage of sample k-2 (the one applied over [t_k-1,
- * t_k], as in bc_obs.h) is taken back from its duties: u = Clarke(d_x v_dc). Phases, in order:
+ * t_k], as in bc_obs.h) is taken back from its duties and the dead time: u = Clarke(d_x v_dc + w_x). A
+ * complementary leg loses v_t = (v_dc + 2 v_diode) t_dead / (2 T_s) of its mean voltage at the upper switch's
+ * turn-on when the current there is positive (a diode holds the terminal low through the dead time) and gains it at
+ * the turn-off when the current there is negative. With the on-time centred on the sample, the current at the two
+ * edges is the sample's i_x -+ rho_x, the PWM ripple from the centre to an edge (the legs' duties and L; the
+ * back-EMF, constant over the period, cancels):
+ *
+ *     rho_x = (v_dc T_s / (3 L)) (2 d_x (1 - d_x) - sum_{y != x} (min(d_x, d_y) - d_x d_y))
+ *     w_x   = -(v_t / 2) (sat((i_x - rho_x) / b) + sat((i_x + rho_x) / b))     (sat: clamp to [-1, 1])
+ *
+ * -v_t / +v_t when the current keeps its sign over the period, 0 when the ripple takes it through zero (b 2 % of the
+ * larger test current; rho = 0 before L is measured). The R test's two levels and the pulses about a held point
+ * cancel this error anyway; the spin's back-EMF would keep it. Phases, in order:
  *
  *  1. ALIGN   phi = pi/2, i_ref rising linearly 0 -> i_test over t_ramp (the rotor's d axis pulled onto the vector
  *             slowly, so that it is left with little swing), then phi turned linearly to 0 over t_ramp (a rotor at
@@ -100,6 +112,8 @@ typedef struct {
     float k_damp;     /* swing damping of ALIGN and the R test, A/V (>= 0) */
     float i_max;      /* over-current trip, A (> 0) */
     float v_max;      /* bound of the PI outputs and of a plausible bus, V (> 0) */
+    float t_dead;     /* the inverter's dead time, s (0 <= t_dead < ts): the voltage taken back is corrected */
+    float v_diode;    /* its diodes' forward drop, V (>= 0), in the same correction */
 } bc_commission_params;
 
 typedef struct {

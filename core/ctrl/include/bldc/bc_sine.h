@@ -215,20 +215,28 @@
  *          a = if_accel clamp((BC_SINE_RHO_HI - rho) / (BC_SINE_RHO_HI - BC_SINE_RHO_LO), -1, 1): the full ramp
  *          while the torque is at most RHO_LO of the I/f torque, none at RHO_HI, and above it the vector slows
  *          (down to dir omega_if = -omega_on, following a rotor an active load pushes back); at rho >= RHO_HI the
- *          vector does not outrun the rotor (dir omega_if <= dir omega^). A rotor the observer sees at rest
- *          (|omega^| < 0.05 omega_on) is evidence of nothing (the observer holds its seed, which a load holding
- *          the rotor leaves off): then a >= if_accel_min and |omega_if| <= 0.05 omega_on (the vector creeps past
- *          the rotor's angle of largest torque, where it breaks away). The swing about the turning vector is
- *          braked through the observer while it sees the rotor move: i_d,ref = if_damp psi_f (omega^ - omega_if)
- *          sin Delta / max(sin^2 Delta, 1/16), within +-min(if_current, sqrt(i_s_max^2 - if_current^2)), a torque
- *          -1.5 k_1 if_damp psi_f (omega^ - omega_if) against the rotor's slip (the current's torque is
- *          1.5 k_1 (i_q cos Delta - i_d sin Delta)). Below omega_on for longer than (omega_on - omega_low) /
- *          if_accel_min (the slowest ramp's time from the vector's lowest speed dir omega_low, <= 0, reached
- *          since the ramp's start): BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT. The same end, whatever the
- *          lowest speed, once the vector has turned against dir for omega_on / if_accel_min in all, or has been
- *          below omega_on for 2 omega_on / if_accel_min in all (the slowest ramp from -omega_on), since the
- *          ramp's start (a hand-back's ramp counts on; a completed ramp resets both): every ramp ends within
- *          2 omega_on / if_accel_min, every start attempt within if_align + 2 omega_on / if_accel_min + if_hold
+ *          vector does not outrun the rotor (dir omega_if <= dir omega^). A rotor that keeps up with a vector
+ *          turning forwards (the observer sees it move, dir omega_if > 0, dir omega_f >= dir omega_if - 0.05
+ *          omega_on) carries the slowest ramp whatever the observer's angle says: then a >= if_accel_min and the
+ *          vector may run ahead of omega^ (below about lambda the observer keeps the error of its seed, which
+ *          decays at omega^2 / lambda; a friction load leaves the rotor up to asin(tau_load / (1.5 k_1
+ *          if_align_current)) off the seed, read as torque margin the rotor does not have). A rotor the
+ *          observer sees at rest (|omega^| < 0.05 omega_on) is evidence of nothing (the observer holds its
+ *          seed, which a load holding the rotor leaves off): then a >= if_accel_min and |omega_if| <= 0.05
+ *          omega_on (the vector creeps past the rotor's angle of largest torque, where it breaks away). The
+ *          swing about the turning vector is braked through the observer while it sees the rotor move:
+ *          i_d,ref = if_damp psi_f (omega^ - omega_if) sin Delta / max(sin^2 Delta, 1/16), within +-min(if_current,
+ *          sqrt(i_s_max^2 - if_current^2)), a torque -1.5 k_1 if_damp psi_f (omega^ - omega_if) against the
+ *          rotor's slip (the current's torque is 1.5 k_1 (i_q cos Delta - i_d sin Delta)). Below omega_on for longer
+ *          than (omega_on - omega_low) / if_accel_min + t_sw (the slowest ramp's time from the vector's lowest speed
+ *          dir omega_low, <= 0, reached since the ramp's start, plus the creep's sweep t_sw = (pi / 2) / (0.05
+ *          omega_on): a rotor held at the seed's rest angle breaks away once the vector has turned from there to
+ *          acos(tau_load / (1.5 k_1 if_current)), at most a quarter turn, at the creep's speed): BC_FLAG_START_FAIL |
+ *          BC_FLAG_DESYNC, WAIT. The same end, whatever the lowest speed, once the vector has turned against dir
+ *          for omega_on / if_accel_min in all, or has been below omega_on for 2 omega_on / if_accel_min + t_sw in
+ *          all (the slowest ramp from -omega_on), since the ramp's start (a hand-back's ramp counts on; a
+ *          completed ramp resets both): every ramp ends within 2 omega_on / if_accel_min + t_sw, every start
+ *          attempt within if_align + 2 omega_on / if_accel_min + t_sw + if_hold
  *          (a rotor pushed back ever faster, or a vector that follows an observer misled by a wrong R, would
  *          otherwise restart the lowest-speed count). With if_accel_min = if_accel: the fixed ramp at if_accel,
  *          none of this.
