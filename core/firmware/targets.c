@@ -167,6 +167,8 @@ static int bemf_int_init(void)
     bemf_int_p.adv_demag = 0.5f;
     bemf_int_p.d_diode = 0.04f; /* the inverter's share (a diode's drop) in the fuzzed start-up and limit duties */
     bemf_int_p.grid_gain = 0.1f; /* the uniform commutation grid (off in "bemf"), so the fuzzer reaches its code */
+    bemf_int_p.brake_tau = 2e-3f; /* and the braking timeout (9) */
+    bemf_int_p.brake_acc = 500.0f;
     return bc_bemf_init(&bemf_int_p, &bemf_int_s);
 }
 STEP_FN bemf_int_step(const bc_ctrl_in *in, bc_ctrl_out *out) { bc_bemf_step(&bemf_int_p, &bemf_int_s, in, out); }

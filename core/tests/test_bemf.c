@@ -119,6 +119,9 @@ static void test_init(void)
     BAD(int_limit, 0.0f);
     BAD(zc_timeout, 1.0f);
     BAD(jump_max, 1.0f);
+    BAD(brake_tau, -1e-3f);
+    BAD(brake_acc, NAN);
+    BAD(brake_q, -1.0f);
     BAD(miss_max, -1);
     BAD(omega_stall, 0.0f);
     BAD(align_duty, 1.5f);
@@ -227,6 +230,9 @@ static void test_fuzz(void)
         p.k_limit = 1.0f;
         p.align_time = (rnd(&seed) % 2u) ? 0.0f : 1e-3f;
         p.grid_gain = (rnd(&seed) % 2u) ? 0.2f : 0.0f; /* the uniform grid's code fuzzed too */
+        p.brake_tau = (rnd(&seed) % 2u) ? 2e-3f : 0.0f;    /* and the braking timeout's (9) */
+        p.brake_acc = 500.0f;
+        p.brake_q = 1e-4f;
         bc_bemf_state s;
         if (bc_bemf_init(&p, &s) != BC_OK) {
             ++bad;

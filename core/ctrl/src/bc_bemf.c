@@ -50,7 +50,9 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
     if (p->method == BC_BEMF_INTEGRATE && !(fin(p->int_limit) && p->int_limit > 0.0f)) return BC_ERR_PARAM;
     if (!in01(p->grid_gain)) return BC_ERR_PARAM;
     if (!nonneg(p->int_limit) || !(fin(p->zc_timeout) && p->zc_timeout >= 1.05f && p->zc_timeout <= 4.0f) ||
-        !(fin(p->jump_max) && p->jump_max > 1.0f) || p->miss_max < 0 || p->miss_max > 100 ||
+        !(fin(p->jump_max) && p->jump_max > 1.0f) || !nonneg(p->brake_tau) || !nonneg(p->brake_acc) ||
+        !nonneg(p->brake_q) ||
+        p->miss_max < 0 || p->miss_max > 100 ||
         !(fin(p->omega_stall) && p->omega_stall > 0.0f))
         return BC_ERR_PARAM;
     if (!nonneg(p->align_time) || !in01(p->align_duty) || !nonneg(p->ramp_w0) || !(fin(p->ramp_w1) && p->ramp_w1 > 0.0f) ||
@@ -528,6 +530,129 @@ static void grid_learn(const bc_bemf_params *p, bc_bemf_state *s, float T)
     if (!(fin(s->grid_tn) && s->grid_tn > 0.0f && fin(*g) && *g > 0.0f)) s->grid_n = 0; /* relearn */
 }
 
+/* 5. The handover's fit. The last m = min(valid, BC_BEMF_HO_FIT) crossings (angle k pi/3 at the k-th) against the
+ * least-squares path of a rotor at constant acceleration whose rising and falling crossings may be displaced
+ * oppositely (a comparator offset, an asymmetric back-EMF): k pi/3 = c0 + c1 u + c2 u^2 + c3 (-1)^k, u the time in
+ * mean intervals. Returns 0 with, in rad, *alt = |c3| pi/3, *res the largest distance of a crossing from the path
+ * and *acc = 2 c2 pi/3 / T^2 (rad/s^2); 1 with m < 5 (no check); -1 if the fit is degenerate. */
+static int handover_fit(const bc_bemf_state *s, float *alt, float *res, float *acc)
+{
+    *alt = 0.0f;
+    *res = 0.0f;
+    *acc = 0.0f;
+    int m = s->valid < BC_BEMF_HO_FIT ? (int)s->valid : BC_BEMF_HO_FIT;
+    if (m < 5) return 1;
+    int last = (int)((s->valid - 1) % BC_BEMF_HO_FIT);
+    float u[BC_BEMF_HO_FIT];
+    for (int k = 0; k < m; ++k) { /* time of the k-th crossing relative to the last, s */
+        int j = (last - (m - 1 - k) + 2 * BC_BEMF_HO_FIT) % BC_BEMF_HO_FIT;
+        u[k] = tdiff(s->ho_ring[j], s->ho_ring[last]) * s->inv_tick;
+    }
+    float tm = -u[0] / (float)(m - 1); /* the mean interval: times in intervals, centred */
+    if (!(fin(tm) && tm > 0.0f)) return -1;
+    float um = 0.0f;
+    for (int k = 0; k < m; ++k) {
+        u[k] /= tm;
+        um += u[k];
+    }
+    um /= (float)m;
+    float a[4][4] = {{0.0f}}, y[4] = {0.0f, 0.0f, 0.0f, 0.0f}; /* the normal equations (lower triangle) */
+    for (int k = 0; k < m; ++k) {
+        float x = u[k] - um;
+        float f[4] = {1.0f, x, x * x, (k & 1) ? -1.0f : 1.0f};
+        for (int r = 0; r < 4; ++r) {
+            for (int c = 0; c <= r; ++c) a[r][c] += f[r] * f[c];
+            y[r] += f[r] * (float)k;
+        }
+    }
+    for (int c = 0; c < 4; ++c) { /* Cholesky, a = L L^T (symmetric positive definite for distinct times) */
+        for (int q = 0; q < c; ++q) a[c][c] -= a[c][q] * a[c][q];
+        if (!(a[c][c] > 1e-9f)) return -1;
+        a[c][c] = sqrtf(a[c][c]);
+        for (int r = c + 1; r < 4; ++r) {
+            for (int q = 0; q < c; ++q) a[r][c] -= a[r][q] * a[c][q];
+            a[r][c] /= a[c][c];
+        }
+    }
+    float cf[4];
+    for (int r = 0; r < 4; ++r) { /* L z = y */
+        float v = y[r];
+        for (int q = 0; q < r; ++q) v -= a[r][q] * cf[q];
+        cf[r] = v / a[r][r];
+    }
+    for (int r = 3; r >= 0; --r) { /* L^T c = z */
+        float v = cf[r];
+        for (int q = r + 1; q < 4; ++q) v -= a[q][r] * cf[q];
+        cf[r] = v / a[r][r];
+    }
+    float worst = 0.0f;
+    for (int k = 0; k < m; ++k) {
+        float x = u[k] - um;
+        float fit = cf[0] + cf[1] * x + cf[2] * x * x + cf[3] * ((k & 1) ? -1.0f : 1.0f);
+        worst = fmaxf(worst, fabsf(fit - (float)k));
+    }
+    *alt = fabsf(cf[3]) * PI3_F;
+    *res = worst * PI3_F;
+    *acc = 2.0f * cf[2] * PI3_F / (tm * tm);
+    return fin(*alt) && fin(*res) && fin(*acc) ? 0 : -1;
+}
+
+/* 5. The handover's plausibility: the crossings lie on a turning rotor's path, their alternate displacement and the
+ * distance of each from the path within what the closed loop's jump check tolerates (alternate crossings (pi/6)
+ * (jump - 1) / (jump + 1) off), at an acceleration the start-up can give (at most BC_BEMF_HO_ACC ramp_accel either
+ * way). */
+static int plausible(const bc_bemf_params *p, const bc_bemf_state *s)
+{
+    float alt, res, acc;
+    int f = handover_fit(s, &alt, &res, &acc);
+    if (f != 0) return f > 0;
+    float d_max = PI6_F * (p->jump_max - 1.0f) / (p->jump_max + 1.0f);
+    return alt <= d_max && res <= d_max && !(p->ramp_accel > 0.0f && fabsf(acc) > BC_BEMF_HO_ACC * p->ramp_accel);
+}
+
+/* 9. The timeout after the crossing at t_zc (s): zc_timeout T60, or, with brake_tau, at least the latest the next
+ * crossing can come for a rotor braked as hard as the drive can brake it, dw/dt = -w / tau - brake_acc from
+ * the speed w0 of the last interval (1 / tau = 1 / brake_tau + brake_q w0), plus the same margin (zc_timeout - 1)
+ * T60: its angle c tau (1 - e^(-t/tau)) -
+ * a tau t (c = w0 + a tau) reaches pi/3 (Newton from t = 0: the angle is concave, the steps approach from below),
+ * or, if the rotor falls below omega_stall first, the time it takes to. */
+static float timeout_of(const bc_bemf_params *p, const bc_bemf_state *s)
+{
+    float t = p->zc_timeout * s->t60;
+    if (!(p->brake_tau > 0.0f) || !(s->t60 > 0.0f)) return t;
+    float tl = s->t_last > 0.0f ? s->t_last : s->t60;
+    float w0 = PI3_F / tl, a = p->brake_acc;
+    float tau = p->brake_tau / (1.0f + p->brake_q * w0 * p->brake_tau); /* the propeller's drag k_q w <= k_q w0 */
+    float c = w0 + a * tau;
+    float ts = tau * logf(c / (p->omega_stall + a * tau)); /* to the stall speed */
+    if (!(fin(ts) && ts > 0.0f)) return t;
+    float tb = 0.0f;
+    for (int k = 0; k < 8; ++k) {
+        float e = expf(-tb / tau);
+        float f = c * tau * (1.0f - e) - a * tau * tb - PI3_F, d = c * e - a * tau; /* angle, speed */
+        if (!(d > 0.0f) || f >= 0.0f) break;
+        tb -= f / d;
+        if (!(tb < ts)) {
+            tb = ts;
+            break;
+        }
+    }
+    float tw = tb + (p->zc_timeout - 1.0f) * s->t60;
+    return fin(tw) && tw > t ? tw : t;
+}
+
+/* timeout_of, computed again only when T60 or the last interval changed (at a crossing; its exp/log cost once a
+ * sector, not every sample) */
+static float timeout_cached(const bc_bemf_params *p, bc_bemf_state *s)
+{
+    if (!(s->to_t60 == s->t60 && s->to_tl == s->t_last)) {
+        s->to_t60 = s->t60;
+        s->to_tl = s->t_last;
+        s->to_val = timeout_of(p, s);
+    }
+    return s->to_val;
+}
+
 /* 5 and 7: an accepted crossing at x_e (s relative to t_k). */
 static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, float x_e)
 {
@@ -546,7 +671,8 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
         s->valid += 1;
         s->t_zc = tadd(n->tk, x_zc * p->f_tick);
         s->have_zc = 1;
-        if (!(s->valid >= p->n_handover && T > 0.0f && PI3_F / T >= 1.5f * p->omega_stall)) {
+        s->ho_ring[(s->valid - 1) % BC_BEMF_HO_FIT] = s->t_zc;
+        if (!(s->valid >= p->n_handover && T > 0.0f && PI3_F / T >= 1.5f * p->omega_stall && plausible(p, s))) {
             /* not yet: the crossing commutates the forced sector 30 degrees after it, if that comes before the
              * forced instant, at the speed from the crossing interval (two crossings in a row), else from the 30
              * degrees between the sector's start and its crossing, at most twice the forced speed: a rotor that
@@ -616,7 +742,11 @@ static int on_crossing(const bc_bemf_params *p, bc_bemf_state *s, bemf_now *n, f
     }
     s->adv = advance_of(p, s, w);
     float x_n;
-    if (p->method == BC_BEMF_INTEGRATE) {
+    /* with sync or high chopping the floating phase conducts in every off-time after a falling crossing (its
+     * terminal pushed below 0 V, its lower diode on) and the filter carries that dip into each conversion: those
+     * samples are not its back-EMF, and the integration commutates from the crossing at the measured speed */
+    int dipped = p->tau_filter > 0.0f && (p->chop == BC_CHOP_SYNC || p->chop == BC_CHOP_HIGH) && !(s->sector & 1);
+    if (p->method == BC_BEMF_INTEGRATE && !dipped) {
         s->integ = 1;
         s->t_int_max = tadd(n->tk, (x_zc + PI3_F / w) * p->f_tick);
         x_n = integrate_predict(p, s, n, w);
@@ -849,7 +979,7 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
             s->t_next = s->t_int_max; /* not reached 60 degrees after the crossing: at once */
         /* 9. timeout */
         if (s->mode == BC_BEMF_CLOSED && s->det < 2 && s->have_zc &&
-            tdiff(n.tk, s->t_zc) >= p->zc_timeout * s->t60 * p->f_tick) {
+            tdiff(n.tk, s->t_zc) >= timeout_cached(p, s) * p->f_tick) {
             if (s->misses < p->miss_max) { /* a blind commutation at once, a virtual crossing */
                 s->misses += 1;
                 s->d_dm *= 0.7f;

@@ -32,7 +32,8 @@ static const bc_field_desc BEMF_FIELDS[] = {
     F(bc_bemf_params, dlim_vf, "f4"),      F(bc_bemf_params, dlim_tau, "f4"),
     F(bc_bemf_params, demag_max, "f4"),     F(bc_bemf_params, cmp_gate, "i4"),
     F(bc_bemf_params, i_start, "f4"),      F(bc_bemf_params, d_diode, "f4"),
-    F(bc_bemf_params, grid_gain, "f4"),
+    F(bc_bemf_params, grid_gain, "f4"),    F(bc_bemf_params, brake_tau, "f4"),
+    F(bc_bemf_params, brake_acc, "f4"),    F(bc_bemf_params, brake_q, "f4"),
 };
 static const bc_struct_desc BEMF_STRUCTS[] = {BC_BIND_STRUCT(bc_bemf_params), BC_BIND_STRUCT(bc_bemf_state)};
 static int bemf_init(const void *p, void *s) { return bc_bemf_init(p, s); }

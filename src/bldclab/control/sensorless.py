@@ -22,7 +22,8 @@ from ..model.units import to_si
 from .base import Control, check_number
 
 __all__ = [
-    "SixStepSensorless", "fast_demag_after", "integral_to_30", "inverter_share", "ramp_excess_speed", "throttle_rate",
+    "SixStepSensorless", "brake_tau", "fast_demag_after", "integral_to_30", "inverter_share", "ramp_excess_speed",
+    "throttle_rate",
 ]
 
 # the settings' C constants (values read from the library: bldclab._core)
@@ -136,6 +137,30 @@ def inverter_share(drive: Drive, chopping: str, current: float) -> float:
         v_d = max(inv.V_f + (inv.r_d - inv.R_on) * abs(current), 0.0)
         q = v_d / (v + v_d)
     return min(max(q, 0.0), 0.5)
+
+
+def brake_tau(drive: Drive) -> float:
+    """Return the time constant of the fastest fall of the rotor's speed the six-step drive can cause (s).
+
+    The inverter brakes hardest with the driven pair shorted (duty 0, synchronous chopping): the pair's back-EMF
+    drives ``-k_pair omega / (2 (R + R_on))`` round it, a braking torque ``D omega`` with ``D = (2 k_phi)^2 / (2 (R +
+    R_on))``, so with the viscous friction the speed falls at most as ``exp(-t / tau)``, ``tau = J / (D + B)`` (the
+    Coulomb friction adds ``tau_c / J``, the propeller's drag ``k_q omega`` per rad/s, at most ``k_q omega_0`` below
+    a speed ``omega_0``: the controller adds both). The crossing timeout (law 9) waits at least as long as such a
+    rotor takes to its next crossing.
+
+    Parameters
+    ----------
+    drive : Drive
+
+    Returns
+    -------
+    float
+        ``J / (D + B)``, s.
+    """
+    m = drive.motor
+    damp = (2.0 * m.k_phi) ** 2 / (2.0 * r_total(drive))
+    return drive.mechanics.J / (damp + drive.mechanics.B)
 
 
 def ramp_excess_speed(drive: Drive, current: float) -> float:
@@ -674,4 +699,7 @@ class SixStepSensorless(Control):
             cmp_gate=int(drive.sensors.bemf_offset != 0.0 and self.fast_demag),
             i_start=su["start_current_limit"] if self.current_sensing else 0.0,
             d_diode=su["diode_duty"],
+            brake_tau=brake_tau(drive),
+            brake_acc=p * drive.mechanics.tau_c / drive.mechanics.J,
+            brake_q=drive.mechanics.k_q / (p * drive.mechanics.J),
         ))

@@ -107,8 +107,14 @@
  *     scheduled with the commutation timer (8). The zero-crossing detector (6) runs in every forced sector (its
  *     speed: w, or the speed from the last forced sector's crossing if higher). A sector with an accepted crossing
  *     counts as valid, one without resets the count. At a crossing:
- *       - handover to CLOSED when it makes n_handover consecutive valid sectors and the speed from its crossing
- *         interval T (two valid sectors in a row) is at least 1.5 omega_stall (a margin above the stall limit):
+ *       - handover to CLOSED when it makes n_handover consecutive valid sectors, the speed from its crossing
+ *         interval T (two valid sectors in a row) is at least 1.5 omega_stall (a margin above the stall limit),
+ *         and the crossings are a turning rotor's: the last m = min(valid, BC_BEMF_HO_FIT) of them (m >= 5; fewer:
+ *         no check), at angles k pi/3, fitted by least squares with c0 + c1 t + c2 t^2 + c3 (-1)^k (a constant
+ *         acceleration, rising and falling crossings displaced oppositely by c3): |c3| and each crossing's
+ *         distance from the fit within (pi/6) (jump_max - 1) / (jump_max + 1) (the displacement of alternate
+ *         crossings the closed loop's jump check tolerates) and |2 c2| <= BC_BEMF_HO_ACC ramp_accel (if
+ *         ramp_accel > 0): a held rotor's twitch gives crossings that are not (docs/sensorless.md, law 5).
  *         T60 = T, and the commutation is scheduled from that crossing as in 7;
  *       - else the crossing commutates the forced sector pi/6 / w_c after it if that comes before the forced instant
  *         (w_c = (pi/3) / T, or (pi/6) / (t_zc - t_c) without T: the rotor crossed 30 degrees after the sector
@@ -197,7 +203,9 @@
  *     transient, where the grid's interval lags the rotor (servo-2k2's throttle step at zero advance: up to 12
  *     degrees late unbounded, the crossing hidden).
  *     BC_BEMF_INTEGRATE (VESC's BLDC mode): from the crossing the sign-corrected samples are integrated by the
- *     trapezoidal rule (the first piece from t_e, where u = 0),
+ *     trapezoidal rule (the first piece from t_e, where u = 0); except after a falling crossing (sectors 0, 2, 4)
+ *     with chop BC_CHOP_SYNC or BC_CHOP_HIGH and tau_filter > 0, which commutate as BC_BEMF_ADC does: there the
+ *     floating phase conducts in every off-time and the filter carries that into each conversion,
  *
  *         lambda(t) = integral from t_e to t of u dt,      commutation when  lambda = int_limit ((pi/6 - adv)/(pi/6))^2
  *
@@ -248,8 +256,12 @@
  *     valleys for the complementary negative leg of BC_CHOP_SYNC, the peaks for a lower switch chopping; the
  *     first sample is taken to be at a valley) until the crossing.
  *
- *  9. Timeout (CLOSED). No crossing accepted by t_zc,prev + zc_timeout T60 (zc_timeout = 1.5: when the next
- *     commutation would be due without advance): with fewer than miss_max misses in a row, a blind commutation at
+ *  9. Timeout (CLOSED). No crossing accepted by t_zc,prev + max(zc_timeout T60, T_b + (zc_timeout - 1) T60)
+ *     (zc_timeout = 1.5: when the next commutation would be due without advance; T_b, with brake_tau > 0: the
+ *     latest the next crossing can come for a rotor braked as hard as the drive can, dw/dt = -w / tau - brake_acc,
+ *     1 / tau = 1 / brake_tau + brake_q w0, from w0 = (pi/3) / T, T the last interval (T60 without one): its angle (w0 + a tau) tau (1 -
+ *     exp(-t / tau)) - a tau t reaches pi/3 at T_b, or, if its speed falls below omega_stall first, T_b is the time
+ *     to it): with fewer than miss_max misses in a row, a blind commutation at
  *     once (BC_FLAG_COMM_LATE) and a virtual crossing t_zc,prev += T60 (T60 kept; no jump check on the next
  *     interval); otherwise a desync, BC_FLAG_ZC_HIDDEN if F never showed the pre level in the window (the
  *     demagnetisation outlasted the crossing, or the crossing came before the window), else BC_FLAG_ZC_TIMEOUT (it
@@ -299,6 +311,11 @@
 #define BC_BEMF_REASON_JUMP 3
 #define BC_BEMF_REASON_STALL 4
 #define BC_BEMF_REASON_START 5
+
+/* crossings fitted at the handover (5): the last six crossing intervals */
+#define BC_BEMF_HO_FIT 7
+/* the largest acceleration of a handover's fit, in ramp_accel (5) */
+#define BC_BEMF_HO_ACC 4.0f
 
 typedef struct {
     int32_t method;      /* BC_BEMF_COMPARATOR, _ADC, _INTEGRATE */
@@ -354,6 +371,10 @@ typedef struct {
     float d_diode;       /* the inverter's share (2): align, ramp and dlim duties d -> d_diode + (1 - d_diode) d, [0, 1) */
     float grid_gain;     /* 7, CLOSED: > 0, commutate on the uniform grid phase-locked to the mean of the six crossings,
                           * each sector's crossing interval filtered with this gain, [0, 1]; 0: after each crossing */
+    float brake_tau;     /* 9: time constant of the fastest fall of the rotor's speed, s (the pair shorted: J / (D + B),
+                            D = k_pair^2 / (2 (R + R_on))); 0: the timeout is zc_timeout T60 only */
+    float brake_acc;     /* 9: and its speed-independent part (Coulomb friction p tau_c / J), electrical rad/s^2 */
+    float brake_q;       /* 9: and the propeller's, k_q / (p J): 1 / tau grows by brake_q w0 (w0: electrical), 1/rad */
 } bc_bemf_params;
 
 typedef struct {
@@ -406,6 +427,8 @@ typedef struct {
     float tau_ol;          /* duration of the forced sector, s */
     float w_zc;            /* speed from the last forced sector's crossing, electrical rad/s (0: none) */
     int32_t valid;         /* consecutive forced sectors with a crossing */
+    uint32_t ho_ring[BC_BEMF_HO_FIT]; /* ticks of the last crossings of those sectors (the handover's fit, 5) */
+    float to_t60, to_tl, to_val; /* 9: the timeout (s) and the T60 and last interval it was computed for */
     int32_t hold;          /* forced sectors at ramp_w1 */
     int32_t sector_ok;     /* the current forced sector had a crossing */
     int32_t first;         /* the first forced sector after an alignment (no crossing read) */
