@@ -544,9 +544,11 @@ static int handover_fit(const bc_bemf_state *s, float *alt, float *res, float *a
     if (m < 5) return 1;
     int last = (int)((s->valid - 1) % BC_BEMF_HO_FIT);
     float u[BC_BEMF_HO_FIT];
+    int j = last - (m - 1);
+    if (j < 0) j += BC_BEMF_HO_FIT;
     for (int k = 0; k < m; ++k) { /* time of the k-th crossing relative to the last, s */
-        int j = (last - (m - 1 - k) + 2 * BC_BEMF_HO_FIT) % BC_BEMF_HO_FIT;
         u[k] = tdiff(s->ho_ring[j], s->ho_ring[last]) * s->inv_tick;
+        if (++j == BC_BEMF_HO_FIT) j = 0;
     }
     float tm = -u[0] / (float)(m - 1); /* the mean interval: times in intervals, centred */
     if (!(fin(tm) && tm > 0.0f)) return -1;
@@ -556,15 +558,27 @@ static int handover_fit(const bc_bemf_state *s, float *alt, float *res, float *a
         um += u[k];
     }
     um /= (float)m;
-    float a[4][4] = {{0.0f}}, y[4] = {0.0f, 0.0f, 0.0f, 0.0f}; /* the normal equations (lower triangle) */
+    /* the normal equations of the regressors 1, x, x^2, (-1)^k against k (lower triangle), from their moments */
+    float s1 = 0.0f, s2 = 0.0f, s3 = 0.0f, s4 = 0.0f, sa = 0.0f, sax = 0.0f, sax2 = 0.0f;
+    float y[4] = {0.0f, 0.0f, 0.0f, 0.0f};
     for (int k = 0; k < m; ++k) {
-        float x = u[k] - um;
-        float f[4] = {1.0f, x, x * x, (k & 1) ? -1.0f : 1.0f};
-        for (int r = 0; r < 4; ++r) {
-            for (int c = 0; c <= r; ++c) a[r][c] += f[r] * f[c];
-            y[r] += f[r] * (float)k;
-        }
+        float x = u[k] - um, x2 = x * x, sg = (k & 1) ? -1.0f : 1.0f, fk = (float)k;
+        s1 += x;
+        s2 += x2;
+        s3 += x2 * x;
+        s4 += x2 * x2;
+        sa += sg;
+        sax += sg * x;
+        sax2 += sg * x2;
+        y[0] += fk;
+        y[1] += x * fk;
+        y[2] += x2 * fk;
+        y[3] += sg * fk;
     }
+    float a[4][4] = {{(float)m, 0.0f, 0.0f, 0.0f},
+                     {s1, s2, 0.0f, 0.0f},
+                     {s2, s3, s4, 0.0f},
+                     {sa, sax, sax2, (float)m}};
     for (int c = 0; c < 4; ++c) { /* Cholesky, a = L L^T (symmetric positive definite for distinct times) */
         for (int q = 0; q < c; ++q) a[c][c] -= a[c][q] * a[c][q];
         if (!(a[c][c] > 1e-9f)) return -1;
@@ -589,7 +603,8 @@ static int handover_fit(const bc_bemf_state *s, float *alt, float *res, float *a
     for (int k = 0; k < m; ++k) {
         float x = u[k] - um;
         float fit = cf[0] + cf[1] * x + cf[2] * x * x + cf[3] * ((k & 1) ? -1.0f : 1.0f);
-        worst = fmaxf(worst, fabsf(fit - (float)k));
+        float d = fabsf(fit - (float)k);
+        if (d > worst) worst = d;
     }
     *alt = fabsf(cf[3]) * PI3_F;
     *res = worst * PI3_F;
