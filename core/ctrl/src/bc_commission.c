@@ -276,18 +276,21 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
     /* the voltage these duties apply, the dead time's loss or gain at each leg's edges (bc_commission.h), with the
      * currents of the interval they apply to (the vector turned 1.5 samples on) */
     float vt = (in->v_dc + 2.0f * p->v_diode) * p->t_dead / (2.0f * ts), b = 0.02f * fmaxf(p->i_test, p->i_if);
-    float kr = s->L > 0.0f ? in->v_dc * ts / (3.0f * s->L) : 0.0f;
-    float cr = cosf(1.5f * s->w_phi * ts), sr = sinf(1.5f * s->w_phi * ts);
-    bc_abc ia = bc_clarke_inv((bc_ab){cr * i.alpha - sr * i.beta, sr * i.alpha + cr * i.beta});
-    float ix[3] = {ia.a, ia.b, ia.c}, vx[3];
-    for (int x = 0; x < 3; ++x) {
-        float dx = duty[x], rho = 2.0f * dx * (1.0f - dx);
-        for (int y = 0; y < 3; ++y) {
-            if (y != x) rho -= fminf(dx, duty[y]) - dx * duty[y];
+    float vx[3] = {duty[0] * in->v_dc, duty[1] * in->v_dc, duty[2] * in->v_dc};
+    if (vt > 0.0f) { /* without a dead time the duties give the voltage as it is */
+        float kr = s->L > 0.0f ? in->v_dc * ts / (3.0f * s->L) : 0.0f;
+        float cr = cosf(1.5f * s->w_phi * ts), sr = sinf(1.5f * s->w_phi * ts);
+        bc_abc ia = bc_clarke_inv((bc_ab){cr * i.alpha - sr * i.beta, sr * i.alpha + cr * i.beta});
+        float ix[3] = {ia.a, ia.b, ia.c};
+        for (int x = 0; x < 3; ++x) {
+            float dx = duty[x], rho = 2.0f * dx * (1.0f - dx);
+            for (int y = 0; y < 3; ++y) {
+                if (y != x) rho -= fminf(dx, duty[y]) - dx * duty[y];
+            }
+            rho = fmaxf(kr * rho, 0.0f);
+            float w = bc_clampf((ix[x] - rho) / b, -1.0f, 1.0f) + bc_clampf((ix[x] + rho) / b, -1.0f, 1.0f);
+            vx[x] -= 0.5f * vt * w;
         }
-        rho = fmaxf(kr * rho, 0.0f);
-        float w = bc_clampf((ix[x] - rho) / b, -1.0f, 1.0f) + bc_clampf((ix[x] + rho) / b, -1.0f, 1.0f);
-        vx[x] = dx * in->v_dc - 0.5f * vt * w;
     }
     bc_ab ua = bc_clarke((bc_abc){vx[0], vx[1], vx[2]});
     s->u_hist[1][0] = s->u_hist[0][0];
