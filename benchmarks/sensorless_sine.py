@@ -64,25 +64,37 @@ def angle_error(drive: bl.Drive, control: bl.Sine, speed: float, torque: float, 
             "sine": float(on.sum() / max(last.sum(), 1)), "tau": m.tau_mean, "eff": m.efficiency}
 
 
+#: The wrong parameters of the sensitivity and estimate tables: label, Drive.scaled factors.
+ESTIMATE_CASES = (("true", {}), ("psi +25 %", {"emf": 1.25}), ("psi -25 %", {"emf": 0.75}), ("R +50 %", {"R": 1.5}),
+                  ("R -50 %", {"R": 0.5}), ("L +30 %", {"L": 1.3}), ("L -30 %", {"L": 0.7}))
+
+
+def loaded_point(d: bl.Drive) -> tuple[float, float, bl.Sine, float, float, float]:
+    """The sensitivity tables' operating point: half the rated load at 0.5 Omega_0 behind an observer start.
+
+    Returns the torque (N m), the speed (rad/s), the controller (hand-off at 0.1 Omega_N or half the speed), the
+    load's instant, its ramp time and the run's duration (s): the start, the load ramp and 20 electrical periods.
+    """
+    torque = 0.5 * 1.5 * bl.control.sine.fundamental_k1(d) * i_sN(d)
+    w = 0.5 * d.Omega_0
+    on = min(0.1 * d.motor.Omega_nominal, 0.5 * w)
+    ctl = bl.Sine(angle="observer", handoff_speed=on, handoff_hysteresis=0.5)
+    st = ctl.sensorless_settings(d)
+    t_load = st["if_align"] + d.motor.p * on / st["if_accel"] + 2 * st["lock_time"] + d.mechanics.J * w / torque + 0.3
+    wb = 2 * math.pi * ctl.speed_bandwidth_hz
+    t_ramp = max(0.3, torque / (d.mechanics.J * wb**2 / 4 * 0.2 * w))
+    dur = t_load + t_ramp + 0.3 + 20 * 2 * math.pi / (d.motor.p * w)
+    return torque, w, ctl, t_load, t_ramp, dur
+
+
 def sensitivity(names: list[str]) -> None:
     """Print the angle error and torque with wrong parameters, then after commissioning from them."""
     print(f"\n{'drive':16s} {'estimate':12s} {'rms deg':>8s} {'worst':>8s} {'tau':>9s} {'after comm.':>11s} "
           f"{'worst':>8s} {'tau':>9s}")
     for name in names:
         d = bl.load(name)
-        torque = 0.5 * 1.5 * bl.control.sine.fundamental_k1(d) * i_sN(d)
-        w = 0.5 * d.Omega_0
-        on = min(0.1 * d.motor.Omega_nominal, 0.5 * w)
-        ctl = bl.Sine(angle="observer", handoff_speed=on, handoff_hysteresis=0.5)
-        st = ctl.sensorless_settings(d)
-        t_load = st["if_align"] + d.motor.p * on / st["if_accel"] + 2 * st["lock_time"] \
-            + d.mechanics.J * w / torque + 0.3
-        wb = 2 * math.pi * ctl.speed_bandwidth_hz
-        t_ramp = max(0.3, torque / (d.mechanics.J * wb**2 / 4 * 0.2 * w))
-        dur = t_load + t_ramp + 0.3 + 20 * 2 * math.pi / (d.motor.p * w)
-        for label, kw in (("true", {}), ("psi +25 %", {"emf": 1.25}), ("psi -25 %", {"emf": 0.75}),
-                          ("R +50 %", {"R": 1.5}), ("R -50 %", {"R": 0.5}), ("L +30 %", {"L": 1.3}),
-                          ("L -30 %", {"L": 0.7})):
+        torque, w, ctl, t_load, t_ramp, dur = loaded_point(d)
+        for label, kw in ESTIMATE_CASES:
             wrong = d.scaled(**kw) if kw else None
             a = angle_error(d, ctl, w, torque, t_load, t_ramp, dur, estimate=wrong)
             e = bl.commission(d, nominal=wrong) if wrong is not None else None
@@ -91,8 +103,6 @@ def sensitivity(names: list[str]) -> None:
             print(f"{name:16s} {label:12s} {a['rms']:8.3f} {a['worst']:8.3f} {a['tau']:9.4g} {after}")
 
 
-ESTIMATE_CASES = (("true", {}), ("psi +25 %", {"emf": 1.25}), ("psi -25 %", {"emf": 0.75}), ("R +50 %", {"R": 1.5}),
-                  ("R -50 %", {"R": 0.5}), ("L +30 %", {"L": 1.3}), ("L -30 %", {"L": 0.7}))
 ESTIMATE_VARIANTS = (("none", {"if_flux_estimate": False, "if_r_estimate": False}),
                      ("flux", {"if_flux_estimate": True, "if_r_estimate": False}),
                      ("flux+R", {"if_flux_estimate": True, "if_r_estimate": True}))
@@ -109,16 +119,7 @@ def estimates(names: list[str]) -> None:
           f"{'rms deg':>8s} {'worst':>8s} {'sine':>5s} {'tau':>9s}")
     for name in names:
         d = bl.load(name)
-        torque = 0.5 * 1.5 * bl.control.sine.fundamental_k1(d) * i_sN(d)
-        w = 0.5 * d.Omega_0
-        on = min(0.1 * d.motor.Omega_nominal, 0.5 * w)
-        ctl = bl.Sine(angle="observer", handoff_speed=on, handoff_hysteresis=0.5)
-        st = ctl.sensorless_settings(d)
-        t_load = st["if_align"] + d.motor.p * on / st["if_accel"] + 2 * st["lock_time"] \
-            + d.mechanics.J * w / torque + 0.3
-        wb = 2 * math.pi * ctl.speed_bandwidth_hz
-        t_ramp = max(0.3, torque / (d.mechanics.J * wb**2 / 4 * 0.2 * w))
-        dur = t_load + t_ramp + 0.3 + 20 * 2 * math.pi / (d.motor.p * w)
+        torque, w, ctl, t_load, t_ramp, dur = loaded_point(d)
         ctl3 = bl.Sine(angle="observer")
         st3 = ctl3.sensorless_settings(d)
         w3 = 0.3 * d.Omega_0

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import bldclab as bl
-from bldclab.analysis.commission import commission
+from bldclab.analysis.commission import Estimate, commission
 from bldclab.control.commission import Commission
 from bldclab.control.sine import fundamental_k1
 from bldclab.errors import BldclabError
@@ -31,17 +31,23 @@ def true_values(d: bl.Drive) -> tuple[float, float, float]:
     return r_total(d), d.motor.L, fundamental_k1(d) / d.motor.p
 
 
+def assert_commissioned(d: bl.Drive, rel_r: float, rel_l: float, rel_psi: float) -> Estimate:
+    """Commission the plant ``d`` on its own data: DONE, and R + R_on, L, psi_f within the relative tolerances."""
+    e = commission(d)
+    assert e.status == "DONE"
+    R, L, psi = true_values(d)
+    assert e.R == pytest.approx(R, rel=rel_r)
+    assert e.L == pytest.approx(L, rel=rel_l)
+    assert e.psi_f == pytest.approx(psi, rel=rel_psi)
+    return e
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", names())
 def test_catalog_accuracy(name: str) -> None:
     """Every catalog drive, free rotor at rest: DONE, and R, L, psi_f within the stated tolerances."""
     d = bl.load(name)
-    e = commission(d)
-    assert e.status == "DONE"
-    R, L, psi = true_values(d)
-    assert e.R == pytest.approx(R, rel=TOL_R)
-    assert e.L == pytest.approx(L, rel=TOL_L)
-    assert e.psi_f == pytest.approx(psi, rel=TOL_PSI)
+    e = assert_commissioned(d, TOL_R, TOL_L, TOL_PSI)
     assert 0 < e.t_test < 1.05 * Commission().duration(d)
 
 
@@ -130,13 +136,7 @@ def test_inverter_errors_within_the_goals(name: str) -> None:
     psi_f -0.23 % and +0.81 %)."""
     d = bl.load(name)
     inv = dataclasses.replace(d.inverter, t_dead=0.01 / d.inverter.f_pwm, V_f=0.7, R_on=0.2 * d.motor.R)
-    p = dataclasses.replace(d, inverter=inv)
-    e = commission(p)
-    assert e.status == "DONE"
-    R, L, psi = true_values(p)
-    assert e.R == pytest.approx(R, rel=0.02)
-    assert e.L == pytest.approx(L, rel=0.05)
-    assert e.psi_f == pytest.approx(psi, rel=0.02)
+    assert_commissioned(dataclasses.replace(d, inverter=inv), 0.02, 0.05, 0.02)
 
 
 @pytest.mark.slow
@@ -147,10 +147,5 @@ def test_the_spin_takes_the_dead_time_off_its_voltage(name: str, t_dead: float) 
     routine now takes off each leg's loss or gain at its edges, with the PWM ripple's share of the edge currents
     (bc_commission.h): psi_f within 0.5 % (measured +0.06 %, -0.07 %)."""
     d = bl.load(name)
-    p = dataclasses.replace(d, inverter=dataclasses.replace(d.inverter, t_dead=t_dead))
-    e = commission(p)
-    assert e.status == "DONE"
-    R, L, psi = true_values(p)
-    assert e.R == pytest.approx(R, rel=0.02)
-    assert e.L == pytest.approx(L, rel=0.05)
-    assert e.psi_f == pytest.approx(psi, rel=0.005)
+    assert_commissioned(dataclasses.replace(d, inverter=dataclasses.replace(d.inverter, t_dead=t_dead)), 0.02, 0.05,
+                        0.005)
