@@ -251,6 +251,7 @@ def startup_map(names: list[str], kinds: tuple[str, ...] = STARTUP_KINDS, inerti
     print(f"\n{'drive':16s} {'load kind':9s} {'J/J_nom':>7s} {'load/tau_if':>11s} {'bound':>6s} {'ok':>5s} "
           f"{'t_lock s':>13s} {'restarts':>8s}  flags of the failures")
     within: dict[tuple[str, str], list[int]] = {}
+    t_locks: dict[str, list[float]] = {}
     for name in names:
         d = bl.load(name)
         for kind in kinds:
@@ -264,6 +265,7 @@ def startup_map(names: list[str], kinds: tuple[str, ...] = STARTUP_KINDS, inerti
                             n_ok[1] += len(runs)
                     good = [r for r in runs if r["ok"]]
                     tl = [r["t_lock"] for r in good]
+                    t_locks.setdefault(kind, []).extend(tl)
                     tls = f"{min(tl):.2f}-{max(tl):.2f}" if tl else "-"
                     fails = sorted({r["flags"] for r in runs if not r["ok"]})
                     print(f"{name:16s} {kind:9s} {kj:7.1f} {fl:11.2f} {runs[0]['bound']:6.3f} "
@@ -273,6 +275,10 @@ def startup_map(names: list[str], kinds: tuple[str, ...] = STARTUP_KINDS, inerti
     for kind in kinds:
         a, b = within.get((kind, "without"), [0, 0]), within.get((kind, "with"), [0, 0])
         print(f"{kind:9s} {a[0]:4d} / {a[1]:<4d} {b[0]:4d} / {b[1]:<4d}")
+    every = [t for k in kinds for t in t_locks.get(k, [])]
+    print("median time to the first hand-off over the starts that succeeded (s): "
+          + ", ".join(f"{k} {np.median(t_locks[k]):.3f}" for k in kinds if t_locks.get(k))
+          + (f", all {np.median(every):.3f} ({len(every)} starts)" if every else ""))
 
 
 def commissioning(names: list[str]) -> None:

@@ -240,6 +240,111 @@ def test_friction_load_near_the_bound_starts(name: str, theta0: float) -> None:
     assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
 
 
+def map_start(name: str, kind: str, kj: float, fl: float, theta0: float, trace_every: int = 8
+              ) -> tuple[bl.sim.SimResult, dict[str, float], float]:
+    """One start of the start-up map (``benchmarks/sensorless_sine.py``, ``startup_case``): the controller from
+    the nominal drive, the plant's inertia ``kj`` times it, a load of ``fl`` times the I/f torque (``passive``:
+    Coulomb friction; ``active``: a constant load from t = 0), speed loop to 0.3 Omega_0. Returns the result, the
+    controller's settings and the I/f torque (N m)."""
+    d = bl.load(name)
+    ctl = bl.Sine(angle="observer", speed_loop=True)
+    st = ctl.sensorless_settings(d)
+    tau_if = 1.5 * fundamental_k1(d) * st["if_current"]
+    plant = start_plant(d, kj, fl * tau_if if kind == "passive" else 0.0)
+    w = 0.3 * d.Omega_0
+    t_ramp = d.motor.p * ctl.handoff(d) / st["if_accel_min"]
+    t_acc = plant.mechanics.J * w / max(ctl.torque_limit(d) - fl * tau_if, 0.1 * ctl.torque_limit(d))
+    dur = 2 * (st["if_align"] + t_ramp + 4 * st["lock_time"]) + t_acc + 0.5
+    r = simulate(plant, ctl, Scenario(duration=dur, omega_ref=w, theta0=theta0, trace_every=trace_every,
+                                      load_torque=fl * tau_if if kind == "active" else 0.0), estimate=d)
+    return r, st, tau_if
+
+
+def assert_started_first_time(r: bl.sim.SimResult, w: float) -> None:
+    """No restart, in the sine mode at the end at the reference (5 %)."""
+    assert "DESYNC" not in r.flags_raised
+    assert r["mode"][-1] == 1
+    assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
+
+
+def test_alignment_damping_current_is_zero_on_a_rotor_at_rest() -> None:
+    """The alignment brakes the rotor's swing with ``i_d = -if_damp e_d``, ``e_d`` the swing's back-EMF on d of
+    the alignment frame. With the current loops' decoupling (the default) the d PI's feed-forward carries ``R
+    i_d,ref`` and its integrator holds the back-EMF alone; the law of before, ``-if_damp (x_d - R i_d)``, fed the
+    current back with the gain ``if_damp R``, 1.9 on outrunner-24v (11.6 on mn3110-780kv): above 1 it latched
+    ``i_d`` at its limit (-10 A of 20.8 A) on a rotor at rest, which turned the alignment's rest angle by
+    ``atan(i_d / i_q)`` = 26 deg. A rotor held at rest by friction (0.75 of the I/f torque, from the alignment's
+    first unstable point) has no back-EMF: over the alignment's last tenth ``|i_d|`` stays below 1 % of
+    ``I_s,N``."""
+    d = bl.load("outrunner-24v")
+    r, st, _ = map_start("outrunner-24v", "passive", 1.0, 0.75, 0.0, trace_every=1)
+    t = r["t"]
+    last = (t > 0.9 * st["if_align"]) & (t < 0.99 * st["if_align"])
+    assert np.all(np.abs(r["omega_m"][last]) < 1e-3 * d.Omega_0), "the rotor is at rest there"
+    assert np.max(np.abs(r["i_d"][last])) < 0.01 * i_sN(d)
+
+
+@pytest.mark.parametrize(("name", "kj", "fl"), [("mn3110-780kv", 5.0, 0.75), ("f60prov-2550kv", 1.0, 0.9)])
+def test_creep_slow_enough_for_the_rotor_to_catch(name: str, kj: float, fl: float) -> None:
+    """A friction load within the design bound on the light drone rotors (mn3110-780kv at five times its inertia and
+    0.75 of the I/f torque, bound 0.80; f60prov-2550kv at its nominal inertia and 0.9, bound 0.91). A rotor held at
+    rest breaks away when the creeping vector leads it by ``asin(f)`` (``f = tau_L / tau_if``) and must reach the
+    vector's speed before the lead passes ``pi - asin(f)``, where the torque falls below the load again: the energy
+    condition ``omega_c^2 <= 2 p tau_if g(f) / J``, ``g(f) = 2 cos(asin f) - f (pi - 2 asin f)``. Written with the
+    inertia's share of the bound at the slowest ramp, ``x = J a_min / (p tau_if)``, it is ``omega_c^2 <= 2 a_min
+    g(f_b - x) / x`` whose least value over every inertia (``x``) at its bound is ``2.56 a_min``: the creep at
+    ``min(0.05 omega_on, sqrt(2 a_min))``. Before, at 5 % of the hand-off speed (35.5 and 143 rad/s electrical,
+    above the rotors' 33.7 and 110 rad/s), the rotor slipped poles at every angle (``START_FAIL``, retried). Now
+    every start hands over on its first attempt."""
+    d = bl.load(name)
+    for theta0 in (0.0, 0.5 * math.pi):
+        r, _, _ = map_start(name, "passive", kj, fl, theta0)
+        assert_started_first_time(r, 0.3 * d.Omega_0)
+
+
+def test_alignment_leaves_the_rotor_behind_the_seed() -> None:
+    """Lee's observer, its radial error removed at ``lambda`` much faster than the rotor turns (low speed), moves
+    its angle by ``cos(delta) d theta`` as the rotor turns ``d theta`` (``delta`` its angle error): ``d delta /
+    dt = -omega ((1 - cos delta) + (omega / lambda) sin delta cos delta)``. An error ahead of the rotor
+    (``delta > 0``, dir-wise) decays; one behind it grows while ``|delta| > 2 omega / lambda``, and the ramp reads a
+    load angle too large. A friction load leaves the rotor where its swing stopped; before, the alignment's second
+    step pulled the rotor backwards onto its rest angle (from the first step's) and friction held it ahead of the
+    seed: on outrunner-24v at five times its inertia and 0.75 of the I/f torque, from angle 0, the observer lagged
+    by 13 deg at the ramp's start, 40 deg at 150 rad/s, lost the rotor and the start failed. The second step now
+    pulls the rotor forwards, and the alignment ends with a sweep forwards by ``2 asin(RHO_HI if_current /
+    if_align_current)`` (twice the band in which friction up to RHO_HI of the I/f torque holds the rotor): the rotor
+    is dragged from behind and, at the inertia the controller is configured with, ends at or behind the seed: at
+    the ramp's start the observer's error is within ``[-1 deg, 2 asin(f tau_if / tau_align) + 1 deg]`` at every
+    angle (0.5 and 0.9 of the I/f torque). At five times the inertia (0.75) every start hands over on its first
+    attempt."""
+    d = bl.load("outrunner-24v")
+    st0 = bl.Sine(angle="observer", speed_loop=True).sensorless_settings(d)
+    angles = (0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi + 0.05)
+    for fl in (0.5, 0.9):
+        band = 2.0 * math.degrees(math.asin(fl * st0["if_current"] / st0["if_align_current"]))
+        for theta0 in angles:
+            r, st, _ = map_start("outrunner-24v", "passive", 1.0, fl, theta0, trace_every=1)
+            k = int(np.argmax(r["t"] > st["if_align"] + 2.0 / d.inverter.f_pwm))
+            err = math.degrees(float(np.angle(np.exp(1j * (r["theta"][k] - r["theta_e"][k])))))
+            assert -1.0 <= err <= band + 1.0, (fl, theta0, err)
+    for theta0 in angles:
+        r, _, _ = map_start("outrunner-24v", "passive", 5.0, 0.75, theta0)
+        assert_started_first_time(r, 0.3 * d.Omega_0)
+
+
+def test_rotor_pushed_back_is_braked_with_the_torque_limit() -> None:
+    """An active load of 0.9 of the I/f torque from t = 0 on outrunner-24v at twice its inertia (bound 0.90), the
+    rotor next to the alignment's unstable point: the load spins it backwards before the current holds it, the
+    observer catches it (the sine mode) at about -700 rad/s electrical. The speed PI's integrator was set to the
+    torque of the slipping I/f current, which on a slipping rotor pulsates about zero (here -1.5 N m): the sine mode
+    went on driving the rotor backwards and ended in START_FAIL and over-current trips. A rotor caught turning
+    against the reference is now braked with the whole torque limit from the catch on: the start hands over on its
+    first attempt."""
+    d = bl.load("outrunner-24v")
+    r, _, _ = map_start("outrunner-24v", "active", 2.0, 0.9, 1.5 * math.pi + 0.05)
+    assert_started_first_time(r, 0.3 * d.Omega_0)
+
+
 def test_start_against_a_load_above_the_if_torque_fails_by_name() -> None:
     """A load above the I/f current's largest torque ``1.5 k_1 if_current`` (here 1.3 times it, active from t = 0)
     cannot be started: it pushes the rotor backwards, the start catches it (the sine mode brakes it with the whole
