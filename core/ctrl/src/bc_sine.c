@@ -687,30 +687,6 @@ static float creep_speed(const bc_sine_params *p)
     return fminf(0.05f * p->omega_on, sqrtf(2.0f * fmaxf(p->if_accel_min, 0.0f)));
 }
 
-/* ALIGN's closing sweep (bc_sine.h, ALIGN): the angle beta = 2 asin(min(RHO_HI if_current / if_align_current, 1))
- * (twice the band in which a friction load up to RHO_HI of the I/f torque holds the rotor off the rest angle) at
- * the speed w_s = w_a / pi, w_a = sqrt(p 1.5 k_1 if_align_current / J) the rotor's swing about the alignment
- * vector (from if_align, three swing periods at if_current: w_a = (6 pi / if_align) sqrt(if_align_current /
- * if_current)); *t_s its time, at most the second step's. Returns beta. */
-static float align_sweep(const bc_sine_params *p, float *t_s)
-{
-    float k = p->if_align_current / p->if_current;
-    float beta = 2.0f * asinf(fminf(BC_SINE_RHO_HI / k, 1.0f));
-    float w_s = 6.0f * sqrtf(k) / fmaxf(p->if_align, 1e-30f);
-    *t_s = fminf(beta / w_s, (0.75f - 1.0f / 3.0f) * p->if_align);
-    return beta;
-}
-
-/* ALIGN's vector angle at the alignment time t: pi/2 for the first third, pi/2 + dir pi/2 up to the sweep, which
- * turns it forward (dir) by beta at a constant speed to end at 3/4 of if_align, held there to the end. */
-static float align_angle(const bc_sine_params *p, float t, float dir)
-{
-    if (3.0f * t < p->if_align) return 0.5f * BC_PI_F;
-    float t_s, beta = align_sweep(p, &t_s);
-    float t1 = 0.75f * p->if_align, f = t_s > 0.0f ? bc_clampf((t - (t1 - t_s)) / t_s, 0.0f, 1.0f) : 1.0f;
-    return 0.5f * BC_PI_F + dir * (0.5f * BC_PI_F + f * beta);
-}
-
 /* ALIGN's zero-current catch window (zc_catch): the first 3 lock_time of each alignment, once a start. */
 static int zc_window(const bc_sine_params *p, const bc_sine_state *s)
 {
@@ -822,11 +798,9 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             }
         } else if (s->sl_phase == BC_SINE_SL_ALIGN) {
             s->sl_t += p->ts;
-            /* two steps: the vector at pi/2 for the first third, then at pi/2 + dir pi/2 (a rotor at the unstable
-             * point of one, or held by friction near it, is a quarter turn from the other's rest angle; from the
-             * first's rest angle the rotor approaches the second's from behind, dir-wise), then a sweep forward
-             * by align_sweep (below) ending at 3/4 of if_align, and the vector held there for the last quarter */
-            s->if_theta = bc_wrap_2pi(align_angle(p, s->sl_t, dir));
+            /* two steps: the vector at pi/2 for the first third, then at 0 (a rotor at the unstable point of
+             * one, or held by friction near it, is a quarter turn from the other's) */
+            s->if_theta = 3.0f * s->sl_t < p->if_align ? 0.5f * BC_PI_F : 0.0f;
             /* the resistance over the last quarter (if_r_est): sums of u.i and i.i, u the applied voltage the
              * observer took this sample (over [t_k-1, t_k]), i the current at t_k */
             if (p->if_r_est && 4.0f * s->sl_t >= 3.0f * p->if_align && u_obs_ok) {

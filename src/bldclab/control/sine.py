@@ -116,11 +116,8 @@ class Sine(Control):
         within ``asin(tau_L / (1.5 k_1 if_align_current))`` of the angle the observer is seeded with; the rest of the
         current limit brakes the swing.
     if_align : float, optional
-        Time of the alignment before the ramp (s). Default three periods of the rotor's oscillation about the
-        vector, ``2 pi / sqrt(p 1.5 k_1 if_current / J)`` each: the vector at pi/2 for a third, then a quarter turn
-        forwards, then a sweep forwards by ``2 asin(0.95 if_current / if_align_current)`` that drags a rotor held by
-        friction from behind (the observer's seed error then ahead of the rotor, where it decays), held still for
-        the last quarter (``bc_sine.h``, ALIGN).
+        Time the I/f current vector is held still before the ramp (s). Default three periods of the rotor's
+        oscillation about the vector, ``2 pi / sqrt(p 1.5 k_1 if_current / J)`` each.
     if_r_estimate : bool
         The observers use the resistance the alignment measures (``sum u.i / sum i.i`` over its last quarter, the
         rotor at rest: the voltage is ``R i``), not the drive data's; kept from the ramp until the next alignment,

@@ -188,22 +188,9 @@
  *
  *   IDLE   the reference (tau, or omega_ref with the speed loop) is 0: legs off. Otherwise dir = its sign, ALIGN.
  *   ALIGN  the current vector i_q,ref = dir if_align_current, i_d,ref = 0 in the frame of theta_if = pi/2 for the
- *          first third of if_align, then of theta_if = pi/2 + dir pi/2 (two steps: a rotor at the unstable point
- *          of one, or held near it by friction, is a quarter turn from the other's rest angle, and a rotor at the
- *          first's rest angle is pulled forwards, dir-wise, onto the second's), then a sweep: theta_if turns
- *          forwards (dir) by beta = 2 asin(min(BC_SINE_RHO_HI if_current / if_align_current, 1)) at the constant
- *          speed w_s = w_a / pi (w_a = (6 pi / if_align) sqrt(if_align_current / if_current), the rotor's swing
- *          about the alignment vector when if_align is three swing periods at if_current), ending at 3/4 of
- *          if_align (its time at most the second step's), and is held there for the last quarter. A friction load
- *          holds the rotor anywhere within asin(tau_load / (1.5 k_1 if_align_current)) of a stationary vector's
- *          rest angle; beta is twice that band at tau_load = RHO_HI 1.5 k_1 if_current, so the sweep drags the
- *          rotor from behind and leaves it at or behind the rest angle the observer is seeded with: the seed's
- *          error then lies ahead of the rotor, which Lee's observer removes as the rotor turns (an error behind
- *          it, larger than 2 omega / lambda, grows at low speed: d delta / dt = -omega ((1 - cos delta) + (omega
- *          / lambda) sin delta cos delta)). A rotor of up to about 12 times the inertia if_align was designed for
- *          that breaks away from rest against a load at the design bound catches the sweeping vector (the energy
- *          condition of RAMP's creep, below, with the alignment torque). The same PIs, decoupling with omega_if,
- *          no back-EMF feed-forward; the amplitude rises linearly over the first tenth of if_align
+ *          first third of if_align, then of theta_if = 0 (two steps: a rotor at the unstable point of one, or held
+ *          near it by friction, is a quarter turn from the other's rest angle; the same PIs, decoupling with
+ *          omega_if, no back-EMF feed-forward), its amplitude rising linearly over the first tenth of if_align
  *          (holding torque early, against an active load). A larger current than the ramp's narrows the band of
  *          angles in which a load holding the rotor (friction) leaves it away from the rest angle the observer is
  *          seeded with: asin(tau_load / (1.5 k_1 if_align_current)). A current-fed rotor has no damping of its own
@@ -211,8 +198,8 @@
  *          there, for either dir), and i_d,ref = -if_damp e_d (clamped to +-min(if_align_current / 2,
  *          sqrt(i_s_max^2 - if_align_current^2))) brakes it; e_d = x_d, the d PI's integrator, with decouple = 1
  *          (its feed-forward carries R i_d,ref), x_d - R i_d without (x_d - R i_d with decoupling fed the current
- *          back with the gain if_damp R, which above 1 latched i_d at its limit on a rotor at rest). An unloaded rotor
- *          settles with its q axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there:
+ *          back with the gain if_damp R, which above 1 latched i_d at its limit on a rotor at rest). An unloaded
+ *          rotor settles with its q axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there:
  *          theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP.
  *          With if_r_est = 1 the alignment also measures the resistance the observers use: over its last quarter
  *          (the vector still, the rotor at rest or swinging out) R^ = sum u.i / sum i.i of the applied
