@@ -428,8 +428,12 @@ class SixStepSensorless(Control):
     current_limit_time : float or str
         Time constant of the limiter at standstill (default ``"1 ms"``): gain ``2 (R + R_on) / (V_dc t)``.
     delay : int
-        Samples between computing and applying an output (0 or 1); :func:`bldclab.simulate` sets it from
-        ``Scenario.delay``.
+        Samples between computing and applying an output (0 or 1). Default 0: an ESC's firmware commutates in its
+        comparator's and commutation timer's interrupts, at the instant it computes (and its throttle's duty moves
+        far slower than a sample); 1: a controller that writes its outputs for the next PWM update, whose
+        commutation waits for the sample after the one that computed it (at a few samples a sector and a large
+        advance that alone loses synchronisation: docs/desync.md, "The controller's delay").
+        :func:`bldclab.simulate` sets it from ``Scenario.delay`` where that is given.
     """
 
     method: Literal["comparator", "adc", "integration"] = "comparator"
@@ -477,7 +481,7 @@ class SixStepSensorless(Control):
     duty_limit_current: float | str | None = None
     start_current_limit: float | str | None = None
     demag_limit: float = 0.6
-    delay: int = 1
+    delay: int = 0
     c_name: ClassVar[str] = "bemf"
     needs_bemf_sensing: ClassVar[bool] = True
     ref_meaning: ClassVar[str] = "duty (throttle) in [-1, 1], its sign the direction of rotation"
