@@ -301,7 +301,7 @@ static void start(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
 /* 6, cmp_blind: an accepted edge at x_e (s relative to t_k) whose comparator input changed in the pair's off-time
  * [v - h, v + h] (v the carrier valley; the pair's active state is next to the peak; even samples are valleys; h =
  * (1 - m) T_s with the duty of the last output), or at the start of the on-time after it (within min_pulse + 2
- * tau_filter + one tick), came from a crossing in that off-time. Into the clamped level (below: even sectors) F reads
+ * tau_filter + one tick, at most half the on-time), came from a crossing in that off-time. Into the clamped level (below: even sectors) F reads
  * the reference from the crossing to the on-time, which shows it: the crossing anywhere in the off-time, its middle
  * v. Out of it (odd sectors) F's diode current, built since v - h while its back-EMF was below, decays as long after
  * the crossing (a linear back-EMF): an edge inside the off-time at 2 t_z - (v - h), so t_z = (t_e + v - h) / 2; one
@@ -311,10 +311,11 @@ static float blind_edge(const bc_bemf_params *p, const bc_bemf_state *s, const b
 {
     if (p->chop != BC_CHOP_SYNC && p->chop != BC_CHOP_HIGH) return x_e;
     float x = x_e - p->t_comp; /* the comparator's input changed */
-    float tol = p->min_pulse + 2.0f * p->tau_filter + s->inv_tick, per = 2.0f * p->ts;
+    float h = (1.0f - bc_clampf(s->m_app, 0.0f, 1.0f)) * p->ts, per = 2.0f * p->ts;
+    /* at most half the on-time, m T_s: an edge later in it is the on-time's own (and the valley below unique) */
+    float tol = fminf(p->min_pulse + 2.0f * p->tau_filter + s->inv_tick, p->ts - h);
     float v0 = (s->k_samp & 1u) ? -p->ts : 0.0f;                    /* the last valley at or before t_k */
     float v = v0 - per * floorf((v0 - (x - tol)) / per + 0.5f);    /* the valley nearest x - tol */
-    float h = (1.0f - bc_clampf(s->m_app, 0.0f, 1.0f)) * p->ts;
     float y = x - v;
     if (!(fin(y) && y >= -h && y <= h + tol)) return x_e; /* in an on-time: the crossing itself */
     if (s->fd_on && tdiff(tadd(n->tk, (v - h) * p->f_tick), s->t_plain) < 0.0f) return x_e;
