@@ -179,8 +179,12 @@ def run_synthetic(ctl: bl.SixStepSensorless, drive: bl.Drive, syn: SyntheticDriv
 
 
 def locked(drive: bl.Drive, w_e: float, **kw) -> bl.SixStepSensorless:
-    """A direct start whose forced commutation runs at the rotor's speed ``w_e`` (electrical), so it locks at once."""
+    """A direct start whose forced commutation runs at the rotor's speed ``w_e`` (electrical), so it locks at once.
+
+    The synthetic drive's comparators see the off-time (no blindness to compensate: ``comparator_blind=False``).
+    """
     w_m = w_e / drive.motor.p
+    kw.setdefault("comparator_blind", False)
     return bl.SixStepSensorless(align_time=0.0, ramp_start_speed=w_m, ramp_end_speed=w_m, stall_speed=0.2 * w_m,
                                 blank=0.0, blank_time="2 us", min_pulse=0.0, **kw)
 
