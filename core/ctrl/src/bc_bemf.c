@@ -546,6 +546,7 @@ static void ho_prepare(bc_bemf_state *s, int32_t v)
     int m = v + 1 < BC_BEMF_HO_FIT ? (int)v + 1 : BC_BEMF_HO_FIT;
     if (m < 5) return;
     int n = m - 1, last = (int)((v - 1) % BC_BEMF_HO_FIT);
+    s->ho_k = last;
     s->ho_t = s->ho_ring[last];
     float u[BC_BEMF_HO_FIT - 1], sum = 0.0f;
     int j = last - (n - 1);
@@ -604,12 +605,10 @@ int bc_bemf_ho_fit(bc_bemf_state *s, float *alt, float *res, float *acc)
     *acc = 0.0f;
     int m = s->valid < BC_BEMF_HO_FIT ? (int)s->valid : BC_BEMF_HO_FIT;
     if (m < 5) return 1;
-    int last = (int)((s->valid - 1) % BC_BEMF_HO_FIT), prev = last > 0 ? last - 1 : BC_BEMF_HO_FIT - 1;
-    int first = last - (m - 1);
+    if (!(s->ho_n == s->valid - 1 && s->ho_t == s->ho_ring[s->ho_k])) ho_prepare(s, s->valid - 1);
+    int prev = s->ho_k, last = prev < BC_BEMF_HO_FIT - 1 ? prev + 1 : 0, first = last - (m - 1);
     if (first < 0) first += BC_BEMF_HO_FIT;
-    float tm = -(tdiff(s->ho_ring[first], s->ho_ring[last]) * s->inv_tick) / (float)(m - 1);
-    if (!(fin(tm) && tm > 0.0f)) return -1; /* the crossings span no time */
-    if (!(s->ho_n == s->valid - 1 && s->ho_t == s->ho_ring[prev])) ho_prepare(s, s->valid - 1);
+    if (!(tdiff(s->ho_ring[first], s->ho_ring[last]) < 0.0f)) return -1; /* the crossings span no time */
     /* this crossing, the last (k = m - 1), and the moments with it */
     float x = (tdiff(s->ho_ring[last], s->ho_ring[prev]) * s->inv_tick - s->ho_c) * s->ho_inv;
     float x2 = x * x, sg = (m & 1) ? 1.0f : -1.0f, fk = (float)(m - 1);
@@ -634,14 +633,19 @@ int bc_bemf_ho_fit(bc_bemf_state *s, float *alt, float *res, float *acc)
     float z1 = y1 - l10 * y0, z2 = y2 - l20 * y0 - l21 * z1, z3 = y3 - l30 * y0 - l31 * z1 - l32 * z2;
     float c3 = z3 / d3, c2 = z2 / d2 - l32 * c3, c1 = z1 / d1 - l21 * c2 - l31 * c3;
     float c0 = y0 / d0 - l10 * c1 - l20 * c2 - l30 * c3;
-    /* the largest distance of a crossing from the path (k even, then odd, and so on; this one the last) */
+    /* the largest distance of a crossing from the path (k even and odd in pairs; this one the last) */
     s->ho_x[m - 1] = x;
-    float ck = c0 + c3, cn = c0 - c3, fj = 0.0f, worst = 0.0f;
-    for (int k = 0; k < m; ++k, fj += 1.0f) {
-        float xk = s->ho_x[k], e = fabsf(ck + (c1 + c2 * xk) * xk - fj), t = ck;
-        worst = e > worst ? e : worst;
-        ck = cn;
-        cn = t;
+    float ce = c0 + c3, co = c0 - c3, fj = 0.0f, worst = 0.0f;
+    int k = 0;
+    for (; k + 1 < m; k += 2, fj += 2.0f) {
+        float xe = s->ho_x[k], xo = s->ho_x[k + 1];
+        float ee = fabsf(ce + (c1 + c2 * xe) * xe - fj), eo = fabsf(co + (c1 + c2 * xo) * xo - (fj + 1.0f));
+        worst = ee > worst ? ee : worst;
+        worst = eo > worst ? eo : worst;
+    }
+    if (k < m) {
+        float ee = fabsf(ce + (c1 + c2 * s->ho_x[k]) * s->ho_x[k] - fj);
+        worst = ee > worst ? ee : worst;
     }
     *alt = fabsf(c3) * PI3_F;
     *res = worst * PI3_F;

@@ -430,7 +430,8 @@ typedef struct {
     uint32_t ho_ring[BC_BEMF_HO_FIT]; /* ticks of the last crossings of those sectors (the handover's fit, 5) */
     /* the handover's fit prepared from the crossings known, for the next crossing's (5, bc_bemf_ho_prepare) */
     int32_t ho_n;          /* valid it was prepared at (the next fit's crossings: min(ho_n + 1, BC_BEMF_HO_FIT)) */
-    uint32_t ho_t;         /* tick of the last crossing it knows */
+    int32_t ho_k;          /* ho_ring's slot of the last crossing it knows */
+    uint32_t ho_t;         /* that crossing's tick */
     float ho_c, ho_inv;    /* its time origin after that crossing (s) and 1 / its time unit (1/s) */
     float ho_x[BC_BEMF_HO_FIT]; /* the known crossings' times in that unit from that origin, oldest first (and the
                                  * fitted crossing's, last) */
