@@ -6,7 +6,8 @@
  * outlasting the crossing, a rotor that stops, a false crossing, a stall, a start that fails); the late commutation;
  * the forced ramp following a faster rotor by its crossings, and its V/f duty; the start-up from alignment to closed
  * loop on a dynamic rotor in both directions and from any angle without alignment, a stop and a reverse; the
- * throttle ramp and the current limit. */
+ * throttle ramp and the current limit; the handover's fit made in two parts against the one-shot fit and the exact one
+ * on random crossing sequences. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
