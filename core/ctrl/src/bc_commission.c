@@ -17,19 +17,26 @@ int bc_commission_init(const bc_commission_params *p, bc_commission_state *s)
         !finite_pos(p->v_pulse) || !finite_pos(p->i_if) || !finite_pos(p->if_accel) || !finite_pos(p->w_spin) ||
         !finite_pos(p->t_spin) || !finite_pos(p->psi_min) || !finite_pos(p->tol_move) ||
         !finite_pos(p->tol_follow) || !finite_pos(p->i_max) || !finite_pos(p->v_max) || !finite_nonneg(p->k_damp) ||
-        !finite_nonneg(p->t_dead) || !(p->t_dead < p->ts) || !finite_nonneg(p->v_diode))
+        !finite_nonneg(p->t_dead) || !(p->t_dead < p->ts) || !finite_nonneg(p->v_diode) ||
+        !finite_pos(p->tol_noise) || !finite_pos(p->t_offset))
         return BC_ERR_PARAM;
     if (p->n_pulse < 1 || p->n_pulse > 1000 || p->pulse_len < 1 || p->pulse_len > 1000) return BC_ERR_PARAM;
+    if (p->n_pulse_max < p->n_pulse || p->n_pulse_max > 1000) return BC_ERR_PARAM;
     if (p->i_test >= p->i_max || p->i_if >= p->i_max) return BC_ERR_PARAM;
     s->guard_p = (bc_guard_params){.i_max = p->i_max, .v_max = p->v_max};
     if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
     s->pi_p = (bc_pi_params){.kp = p->kp, .ki = p->ki, .ts = p->ts, .u_min = -p->v_max, .u_max = p->v_max};
     if (bc_pi_init(&s->pi_p, &s->pi_d) != BC_OK || bc_pi_init(&s->pi_p, &s->pi_q) != BC_OK) return BC_ERR_PARAM;
-    s->phase = BC_COMM_PH_ALIGN;
+    s->phase = BC_COMM_PH_OFFSET;
     s->status = BC_COMM_RUNNING;
     s->t = 0.0f;
     s->k = 0;
     s->phi = s->w_phi = 0.0f;
+    for (int x = 0; x < 3; ++x) s->i_off[x] = s->s_o[x] = 0.0f;
+    s->sig_i = 0.0f;
+    s->n_cmd = 0;
+    s->b_a = s->b_b = 0.0f;
+    s->b_n = 0;
     for (int j = 0; j < 2; ++j) {
         s->u_hist[j][0] = s->u_hist[j][1] = 0.0f;
         s->phi_hist[j] = 0.0f;
@@ -49,6 +56,8 @@ static void next_phase(bc_commission_state *s, int32_t phase)
     s->t = 0.0f;
     s->k = 0;
     s->n = s->s_v = s->s_i = s->s_vb = s->s_e = s->s_e2 = s->s_dd = s->e_ang = 0.0f;
+    s->b_a = s->b_b = 0.0f;
+    s->b_n = 0;
     s->v_lo = 3.0e38f;
     s->v_hi = -3.0e38f;
 }
@@ -59,15 +68,34 @@ static void stop(bc_commission_state *s, int32_t status)
     s->phase = BC_COMM_PH_DONE;
 }
 
-/* A window sample of the R test: the voltage over [t_k-1, t_k] and the current at t_k. */
-static void r_sample(bc_commission_state *s, bc_ab u, bc_ab i)
+/* A window sample of the R test: the voltage over [t_k-1, t_k] and the current at t_k into the means; the voltage
+ * into the mean of its block (BC_COMM_BLOCKS a window), and each block's mean into the spread of alpha and the
+ * largest |beta| (block means: the current's noise through k_p would dominate single samples). */
+static void r_sample(const bc_commission_params *p, bc_commission_state *s, bc_ab u, bc_ab i)
 {
     s->n += 1.0f;
     s->s_v += u.alpha;
     s->s_i += i.alpha;
-    s->s_vb = fmaxf(s->s_vb, fabsf(u.beta));
-    s->v_lo = fminf(s->v_lo, u.alpha);
-    s->v_hi = fmaxf(s->v_hi, u.alpha);
+    s->b_a += u.alpha;
+    s->b_b += u.beta;
+    s->b_n += 1;
+    int32_t nb = (int32_t)(p->t_window / ((float)BC_COMM_BLOCKS * p->ts));
+    if (s->b_n >= (nb > 1 ? nb : 1)) {
+        float a = s->b_a / (float)s->b_n, b = s->b_b / (float)s->b_n;
+        s->s_vb = fmaxf(s->s_vb, fabsf(b));
+        s->v_lo = fminf(s->v_lo, a);
+        s->v_hi = fmaxf(s->v_hi, a);
+        s->b_a = s->b_b = 0.0f;
+        s->b_n = 0;
+    }
+}
+
+/* L's relative standard error from the current's noise within tol_noise after `pairs` pulse pairs: the sum
+ * sum s (i_k - i_k-1) takes each sample's noise at the 2 pairs - 1 sign changes twice and at its ends once,
+ * variance (8 pairs - 2) sig_i^2. */
+static int l_precise(const bc_commission_params *p, const bc_commission_state *s, int32_t pairs)
+{
+    return s->sig_i * sqrtf((float)(8 * pairs - 2)) <= p->tol_noise * fabsf(s->l_den);
 }
 
 /* End of an R window: the means, and ROTOR_MOVING if the rotor's back-EMF shows. Returns 1 if it may go on. */
@@ -102,12 +130,30 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
         out->diag[7] = (float)s->status;
         return;
     }
+    for (int x = 0; x < 3; ++x) i3[x] -= s->i_off[x]; /* the sensors' offsets, measured in OFFSET */
     bc_ab i = bc_clarke((bc_abc){i3[0], i3[1], i3[2]});
     bc_ab u = {s->u_hist[1][0], s->u_hist[1][1]}; /* applied over [t_k-1, t_k] */
     float phi_u = s->phi_hist[1];                /* its vector angle */
     float ts = p->ts;
     s->t += ts;
     s->k++;
+
+    if (s->phase == BC_COMM_PH_OFFSET) {
+        /* legs off, no current: the sensors read their offsets, and the spread of alpha is the noise */
+        s->n += 1.0f;
+        for (int x = 0; x < 3; ++x) s->s_o[x] += i3[x];
+        s->s_i += i.alpha;
+        s->s_e2 += i.alpha * i.alpha;
+        if (s->t >= p->t_offset) {
+            float m = s->s_i / s->n;
+            s->sig_i = sqrtf(fmaxf(s->s_e2 / s->n - m * m, 0.0f));
+            for (int x = 0; x < 3; ++x) s->i_off[x] = s->s_o[x] / s->n;
+            next_phase(s, BC_COMM_PH_ALIGN);
+        }
+        out->diag[0] = (float)s->phase;
+        out->diag[7] = (float)s->status;
+        return;
+    }
 
     float i_ref = p->i_test;
     int pulse = 0;     /* 1: open loop, u_hold + the pulse */
@@ -126,7 +172,7 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
         }
         break;
     case BC_COMM_PH_R_HI:
-        if (s->t > p->t_settle) r_sample(s, u, i);
+        if (s->t > p->t_settle) r_sample(p, s, u, i);
         if (s->t >= p->t_settle + p->t_window) {
             if (!r_end(p, s, &s->V2, &s->I2)) break;
             if (fabsf(s->I2) < 0.5f * p->i_test) {
@@ -138,7 +184,7 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
         break;
     case BC_COMM_PH_R_LO:
         i_ref = 0.5f * p->i_test;
-        if (s->t > p->t_settle) r_sample(s, u, i);
+        if (s->t > p->t_settle) r_sample(p, s, u, i);
         if (s->t >= p->t_settle + p->t_window) {
             if (!r_end(p, s, &s->V1, &s->I1)) break;
             s->R = (s->V2 - s->V1) / (s->I2 - s->I1); /* R = (V_2 - V_1) / (I_2 - I_1) */
@@ -146,22 +192,27 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
             s->u_hold[0] = s->pi_d.x;
             s->u_hold[1] = s->pi_q.x;
             s->l_num = s->l_den = 0.0f;
+            s->n_cmd = 2 * p->n_pulse * p->pulse_len;
             next_phase(s, BC_COMM_PH_L);
         }
         break;
     case BC_COMM_PH_L: {
         i_ref = 0.5f * p->i_test;
-        int32_t n_cmd = 2 * p->n_pulse * p->pulse_len; /* commands of the pulse train */
-        int32_t c = s->k - 1;                          /* this sample's command index in the phase */
+        int32_t c = s->k - 1; /* this sample's command index in the phase */
         /* measurement: the interval [t_k-1, t_k] carries the command of two samples ago, c - 2 */
         int32_t cm = c - 2;
-        if (cm >= 0 && cm < n_cmd) {
+        if (cm >= 0 && cm < s->n_cmd) {
             float sg = ((cm / p->pulse_len) % 2 == 0) ? 1.0f : -1.0f;
             float im = 0.5f * (s->i_prev[0] + i.alpha);
             /* L = sum s (u - V_1 - R (i_mean - I_1)) T_s / sum s (i_k - i_k-1) */
             s->l_num += sg * (u.alpha - s->V1 - s->R * (im - s->I1)) * ts;
             s->l_den += sg * (i.alpha - s->i_prev[0]);
         }
+        int32_t pairs = s->n_cmd / (2 * p->pulse_len);
+        /* at the train's end, a pair more while L's standard error from the noise is above tol_noise (the sums
+         * lack the last two intervals: the estimate errs on the safe side) */
+        if (c == s->n_cmd && pairs < p->n_pulse_max && !l_precise(p, s, pairs)) s->n_cmd += 2 * p->pulse_len;
+        int32_t n_cmd = s->n_cmd;
         if (c < n_cmd) {
             pulse = 1;
             v_add = ((c / p->pulse_len) % 2 == 0) ? p->v_pulse : -p->v_pulse;
@@ -170,6 +221,10 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
         } else {
             s->L = (s->l_den != 0.0f) ? s->l_num / s->l_den : 0.0f;
             if (!isfinite(s->L)) s->L = 0.0f;
+            if (!l_precise(p, s, pairs)) {
+                stop(s, BC_COMM_NOISY); /* n_pulse_max pairs and still not precise */
+                break;
+            }
             if (s->t >= (float)(n_cmd + 2) * ts + p->t_settle) next_phase(s, BC_COMM_PH_SPIN);
         }
         break;
