@@ -6,19 +6,24 @@
  * Frames: amplitude-invariant alpha-beta (bc_transform.h). The controller drives a current vector i_ref e^(j phi)
  * with two PIs in the frame of phi (the same gains for both axes), the voltage rotated back with the loop's delay
  * compensated (phi + 1.5 omega_phi T_s) and min-max SVM. The voltage of sample k-2 (the one applied over [t_k-1,
- * t_k], as in bc_obs.h) is taken back from its duties and the dead time: u = Clarke(d_x v_dc + w_x). A
- * complementary leg loses v_t = (v_dc + 2 v_diode) t_dead / (2 T_s) of its mean voltage at the upper switch's
- * turn-on when the current there is positive (a diode holds the terminal low through the dead time) and gains it at
- * the turn-off when the current there is negative. With the on-time centred on the sample, the current at the two
- * edges is the sample's i_x -+ rho_x, the PWM ripple from the centre to an edge (the legs' duties and L; the
- * back-EMF, constant over the period, cancels):
+ * t_k], as in bc_obs.h) is taken back from its duties and the dead time ("dead time"): u = Clarke(d_x v_dc + w_x).
  *
- *     rho_x = (v_dc T_s / (3 L)) (2 d_x (1 - d_x) - sum_{y != x} (min(d_x, d_y) - d_x d_y))
- *     w_x   = -(v_t / 2) (sat((i_x - rho_x) / b) + sat((i_x + rho_x) / b))     (sat: clamp to [-1, 1])
+ * Dead time. The samples alternate between the carrier's valley and peak (the first a valley): a half period from a
+ * peak holds each leg's turn-off edge (at d_x T_s), one from a valley its turn-on (at (1 - d_x) T_s). When a
+ * command's half period starts (the next sample), its loss or gain w_x is worked out event by event from the phase
+ * currents measured then: between events every current changes at
  *
- * -v_t / +v_t when the current keeps its sign over the period, 0 when the ripple takes it through zero (b 2 % of the
- * larger test current; rho = 0 before L is measured). The R test's two levels and the pulses about a held point
- * cancel this error anyway; the spin's back-EMF would keep it. Phases, in order:
+ *     di_x/dt = (v_x - (v_a + v_b + v_c) / 3 - eb_x) / L,    eb = e + R i = u - L (i_k - i_k-1) / T_s
+ *
+ * (eb of the half period before: its voltage, corrected, less what the inductance took); a leg at its edge has both
+ * switches off for t_dead, its terminal set by its current, -v_diode for i_x > 0 and v_dc + v_diode for i_x < 0,
+ * and if that current reaches zero in the dead time it floats where it stays zero, v_x = 1.5 eb_x + (v_y + v_z) / 2
+ * (within the rails), until the switch takes it to its new level; w_x is the mean terminal voltage so found less
+ * d_x v_dc. The events (three edges, their dead times' ends, the currents' ends) move each other: a leg held by its
+ * diode lengthens the others' states, and their ripple decides whether the next edge is held. Before L is measured
+ * the loss is -v_t sat(i_x / b), v_t = (v_dc + 2 v_diode) t_dead / (2 T_s), b 2 % of the larger test current. The
+ * R test's two levels and the pulses about a held point cancel this error anyway; the spin's back-EMF would keep it.
+ * Phases, in order:
  *
  *  0. OFFSET  t_offset with the legs off (no current flows in a motor at rest): the mean of each phase current is
  *             its sensor's offset, taken off every later sample (as firmware calibrates with the PWM off); the
@@ -156,6 +161,9 @@ typedef struct {
     int32_t n_cmd;         /* L: commands of the pulse train (grows a pair at a time while the noise asks) */
     float b_a, b_b;        /* R test: the voltage's sums over the block (alpha, beta) */
     int32_t b_n;           /* ... and its samples */
+    float d_cmd[3], v_cmd; /* the last command's duties and bus voltage (V), for its dead-time correction */
+    int32_t has_cmd;       /* 1: that correction is still to be added to u_hist[0] */
+    uint32_t odd;          /* 1: this sample is at a carrier peak (odd samples from the first, a valley) */
     float R, L, psi;       /* results (0 until measured) */
 } bc_commission_state;
 
