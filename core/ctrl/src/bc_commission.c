@@ -177,7 +177,10 @@ static bc_ab dt_voltage(const bc_commission_params *p, const bc_commission_state
             flt[who] = 1;
         }
     }
-    for (int x = 0; x < 3; ++x) w[x] = area[x] / ts - d[x] * v;
+    for (int x = 0; x < 3; ++x) {
+        w[x] = area[x] / ts - d[x] * v;
+        if (!isfinite(w[x])) w[x] = 0.0f; /* measurements out of any range: no correction rather than NaN */
+    }
     return bc_clarke((bc_abc){w[0], w[1], w[2]});
 }
 
