@@ -7,7 +7,10 @@ script asks whether that is a difference in how the two drives are compared, and
 
 - Hall six-step as :func:`~bldclab.analysis.sensorless.versus_hall` runs it (``SixStep(regulation="duty",
   timed=True)``: the commutation timer at the Hall angle) and at the PWM sample (``timed=False``);
-- the sensorless drive after each crossing (``grid 0``) and on the uniform grid (``grid 0.1``);
+- the sensorless drive after each crossing (``grid 0``) and on the uniform grid (``grid 0.1``), with the drive's
+  default ``comparator_blind`` (docs/sensorless.md, law 6: on an inverter with ideal diodes a crossing in the PWM
+  off-time is placed in the off-time, not at the edge that shows it) and with the edges taken as seen (``seen``,
+  ``comparator_blind=False``);
 - all at the same duty (Hall six-step's for half ``I_N``'s torque) and imposed speed, the rotor's initial angle
   shifted by ``k/K`` of one PWM period's travel (``K`` shifts): each run's commutations move by that fraction of the
   carrier against the carrier, so the mean over the shifts is the carrier-averaged torque.
@@ -87,7 +90,9 @@ def main() -> None:
         raise SystemExit("under four PWM periods per sector: the locked start needs a speed ramp (run_locked)")
     hall = SixStep(regulation="duty", chopping="sync", timed=True)
     drives = {"hall timed": hall, "hall sampled": SixStep(regulation="duty", chopping="sync", timed=False),
-              "grid 0": locked(d, w_m), "grid 0.1": locked(d, w_m, grid_gain=0.1)}
+              "grid 0": locked(d, w_m), "grid 0.1": locked(d, w_m, grid_gain=0.1),
+              "grid 0 seen": locked(d, w_m, comparator_blind=False),
+              "grid 0.1 seen": locked(d, w_m, grid_gain=0.1, comparator_blind=False)}
     duty, _ = _hall_duty(d, args.speed, args.periods, hall)
     settle = 6.0
     t0, dur = settle * period, (settle + args.periods) * period

@@ -126,7 +126,7 @@ class SyntheticDrive:
         inp["zc_count"] = self.count
         inp["zc_tick"] = self.tick
 
-    def apply(self, k: int, out: np.ndarray, delay: int = 1) -> None:
+    def apply(self, k: int, out: np.ndarray, delay: int) -> None:
         ta = (k + delay) * self.ts
         self.set_pair(ta, out["leg"][0])
         if int(out["has_at"][0]):
@@ -173,14 +173,18 @@ def run_synthetic(ctl: bl.SixStepSensorless, drive: bl.Drive, syn: SyntheticDriv
         inp["ref"] = ref
         out[...] = 0
         c.controller_step(info, owner.record, state, inp, out)
-        syn.apply(k, out)
+        syn.apply(k, out, delay=ctl.delay)
         outs.append(out.copy())
     return outs
 
 
 def locked(drive: bl.Drive, w_e: float, **kw) -> bl.SixStepSensorless:
-    """A direct start whose forced commutation runs at the rotor's speed ``w_e`` (electrical), so it locks at once."""
+    """A direct start whose forced commutation runs at the rotor's speed ``w_e`` (electrical), so it locks at once.
+
+    The synthetic drive's comparators see the off-time (no blindness to compensate: ``comparator_blind=False``).
+    """
     w_m = w_e / drive.motor.p
+    kw.setdefault("comparator_blind", False)
     return bl.SixStepSensorless(align_time=0.0, ramp_start_speed=w_m, ramp_end_speed=w_m, stall_speed=0.2 * w_m,
                                 blank=0.0, blank_time="2 us", min_pulse=0.0, **kw)
 
@@ -244,6 +248,24 @@ def test_units_and_defaults_from_the_drive():
 def test_bad_settings_name_the_field(kw, field):
     with pytest.raises(BldclabError, match=field.replace(".", r"\.")):
         bl.SixStepSensorless(**kw)
+
+
+def test_the_esc_runs_without_the_samples_delay_unless_the_scenario_says_so():
+    """An ESC's firmware commutates in its interrupts: ``SixStepSensorless`` runs with ``delay`` 0 where the Scenario
+    leaves it (``None``), its first output (the alignment's legs) applied from t = 0; a Scenario's delay of 1 is
+    applied to it (the first half period with every leg off), and other controllers keep their 1."""
+    d = bl.load("f60prov-2550kv")
+    sc = bl.Scenario(duration=4e-4, ref=0.3)
+    assert sc.delay is None and bl.SixStepSensorless().delay == 0 and bl.SixStepSensorless().own_delay == 0
+    for delay, on_at_0 in ((None, True), (1, False), (0, True)):
+        r = bl.simulate(d, bl.SixStepSensorless(), dataclasses.replace(sc, delay=delay), check="off")
+        modes = np.vstack([r.signals[f"mode_{x}"] for x in "abc"])
+        assert r.meta["control"]["delay"] == r.meta["scenario"]["delay"] == (0 if delay is None else delay)
+        assert bool(modes[:, 0].any()) == on_at_0 and modes[:, 1].any(), (delay, modes[:, :2])
+    assert bl.SixStep().own_delay == 1 and bl.Sine().own_delay == 1
+    for bad in (2, True, -1):
+        with pytest.raises(BldclabError, match=r"scenario\.delay"):
+            bl.Scenario(duration=1e-3, delay=bad)
 
 
 def test_comparator_needs_the_star_reference():
@@ -325,7 +347,8 @@ def test_a_clamp_outlasting_the_crossing_is_a_named_desync():
     syn = SyntheticDrive(w=w, th0=5 * math.pi / 6 - w * ts, ts=ts, f_tick=d.sensors.f_tick)
     c = core()
     info = c.controllers["bemf"]
-    owner = locked(d, w).c_record(d, c, 0)
+    ctl = locked(d, w)
+    owner = ctl.c_record(d, c, 0)
     state = c.opaque(info.state)
     assert c.controller_init(info, owner.record, state) == 0
     inp, out = c.record("bc_ctrl_in"), c.record("bc_ctrl_out")
@@ -337,7 +360,7 @@ def test_a_clamp_outlasting_the_crossing_is_a_named_desync():
         inp["ref"] = 0.5
         out[...] = 0
         c.controller_step(info, owner.record, state, inp, out)
-        syn.apply(k, out)
+        syn.apply(k, out, delay=ctl.delay)
         if first is None and int(out["flags"][0]) & bl.flag("DESYNC"):
             first = (k, int(out["flags"][0]), out.copy())
     assert first is not None

@@ -88,7 +88,7 @@ static const float LU_F_12[12] = {0.0f, 0.4f, 0.4f, 0.4f, 0.4f, 0.4f, 0.0f, -0.4
      .n_handover = 6, .duty_min = 0.0f, .duty_rate = 0.0f, .ref_stop = 0.0f, .restart_wait = 0.05f,              \
      .restart_max = 1.0f, .use_current = 1, .i_max = 100.0f, .i_limit = 0.0f, .k_limit = 2.083333f, .v_max = 96.0f, \
      .fast_demag = 1, .fd_after = 0.3f, .dlim_d0 = 0.05208333f, .dlim_vf = 0.001666667f, .dlim_tau = 1.5e-3f,     \
-     .demag_max = 0.6f, .cmp_gate = 0, .i_start = 50.0f}
+     .demag_max = 0.6f, .cmp_gate = 0, .cmp_blind = 0, .i_start = 50.0f}
 
 /* The sensorless Sine on htm-48v: HTM_SINE_PARAMS with the angle from the flux observer (HTM_FLUXOBS_PARAMS with
  * Sine(angle="observer")'s defaults for the drive: lambda = 2 omega_on = 107 rad/s) and its I/f start-up (0.5 I_s,N,

@@ -18,6 +18,13 @@
  * crossing or clamp_post after it (k the trapezoid, its ramp 30 degrees either side of the crossing): the phase
  * still conducts a current its back-EMF drove in the PWM off-time (high-side chopping: e_x < 0 clamps to 0 V).
  *
+ * Blind off-times (blind = 1; ideal diodes with high-side or synchronous chopping): the pair's off-time (centred at
+ * the carrier valleys, the even samples, half-width (1 - m) ts) holds both driven terminals at 0 V, and a floating
+ * phase (after its demagnetisation) whose back-EMF is below the reference there conducts through its lower diode and
+ * reads the reference exactly: its comparator holds the level it showed at the off-time's start a. A back-EMF that
+ * rises through zero at t_z in the off-time frees it when the diode current built since a has decayed, at 2 t_z - a
+ * (a linear back-EMF), or at the on-time's start b; one that falls through zero shows it at b.
+ *
  * The controller's output at sample k applies from t_(k+delay) (and leg_at from there + t_at); every change of the
  * driven pair is a commutation, recorded with its time. True crossings of the floating phase are recorded too. */
 #ifndef SYNTH_BEMF_H
@@ -46,6 +53,7 @@ typedef struct {
     double demag, demag_long;
     double clamp_pre, clamp_post; /* off-time clamp beyond these |k| (>= 1: none) */
     double shift[3];              /* each phase's back-EMF delayed by this electrical angle (0: the magnet's grid) */
+    int blind;                    /* 1: the floating phase's comparator blind in the pair's off-time (above) */
     long n_long;
     int glitch_x;
     double glitch_t, glitch_len;
@@ -165,6 +173,35 @@ static inline int sb_seg_at(const synth_bemf *g, double t)
     return lo % SB_NSEG;
 }
 
+/* the pair's off-time [*a, *b) holding t (centred at the nearest carrier valley, half-width (1 - m) ts): 1, else 0 */
+static inline int sb_offtime(const synth_bemf *g, double t, double *a, double *b)
+{
+    double per = 2.0 * g->ts, v = per * floor(t / per + 0.5);
+    double h = (1.0 - g->seg_m[sb_seg_at(g, v)]) * g->ts;
+    *a = v - h;
+    *b = v + h;
+    return t >= *a && t < *b;
+}
+
+static inline double sb_solve(const synth_bemf *g, double t1, double t2, double ang);
+
+/* the zero of phase x's back-EMF in (t1, t2], if one: 1 and *tz */
+static inline int sb_zero_in(const synth_bemf *g, int x, double t1, double t2, double *tz)
+{
+    double a1 = sb_theta(g, t1), a2 = sb_theta(g, t2), off = sb_off(g, x);
+    double lo = a1 < a2 ? a1 : a2, hi = a1 < a2 ? a2 : a1;
+    for (double n = ceil((lo - off) / BC_PI); n * BC_PI + off <= hi; n += 1.0) {
+        double tgt = n * BC_PI + off;
+        if ((a1 - tgt) * (a2 - tgt) > 0.0 || a1 == tgt) continue;
+        *tz = sb_solve(g, t1, t2, tgt);
+        return 1;
+    }
+    return 0;
+}
+
+/* phase x's back-EMF at t */
+static inline double sb_emf(const synth_bemf *g, int x, double t) { return sb_omega(g, t) * sb_trap(sb_theta(g, t) - sb_off(g, x)); }
+
 /* true level of phase x at t (the back-EMF's sign from the speed at t) */
 static inline int sb_level(const synth_bemf *g, int x, double t)
 {
@@ -172,8 +209,14 @@ static inline int sb_level(const synth_bemf *g, int x, double t)
     if (x == g->seg_pos[j]) return 1;
     if (x == g->seg_neg[j]) return 0;
     if (x == g->seg_fl[j] && t < g->seg_cl_end[j]) return g->seg_cl[j];
-    double w = sb_omega(g, t);
-    double e = w * sb_trap(sb_theta(g, t) - sb_off(g, x));
+    double e = sb_emf(g, x, t), a, b;
+    if (g->blind && x == g->seg_fl[j] && sb_offtime(g, t, &a, &b) && a >= g->seg_t[j] && a >= g->seg_cl_end[j]) {
+        int at_a = sb_emf(g, x, a) > 0.0;
+        if (!(e > 0.0)) return at_a; /* clamped: the comparator holds */
+        double tz;
+        if (!at_a && sb_zero_in(g, x, a, t, &tz) && t < 2.0 * tz - a) return 0; /* the diode current decays */
+        return 1;
+    }
     return e > 0.0 ? 1 : 0;
 }
 
@@ -281,6 +324,16 @@ static inline void sb_edges(synth_bemf *g, double t1, double t2, int log_zc)
             for (int j = 1; j < g->tab_n; ++j) {
                 double tj = g->tab_t0 + (double)j * g->h;
                 if (tj > t1 && tj <= t2) c[nc++] = tj;
+            }
+        }
+        if (g->blind) { /* the off-times' ends, and where a rising crossing's diode current ends */
+            double per = 2.0 * g->ts;
+            for (double v = per * floor(t1 / per) - per; v <= t2 + per && nc < 2 * SB_NSEG + SB_NSUB + 10; v += per) {
+                double a, b, tz;
+                (void)sb_offtime(g, v, &a, &b);
+                if (a > t1 && a <= t2) c[nc++] = a;
+                if (b > t1 && b <= t2) c[nc++] = b;
+                if (sb_zero_in(g, x, a, b, &tz) && 2.0 * tz - a > t1 && 2.0 * tz - a <= t2) c[nc++] = 2.0 * tz - a;
             }
         }
         if (g->glitch_t >= 0.0 && x == g->glitch_x) {

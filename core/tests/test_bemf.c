@@ -231,6 +231,7 @@ static void test_fuzz(void)
         p.align_time = (rnd(&seed) % 2u) ? 0.0f : 1e-3f;
         p.grid_gain = (rnd(&seed) % 2u) ? 0.2f : 0.0f; /* the uniform grid's code fuzzed too */
         p.brake_tau = (rnd(&seed) % 2u) ? 2e-3f : 0.0f;    /* and the braking timeout's (9) */
+        p.cmp_blind = (int32_t)(rnd(&seed) % 2u);        /* and the blind off-times' (6) */
         p.brake_acc = 500.0f;
         p.brake_q = 1e-4f;
         bc_bemf_state s;
@@ -1210,6 +1211,58 @@ static void test_uniform_grid(void)
     CHECK(bc_bemf_init(&p, &st) == BC_ERR_PARAM, "grid_gain NaN refused");
 }
 
+/* 6, cmp_blind. The synthetic drive's comparators blind in the pair's off-time (ideal diodes: the floating phase
+ * clamped at the driven terminals' rail reads the reference), high-side and synchronous chopping, duty 0.2, 287 Hz
+ * (11.6 PWM periods a sector: the crossings drift through the carrier; the interval filter slow, 0.05, so that each
+ * commutation's error is its crossing's). Taken as seen, a crossing in the off-time [a, b] (half-width h = 0.8 T_s
+ * = 20 us) is late: rising, by min(t_z - a, b - t_z) (the diode current's decay; h / 2 on average over the
+ * off-time), falling by b - t_z (h on average): over the carrier (a share 1 - m of the crossings in an off-time)
+ * 3 (1 - m) h / 4 = 12 us, up to 2 h. Placed in the off-time (the rising ones inside it exactly, those at the
+ * on-time's start and the falling ones at the middle of where they can be): no bias (the mean within 1 us: the
+ * crossings' carrier phases over 140 sectors are not exactly uniform), each within h of its crossing (1.1 h for
+ * the commutation: the interval filter's share). */
+static void test_blind_offtime(void)
+{
+    static synth_bemf g;
+    const double w = 2.0 * BC_PI * 287.0, m = 0.2, h = (1.0 - m) * TS, lag = 0.75 * (1.0 - m) * h;
+    const int chops[2] = {BC_CHOP_HIGH, BC_CHOP_SYNC};
+    for (int ic = 0; ic < 2; ++ic) {
+        for (int dir = 1; dir >= -1; dir -= 2) {
+            double mean[2], worst[2];
+            for (int blind = 0; blind <= 1; ++blind) {
+                bc_bemf_params p = locked(BC_BEMF_COMPARATOR, w);
+                p.chop = chops[ic];
+                p.cmp_blind = blind;
+                p.t60_gain = 0.05f;
+                sb_init(&g, TS, F_TICK, 1);
+                kin_rotor(&g, w, dir, 0.0);
+                g.demag = 30e-6;
+                g.blind = 1;
+                run_stats r = run_kinematic(p, &g, 4000, (float)(dir * m), 0.02, 0.0);
+                CHECK(r.desync == 0 && r.missing == 0 && r.n_closed_comm > 120,
+                      "chop %d dir %d cmp_blind %d: %ld commutations, %ld desyncs, %ld missing", chops[ic], dir, blind,
+                      r.n_closed_comm, r.desync, r.missing);
+                mean[blind] = r.mean_err;
+                worst[blind] = r.worst;
+            }
+            CHECK(mean[0] > 0.85 * lag && mean[0] < 1.15 * lag && worst[0] > 1.5 * h && worst[0] < 2.0 * h + 3.0 * TICK,
+                  "chop %d dir %d, edges as seen: mean lag %.3g s (closed form %.3g), worst %.3g s", chops[ic], dir,
+                  mean[0], lag, worst[0]);
+            CHECK(fabs(mean[1]) < 1e-6 && worst[1] < 1.1 * h,
+                  "chop %d dir %d, cmp_blind: mean error %.3g s, worst %.3g s (h %.3g)", chops[ic], dir, mean[1],
+                  worst[1], h);
+            if (ic == 1 && dir == 1)
+                printf("test_bemf: blind off-times, duty 0.2: mean lag %.2f us as seen (closed form %.2f), %.2f us "
+                       "placed (worst %.1f -> %.1f us)\n", mean[0] * 1e6, lag * 1e6, mean[1] * 1e6, worst[0] * 1e6,
+                       worst[1] * 1e6);
+        }
+    }
+    bc_bemf_params p = locked(BC_BEMF_COMPARATOR, w);
+    bc_bemf_state st;
+    p.cmp_blind = 2;
+    CHECK(bc_bemf_init(&p, &st) == BC_ERR_PARAM, "cmp_blind 2 refused");
+}
+
 /* 7, the uniform grid bounded by the demagnetisation. Phases b and c 2 and -1.5 degrees off as above, and a clamp of
  * 18 degrees (0.6 of the 30-degree window) against demag_max 0.6: a commutation must leave the next crossing at least
  * 18 / 0.6 = 30 degrees (the clamp at most demag_max of the window), and the next crossing is expected one T60 after
@@ -1482,5 +1535,6 @@ int main(void)
     test_fast_demag_dead_time();
     test_uniform_grid();
     test_uniform_grid_demag_bound();
+    test_blind_offtime();
     return bc_test_summary("test_bemf");
 }

@@ -66,7 +66,7 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s)
         !(fin(p->v_max) && p->v_max > 0.0f) || (p->fast_demag != 0 && p->fast_demag != 1) ||
         !(fin(p->fd_after) && p->fd_after >= 0.0f && p->fd_after < 1.0f) || !in01(p->dlim_d0) ||
         !nonneg(p->dlim_vf) || !nonneg(p->dlim_tau) || !(fin(p->demag_max) && p->demag_max >= 0.0f && p->demag_max < 1.0f) ||
-        (p->cmp_gate != 0 && p->cmp_gate != 1) || !nonneg(p->i_start) ||
+        (p->cmp_gate != 0 && p->cmp_gate != 1) || (p->cmp_blind != 0 && p->cmp_blind != 1) || !nonneg(p->i_start) ||
         !(fin(p->d_diode) && p->d_diode >= 0.0f && p->d_diode < 1.0f))
         return BC_ERR_PARAM;
     *s = (bc_bemf_state){0};
@@ -298,6 +298,34 @@ static void start(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
 /* ------------------------------------------------------------------------------------------------------------ */
 /* 6. zero-crossing detection */
 
+/* 6, cmp_blind: an accepted edge at x_e (s relative to t_k) whose comparator input changed in the pair's off-time
+ * [v - h, v + h] (v the carrier valley; the pair's active state is next to the peak; even samples are valleys; h =
+ * (1 - m) T_s with the duty of the last output), or at the start of the on-time after it (within min_pulse + 2
+ * tau_filter + one tick, at most half the on-time), came from a crossing in that off-time. Into the clamped level (below: even sectors) F reads
+ * the reference from the crossing to the on-time, which shows it: the crossing anywhere in the off-time, its middle
+ * v. Out of it (odd sectors) F's diode current, built since v - h while its back-EMF was below, decays as long after
+ * the crossing (a linear back-EMF): an edge inside the off-time at 2 t_z - (v - h), so t_z = (t_e + v - h) / 2; one
+ * at the on-time's start, t_z in [v, v + h], its middle. Not while the fast pattern, which centres the pair's
+ * on-time at the valley, may have been in force over that off-time (before t_plain). */
+static float blind_edge(const bc_bemf_params *p, const bc_bemf_state *s, const bemf_now *n, float x_e)
+{
+    if (p->chop != BC_CHOP_SYNC && p->chop != BC_CHOP_HIGH) return x_e;
+    float x = x_e - p->t_comp; /* the comparator's input changed */
+    float h = (1.0f - bc_clampf(s->m_app, 0.0f, 1.0f)) * p->ts, per = 2.0f * p->ts;
+    /* at most half the on-time, m T_s: an edge later in it is the on-time's own (and the valley below unique) */
+    float tol = fminf(p->min_pulse + 2.0f * p->tau_filter + s->inv_tick, p->ts - h);
+    float v0 = (s->k_samp & 1u) ? -p->ts : 0.0f;                    /* the last valley at or before t_k */
+    float v = v0 - per * floorf((v0 - (x - tol)) / per + 0.5f);    /* the valley nearest x - tol */
+    float y = x - v;
+    if (!(fin(y) && y >= -h && y <= h + tol)) return x_e; /* in an on-time: the crossing itself */
+    if (s->fd_on && tdiff(tadd(n->tk, (v - h) * p->f_tick), s->t_plain) < 0.0f) return x_e;
+    if (s->sector & 1) { /* into above: the pre level was the clamped one */
+        float z = y < h - s->inv_tick ? 0.5f * (x + (v - h)) : v + 0.5f * h;
+        return z + p->t_comp;
+    }
+    return v + p->t_comp;
+}
+
 /* Comparator. Returns 1 with *x_e (s, relative to t_k) when a crossing is accepted at this sample; post_open while
  * the level has been post since the window opened (the clamp, or a crossing already past). */
 static int detect_comparator(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, const bemf_now *n,
@@ -329,6 +357,7 @@ static int detect_comparator(const bc_bemf_params *p, bc_bemf_state *s, const bc
     if (lvl != post) { /* the pre level at a sample: the demagnetisation is over */
         if (!s->dm_known) {
             s->dm_known = 1;
+            if (!s->pre_seen) s->t_plain = n->ta;
             s->pre_seen = 1;
             int edge = cnt != s->cnt_c && te_past && tdiff(te, s->t_c) >= 0.0f; /* the clamp's end, seen */
             s->t_dm = edge ? te : s->t_c;
@@ -341,10 +370,12 @@ static int detect_comparator(const bc_bemf_params *p, bc_bemf_state *s, const bc
     /* the post level: a crossing only through an edge inside the window (else the clamp, or a crossing already
      * past when the window opened: rejected) */
     if (!edge_in) return 0;
+    if (!s->pre_seen) s->t_plain = n->ta;
     s->pre_seen = 1; /* an edge into post in the window: the pre level was there before it */
     if (p->blanking == BC_BEMF_BLANK_DEMAG && s->dm_known && tdiff(te, s->t_dm) < min_pulse) return 0;
     if (tdiff(n->tk, te) < min_pulse) return 0; /* minimum pulse: not yet */
     *x_e = tdiff(te, n->tk) * s->inv_tick;
+    if (p->cmp_blind) *x_e = blind_edge(p, s, n, *x_e);
     return 1;
 }
 

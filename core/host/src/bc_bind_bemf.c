@@ -31,6 +31,7 @@ static const bc_field_desc BEMF_FIELDS[] = {
     F(bc_bemf_params, dlim_d0, "f4"),
     F(bc_bemf_params, dlim_vf, "f4"),      F(bc_bemf_params, dlim_tau, "f4"),
     F(bc_bemf_params, demag_max, "f4"),     F(bc_bemf_params, cmp_gate, "i4"),
+    F(bc_bemf_params, cmp_blind, "i4"),
     F(bc_bemf_params, i_start, "f4"),      F(bc_bemf_params, d_diode, "f4"),
     F(bc_bemf_params, grid_gain, "f4"),    F(bc_bemf_params, brake_tau, "f4"),
     F(bc_bemf_params, brake_acc, "f4"),    F(bc_bemf_params, brake_q, "f4"),

@@ -43,7 +43,7 @@ OPTIONS: dict[str, tuple[str, str, str | None, str]] = {
                                                     "default I_N)"),
     "--delay": ("delay", "", None, "controller delay, samples: 1 (an output computed at a sample applies from the "
                                    "next one, as a sampled controller) or 0 (within the sample, as an ESC's "
-                                   "interrupt-driven commutation timer) (default 1)"),
+                                   "interrupt-driven commutation timer) (default 0)"),
 }
 #: The unit a value without one is read in (the axis's), as the factor of that unit to SI.
 _TO_AXIS = {"angle": math.pi / 180.0, "frequency": 1e3, "voltage": 1.0, "inertia": 1.0, "propeller": 1.0,

@@ -139,6 +139,15 @@ class Control:
             raise BldclabError(f"control ({self.label})", "the C controller rejected its parameters")
         return CSlot(info.step_ptr, cp.address, int(state.ctypes.data), cp, info.diag, keep=(state,))
 
+    @property
+    def own_delay(self) -> int:
+        """The computation delay (samples) this controller runs with where the Scenario leaves it (``delay=None``).
+
+        Its ``delay`` setting where it has one, else 1 (a sampled controller's output applies from the next sample).
+        """
+        d = getattr(self, "delay", 1)
+        return 1 if isinstance(d, bool) or d not in (0, 1) else int(d)
+
     def with_delay(self, delay: int) -> Control:
         """Return the controller configured for the runner's computation delay (samples, 0 or 1).
 

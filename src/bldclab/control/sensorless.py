@@ -320,6 +320,15 @@ class SixStepSensorless(Control):
         believes another value).
     comparator_delay : float or str, optional
         The comparators' propagation delay the firmware compensates; default ``drive.sensors.bemf_delay``.
+    comparator_blind : bool, optional
+        Comparator with ``sync`` or ``high`` chopping: True takes the comparator as blind in the pair's PWM
+        off-time, where both driven terminals sit at the negative rail and a floating terminal clamped there by an
+        ideal diode reads exactly the star reference, so a crossing in the off-time shows late (at most at the next
+        on-time's start). An edge in the off-time, or at the start of the on-time after it, is then taken at the
+        off-time's middle, the carrier valley (unbiased: the crossing lies uniformly in the off-time), an edge in an
+        on-time as seen (docs/sensorless.md, law 6). Default :meth:`blind`: True where the drive's diodes are ideal
+        (``V_f = 0`` and ``r_d = 0``); with any forward voltage the floating terminal is not clamped near its
+        crossing and the comparator reads the off-time exactly.
     timing : float or str
         Timing advance (electrical angle, default 0).
     timing_time : float or str
@@ -428,8 +437,12 @@ class SixStepSensorless(Control):
     current_limit_time : float or str
         Time constant of the limiter at standstill (default ``"1 ms"``): gain ``2 (R + R_on) / (V_dc t)``.
     delay : int
-        Samples between computing and applying an output (0 or 1); :func:`bldclab.simulate` sets it from
-        ``Scenario.delay``.
+        Samples between computing and applying an output (0 or 1). Default 0: an ESC's firmware commutates in its
+        comparator's and commutation timer's interrupts, at the instant it computes (and its throttle's duty moves
+        far slower than a sample); 1: a controller that writes its outputs for the next PWM update, whose
+        commutation waits for the sample after the one that computed it (at a few samples a sector and a large
+        advance that alone loses synchronisation: docs/desync.md, "The controller's delay").
+        :func:`bldclab.simulate` sets it from ``Scenario.delay`` where that is given.
     """
 
     method: Literal["comparator", "adc", "integration"] = "comparator"
@@ -443,6 +456,7 @@ class SixStepSensorless(Control):
     n_samples: int = 2
     filter_tau: float | str | None = None
     comparator_delay: float | str | None = None
+    comparator_blind: bool | None = None
     timing: float | str = 0.0
     timing_time: float | str = 0.0
     timing_demag: float = 0.0
@@ -477,7 +491,7 @@ class SixStepSensorless(Control):
     duty_limit_current: float | str | None = None
     start_current_limit: float | str | None = None
     demag_limit: float = 0.6
-    delay: int = 1
+    delay: int = 0
     c_name: ClassVar[str] = "bemf"
     needs_bemf_sensing: ClassVar[bool] = True
     ref_meaning: ClassVar[str] = "duty (throttle) in [-1, 1], its sign the direction of rotation"
@@ -542,6 +556,9 @@ class SixStepSensorless(Control):
                 raise BldclabError(f"control.{name}", f"must be an integer in [{lo}, {hi}], got {v!r}")
         if self.delay not in (0, 1) or isinstance(self.delay, bool):
             raise BldclabError("control.delay", f"must be 0 or 1 sample, got {self.delay!r}")
+        if self.comparator_blind is not None and not isinstance(self.comparator_blind, bool):
+            raise BldclabError("control.comparator_blind",
+                               f"must be True, False or None (from the drive), got {self.comparator_blind!r}")
         if not isinstance(self.fast_demag, bool):
             raise BldclabError("control.fast_demag", f"must be True or False, got {self.fast_demag!r}")
         if not isinstance(self.current_sensing, bool):
@@ -586,6 +603,19 @@ class SixStepSensorless(Control):
         tau = sen.bemf_tau if self.filter_tau is None else float(self.filter_tau)
         t_comp = sen.bemf_delay if self.comparator_delay is None else float(self.comparator_delay)
         return tau, t_comp
+
+    def blind(self, drive: Drive) -> bool:
+        """Return whether the comparator is taken as blind in the pair's PWM off-time on ``drive`` (law 6).
+
+        The given ``comparator_blind``, else True for the comparator method with ``sync`` or ``high`` chopping
+        (the off-time holds both driven terminals at the negative rail) on an inverter with ideal diodes (``V_f =
+        0`` and ``r_d = 0``: a floating terminal clamped in the off-time reads exactly the star reference).
+        """
+        if self.method != "comparator" or self.chopping not in ("sync", "high"):
+            return False
+        if self.comparator_blind is not None:
+            return self.comparator_blind
+        return drive.inverter.V_f == 0.0 and drive.inverter.r_d == 0.0
 
     def start_up(self, drive: Drive) -> dict[str, float]:
         """Return the start-up settings for ``drive``: the given ones, else the defaults derived from it.
@@ -697,6 +727,7 @@ class SixStepSensorless(Control):
             dlim_tau=m.L / r_total(drive),
             demag_max=self.demag_limit,
             cmp_gate=int(drive.sensors.bemf_offset != 0.0 and self.fast_demag),
+            cmp_blind=int(self.blind(drive)),
             i_start=su["start_current_limit"] if self.current_sensing else 0.0,
             d_diode=su["diode_duty"],
             brake_tau=brake_tau(drive),

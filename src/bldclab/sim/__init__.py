@@ -276,8 +276,11 @@ class Scenario:
         Initial speed (rad/s); default the imposed speed at t = 0, or 0.
     i0 : tuple of float
         Initial phase currents (A), projected to sum zero.
-    delay : int
-        Controller computation delay in samples (1: output applied from the next sample, as on a DSP; 0: ideal).
+    delay : int, optional
+        Controller computation delay in samples (1: output applied from the next sample, as on a DSP; 0: within the
+        sample). ``None`` (default): the controller's own, its ``delay`` setting (1 for every built-in controller
+        but :class:`~bldclab.control.sensorless.SixStepSensorless`, an ESC's firmware that commutates in its
+        interrupts: 0), 1 for a controller without one.
     trace_every : int
         Samples per trace row (>= 1); larger values thin long traces (means and extremes still cover every row).
     trace_sub : int
@@ -303,7 +306,7 @@ class Scenario:
     theta0: float = 0.0
     omega0: float | None = None
     i0: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    delay: int = 1
+    delay: int | None = None
     trace_every: int = 1
     trace_sub: int = 1
     trace: bool = True
@@ -330,8 +333,9 @@ class Scenario:
             raise BldclabError("scenario.i0", "needs three currents (a, b, c)")
         for j, v in enumerate(self.i0):
             _check_scalar(f"scenario.i0[{j}]", v)
-        if self.delay not in (0, 1):
-            raise BldclabError("scenario.delay", f"must be 0 or 1 sample, got {self.delay!r}")
+        if self.delay is not None and (isinstance(self.delay, bool) or self.delay not in (0, 1)):
+            raise BldclabError("scenario.delay", f"must be 0 or 1 sample (or None: the controller's own), got "
+                                                 f"{self.delay!r}")
         for name in ("trace_every", "trace_sub"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
@@ -669,7 +673,8 @@ def _run(drive: Drive, control: Control, scenario: Scenario, check: str, estimat
     ``watch``: the progress record of an isolated run; ``thermal``: the coupling with the thermal network.
     """
     c = core()
-    control = control.with_delay(scenario.delay)
+    delay = control.own_delay if scenario.delay is None else scenario.delay
+    control = control.with_delay(delay)
     keep: list[object] = []
     n = samples_of(drive, scenario.duration)
     t_half = 0.5 / drive.inverter.f_pwm
@@ -717,7 +722,7 @@ def _run(drive: Drive, control: Control, scenario: Scenario, check: str, estimat
     cfg["ctrl"]["step"] = slot.step
     cfg["ctrl"]["params"] = slot.params
     cfg["ctrl"]["state"] = slot.state
-    cfg["delay"] = scenario.delay
+    cfg["delay"] = delay
     cfg["trace_every"] = scenario.trace_every
     cfg["trace_sub"] = scenario.trace_sub
     # the run ends at the last whole sample; a window ending within rounding of it closes there
@@ -789,7 +794,7 @@ def _run(drive: Drive, control: Control, scenario: Scenario, check: str, estimat
         "drive": {"name": drive.name, "toml": drive.to_toml()},
         "control": control.describe(),
         "estimate": None if estimate is None else {"name": estimate.name, "toml": estimate.to_toml()},
-        "scenario": _describe_scenario(scenario),
+        "scenario": _describe_scenario(dataclasses.replace(scenario, delay=delay)),  # the delay applied
         "samples": n,
         "controller_flags": int(st["flags_seen"]),
         "flags": _flag_stats(c, st, n, t_half),

@@ -144,6 +144,24 @@
  *     the pre level inside the clamp, ringing, does not end it); a pre level shorter than a sample (two edges
  *     between samples) is not measured and the crossing is accepted as with BC_BEMF_BLANK_FIXED, which needs no
  *     pre level at a sample: the first edge into post in the window.
+ *     Blind off-times (cmp_blind = 1; BC_CHOP_SYNC or BC_CHOP_HIGH): the pair's off-time holds both its terminals
+ *     at the negative rail, and with ideal diodes (no forward voltage) a floating terminal clamped there by its
+ *     lower diode reads exactly the star reference: the comparator holds its level, and a crossing in the off-time
+ *     shows late, at most at the next on-time's start. The pair's off-time is centred at a carrier valley v (its
+ *     active state next to the peak; even samples are valleys, the first sample is taken to be one), of half-width
+ *     h = (1 - m) T_s (m: the duty of the last output). An accepted edge whose comparator input changed, t_e -
+ *     t_comp, within [v - h, v + h + tol] of the valley v nearest it (tol = min_pulse + 2 tau_filter + 1 / f_tick,
+ *     at most half the on-time m T_s: the floating phase's off-time current decays and the filter settles after
+ *     the on-time's start, and the capture tick) came from a crossing in that off-time, and is placed there:
+ *     into the clamped level (below, even sectors) F reads the reference from the crossing until the on-time shows
+ *     it, so the crossing lay anywhere in the off-time: t_z = v; out of it (above, odd sectors) F's diode current,
+ *     built from v - h while its back-EMF was below, decays as long after the crossing as it grew (a linear
+ *     back-EMF): an edge inside the off-time (before v + h - 1 / f_tick) gives t_z = (t_e - t_comp + v - h) / 2,
+ *     one at the on-time's start t_z in [v, v + h], its middle v + h/2. Unbiased where the carrier and the rotor
+ *     are not synchronous, each within h of the crossing; t_e is taken as t_z + t_comp (the filter's delay of 7
+ *     still applies). An edge in an on-time is the crossing as before. Not while the fast pattern (8) may have
+ *     been in force over that off-time (it centres the pair's on-time at the valley): from the sample that first
+ *     sees the pre level in the window its outputs are the plain pattern, from t_a on.
  *
  *     ADC (BC_BEMF_ADC, BC_BEMF_INTEGRATE). At each new conversion sampled at t >= t_open, the sign-corrected sample
  *     u = s_F (v_term[F] - v_neutral), s_F = +1 (post above) or -1, is post when u > 0. The crossing needs a pre
@@ -367,6 +385,8 @@ typedef struct {
     float dlim_tau;      /* the inductive part: dlim_d0 sqrt(1 + (Omega dlim_tau)^2), s (>= 0) */
     float demag_max;     /* demagnetisation limiter (2): largest demagnetisation angle / (pi/6 + adv), [0, 1); 0: off */
     int32_t cmp_gate;    /* 1: in a fast-demagnetisation sector on the negative leg, the comparator in the on-time only */
+    int32_t cmp_blind;   /* 1: the comparator sees no crossing in the pair's off-time (ideal diodes; SYNC, HIGH): an edge
+                          * there or at the next on-time's start is taken at the off-time's middle (6); 0: as seen */
     float i_start;       /* start-up current limit (ALIGN, RAMP; use_current), cycle by cycle, A (>= 0; 0: none) */
     float d_diode;       /* the inverter's share (2): align, ramp and dlim duties d -> d_diode + (1 - d_diode) d, [0, 1) */
     float grid_gain;     /* 7, CLOSED: > 0, commutate on the uniform grid phase-locked to the mean of the six crossings,
@@ -439,6 +459,7 @@ typedef struct {
     int32_t post_open;     /* the post level since the window opened */
     int32_t dm_known;      /* t_dm measured */
     uint32_t t_open;       /* tick the window opens */
+    uint32_t t_plain;      /* tick from which the outputs are the plain pattern (the pre level seen; cmp_blind, 6) */
     uint32_t t_dm;         /* tick the demagnetisation ended */
     uint32_t cnt_c;        /* zc_count[F] at the last sample before the commutation */
     uint32_t cnt_open;     /* zc_count[F] at the last sample before the window */
