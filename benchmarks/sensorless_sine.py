@@ -18,7 +18,11 @@ load x inertia x initial angle, with the design bound of the load-adaptive ramp;
 ``--inertias 1,5``, ``--loads 0.75,0.9`` select a part of it, ``--dump FILE`` writes each start to FILE. And the
 controller's own estimates (``--estimates
 [DRIVE ...]`` alone): each wrong parameter without them, with the zero-current flux reading (``if_flux_estimate``) and
-with it and the alignment's resistance (``if_r_estimate``).
+with it and the alignment's resistance (``if_r_estimate``). And the commissioning with current-sensor errors
+(``--commission-sensors [DRIVE ...]`` alone): offsets, white noise and a 12-bit ADC, fractions of the full scale
+``2 I_N``, each case's R, L, psi_f errors, status and time on the drive. And the flux linkage's residual with the
+inverter's dead time (``--commission-deadtime [DRIVE ...]`` alone): 1 % and 3 % of the PWM period, 0.7-V diodes,
+``R_on = 0.2 R``, the spin at 0.3, 0.45 and 0.6 ``Omega_N``.
 
 Run: ``PYTHONPATH=src python benchmarks/sensorless_sine.py [DRIVE ...]``.
 """
@@ -300,6 +304,52 @@ def commissioning(names: list[str]) -> None:
               f"{100 * (e.psi_f * d.motor.p / k1 - 1):9.3f} {e.t_test:9.3f} {e.wall_time:7.2f}")
 
 
+# (label, offset, noise, ADC bits): offsets (1, -0.6, 0.8) x offset on a, b, c; all fractions of I_fs = 2 I_N
+COMMISSION_SENSOR_CASES = (("none", 0.0, 0.0, 0), ("offset 1 %", 0.01, 0.0, 0), ("offset 2 %", 0.02, 0.0, 0),
+                           ("12-bit", 0.0, 0.0, 12), ("noise 0.2 %", 0.0, 0.002, 12), ("noise 1 %", 0.0, 0.01, 12),
+                           ("1 % + 0.2 %", 0.01, 0.002, 12), ("1 % + 1 %", 0.01, 0.01, 12),
+                           ("noise 2 %", 0.0, 0.02, 12))
+
+
+def commissioning_sensors(names: list[str]) -> None:
+    """Print the commissioning accuracy and time with current-sensor errors (the routine configured from the
+    drive's own data, unaware of the errors but for what it measures with the legs off)."""
+    print(f"\n{'drive':16s} {'sensors':12s} {'status':8s} {'R err %':>8s} {'L err %':>8s} {'psi err %':>9s} "
+          f"{'t test s':>9s} {'wall s':>7s}")
+    for name in names:
+        d = bl.load(name)
+        fs = 2.0 * d.motor.I_N
+        k1 = bl.control.sine.fundamental_k1(d)
+        for label, off, noise, bits in COMMISSION_SENSOR_CASES:
+            plant = d.replace(sensors__current_offset=(off * fs, -0.6 * off * fs, 0.8 * off * fs),
+                              sensors__current_noise=noise * fs,
+                              sensors__current_lsb=2.0 * fs / 2**bits if bits else 0.0)
+            e = bl.commission(plant, nominal=d)
+            errs = [100 * (v / t - 1) if v else math.nan
+                    for v, t in ((e.R, r_total(d)), (e.L, d.motor.L), (e.psi_f, k1 / d.motor.p))]
+            print(f"{name:16s} {label:12s} {e.status:8s} {errs[0]:8.3f} {errs[1]:8.3f} {errs[2]:9.3f} "
+                  f"{e.t_test:9.3f} {e.wall_time:7.2f}", flush=True)
+
+
+def commissioning_deadtime(names: list[str], fractions: tuple[float, ...] = (0.01, 0.03),
+                           spins: tuple[float, ...] = (0.3, 0.45, 0.6)) -> None:
+    """Print psi_f's error (%) with a dead time (fractions of the PWM period) at spin speeds (fractions of
+    ``Omega_N``); the routine told the dead time and the diode drop."""
+    print(f"\n{'drive':16s} {'t_dead':>7s} " + " ".join(f"{'spin ' + str(s):>22s}" for s in spins))
+    for name in names:
+        d = bl.load(name)
+        k1 = bl.control.sine.fundamental_k1(d)
+        for frac in fractions:
+            inv = dataclasses.replace(d.inverter, t_dead=frac / d.inverter.f_pwm, V_f=0.7, R_on=0.2 * d.motor.R)
+            plant = dataclasses.replace(d, inverter=inv)
+            cells = []
+            for sp in spins:
+                e = bl.commission(plant, control=bl.control.Commission(spin_speed=sp * d.motor.Omega_nominal))
+                err = 100 * (e.psi_f * d.motor.p / k1 - 1) if e.ok else math.nan
+                cells.append(f"{e.status[:8]:>8s} {err:7.3f} {e.t_test:5.2f}s")
+            print(f"{name:16s} {100 * frac:6.1f}% " + " ".join(f"{c:>22s}" for c in cells), flush=True)
+
+
 def main(names: list[str]) -> None:
     print(f"{'drive':16s} {'obs':8s} {'speed':>6s} {'rms deg':>8s} {'worst':>8s} {'sine':>5s} {'tau':>9s} "
           f"{'tau enc':>9s} {'eff':>6s} {'eff enc':>7s}")
@@ -328,6 +378,14 @@ def main(names: list[str]) -> None:
 if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] == "--sensors":
         sensor_errors(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v"])
+        raise SystemExit(0)
+    if len(sys.argv) > 1 and sys.argv[1] == "--commission-sensors":
+        commissioning_sensors(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv",
+                                               "f60prov-2550kv"])
+        raise SystemExit(0)
+    if len(sys.argv) > 1 and sys.argv[1] == "--commission-deadtime":
+        commissioning_deadtime(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv",
+                                                "f60prov-2550kv"])
         raise SystemExit(0)
     if len(sys.argv) > 1 and sys.argv[1] == "--estimates":
         estimates(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv",

@@ -117,7 +117,8 @@ static inline void htm_sine_observer(bc_sine_params *p)
 /* Self-commissioning on htm-48v: the record bldclab.control.Commission() builds for the drive. */
 #define HTM_COMMISSION_PARAMS                                                                                     \
     {.ts = HTM_TS, .kp = 0.09425f, .ki = 62.83f, .i_test = 28.87f, .t_ramp = 0.3631f, .t_settle = 0.2595f,        \
-     .t_window = 0.2420f, .v_pulse = 1.516f, .n_pulse = 8, .pulse_len = 10, .i_if = 28.87f, .if_accel = 167.0f,    \
+     .t_window = 0.2420f, .v_pulse = 1.516f, .n_pulse = 8, .pulse_len = 10, .n_pulse_max = 500, .tol_noise = 0.01f,  \
+     .t_offset = 0.02f, .i_if = 28.87f, .if_accel = 167.0f,                                                       \
      .w_spin = 160.8f, .t_spin = 0.6051f, .psi_min = 0.01216f, .tol_move = 0.05f, .tol_follow = 0.3f,             \
      .k_damp = 11.43f, .i_max = 100.0f, .v_max = 96.0f}
 

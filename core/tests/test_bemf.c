@@ -6,7 +6,8 @@
  * outlasting the crossing, a rotor that stops, a false crossing, a stall, a start that fails); the late commutation;
  * the forced ramp following a faster rotor by its crossings, and its V/f duty; the start-up from alignment to closed
  * loop on a dynamic rotor in both directions and from any angle without alignment, a stop and a reverse; the
- * throttle ramp and the current limit. */
+ * throttle ramp and the current limit; the handover's fit made in two parts against the one-shot fit and the exact one
+ * on random crossing sequences. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -1512,6 +1513,280 @@ static void test_fast_demag_and_limiter(void)
     }
 }
 
+/* The handover's fit (5) as the controller makes it, in two parts (bc_bemf_ho_prepare after a crossing,
+ * bc_bemf_ho_fit at the next), against the one-shot fit it replaced (all m crossings' times centred on their mean,
+ * in their mean interval, the normal equations from their moments, in float: the reference for the decision) and
+ * the same fit in double (the exact answer for these purposes). Random crossing sequences: rotors at constant
+ * acceleration with noise and an alternate displacement, held rotors' twitches (random intervals), crossings out of
+ * order or at one tick (no rotor's), at any ring position and across the tick counter's wrap. The two float forms
+ * differ only in rounding: their accept/reject decisions (as plausible takes them: alt and res within 10 deg, |acc|
+ * within 4 ramp_accel, no check for m < 5, a refusal for a degenerate fit) differ only where the exact values lie
+ * within rounding of a limit, and the two part form is no less accurate. */
+#define HO_M(valid) ((valid) < BC_BEMF_HO_FIT ? (int)(valid) : BC_BEMF_HO_FIT)
+
+/* the crossings' times relative to the last, s, oldest first (as the one-shot fit read them) */
+static int ho_times(const uint32_t *ring, int32_t valid, float inv_tick, float *u, double *ud)
+{
+    int m = HO_M(valid), last = (int)((valid - 1) % BC_BEMF_HO_FIT), j = last - (m - 1);
+    if (j < 0) j += BC_BEMF_HO_FIT;
+    for (int k = 0; k < m; ++k) {
+        int32_t dt = (int32_t)(ring[j] - ring[last]);
+        u[k] = (float)dt * inv_tick;
+        ud[k] = (double)dt * (double)inv_tick;
+        if (++j == BC_BEMF_HO_FIT) j = 0;
+    }
+    return m;
+}
+
+/* the one-shot fit in float, as bc_bemf.c made it before the fit was split (1 for m < 5, -1 degenerate) */
+static int ho_ref_float(const uint32_t *ring, int32_t valid, float inv_tick, float out[3])
+{
+    out[0] = out[1] = out[2] = 0.0f;
+    float u[BC_BEMF_HO_FIT];
+    double ud[BC_BEMF_HO_FIT];
+    int m = ho_times(ring, valid, inv_tick, u, ud);
+    if (m < 5) return 1;
+    float tm = -u[0] / (float)(m - 1);
+    if (!(isfinite(tm) && tm > 0.0f)) return -1;
+    float um = 0.0f;
+    for (int k = 0; k < m; ++k) {
+        u[k] /= tm;
+        um += u[k];
+    }
+    um /= (float)m;
+    float s1 = 0.0f, s2 = 0.0f, s3 = 0.0f, s4 = 0.0f, sa = 0.0f, sax = 0.0f, sax2 = 0.0f;
+    float y[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    for (int k = 0; k < m; ++k) {
+        float x = u[k] - um, x2 = x * x, sg = (k & 1) ? -1.0f : 1.0f, fk = (float)k;
+        s1 += x;
+        s2 += x2;
+        s3 += x2 * x;
+        s4 += x2 * x2;
+        sa += sg;
+        sax += sg * x;
+        sax2 += sg * x2;
+        y[0] += fk;
+        y[1] += x * fk;
+        y[2] += x2 * fk;
+        y[3] += sg * fk;
+    }
+    float a[4][4] = {{(float)m, 0.0f, 0.0f, 0.0f}, {s1, s2, 0.0f, 0.0f}, {s2, s3, s4, 0.0f}, {sa, sax, sax2, (float)m}};
+    for (int c = 0; c < 4; ++c) {
+        for (int q = 0; q < c; ++q) a[c][c] -= a[c][q] * a[c][q];
+        if (!(a[c][c] > 1e-9f)) return -1;
+        a[c][c] = sqrtf(a[c][c]);
+        for (int r = c + 1; r < 4; ++r) {
+            for (int q = 0; q < c; ++q) a[r][c] -= a[r][q] * a[c][q];
+            a[r][c] /= a[c][c];
+        }
+    }
+    float cf[4];
+    for (int r = 0; r < 4; ++r) {
+        float v = y[r];
+        for (int q = 0; q < r; ++q) v -= a[r][q] * cf[q];
+        cf[r] = v / a[r][r];
+    }
+    for (int r = 3; r >= 0; --r) {
+        float v = cf[r];
+        for (int q = r + 1; q < 4; ++q) v -= a[q][r] * cf[q];
+        cf[r] = v / a[r][r];
+    }
+    float worst = 0.0f;
+    for (int k = 0; k < m; ++k) {
+        float x = u[k] - um;
+        float d = fabsf(cf[0] + cf[1] * x + cf[2] * x * x + cf[3] * ((k & 1) ? -1.0f : 1.0f) - (float)k);
+        if (d > worst) worst = d;
+    }
+    out[0] = fabsf(cf[3]) * (float)(BC_PI / 3.0);
+    out[1] = worst * (float)(BC_PI / 3.0);
+    out[2] = 2.0f * cf[2] * (float)(BC_PI / 3.0) / (tm * tm);
+    return isfinite(out[0]) && isfinite(out[1]) && isfinite(out[2]) ? 0 : -1;
+}
+
+/* the same fit in double (Gram-Schmidt on the centred regressors: 1 for m < 5, -1 singular to 1e-9 of their size) */
+static int ho_ref_double(const uint32_t *ring, int32_t valid, float inv_tick, double out[3])
+{
+    out[0] = out[1] = out[2] = 0.0;
+    float u[BC_BEMF_HO_FIT];
+    double ud[BC_BEMF_HO_FIT];
+    int m = ho_times(ring, valid, inv_tick, u, ud);
+    if (m < 5) return 1;
+    double tm = -ud[0] / (double)(m - 1);
+    if (!(tm > 0.0)) return -1;
+    double um = 0.0;
+    for (int k = 0; k < m; ++k) um += ud[k] / tm / (double)m;
+    double q[4][BC_BEMF_HO_FIT], cq[4], r[4][4] = {{0.0}};
+    for (int k = 0; k < m; ++k) {
+        double x = ud[k] / tm - um;
+        q[0][k] = 1.0;
+        q[1][k] = x;
+        q[2][k] = x * x;
+        q[3][k] = (k & 1) ? -1.0 : 1.0;
+    }
+    for (int c = 0; c < 4; ++c) { /* modified Gram-Schmidt, q = Q, r = R */
+        double n0 = 0.0, n = 0.0;
+        for (int k = 0; k < m; ++k) n0 += q[c][k] * q[c][k];
+        for (int p = 0; p < c; ++p) {
+            double d = 0.0;
+            for (int k = 0; k < m; ++k) d += q[p][k] * q[c][k];
+            r[p][c] = d;
+            for (int k = 0; k < m; ++k) q[c][k] -= d * q[p][k];
+        }
+        for (int k = 0; k < m; ++k) n += q[c][k] * q[c][k];
+        if (!(n > 1e-18 * n0)) return -1;
+        r[c][c] = sqrt(n);
+        for (int k = 0; k < m; ++k) q[c][k] /= r[c][c];
+    }
+    for (int c = 0; c < 4; ++c) {
+        cq[c] = 0.0;
+        for (int k = 0; k < m; ++k) cq[c] += q[c][k] * (double)k;
+    }
+    double cf[4];
+    for (int c = 3; c >= 0; --c) {
+        double v = cq[c];
+        for (int p = c + 1; p < 4; ++p) v -= r[c][p] * cf[p];
+        cf[c] = v / r[c][c];
+    }
+    double worst = 0.0;
+    for (int k = 0; k < m; ++k) {
+        double x = ud[k] / tm - um;
+        worst = fmax(worst, fabs(cf[0] + cf[1] * x + cf[2] * x * x + cf[3] * ((k & 1) ? -1.0 : 1.0) - (double)k));
+    }
+    out[0] = fabs(cf[3]) * BC_PI / 3.0;
+    out[1] = worst * BC_PI / 3.0;
+    out[2] = 2.0 * cf[2] * BC_PI / 3.0 / (tm * tm);
+    return 0;
+}
+
+/* plausible's decision on a fit's outcome */
+static int ho_accept(int r, double alt, double res, double acc, double d_max, double acc_max)
+{
+    return r != 0 ? r > 0 : alt <= d_max && res <= d_max && !(fabs(acc) > acc_max);
+}
+
+static void test_handover_fit(void)
+{
+    uint32_t seed = 12345u;
+    const double d_max = BC_PI / 6.0 / 3.0; /* jump_max 2's 10 degrees */
+    long n = 0, n_acc = 0, n_rej = 0, n_none = 0, n_ret = 0, n_diff = 0, n_far = 0, n_same = 0, n_rot = 0;
+    long w_new = 0, w_ref = 0; /* decisions other than the exact one's */
+    long t_new = 0, t_ref = 0; /* errors above 1e-3 of the size (rotors) */
+    double err_new = 0.0, err_ref = 0.0, ss_new = 0.0, ss_ref = 0.0; /* errors relative to size (rotors) */
+    double far = 0.0; /* the furthest from a limit a decision changed */
+    for (long trial = 0; trial < 200000; ++trial) {
+        bc_bemf_state s;
+        memset(&s, 0, sizeof s);
+        double f_tick = (trial % 2) ? 10e6 : 84e6;
+        s.inv_tick = (float)(1.0 / f_tick);
+        int32_t valid = (int32_t)(3u + rnd(&seed) % 40u);
+        uint32_t t0 = (trial % 5 == 0) ? 0xffffffffu - rnd(&seed) % 2000000u : rnd(&seed); /* across the wrap */
+        uint32_t tk[BC_BEMF_HO_FIT];
+        int kind = (int)(rnd(&seed) % 10u);
+        double w = 20.0 + (double)(rnd(&seed) % 100000u) * 0.05; /* electrical rad/s, 20 .. 5,020 */
+        double a_ramp = w * (0.5 + (double)(rnd(&seed) % 1000u) / 100.0); /* rad/s^2 */
+        if (kind < 6) { /* a rotor: constant acceleration, an alternate displacement and noise (up to 10 and 15 deg) */
+            double acc = a_ramp * ((double)(rnd(&seed) % 2001u) / 200.0 - 5.0);
+            double alt = ((double)(rnd(&seed) % 2001u) / 100.0 - 10.0) * DEG * (kind < 3);
+            double noise = (double)(rnd(&seed) % 1501u) / 100.0 * DEG * (kind % 2);
+            for (int k = 0; k < BC_BEMF_HO_FIT; ++k) {
+                double g = (k + 1) * BC_PI / 3.0 + ((k & 1) ? -alt : alt) +
+                           noise * ((double)(rnd(&seed) % 2001u) / 1000.0 - 1.0);
+                double disc = w * w + 2.0 * acc * g, t = 2.0 * (double)k / w; /* stopped before: anything */
+                if (fabs(acc) < 1e-9) t = g / w;
+                else if (disc > 0.0) t = (-w + sqrt(disc)) / acc;
+                tk[k] = t0 + (uint32_t)lround(t * f_tick);
+            }
+        } else if (kind < 9) { /* a held rotor's twitch: random intervals */
+            uint32_t t = t0, span = (uint32_t)(f_tick * (BC_PI / 3.0) / w);
+            for (int k = 0; k < BC_BEMF_HO_FIT; ++k) {
+                t += rnd(&seed) % (2u * span + 1u);
+                tk[k] = t;
+            }
+        } else { /* no rotor's: out of order, or at one tick */
+            for (int k = 0; k < BC_BEMF_HO_FIT; ++k)
+                tk[k] = (rnd(&seed) % 3u == 0u) ? t0 : t0 + rnd(&seed) % 5000u - 2500u;
+        }
+        int m = HO_M(valid);
+        for (int k = 0; k < m; ++k) s.ho_ring[(valid - m + k) % BC_BEMF_HO_FIT] = tk[BC_BEMF_HO_FIT - m + k];
+        float ref[3], out[3], again[3];
+        double ex[3];
+        int r_ref = ho_ref_float(s.ho_ring, valid, s.inv_tick, ref);
+        int r_ex = ho_ref_double(s.ho_ring, valid, s.inv_tick, ex);
+        /* as in the controller: prepared at valid - 1, before the last crossing took its slot (which held an older
+         * one), then the fit; in a quarter of the trials prepared at the crossing itself, stale from another ring */
+        uint32_t keep = s.ho_ring[(valid - 1) % BC_BEMF_HO_FIT];
+        s.ho_ring[(valid - 1) % BC_BEMF_HO_FIT] = tk[0] ^ 0x5a5a5a5au;
+        s.valid = valid - 1;
+        bc_bemf_ho_prepare(&s);
+        s.ho_ring[(valid - 1) % BC_BEMF_HO_FIT] = keep;
+        if (trial % 4 == 0) s.ho_ring[(valid + 5) % BC_BEMF_HO_FIT] += 1u; /* the crossing before the last moved */
+        s.valid = valid;
+        int r = bc_bemf_ho_fit(&s, &out[0], &out[1], &out[2]);
+        if (trial % 4 == 0) { /* prepared again (the preparation is not the last crossing's): as the exact data */
+            s.ho_ring[(valid + 5) % BC_BEMF_HO_FIT] -= 1u;
+            r_ref = ho_ref_float(s.ho_ring, valid, s.inv_tick, ref);
+            r_ex = ho_ref_double(s.ho_ring, valid, s.inv_tick, ex);
+            s.ho_t += 1u; /* and the stale preparation's key no longer matches */
+            r = bc_bemf_ho_fit(&s, &out[0], &out[1], &out[2]);
+        }
+        /* the fit prepared at the crossing itself gives the same, bit for bit */
+        s.ho_n = -1;
+        int r2 = bc_bemf_ho_fit(&s, &again[0], &again[1], &again[2]);
+        n_same += r2 == r && memcmp(again, out, sizeof out) == 0;
+        ++n;
+        double lim = 4.0 * a_ramp;
+        int d_new = ho_accept(r, (double)out[0], (double)out[1], (double)out[2], d_max, lim);
+        int d_ref = ho_accept(r_ref, (double)ref[0], (double)ref[1], (double)ref[2], d_max, lim);
+        int d_ex = ho_accept(r_ex, ex[0], ex[1], ex[2], d_max, lim);
+        n_none += r_ref == 1;
+        n_acc += r_ref != 1 && d_ref;
+        n_rej += !d_ref;
+        n_ret += r != r_ref;
+        w_new += d_new != d_ex;
+        w_ref += d_ref != d_ex;
+        if (r_ex != 0 || r_ref != 0 || r != 0) continue;
+        /* relative to each quantity's own size and a share of its limit */
+        double sc[3] = {fabs(ex[0]) + 0.01 * d_max, fabs(ex[1]) + 0.01 * d_max, fabs(ex[2]) + 0.01 * lim};
+        double e_new = 0.0, e_ref = 0.0, margin = fmin(fmin(fabs(ex[0] - d_max) / sc[0], fabs(ex[1] - d_max) / sc[1]),
+                                                       fabs(fabs(ex[2]) - lim) / sc[2]);
+        for (int q = 0; q < 3; ++q) {
+            e_new = fmax(e_new, fabs((double)out[q] - ex[q]) / sc[q]);
+            e_ref = fmax(e_ref, fabs((double)ref[q] - ex[q]) / sc[q]);
+        }
+        if (kind < 6) { /* a rotor's crossings */
+            ++n_rot;
+            err_new = fmax(err_new, e_new);
+            err_ref = fmax(err_ref, e_ref);
+            ss_new += e_new * e_new;
+            ss_ref += e_ref * e_ref;
+            t_new += e_new > 1e-3;
+            t_ref += e_ref > 1e-3;
+        }
+        if (d_new != d_ref) {
+            ++n_diff;
+            far = fmax(far, margin);
+            n_far += margin > 1e-2;
+        }
+    }
+    double nr = (double)(n_rot > 0 ? n_rot : 1), rms_new = sqrt(ss_new / nr), rms_ref = sqrt(ss_ref / nr);
+    printf("test_bemf: handover fit: %ld crossing sequences, the one-shot fit accepts %ld, refuses %ld, %ld without a "
+           "check; decisions different from its %ld (the furthest %.1e of its size from a limit), from the exact "
+           "fit's %ld (the one-shot fit's %ld); error against the exact fit over %ld rotors' sequences, rms %.2e, "
+           "above 1e-3 %ld times, largest %.2e (the one-shot fit's %.2e, %ld, %.2e); other return codes %ld "
+           "(degenerate sequences)\n", n, n_acc, n_rej, n_none, n_diff, far, w_new, w_ref, n_rot, rms_new, t_new,
+           err_new, rms_ref, t_ref, err_ref, n_ret);
+    CHECK(n_acc > 20000 && n_rej > 20000 && n_none > 5000 && n_rot > 100000,
+          "the sequences cover every decision: %ld, %ld, %ld, %ld", n_acc, n_rej, n_none, n_rot);
+    CHECK(n_same == n, "prepared ahead and at the crossing: %ld of %ld the same", n_same, n);
+    CHECK(n_far == 0, "%ld decisions differ from the one-shot fit's further than 1e-2 of a limit", n_far);
+    /* as accurate: as many decisions as the one-shot fit's the exact fit's, errors as small (their largest are both
+     * the rounding noise of an acceleration the exact fit puts at zero) */
+    CHECK(w_new <= w_ref + 5 && rms_new <= 1.25 * rms_ref && t_new <= t_ref + t_ref / 4 && err_new < 0.1,
+          "error against the exact fit rms %.2e, above 1e-3 %ld times, largest %.2e (the one-shot fit's %.2e, %ld, "
+          "%.2e), decisions other than the exact one's %ld (%ld)", rms_new, t_new, err_new, rms_ref, t_ref, err_ref,
+          w_new, w_ref);
+}
+
 int main(void)
 {
     test_init();
@@ -1535,6 +1810,7 @@ int main(void)
     test_fast_demag_dead_time();
     test_uniform_grid();
     test_uniform_grid_demag_bound();
+    test_handover_fit();
     test_blind_offtime();
     return bc_test_summary("test_bemf");
 }

@@ -563,37 +563,44 @@ static void grid_learn(const bc_bemf_params *p, bc_bemf_state *s, float T)
 
 /* 5. The handover's fit. The last m = min(valid, BC_BEMF_HO_FIT) crossings (angle k pi/3 at the k-th) against the
  * least-squares path of a rotor at constant acceleration whose rising and falling crossings may be displaced
- * oppositely (a comparator offset, an asymmetric back-EMF): k pi/3 = c0 + c1 u + c2 u^2 + c3 (-1)^k, u the time in
- * mean intervals. Returns 0 with, in rad, *alt = |c3| pi/3, *res the largest distance of a crossing from the path
- * and *acc = 2 c2 pi/3 / T^2 (rad/s^2); 1 with m < 5 (no check); -1 if the fit is degenerate. */
-static int handover_fit(const bc_bemf_state *s, float *alt, float *res, float *acc)
+ * oppositely (a comparator offset, an asymmetric back-EMF): k pi/3 = c0 + c1 x + c2 x^2 + c3 (-1)^k, x the time in
+ * some unit from some origin (the fitted path, hence the distances from it and c3, do not depend on which: 1, x, x^2
+ * span the same functions of time). The fit is made in two parts so that the crossing that decides pays only for its
+ * own point: after each crossing (ho_prepare, at the next sample) the m - 1 crossings known for the next fit, their
+ * time unit the mean interval between them and their origin half a unit after their middle (where the next fit's
+ * middle is expected: the moments nearly centred, as well conditioned as centred ones), their times in that unit and
+ * the moments of the normal equations over them; at the crossing its own time and moments, the 4 x 4 Cholesky solve
+ * and the distances. */
+static void ho_prepare(bc_bemf_state *s, int32_t v)
 {
-    *alt = 0.0f;
-    *res = 0.0f;
-    *acc = 0.0f;
-    int m = s->valid < BC_BEMF_HO_FIT ? (int)s->valid : BC_BEMF_HO_FIT;
-    if (m < 5) return 1;
-    int last = (int)((s->valid - 1) % BC_BEMF_HO_FIT);
-    float u[BC_BEMF_HO_FIT];
-    int j = last - (m - 1);
+    s->ho_n = v;
+    int m = v + 1 < BC_BEMF_HO_FIT ? (int)v + 1 : BC_BEMF_HO_FIT;
+    if (m < 5) return;
+    int n = m - 1, last = (int)((v - 1) % BC_BEMF_HO_FIT);
+    s->ho_k = last;
+    s->ho_t = s->ho_ring[last];
+    float u[BC_BEMF_HO_FIT - 1], sum = 0.0f;
+    int j = last - (n - 1);
     if (j < 0) j += BC_BEMF_HO_FIT;
-    for (int k = 0; k < m; ++k) { /* time of the k-th crossing relative to the last, s */
+    for (int k = 0; k < n; ++k) { /* time of the k-th crossing relative to the last known, s */
         u[k] = tdiff(s->ho_ring[j], s->ho_ring[last]) * s->inv_tick;
+        sum += u[k];
         if (++j == BC_BEMF_HO_FIT) j = 0;
     }
-    float tm = -u[0] / (float)(m - 1); /* the mean interval: times in intervals, centred */
-    if (!(fin(tm) && tm > 0.0f)) return -1;
-    float um = 0.0f;
-    for (int k = 0; k < m; ++k) {
-        u[k] /= tm;
-        um += u[k];
+    float tm = -u[0] / (float)(n - 1); /* the mean interval */
+    if (!(tm > 0.0f)) { /* crossings out of order (no rotor's; the fit will say so): a unit that spans them */
+        tm = 0.0f;
+        for (int k = 0; k < n; ++k) tm = fabsf(u[k]) > tm ? fabsf(u[k]) : tm;
+        tm = tm > 0.0f ? tm / (float)(n - 1) : s->inv_tick;
     }
-    um /= (float)m;
-    /* the normal equations of the regressors 1, x, x^2, (-1)^k against k (lower triangle), from their moments */
+    float c = (sum + tm) / (float)m, inv = 1.0f / tm;
+    s->ho_c = c;
+    s->ho_inv = inv;
     float s1 = 0.0f, s2 = 0.0f, s3 = 0.0f, s4 = 0.0f, sa = 0.0f, sax = 0.0f, sax2 = 0.0f;
-    float y[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-    for (int k = 0; k < m; ++k) {
-        float x = u[k] - um, x2 = x * x, sg = (k & 1) ? -1.0f : 1.0f, fk = (float)k;
+    float y0 = 0.0f, y1 = 0.0f, y2 = 0.0f, y3 = 0.0f;
+    for (int k = 0; k < n; ++k) {
+        float x = (u[k] - c) * inv, x2 = x * x, sg = (k & 1) ? -1.0f : 1.0f, fk = (float)k;
+        s->ho_x[k] = x;
         s1 += x;
         s2 += x2;
         s3 += x2 * x;
@@ -601,45 +608,79 @@ static int handover_fit(const bc_bemf_state *s, float *alt, float *res, float *a
         sa += sg;
         sax += sg * x;
         sax2 += sg * x2;
-        y[0] += fk;
-        y[1] += x * fk;
-        y[2] += x2 * fk;
-        y[3] += sg * fk;
+        y0 += fk;
+        y1 += x * fk;
+        y2 += x2 * fk;
+        y3 += sg * fk;
     }
-    float a[4][4] = {{(float)m, 0.0f, 0.0f, 0.0f},
-                     {s1, s2, 0.0f, 0.0f},
-                     {s2, s3, s4, 0.0f},
-                     {sa, sax, sax2, (float)m}};
-    for (int c = 0; c < 4; ++c) { /* Cholesky, a = L L^T (symmetric positive definite for distinct times) */
-        for (int q = 0; q < c; ++q) a[c][c] -= a[c][q] * a[c][q];
-        if (!(a[c][c] > 1e-9f)) return -1;
-        a[c][c] = sqrtf(a[c][c]);
-        for (int r = c + 1; r < 4; ++r) {
-            for (int q = 0; q < c; ++q) a[r][c] -= a[r][q] * a[c][q];
-            a[r][c] /= a[c][c];
-        }
+    float *mo = s->ho_mom;
+    mo[0] = s1;
+    mo[1] = s2;
+    mo[2] = s3;
+    mo[3] = s4;
+    mo[4] = sa;
+    mo[5] = sax;
+    mo[6] = sax2;
+    mo[7] = y0;
+    mo[8] = y1;
+    mo[9] = y2;
+    mo[10] = y3;
+}
+
+void bc_bemf_ho_prepare(bc_bemf_state *s) { ho_prepare(s, s->valid); }
+
+int bc_bemf_ho_fit(bc_bemf_state *s, float *alt, float *res, float *acc)
+{
+    *alt = 0.0f;
+    *res = 0.0f;
+    *acc = 0.0f;
+    int m = s->valid < BC_BEMF_HO_FIT ? (int)s->valid : BC_BEMF_HO_FIT;
+    if (m < 5) return 1;
+    if (!(s->ho_n == s->valid - 1 && s->ho_t == s->ho_ring[s->ho_k])) ho_prepare(s, s->valid - 1);
+    int prev = s->ho_k, last = prev < BC_BEMF_HO_FIT - 1 ? prev + 1 : 0, first = last - (m - 1);
+    if (first < 0) first += BC_BEMF_HO_FIT;
+    if (!(tdiff(s->ho_ring[first], s->ho_ring[last]) < 0.0f)) return -1; /* the crossings span no time */
+    /* this crossing, the last (k = m - 1), and the moments with it */
+    float x = (tdiff(s->ho_ring[last], s->ho_ring[prev]) * s->inv_tick - s->ho_c) * s->ho_inv;
+    float x2 = x * x, sg = (m & 1) ? 1.0f : -1.0f, fk = (float)(m - 1);
+    const float *mo = s->ho_mom;
+    float s1 = mo[0] + x, s2 = mo[1] + x2, s3 = mo[2] + x2 * x, s4 = mo[3] + x2 * x2, sa = mo[4] + sg;
+    float sax = mo[5] + sg * x, sax2 = mo[6] + sg * x2;
+    float y0 = mo[7] + fk, y1 = mo[8] + x * fk, y2 = mo[9] + x2 * fk, y3 = mo[10] + sg * fk;
+    /* the normal equations of 1, x, x^2, (-1)^k, [[m, s1, s2, sa], [s1, s2, s3, sax], [s2, s3, s4, sax2], [sa, sax,
+     * sax2, m]] c = y, by L D L^T (L unit lower triangular; D positive for distinct times): L z = y, L^T c = D^-1 z */
+    float d0 = (float)m;
+    float l10 = s1 / d0, l20 = s2 / d0, l30 = sa / d0;
+    float d1 = s2 - l10 * s1;
+    if (!(d1 > 1e-9f)) return -1;
+    float e21 = s3 - l20 * s1, e31 = sax - l30 * s1;
+    float l21 = e21 / d1, l31 = e31 / d1;
+    float d2 = s4 - l20 * s2 - l21 * e21;
+    if (!(d2 > 1e-9f)) return -1;
+    float e32 = sax2 - l30 * s2 - l31 * e21;
+    float l32 = e32 / d2;
+    float d3 = d0 - l30 * sa - l31 * e31 - l32 * e32;
+    if (!(d3 > 1e-9f)) return -1;
+    float z1 = y1 - l10 * y0, z2 = y2 - l20 * y0 - l21 * z1, z3 = y3 - l30 * y0 - l31 * z1 - l32 * z2;
+    float c3 = z3 / d3, c2 = z2 / d2 - l32 * c3, c1 = z1 / d1 - l21 * c2 - l31 * c3;
+    float c0 = y0 / d0 - l10 * c1 - l20 * c2 - l30 * c3;
+    /* the largest distance of a crossing from the path (k even and odd in pairs; this one the last) */
+    s->ho_x[m - 1] = x;
+    float ce = c0 + c3, co = c0 - c3, fj = 0.0f, worst = 0.0f;
+    int k = 0;
+    for (; k + 1 < m; k += 2, fj += 2.0f) {
+        float xe = s->ho_x[k], xo = s->ho_x[k + 1];
+        float ee = fabsf(ce + (c1 + c2 * xe) * xe - fj), eo = fabsf(co + (c1 + c2 * xo) * xo - (fj + 1.0f));
+        worst = ee > worst ? ee : worst;
+        worst = eo > worst ? eo : worst;
     }
-    float cf[4];
-    for (int r = 0; r < 4; ++r) { /* L z = y */
-        float v = y[r];
-        for (int q = 0; q < r; ++q) v -= a[r][q] * cf[q];
-        cf[r] = v / a[r][r];
+    if (k < m) {
+        float ee = fabsf(ce + (c1 + c2 * s->ho_x[k]) * s->ho_x[k] - fj);
+        worst = ee > worst ? ee : worst;
     }
-    for (int r = 3; r >= 0; --r) { /* L^T c = z */
-        float v = cf[r];
-        for (int q = r + 1; q < 4; ++q) v -= a[q][r] * cf[q];
-        cf[r] = v / a[r][r];
-    }
-    float worst = 0.0f;
-    for (int k = 0; k < m; ++k) {
-        float x = u[k] - um;
-        float fit = cf[0] + cf[1] * x + cf[2] * x * x + cf[3] * ((k & 1) ? -1.0f : 1.0f);
-        float d = fabsf(fit - (float)k);
-        if (d > worst) worst = d;
-    }
-    *alt = fabsf(cf[3]) * PI3_F;
+    *alt = fabsf(c3) * PI3_F;
     *res = worst * PI3_F;
-    *acc = 2.0f * cf[2] * PI3_F / (tm * tm);
+    *acc = 2.0f * c2 * PI3_F * s->ho_inv * s->ho_inv;
     return fin(*alt) && fin(*res) && fin(*acc) ? 0 : -1;
 }
 
@@ -647,10 +688,10 @@ static int handover_fit(const bc_bemf_state *s, float *alt, float *res, float *a
  * distance of each from the path within what the closed loop's jump check tolerates (alternate crossings (pi/6)
  * (jump - 1) / (jump + 1) off), at an acceleration the start-up can give (at most BC_BEMF_HO_ACC ramp_accel either
  * way). */
-static int plausible(const bc_bemf_params *p, const bc_bemf_state *s)
+static int plausible(const bc_bemf_params *p, bc_bemf_state *s)
 {
     float alt, res, acc;
-    int f = handover_fit(s, &alt, &res, &acc);
+    int f = bc_bemf_ho_fit(s, &alt, &res, &acc);
     if (f != 0) return f > 0;
     float d_max = PI6_F * (p->jump_max - 1.0f) / (p->jump_max + 1.0f);
     return alt <= d_max && res <= d_max && !(p->ramp_accel > 0.0f && fabsf(acc) > BC_BEMF_HO_ACC * p->ramp_accel);
@@ -975,6 +1016,8 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
     }
     /* 4. alignment over: the ramp */
     if (s->mode == BC_BEMF_ALIGN && s->t_in >= p->align_time) begin_ramp(p, s, in, &n);
+    /* 5. the handover's fit prepared at the first sample after each forced sector's crossing (ho_prepare) */
+    if (s->mode == BC_BEMF_RAMP && s->ho_n != s->valid) ho_prepare(s, s->valid);
 
     /* 5-9. detection, commutation schedule, timeout */
     if (s->mode == BC_BEMF_RAMP || s->mode == BC_BEMF_CLOSED) {

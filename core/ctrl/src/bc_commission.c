@@ -17,19 +17,29 @@ int bc_commission_init(const bc_commission_params *p, bc_commission_state *s)
         !finite_pos(p->v_pulse) || !finite_pos(p->i_if) || !finite_pos(p->if_accel) || !finite_pos(p->w_spin) ||
         !finite_pos(p->t_spin) || !finite_pos(p->psi_min) || !finite_pos(p->tol_move) ||
         !finite_pos(p->tol_follow) || !finite_pos(p->i_max) || !finite_pos(p->v_max) || !finite_nonneg(p->k_damp) ||
-        !finite_nonneg(p->t_dead) || !(p->t_dead < p->ts) || !finite_nonneg(p->v_diode))
+        !finite_nonneg(p->t_dead) || !(p->t_dead < p->ts) || !finite_nonneg(p->v_diode) ||
+        !finite_pos(p->tol_noise) || !finite_pos(p->t_offset))
         return BC_ERR_PARAM;
     if (p->n_pulse < 1 || p->n_pulse > 1000 || p->pulse_len < 1 || p->pulse_len > 1000) return BC_ERR_PARAM;
+    if (p->n_pulse_max < p->n_pulse || p->n_pulse_max > 1000) return BC_ERR_PARAM;
     if (p->i_test >= p->i_max || p->i_if >= p->i_max) return BC_ERR_PARAM;
     s->guard_p = (bc_guard_params){.i_max = p->i_max, .v_max = p->v_max};
     if (bc_guard_init(&s->guard_p, &s->guard) != BC_OK) return BC_ERR_PARAM;
     s->pi_p = (bc_pi_params){.kp = p->kp, .ki = p->ki, .ts = p->ts, .u_min = -p->v_max, .u_max = p->v_max};
     if (bc_pi_init(&s->pi_p, &s->pi_d) != BC_OK || bc_pi_init(&s->pi_p, &s->pi_q) != BC_OK) return BC_ERR_PARAM;
-    s->phase = BC_COMM_PH_ALIGN;
+    s->phase = BC_COMM_PH_OFFSET;
     s->status = BC_COMM_RUNNING;
     s->t = 0.0f;
     s->k = 0;
     s->phi = s->w_phi = 0.0f;
+    for (int x = 0; x < 3; ++x) s->i_off[x] = s->s_o[x] = 0.0f;
+    s->sig_i = 0.0f;
+    s->n_cmd = 0;
+    s->b_a = s->b_b = 0.0f;
+    s->b_n = 0;
+    s->d_cmd[0] = s->d_cmd[1] = s->d_cmd[2] = s->v_cmd = 0.0f;
+    s->has_cmd = 0;
+    s->odd = 0u;
     for (int j = 0; j < 2; ++j) {
         s->u_hist[j][0] = s->u_hist[j][1] = 0.0f;
         s->phi_hist[j] = 0.0f;
@@ -49,6 +59,8 @@ static void next_phase(bc_commission_state *s, int32_t phase)
     s->t = 0.0f;
     s->k = 0;
     s->n = s->s_v = s->s_i = s->s_vb = s->s_e = s->s_e2 = s->s_dd = s->e_ang = 0.0f;
+    s->b_a = s->b_b = 0.0f;
+    s->b_n = 0;
     s->v_lo = 3.0e38f;
     s->v_hi = -3.0e38f;
 }
@@ -59,15 +71,125 @@ static void stop(bc_commission_state *s, int32_t status)
     s->phase = BC_COMM_PH_DONE;
 }
 
-/* A window sample of the R test: the voltage over [t_k-1, t_k] and the current at t_k. */
-static void r_sample(bc_commission_state *s, bc_ab u, bc_ab i)
+/* A window sample of the R test: the voltage over [t_k-1, t_k] and the current at t_k into the means; the voltage
+ * into the mean of its block (BC_COMM_BLOCKS a window), and each block's mean into the spread of alpha and the
+ * largest |beta| (block means: the current's noise through k_p would dominate single samples). */
+static void r_sample(const bc_commission_params *p, bc_commission_state *s, bc_ab u, bc_ab i)
 {
     s->n += 1.0f;
     s->s_v += u.alpha;
     s->s_i += i.alpha;
-    s->s_vb = fmaxf(s->s_vb, fabsf(u.beta));
-    s->v_lo = fminf(s->v_lo, u.alpha);
-    s->v_hi = fmaxf(s->v_hi, u.alpha);
+    s->b_a += u.alpha;
+    s->b_b += u.beta;
+    s->b_n += 1;
+    int32_t nb = (int32_t)(p->t_window / ((float)BC_COMM_BLOCKS * p->ts));
+    if (s->b_n >= (nb > 1 ? nb : 1)) {
+        float a = s->b_a / (float)s->b_n, b = s->b_b / (float)s->b_n;
+        s->s_vb = fmaxf(s->s_vb, fabsf(b));
+        s->v_lo = fminf(s->v_lo, a);
+        s->v_hi = fmaxf(s->v_hi, a);
+        s->b_a = s->b_b = 0.0f;
+        s->b_n = 0;
+    }
+}
+
+/* The dead time's loss or gain (alpha-beta, V) over the half period [t_k, t_k+1] the last command's duties d_cmd
+ * apply to, from the phase currents i3 at t_k, the back-EMF and resistive drop eb (phase to star, V) and whether
+ * t_k is a carrier peak: the half period simulated event by event (bc_commission.h, "dead time"). */
+static bc_ab dt_voltage(const bc_commission_params *p, const bc_commission_state *s, const float i3[3],
+                        const float eb[3], int peak)
+{
+    float td = p->t_dead, ts = p->ts, v = s->v_cmd, vd = p->v_diode;
+    const float *d = s->d_cmd;
+    float w[3];
+    if (!(td > 0.0f)) return (bc_ab){0.0f, 0.0f}; /* without a dead time the duties give the voltage */
+    if (!(s->L > 0.0f)) {
+        /* L not measured yet: the loss by the current's sign, over a band of 2 % of the larger test current */
+        float vt = (v + 2.0f * vd) * td / (2.0f * ts), b = 0.02f * fmaxf(p->i_test, p->i_if);
+        for (int x = 0; x < 3; ++x) w[x] = -vt * bc_clampf(i3[x] / b, -1.0f, 1.0f);
+        return bc_clarke((bc_abc){w[0], w[1], w[2]});
+    }
+    float to = peak ? 0.0f : v; /* the level each leg goes to at its edge */
+    float cur[3], lv[3], area[3], te[3], tend[3];
+    int todo[3], indt[3], flt[3];
+    for (int x = 0; x < 3; ++x) {
+        cur[x] = i3[x];
+        area[x] = 0.0f;
+        todo[x] = d[x] > 0.0f && d[x] < 1.0f; /* an edge in this half period */
+        lv[x] = peak ? (d[x] > 0.0f ? v : 0.0f) : (d[x] >= 1.0f ? v : 0.0f);
+        te[x] = peak ? d[x] * ts : (1.0f - d[x]) * ts;
+        tend[x] = ts;
+        indt[x] = flt[x] = 0;
+    }
+    float t = 0.0f;
+    for (int it = 0; it < 16; ++it) {
+        /* a leg in its dead time: its diode's rail by the current's sign; at zero current it floats where the
+         * current stays zero, v_x = 1.5 e_x + (v_y + v_z) / 2 (within the rails) */
+        for (int x = 0; x < 3; ++x) {
+            if (!indt[x]) continue;
+            if (flt[x]) {
+                float o = lv[(x + 1) % 3] + lv[(x + 2) % 3];
+                lv[x] = bc_clampf(1.5f * eb[x] + 0.5f * o, 0.0f, v);
+            } else {
+                lv[x] = cur[x] > 0.0f ? -vd : v + vd;
+            }
+        }
+        float vn = (lv[0] + lv[1] + lv[2]) / 3.0f, sl[3];
+        for (int x = 0; x < 3; ++x) sl[x] = flt[x] ? 0.0f : (lv[x] - vn - eb[x]) / s->L; /* di/dt */
+        float tn = ts;
+        int kind = 0, who = 0;
+        for (int x = 0; x < 3; ++x) {
+            if (todo[x] && te[x] < tn) {
+                tn = te[x];
+                kind = 1;
+                who = x;
+            }
+            if (indt[x] && tend[x] < tn) {
+                tn = tend[x];
+                kind = 2;
+                who = x;
+            }
+            if (indt[x] && !flt[x] && cur[x] * sl[x] < 0.0f) {
+                float tz = t - cur[x] / sl[x];
+                if (tz < tn) {
+                    tn = tz;
+                    kind = 3;
+                    who = x;
+                }
+            }
+        }
+        if (tn < t) tn = t;
+        for (int x = 0; x < 3; ++x) {
+            area[x] += lv[x] * (tn - t);
+            cur[x] += sl[x] * (tn - t);
+        }
+        t = tn;
+        if (kind == 0) break;
+        if (kind == 1) { /* the edge: both switches off for t_dead */
+            todo[who] = 0;
+            indt[who] = 1;
+            tend[who] = t + td;
+        } else if (kind == 2) { /* the dead time's end: the switch takes the leg to its new level */
+            indt[who] = flt[who] = 0;
+            lv[who] = to;
+        } else { /* the current reached zero inside the dead time */
+            cur[who] = 0.0f;
+            flt[who] = 1;
+        }
+    }
+    for (int x = 0; x < 3; ++x) {
+        w[x] = area[x] / ts - d[x] * v;
+        if (!isfinite(w[x])) w[x] = 0.0f; /* measurements out of any range: no correction rather than NaN */
+    }
+    return bc_clarke((bc_abc){w[0], w[1], w[2]});
+}
+
+/* L's relative standard error from the current's noise within tol_noise after `pairs` pulse pairs: the sum
+ * sum s (i_k - i_k-1) takes each sample's noise at the 2 pairs - 1 sign changes twice and at its ends once,
+ * variance (8 pairs - 2) sig_i^2. */
+static int l_precise(const bc_commission_params *p, const bc_commission_state *s, int32_t pairs)
+{
+    return s->sig_i * sqrtf((float)(8 * pairs - 2)) <= p->tol_noise * fabsf(s->l_den);
 }
 
 /* End of an R window: the means, and ROTOR_MOVING if the rotor's back-EMF shows. Returns 1 if it may go on. */
@@ -102,12 +224,43 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
         out->diag[7] = (float)s->status;
         return;
     }
+    for (int x = 0; x < 3; ++x) i3[x] -= s->i_off[x]; /* the sensors' offsets, measured in OFFSET */
     bc_ab i = bc_clarke((bc_abc){i3[0], i3[1], i3[2]});
+    int peak = (int)s->odd; /* t_k a carrier peak (odd k: the samples alternate from a valley) */
+    s->odd ^= 1u;
+    if (s->has_cmd) {
+        /* the last command's half period starts now: its dead-time loss or gain from these currents, against the
+         * back-EMF and resistive drop of the half period before, e + R i = u - L (i_k - i_k-1) / T_s */
+        bc_abc e3 = bc_clarke_inv((bc_ab){s->u_hist[1][0] - s->L * (i.alpha - s->i_prev[0]) / p->ts,
+                                          s->u_hist[1][1] - s->L * (i.beta - s->i_prev[1]) / p->ts});
+        float eb[3] = {e3.a, e3.b, e3.c};
+        bc_ab w = dt_voltage(p, s, i3, eb, peak);
+        s->u_hist[0][0] += w.alpha;
+        s->u_hist[0][1] += w.beta;
+        s->has_cmd = 0;
+    }
     bc_ab u = {s->u_hist[1][0], s->u_hist[1][1]}; /* applied over [t_k-1, t_k] */
     float phi_u = s->phi_hist[1];                /* its vector angle */
     float ts = p->ts;
     s->t += ts;
     s->k++;
+
+    if (s->phase == BC_COMM_PH_OFFSET) {
+        /* legs off, no current: the sensors read their offsets, and the spread of alpha is the noise */
+        s->n += 1.0f;
+        for (int x = 0; x < 3; ++x) s->s_o[x] += i3[x];
+        s->s_i += i.alpha;
+        s->s_e2 += i.alpha * i.alpha;
+        if (s->t >= p->t_offset) {
+            float m = s->s_i / s->n;
+            s->sig_i = sqrtf(fmaxf(s->s_e2 / s->n - m * m, 0.0f));
+            for (int x = 0; x < 3; ++x) s->i_off[x] = s->s_o[x] / s->n;
+            next_phase(s, BC_COMM_PH_ALIGN);
+        }
+        out->diag[0] = (float)s->phase;
+        out->diag[7] = (float)s->status;
+        return;
+    }
 
     float i_ref = p->i_test;
     int pulse = 0;     /* 1: open loop, u_hold + the pulse */
@@ -126,7 +279,7 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
         }
         break;
     case BC_COMM_PH_R_HI:
-        if (s->t > p->t_settle) r_sample(s, u, i);
+        if (s->t > p->t_settle) r_sample(p, s, u, i);
         if (s->t >= p->t_settle + p->t_window) {
             if (!r_end(p, s, &s->V2, &s->I2)) break;
             if (fabsf(s->I2) < 0.5f * p->i_test) {
@@ -138,7 +291,7 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
         break;
     case BC_COMM_PH_R_LO:
         i_ref = 0.5f * p->i_test;
-        if (s->t > p->t_settle) r_sample(s, u, i);
+        if (s->t > p->t_settle) r_sample(p, s, u, i);
         if (s->t >= p->t_settle + p->t_window) {
             if (!r_end(p, s, &s->V1, &s->I1)) break;
             s->R = (s->V2 - s->V1) / (s->I2 - s->I1); /* R = (V_2 - V_1) / (I_2 - I_1) */
@@ -146,22 +299,27 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
             s->u_hold[0] = s->pi_d.x;
             s->u_hold[1] = s->pi_q.x;
             s->l_num = s->l_den = 0.0f;
+            s->n_cmd = 2 * p->n_pulse * p->pulse_len;
             next_phase(s, BC_COMM_PH_L);
         }
         break;
     case BC_COMM_PH_L: {
         i_ref = 0.5f * p->i_test;
-        int32_t n_cmd = 2 * p->n_pulse * p->pulse_len; /* commands of the pulse train */
-        int32_t c = s->k - 1;                          /* this sample's command index in the phase */
+        int32_t c = s->k - 1; /* this sample's command index in the phase */
         /* measurement: the interval [t_k-1, t_k] carries the command of two samples ago, c - 2 */
         int32_t cm = c - 2;
-        if (cm >= 0 && cm < n_cmd) {
+        if (cm >= 0 && cm < s->n_cmd) {
             float sg = ((cm / p->pulse_len) % 2 == 0) ? 1.0f : -1.0f;
             float im = 0.5f * (s->i_prev[0] + i.alpha);
             /* L = sum s (u - V_1 - R (i_mean - I_1)) T_s / sum s (i_k - i_k-1) */
             s->l_num += sg * (u.alpha - s->V1 - s->R * (im - s->I1)) * ts;
             s->l_den += sg * (i.alpha - s->i_prev[0]);
         }
+        int32_t pairs = s->n_cmd / (2 * p->pulse_len);
+        /* at the train's end, a pair more while L's standard error from the noise is above tol_noise (the sums
+         * lack the last two intervals: the estimate errs on the safe side) */
+        if (c == s->n_cmd && pairs < p->n_pulse_max && !l_precise(p, s, pairs)) s->n_cmd += 2 * p->pulse_len;
+        int32_t n_cmd = s->n_cmd;
         if (c < n_cmd) {
             pulse = 1;
             v_add = ((c / p->pulse_len) % 2 == 0) ? p->v_pulse : -p->v_pulse;
@@ -170,6 +328,10 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
         } else {
             s->L = (s->l_den != 0.0f) ? s->l_num / s->l_den : 0.0f;
             if (!isfinite(s->L)) s->L = 0.0f;
+            if (!l_precise(p, s, pairs)) {
+                stop(s, BC_COMM_NOISY); /* n_pulse_max pairs and still not precise */
+                break;
+            }
             if (s->t >= (float)(n_cmd + 2) * ts + p->t_settle) next_phase(s, BC_COMM_PH_SPIN);
         }
         break;
@@ -273,26 +435,12 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
         out->leg[x].mode = BC_LEG_PWM;
         out->leg[x].duty = duty[x];
     }
-    /* the voltage these duties apply, the dead time's loss or gain at each leg's edges (bc_commission.h), with the
-     * currents of the interval they apply to (the vector turned 1.5 samples on) */
-    float vt = (in->v_dc + 2.0f * p->v_diode) * p->t_dead / (2.0f * ts), b = 0.02f * fmaxf(p->i_test, p->i_if);
-    float vx[3] = {duty[0] * in->v_dc, duty[1] * in->v_dc, duty[2] * in->v_dc};
-    if (vt > 0.0f) { /* without a dead time the duties give the voltage as it is */
-        float kr = s->L > 0.0f ? in->v_dc * ts / (3.0f * s->L) : 0.0f;
-        float cr = cosf(1.5f * s->w_phi * ts), sr = sinf(1.5f * s->w_phi * ts);
-        bc_abc ia = bc_clarke_inv((bc_ab){cr * i.alpha - sr * i.beta, sr * i.alpha + cr * i.beta});
-        float ix[3] = {ia.a, ia.b, ia.c};
-        for (int x = 0; x < 3; ++x) {
-            float dx = duty[x], rho = 2.0f * dx * (1.0f - dx);
-            for (int y = 0; y < 3; ++y) {
-                if (y != x) rho -= fminf(dx, duty[y]) - dx * duty[y];
-            }
-            rho = fmaxf(kr * rho, 0.0f);
-            float w = bc_clampf((ix[x] - rho) / b, -1.0f, 1.0f) + bc_clampf((ix[x] + rho) / b, -1.0f, 1.0f);
-            vx[x] -= 0.5f * vt * w;
-        }
-    }
-    bc_ab ua = bc_clarke((bc_abc){vx[0], vx[1], vx[2]});
+    /* the voltage these duties apply without the dead time; its loss or gain is added at the next sample, when the
+     * currents at the start of the half period they apply to are measured (dt_voltage) */
+    bc_ab ua = bc_clarke((bc_abc){duty[0] * in->v_dc, duty[1] * in->v_dc, duty[2] * in->v_dc});
+    for (int x = 0; x < 3; ++x) s->d_cmd[x] = duty[x];
+    s->v_cmd = in->v_dc;
+    s->has_cmd = 1;
     s->u_hist[1][0] = s->u_hist[0][0];
     s->u_hist[1][1] = s->u_hist[0][1];
     s->phi_hist[1] = s->phi_hist[0];

@@ -27,7 +27,8 @@ class Estimate:
     ----------
     status : str
         ``"DONE"``, or the failure: ``"ROTOR_MOVING"``, ``"NO_CURRENT"``, ``"SATURATED"``, ``"NOT_FOLLOWING"``,
-        ``"FAULT"`` (``bc_commission.h``), or ``"UNFINISHED"`` (the run ended first).
+        ``"NOISY"`` (the current's noise leaves L imprecise), ``"FAULT"`` (``bc_commission.h``), or ``"UNFINISHED"``
+        (the run ended first).
     R : float
         Resistance in series with a phase, ``R + R_on`` (Ohm); 0 if not measured.
     L : float
@@ -116,10 +117,11 @@ def commission(drive: Drive, nominal: Drive | None = None, control: Commission |
                                                   faults=faults),
                  estimate=nominal)
     wall = time.perf_counter() - t0
-    names = {v: k.removeprefix("BC_COMM_") for k, v in load_core().groups["commission_status"].items()}
+    groups = load_core().groups
+    names = {v: k.removeprefix("BC_COMM_") for k, v in groups["commission_status"].items()}
     code = int(r["status"][-1])
     status = "UNFINISHED" if code == 0 else names.get(code, str(code))
-    done = r["phase"] >= 5
+    done = r["phase"] >= groups["commission_phase"]["BC_COMM_PH_DONE"]
     t_test = float(r["t"][done][0]) if done.any() else t_run
     return Estimate(status=status, R=float(r["R"][-1]), L=float(r["L"][-1]), psi_f=float(r["psi"][-1]),
                     t_test=t_test, wall_time=wall, nominal=nominal)

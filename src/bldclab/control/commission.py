@@ -40,7 +40,16 @@ class Commission(Control):
     pulse_samples : int
         Samples per inductance pulse.
     pulses : int
-        Pulse pairs (+, -).
+        Pulse pairs (+, -) at least.
+    max_pulses : int
+        Pulse pairs at most (``pulses`` .. 1000): while L's relative standard error from the current's noise
+        (measured with the legs off before the tests) is above ``tol_noise``, the routine adds a pair; after
+        ``max_pulses`` it ends with the status ``NOISY``.
+    tol_noise : float
+        Largest relative standard error of L from the current's noise (-).
+    offset_time : float
+        Time (s) the routine reads the current sensors with the legs off, before the tests: their means are the
+        offsets it takes off every later sample, their spread the noise.
     tol_move, tol_follow : float
         Thresholds of the ROTOR_MOVING and NOT_FOLLOWING statuses (-).
     """
@@ -50,6 +59,9 @@ class Commission(Control):
     spin_current: float | None = None
     pulse_samples: int = 10
     pulses: int = 8
+    max_pulses: int = 500
+    tol_noise: float = 0.01
+    offset_time: float = 0.02
     tol_move: float = 0.05
     tol_follow: float = 0.3
     c_name: ClassVar[str] = "commission"
@@ -59,12 +71,16 @@ class Commission(Control):
         for name in ("test_current", "spin_speed", "spin_current"):
             if getattr(self, name) is not None:
                 check_number(name, getattr(self, name))
-        for name in ("pulse_samples", "pulses"):
+        for name in ("pulse_samples", "pulses", "max_pulses"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 1000:
                 raise BldclabError(f"control.{name}", f"must be an integer in [1, 1000], got {v!r}")
+        if self.max_pulses < self.pulses:
+            raise BldclabError("control.max_pulses", f"must be >= pulses = {self.pulses}, got {self.max_pulses}")
         check_number("tol_move", self.tol_move)
         check_number("tol_follow", self.tol_follow)
+        check_number("tol_noise", self.tol_noise)
+        check_number("offset_time", self.offset_time)
 
     def settings(self, drive: Drive) -> dict[str, float]:
         """Return the routine's settings for a drive's nominal data (currents A, times s, speeds rad/s, V).
@@ -85,7 +101,7 @@ class Commission(Control):
         tau_el = m.L / r_total(drive)
         swing = 2 * math.pi / w_n
         return {
-            "ts": ts, "i_test": i_t, "i_if": i_if,
+            "ts": ts, "i_test": i_t, "i_if": i_if, "t_offset": self.offset_time,
             "t_ramp": 3 * swing, "t_settle": 5 * tau_el + 0.01 + 2 * swing, "t_window": max(0.05, 2 * swing),
             "v_pulse": 0.25 * i_t * m.L / (self.pulse_samples * ts),
             "if_accel": min(m.p * 0.5 * 1.5 * k1 * i_if / J, 0.02 * w_spin * w_nif), "w_spin": w_spin,
@@ -95,10 +111,10 @@ class Commission(Control):
         }
 
     def duration(self, drive: Drive) -> float:
-        """Return the routine's length for a drive's nominal data (s)."""
+        """Return the routine's length for a drive's nominal data (s), with ``max_pulses`` pulse pairs."""
         st = self.settings(drive)
-        return (2 * st["t_ramp"] + st["t_settle"] + st["t_window"] + st["t_settle"] + st["t_window"]
-                + (2 * self.pulses * self.pulse_samples + 2) * st["ts"] + st["t_settle"]
+        return (st["t_offset"] + 2 * st["t_ramp"] + st["t_settle"] + st["t_window"] + st["t_settle"] + st["t_window"]
+                + (2 * self.max_pulses * self.pulse_samples + 2) * st["ts"] + st["t_settle"]
                 + st["t_ramp"] + st["w_spin"] / st["if_accel"] + st["t_settle"] + st["t_spin"])
 
     def c_record(self, drive: Drive, core: Core, n_samples: int) -> CParams:  # noqa: D102
@@ -112,8 +128,9 @@ class Commission(Control):
         kp, ki = pi_gains(max(r_total(drive), bw * drive.motor.L / 10), drive.motor.L, bw / (2 * math.pi), 90.0)
         rec = core.filled(
             "bc_commission_params", kp=kp, ki=ki, n_pulse=self.pulses, pulse_len=self.pulse_samples,
-            tol_move=self.tol_move, tol_follow=self.tol_follow, i_max=i_max, v_max=2.0 * drive.inverter.V_dc,
+            n_pulse_max=self.max_pulses, tol_noise=self.tol_noise, tol_move=self.tol_move, tol_follow=self.tol_follow,
+            i_max=i_max, v_max=2.0 * drive.inverter.V_dc,
             t_dead=drive.inverter.t_dead, v_diode=drive.inverter.V_f,
             **{k: st[k] for k in ("ts", "i_test", "t_ramp", "t_settle", "t_window", "v_pulse", "i_if", "if_accel",
-                                  "w_spin", "t_spin", "psi_min", "k_damp")})
+                                  "w_spin", "t_spin", "psi_min", "k_damp", "t_offset")})
         return CParams(rec, [])

@@ -202,10 +202,13 @@ def _plain(value: Any) -> Any:
     return str(value)
 
 
-def _scenario() -> dict[str, Any]:
+def _scenario(controls: Mapping[str, tuple[Control, float]]) -> dict[str, Any]:
     """Return the measuring scenario of :func:`~bldclab.analysis.experiments.steady_state` as ``compare`` runs it."""
     par = inspect.signature(steady_state).parameters
     delay = next(f.default for f in dataclasses.fields(Scenario) if f.name == "delay")
+    if delay is None:  # each controller's own
+        own = sorted({ctl.own_delay for ctl, _ in controls.values()})
+        delay = own[0] if len(own) == 1 else "/".join(map(str, own))
     return {"speed": "imposed (dynamometer), constant", "settle_periods": par["settle_periods"].default,
             "settle_time_s": par["settle_time"].default, "measure_periods": par["measure_periods"].default,
             "delay_samples": delay, "start": "from rest: zero currents, electrical angle 0"}
@@ -262,7 +265,7 @@ def make_manifest(res: CompareResult, controls: Mapping[str, tuple[Control, floa
         "format": FORMAT, "format_version": FORMAT_VERSION, "command": command, "bldclab_version": __version__,
         "created": _now(), "environment": _environment(), "wall_time_s": round(float(res.seconds), 3),
         "motor": {"name": res.drive.name, "source": motor_source, "toml": res.drive.to_toml()},
-        "speeds_pu": speeds, "supplies": _supplies(res.drive, controls), "scenario": _scenario(),
+        "speeds_pu": speeds, "supplies": _supplies(res.drive, controls), "scenario": _scenario(controls),
         "waveforms": {"speeds_pu": sorted({float(p["speed_pu"]) for p in waveform_points}),
                       "trace_sub": waveform_sub, "periods_shown": 1, "points": _plain(list(waveform_points))},
         "verdict": list(res.verdict), "warnings": _plaus.distinct(res.warnings), "files": sorted(set(files)),

@@ -448,6 +448,14 @@ typedef struct {
     float w_zc;            /* speed from the last forced sector's crossing, electrical rad/s (0: none) */
     int32_t valid;         /* consecutive forced sectors with a crossing */
     uint32_t ho_ring[BC_BEMF_HO_FIT]; /* ticks of the last crossings of those sectors (the handover's fit, 5) */
+    /* the handover's fit prepared from the crossings known, for the next crossing's (5, bc_bemf_ho_prepare) */
+    int32_t ho_n;          /* valid it was prepared at (the next fit's crossings: min(ho_n + 1, BC_BEMF_HO_FIT)) */
+    int32_t ho_k;          /* ho_ring's slot of the last crossing it knows */
+    uint32_t ho_t;         /* that crossing's tick */
+    float ho_c, ho_inv;    /* its time origin after that crossing (s) and 1 / its time unit (1/s) */
+    float ho_x[BC_BEMF_HO_FIT]; /* the known crossings' times in that unit from that origin, oldest first (and the
+                                 * fitted crossing's, last) */
+    float ho_mom[11];      /* their moments: x, x^2, x^3, x^4, (-1)^k, (-1)^k x, (-1)^k x^2, k, k x, k x^2, k (-1)^k */
     float to_t60, to_tl, to_val; /* 9: the timeout (s) and the T60 and last interval it was computed for */
     int32_t hold;          /* forced sectors at ramp_w1 */
     int32_t sector_ok;     /* the current forced sector had a crossing */
@@ -487,5 +495,15 @@ int bc_bemf_init(const bc_bemf_params *p, bc_bemf_state *s);
 
 /* One sample: measurements in, leg commands for the next half period (and a timed commutation inside it) out. */
 void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *in, bc_ctrl_out *out);
+
+/* The handover's fit (5) in its two parts, exposed for tests. bc_bemf_ho_prepare: the moments of the last
+ * min(valid + 1, BC_BEMF_HO_FIT) - 1 crossings in ho_ring, for the fit at the next crossing (the controller calls it
+ * at the first sample of a forced sector after its crossing). bc_bemf_ho_fit: at a crossing (valid and ho_ring
+ * updated), the fit of the last m = min(valid, BC_BEMF_HO_FIT) crossings, prepared again first unless the preparation
+ * is the one for valid - 1 and the same last crossing. Returns 0 with, in rad, *alt = |c3| pi/3, *res the largest
+ * distance of a crossing from the fitted path and *acc its acceleration (rad/s^2); 1 with m < 5 (no check); -1 if the
+ * crossings do not span a positive time or the fit is degenerate. */
+void bc_bemf_ho_prepare(bc_bemf_state *s);
+int bc_bemf_ho_fit(bc_bemf_state *s, float *alt, float *res, float *acc);
 
 #endif /* BC_BEMF_H */

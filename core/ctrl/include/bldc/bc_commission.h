@@ -6,20 +6,28 @@
  * Frames: amplitude-invariant alpha-beta (bc_transform.h). The controller drives a current vector i_ref e^(j phi)
  * with two PIs in the frame of phi (the same gains for both axes), the voltage rotated back with the loop's delay
  * compensated (phi + 1.5 omega_phi T_s) and min-max SVM. The voltage of sample k-2 (the one applied over [t_k-1,
- * t_k], as in bc_obs.h) is taken back from its duties and the dead time: u = Clarke(d_x v_dc + w_x). A
- * complementary leg loses v_t = (v_dc + 2 v_diode) t_dead / (2 T_s) of its mean voltage at the upper switch's
- * turn-on when the current there is positive (a diode holds the terminal low through the dead time) and gains it at
- * the turn-off when the current there is negative. With the on-time centred on the sample, the current at the two
- * edges is the sample's i_x -+ rho_x, the PWM ripple from the centre to an edge (the legs' duties and L; the
- * back-EMF, constant over the period, cancels):
+ * t_k], as in bc_obs.h) is taken back from its duties and the dead time ("dead time"): u = Clarke(d_x v_dc + w_x).
  *
- *     rho_x = (v_dc T_s / (3 L)) (2 d_x (1 - d_x) - sum_{y != x} (min(d_x, d_y) - d_x d_y))
- *     w_x   = -(v_t / 2) (sat((i_x - rho_x) / b) + sat((i_x + rho_x) / b))     (sat: clamp to [-1, 1])
+ * Dead time. The samples alternate between the carrier's valley and peak (the first a valley): a half period from a
+ * peak holds each leg's turn-off edge (at d_x T_s), one from a valley its turn-on (at (1 - d_x) T_s). When a
+ * command's half period starts (the next sample), its loss or gain w_x is worked out event by event from the phase
+ * currents measured then: between events every current changes at
  *
- * -v_t / +v_t when the current keeps its sign over the period, 0 when the ripple takes it through zero (b 2 % of the
- * larger test current; rho = 0 before L is measured). The R test's two levels and the pulses about a held point
- * cancel this error anyway; the spin's back-EMF would keep it. Phases, in order:
+ *     di_x/dt = (v_x - (v_a + v_b + v_c) / 3 - eb_x) / L,    eb = e + R i = u - L (i_k - i_k-1) / T_s
  *
+ * (eb of the half period before: its voltage, corrected, less what the inductance took); a leg at its edge has both
+ * switches off for t_dead, its terminal set by its current, -v_diode for i_x > 0 and v_dc + v_diode for i_x < 0,
+ * and if that current reaches zero in the dead time it floats where it stays zero, v_x = 1.5 eb_x + (v_y + v_z) / 2
+ * (within the rails), until the switch takes it to its new level; w_x is the mean terminal voltage so found less
+ * d_x v_dc. The events (three edges, their dead times' ends, the currents' ends) move each other: a leg held by its
+ * diode lengthens the others' states, and their ripple decides whether the next edge is held. Before L is measured
+ * the loss is -v_t sat(i_x / b), v_t = (v_dc + 2 v_diode) t_dead / (2 T_s), b 2 % of the larger test current. The
+ * R test's two levels and the pulses about a held point cancel this error anyway; the spin's back-EMF would keep it.
+ * Phases, in order:
+ *
+ *  0. OFFSET  t_offset with the legs off (no current flows in a motor at rest): the mean of each phase current is
+ *             its sensor's offset, taken off every later sample (as firmware calibrates with the PWM off); the
+ *             standard deviation of i_alpha is the noise sig_i that sets the pulses of L.
  *  1. ALIGN   phi = pi/2, i_ref rising linearly 0 -> i_test over t_ramp (the rotor's d axis pulled onto the vector
  *             slowly, so that it is left with little swing), then phi turned linearly to 0 over t_ramp (a rotor at
  *             the unstable point of one angle, its d axis opposite the current, is pulled off it by the other).
@@ -29,7 +37,8 @@
  *             measured), clamped to +-i_test / 2. The integrator and not the applied voltage: through k_p the loop
  *             gain k_p k_damp would exceed 1 and chatter; on x_q it is a pole at -k_i k_damp.
  *  2. R_HI    t_settle, then t_window at i_test: means V_2 = <u_alpha>, I_2 = <i_alpha>; over it the spread of u_alpha and the
- *             largest |u_beta| (a turning rotor's back-EMF).
+ *             largest |u_beta| (a turning rotor's back-EMF), both of the means of BC_COMM_BLOCKS blocks of the window
+ *             (single samples carry the current's noise through k_p).
  *  3. R_LO    t_settle, then t_window at i_test / 2: V_1, I_1, likewise. Two levels cancel the inverter's voltage
  *             error (diode drops, dead time), constant at a constant current sign:
  *
@@ -42,6 +51,9 @@
  *                 L = sum s (u_alpha - V_1 - R ((i_k-1 + i_k)/2 - I_1)) T_s / sum s (i_k - i_k-1)
  *
  *             (u - V_1 - R (i - I_1) is what the inductance takes, the inverter's error cancelled by V_1 - R I_1).
+ *             The voltage is the held command, free of noise; the current's noise enters the denominator at the
+ *             sign changes, variance (8 P - 2) sig_i^2 after P pairs: while sig_i sqrt(8 P - 2) > tol_noise |sum s
+ *             (i_k - i_k-1)| a pair is added, up to n_pulse_max pairs (then NOISY).
  *             Then t_settle with the PIs at I_1 again.
  *  5. SPIN    I/f: i_ref rising to i_if over t_ramp with the vector still, then the vector turning, omega_phi
  *             ramped by if_accel to w_spin (electrical rad/s), t_settle there, then t_spin of the back-EMF in the frame of phi,
@@ -55,14 +67,16 @@
  *  6. DONE    legs off; the results stay in the state.
  *
  * Statuses (status, diag 7): RUNNING until DONE; a failure turns the legs off for good and names its cause:
- *   ROTOR_MOVING   in R_HI or R_LO, the largest |u_beta| or the spread of u_alpha exceeds tol_move |V| (a rotor
- *                  turned by its load or a dynamometer: back-EMF where a standing rotor has none)
+ *   ROTOR_MOVING   in R_HI or R_LO, the largest |u_beta| or the spread of u_alpha (block means) exceeds tol_move |V|
+ *                  (a rotor turned by its load or a dynamometer: back-EMF where a standing rotor has none)
  *   NO_CURRENT     |I_2| < i_test / 2 at the end of R_HI, or the duties clipped with |i_d| < i_ref / 2 (an open
  *                  phase: the PI winds up against no current)
  *   SATURATED      the duties clipped with the current there (the test voltage or the spin's back-EMF above the
  *                  bus)
  *   NOT_FOLLOWING  in SPIN, the spread (standard deviation) of |e'| exceeds tol_follow <|e'|>, or <|e'|> is below
  *                  w_spin psi_min: the rotor does not turn with the vector
+ *   NOISY          after n_pulse_max pulse pairs L's relative standard error from the current's noise is still
+ *                  above tol_noise
  *   FAULT          the input guard (over-current, bus, fault pin, non-finite measurement; bc_guard.h)
  *
  * diag: 0 phase (BC_COMM_PH_*), 1 R (Ohm), 2 L (H), 3 psi_f (V s), 4 i' real (A), 5 i' imaginary (A), 6 phi (rad),
@@ -84,13 +98,17 @@
 #define BC_COMM_SATURATED 4
 #define BC_COMM_NOT_FOLLOWING 5
 #define BC_COMM_FAULT 6
+#define BC_COMM_NOISY 7
 
-#define BC_COMM_PH_ALIGN 0
-#define BC_COMM_PH_R_HI 1
-#define BC_COMM_PH_R_LO 2
-#define BC_COMM_PH_L 3
-#define BC_COMM_PH_SPIN 4
-#define BC_COMM_PH_DONE 5
+#define BC_COMM_BLOCKS 8 /* blocks of an R window whose mean voltages show a turning rotor */
+
+#define BC_COMM_PH_OFFSET 0
+#define BC_COMM_PH_ALIGN 1
+#define BC_COMM_PH_R_HI 2
+#define BC_COMM_PH_R_LO 3
+#define BC_COMM_PH_L 4
+#define BC_COMM_PH_SPIN 5
+#define BC_COMM_PH_DONE 6
 
 typedef struct {
     float ts;         /* sampling period, s (> 0) */
@@ -102,6 +120,9 @@ typedef struct {
     float v_pulse;    /* inductance pulse voltage, V (> 0) */
     int32_t n_pulse;  /* pulse pairs (1 .. 1000) */
     int32_t pulse_len; /* samples per pulse (1 .. 1000) */
+    int32_t n_pulse_max; /* most pulse pairs while the noise asks for more (n_pulse .. 1000) */
+    float tol_noise;  /* largest relative standard error of L from the current's noise, - (> 0) */
+    float t_offset;   /* current-sensor offset calibration with the legs off, s (> 0) */
     float i_if;       /* I/f current of the spin, A (> 0, < i_max) */
     float if_accel;   /* spin ramp, electrical rad/s^2 (> 0) */
     float w_spin;     /* spin speed, electrical rad/s (> 0) */
@@ -134,6 +155,15 @@ typedef struct {
     float s_dd, e_ang;    /* spin: the rotor's travel against the vector (sum of the steps of arg e'), last arg e' */
     float l_num, l_den;   /* inductance sums */
     float V1, I1, V2, I2;
+    float i_off[3];        /* current-sensor offsets measured in OFFSET, A (0 before) */
+    float s_o[3];          /* OFFSET: sums of the phase currents */
+    float sig_i;           /* the alpha current's noise measured in OFFSET (standard deviation), A */
+    int32_t n_cmd;         /* L: commands of the pulse train (grows a pair at a time while the noise asks) */
+    float b_a, b_b;        /* R test: the voltage's sums over the block (alpha, beta) */
+    int32_t b_n;           /* ... and its samples */
+    float d_cmd[3], v_cmd; /* the last command's duties and bus voltage (V), for its dead-time correction */
+    int32_t has_cmd;       /* 1: that correction is still to be added to u_hist[0] */
+    uint32_t odd;          /* 1: this sample is at a carrier peak (odd samples from the first, a valley) */
     float R, L, psi;       /* results (0 until measured) */
 } bc_commission_state;
 
