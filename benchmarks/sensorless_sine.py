@@ -15,7 +15,8 @@ wrong data; and the commissioning accuracy (R, L, psi_f against the plant's) wit
 Then the current-sensor errors (``--sensors [DRIVE ...]`` alone): an offset on phase a and white noise on the
 measured phases, the controller unaware of them. And the start-up map (``--startup [DRIVE ...]`` alone): load kind x
 load x inertia x initial angle, with the design bound of the load-adaptive ramp; ``--kinds passive,brake``,
-``--inertias 1,5``, ``--loads 0.75,0.9`` select a part of it. And the controller's own estimates (``--estimates
+``--inertias 1,5``, ``--loads 0.75,0.9`` select a part of it, ``--dump FILE`` writes each start to FILE. And the
+controller's own estimates (``--estimates
 [DRIVE ...]`` alone): each wrong parameter without them, with the zero-current flux reading (``if_flux_estimate``) and
 with it and the alignment's resistance (``if_r_estimate``). And the commissioning with current-sensor errors
 (``--commission-sensors [DRIVE ...]`` alone): offsets, white noise and a 12-bit ADC, fractions of the full scale
@@ -243,24 +244,31 @@ def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str) ->
 
 
 def startup_map(names: list[str], kinds: tuple[str, ...] = STARTUP_KINDS, inertias: tuple[float, ...] = STARTUP_J,
-                loads: tuple[float, ...] = STARTUP_LOADS) -> None:
+                loads: tuple[float, ...] = STARTUP_LOADS, dump: str | None = None) -> None:
     """Print the start-up's success over load torque x inertia x initial angle, per load kind (``startup_case``).
 
     One line per drive, load kind, inertia and load: the starts that succeeded out of the initial angles, the
     bound (the load fraction within which the start is designed to succeed, counting the drive's own friction),
     the time to the hand-off (s, range) and the starts that restarted at least once (DESYNC); failures are named by
     their flags. Then, per load kind, the starts that succeeded within the bound without and with the drive's own
-    friction (``startup_bound``). ``kinds``, ``inertias`` and ``loads`` select a part of the map.
+    friction (``startup_bound``). ``kinds``, ``inertias`` and ``loads`` select a part of the map; ``dump``, a file
+    to which each start is written as a line ``drive kind J load angle ok t_lock`` (to compare two versions start by
+    start).
     """
     print(f"\n{'drive':16s} {'load kind':9s} {'J/J_nom':>7s} {'load/tau_if':>11s} {'bound':>6s} {'ok':>5s} "
           f"{'t_lock s':>13s} {'restarts':>8s}  flags of the failures")
     within: dict[tuple[str, str], list[int]] = {}
+    t_locks: dict[str, list[float]] = {}
     for name in names:
         d = bl.load(name)
         for kind in kinds:
             for kj in inertias:
                 for fl in loads:
                     runs = [startup_case(d, fl, kj, th, kind) for th in STARTUP_ANGLES]
+                    if dump:
+                        with open(dump, "a", encoding="utf-8") as f:
+                            for th, r in zip(STARTUP_ANGLES, runs, strict=True):
+                                f.write(f"{name} {kind} {kj:g} {fl:g} {th:.4f} {int(r['ok'])} {r['t_lock']:.6f}\n")
                     for label, b in (("without", runs[0]["bound0"]), ("with", runs[0]["bound"])):
                         if fl <= b:
                             n_ok = within.setdefault((kind, label), [0, 0])
@@ -268,6 +276,7 @@ def startup_map(names: list[str], kinds: tuple[str, ...] = STARTUP_KINDS, inerti
                             n_ok[1] += len(runs)
                     good = [r for r in runs if r["ok"]]
                     tl = [r["t_lock"] for r in good]
+                    t_locks.setdefault(kind, []).extend(tl)
                     tls = f"{min(tl):.2f}-{max(tl):.2f}" if tl else "-"
                     fails = sorted({r["flags"] for r in runs if not r["ok"]})
                     print(f"{name:16s} {kind:9s} {kj:7.1f} {fl:11.2f} {runs[0]['bound']:6.3f} "
@@ -277,6 +286,10 @@ def startup_map(names: list[str], kinds: tuple[str, ...] = STARTUP_KINDS, inerti
     for kind in kinds:
         a, b = within.get((kind, "without"), [0, 0]), within.get((kind, "with"), [0, 0])
         print(f"{kind:9s} {a[0]:4d} / {a[1]:<4d} {b[0]:4d} / {b[1]:<4d}")
+    every = [t for k in kinds for t in t_locks.get(k, [])]
+    print("median time to the first hand-off over the starts that succeeded (s): "
+          + ", ".join(f"{k} {np.median(t_locks[k]):.3f}" for k in kinds if t_locks.get(k))
+          + (f", all {np.median(every):.3f} ({len(every)} starts)" if every else ""))
 
 
 def commissioning(names: list[str]) -> None:
@@ -380,7 +393,7 @@ if __name__ == "__main__":
         raise SystemExit(0)
     if len(sys.argv) > 1 and sys.argv[1] == "--startup":
         args, sel = sys.argv[2:], {}
-        for opt in ("--kinds", "--inertias", "--loads"):
+        for opt in ("--kinds", "--inertias", "--loads", "--dump"):
             if opt in args:
                 k = args.index(opt)
                 sel[opt] = args[k + 1].split(",")
@@ -388,7 +401,8 @@ if __name__ == "__main__":
         startup_map(args or ["htm-48v", "servo-2k2", "outrunner-24v"],
                     kinds=tuple(sel.get("--kinds", STARTUP_KINDS)),
                     inertias=tuple(float(x) for x in sel.get("--inertias", STARTUP_J)),
-                    loads=tuple(float(x) for x in sel.get("--loads", STARTUP_LOADS)))
+                    loads=tuple(float(x) for x in sel.get("--loads", STARTUP_LOADS)),
+                    dump=sel["--dump"][0] if "--dump" in sel else None)
         raise SystemExit(0)
     drives = sys.argv[1:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv", "f60prov-2550kv"]
     main(drives)

@@ -679,6 +679,14 @@ static float torque_ref(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl
     return bc_pi_limit(&s->piw_p, *tau_u);
 }
 
+/* RAMP's creep speed and the observer's trust threshold (bc_sine.h, RAMP): 5 % of omega_on, at most sqrt(2
+ * if_accel_min), the speed at which a rotor that breaks away from rest against a friction load at the design bound
+ * still catches the vector before its load angle passes the far equilibrium (whatever its inertia) */
+static float creep_speed(const bc_sine_params *p)
+{
+    return fminf(0.05f * p->omega_on, sqrtf(2.0f * fmaxf(p->if_accel_min, 0.0f)));
+}
+
 /* ALIGN's zero-current catch window (zc_catch): the first 3 lock_time of each alignment, once a start. */
 static int zc_window(const bc_sine_params *p, const bc_sine_state *s)
 {
@@ -832,7 +840,8 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             /* the observer is trusted when it sees the rotor move (at least 5 % of omega_on): at rest it holds its
              * seed, which a load holding the rotor leaves off. Not trusted: the vector creeps (below) at
              * if_accel_min at least, the swing is not braked */
-            int moving = fabsf(o.omega_e) >= 0.05f * p->omega_on;
+            float w_cr = creep_speed(p);
+            int moving = fabsf(o.omega_e) >= w_cr;
             s->if_trust = adaptive && moving;
             /* the rotor keeps up with a vector turning forwards (its low-passed speed within the trust threshold
              * of the vector's): it carries the slowest ramp, whatever the observer's angle says. Below about
@@ -840,7 +849,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
              * load held in the alignment makes up to asin(tau_L / tau_align) and the ramp reads as torque margin
              * the rotor does not have: without this the vector waits at the rotor's stick-slip speed */
             int sync = s->if_trust && dir * s->if_omega > 0.0f &&
-                       dir * s->omega_f >= dir * s->if_omega - 0.05f * p->omega_on;
+                       dir * s->omega_f >= dir * s->if_omega - w_cr;
             if (adaptive) {
                 a *= bc_clampf((BC_SINE_RHO_HI - s->rho_f) / (BC_SINE_RHO_HI - BC_SINE_RHO_LO), -1.0f, 1.0f);
                 if (!moving || sync) a = fmaxf(a, p->if_accel_min);
@@ -849,7 +858,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
              * followed back); theta_if += omega_if T_s */
             float w = fmaxf(dir * s->if_omega + a * p->ts, -p->omega_on);
             /* a rotor at rest is passed slowly (it breaks away where the torque is largest): at most a creep */
-            if (adaptive && !moving) w = fminf(w, 0.05f * p->omega_on);
+            if (adaptive && !moving) w = fminf(w, w_cr);
             /* at the top of the band the vector does not outrun the rotor (the observer's speed) */
             if (s->if_trust && s->rho_f >= BC_SINE_RHO_HI && !sync)
                 w = fminf(w, fmaxf(dir * o.omega_e, -p->omega_on));
@@ -872,8 +881,8 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 float t_min = p->omega_on / p->if_accel_min;
                 /* plus the creep's sweep: a rotor held at the seed's rest angle moves once the vector has turned
                  * from there to its breakaway angle acos(tau_load / tau_if), at most a quarter turn, at the creep's
-                 * speed 0.05 omega_on: t_sw = (pi / 2) / (0.05 omega_on) */
-                float t_sw = 10.0f * BC_PI_F / p->omega_on;
+                 * speed w_cr: t_sw = (pi / 2) / w_cr */
+                float t_sw = 0.5f * BC_PI_F / fmaxf(w_cr, 1e-30f);
                 if (adaptive && (s->if_t >= (p->omega_on - s->if_wmin) / p->if_accel_min + t_sw ||
                                  s->if_tb >= t_min || s->if_tr >= 2.0f * t_min + t_sw))
                     sl_desync(p, s, out, BC_FLAG_START_FAIL);
@@ -993,7 +1002,12 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             bc_dq idq1 = bc_park(bc_clarke(i), sd1, cd1);
             float ia = p->if_align_current;
             float id_max = fminf(0.5f * ia, sqrtf(fmaxf(p->i_s_max * p->i_s_max - ia * ia, 0.0f))) * s->derate_f;
-            id_ref = bc_clampf(-p->if_damp * (s->pi_d.x - p->R * idq1.d), -id_max, id_max);
+            /* the d voltage beyond R i_d is the swing's back-EMF: with decoupling the PI's feed-forward already
+             * carries R i_d,ref and the integrator holds the back-EMF alone (x_d - R i_d would feed the current
+             * back with the gain if_damp R, which above 1 latches i_d at its limit and turns the rest angle by
+             * atan(i_d / i_q)); without it the integrator holds R i_d + e_d */
+            float e_d = s->pi_d.x - (p->decouple ? 0.0f : p->R * idq1.d);
+            id_ref = bc_clampf(-p->if_damp * e_d, -id_max, id_max);
         } else if (s->sl_phase == BC_SINE_SL_RAMP) {
             /* the swing braked through the observer: i_d = if_damp psi_f (omega^ - omega_if) / sin Delta makes
              * the torque -1.5 k_1 if_damp psi_f (omega^ - omega_if) (bc_sine.h, RAMP); near sin Delta = 0 (the
@@ -1012,7 +1026,14 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
         handoff = was == BC_SINE_MODE_START;
         float sd0 = -sinf(theta), cd0 = -cosf(theta);
         bc_dq idq0 = bc_park(bc_clarke(i), sd0, cd0);
-        if (handoff && p->speed_loop) bc_pi_reset(&s->piw_p, &s->pi_w, 1.5f * p->k_1 * idq0.q);
+        if (handoff && p->speed_loop) {
+            /* bumpless: the torque the present current makes; but a rotor caught turning against the reference
+             * (pushed back by an active load) is braked with the whole torque limit: the slipping I/f vector's
+             * torque there pulsates at the slip frequency about zero and says nothing of the load */
+            float tau0 = 1.5f * p->k_1 * idq0.q;
+            if (in->omega_ref * s->omega_f < 0.0f) tau0 = in->omega_ref > 0.0f ? p->tau_max : -p->tau_max;
+            bc_pi_reset(&s->piw_p, &s->pi_w, tau0);
+        }
         tau = torque_ref(p, s, in, omega_e / (float)p->p, &tau_u, &e_w);
         float i_lim = s->derate_f * bc_sine_i_limit(p, s, in->v_dc, omega_e, tau < 0.0f ? -1.0f : 1.0f);
         iq_ref = bc_clampf(tau / (1.5f * p->k_1), -i_lim, i_lim); /* i_q,ref = tau / (1.5 k_1) */

@@ -102,7 +102,9 @@ class Sine(Control):
         The load-adaptive ramp's slowest mean acceleration (rad/s^2, mechanical), at most ``if_accel``; default
         ``if_accel / 20``: a ramp that takes longer than ``omega_on / if_accel_min + t_sw`` (from its lowest speed,
         if it followed a rotor pushed back: ``(omega_on - omega_low) / if_accel_min + t_sw``; ``t_sw = (pi / 2) /
-        (0.05 omega_on)`` the creep's sweep to the breakaway angle of a rotor held at rest; whatever that lowest
+        w_cr`` the creep's sweep to the breakaway angle of a rotor held at rest, at the creep speed ``w_cr =
+        min(0.05 omega_on, sqrt(2 p if_accel_min))`` (electrical: a rotor breaking away against a load at the
+        design bound catches the vector, whatever its inertia); whatever that lowest
         speed, one that has turned backwards for ``omega_on / if_accel_min`` in all or been below ``omega_on`` for
         ``2 omega_on / if_accel_min + t_sw``) ends in ``START_FAIL``. The
         start is designed for a load ``tau_L / tau_if <= 0.95 - 0.35 if_accel_min / if_accel - J if_accel_min /

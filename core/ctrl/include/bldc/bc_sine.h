@@ -194,10 +194,12 @@
  *          (holding torque early, against an active load). A larger current than the ramp's narrows the band of
  *          angles in which a load holding the rotor (friction) leaves it away from the rest angle the observer is
  *          seeded with: asin(tau_load / (1.5 k_1 if_align_current)). A current-fed rotor has no damping of its own
- *          and would swing about the vector; its swing's back-EMF lies on d of theta_if (the rotor's q axis there,
- *          for either dir), and i_d,ref = -if_damp (x_d - R i_d) (x_d the d PI's integrator, clamped to
- *          +-min(if_align_current / 2, sqrt(i_s_max^2 - if_align_current^2))) brakes it. An unloaded rotor
- *          settles with its q axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there:
+ *          and would swing about the vector; its swing's back-EMF e_d lies on d of theta_if (the rotor's q axis
+ *          there, for either dir), and i_d,ref = -if_damp e_d (clamped to +-min(if_align_current / 2,
+ *          sqrt(i_s_max^2 - if_align_current^2))) brakes it; e_d = x_d, the d PI's integrator, with decouple = 1
+ *          (its feed-forward carries R i_d,ref), x_d - R i_d without (x_d - R i_d with decoupling fed the current
+ *          back with the gain if_damp R, which above 1 latched i_d at its limit on a rotor at rest). An unloaded
+ *          rotor settles with its q axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there:
  *          theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP.
  *          With if_r_est = 1 the alignment also measures the resistance the observers use: over its last quarter
  *          (the vector still, the rotor at rest or swinging out) R^ = sum u.i / sum i.i of the applied
@@ -216,21 +218,27 @@
  *          while the torque is at most RHO_LO of the I/f torque, none at RHO_HI, and above it the vector slows
  *          (down to dir omega_if = -omega_on, following a rotor an active load pushes back); at rho >= RHO_HI the
  *          vector does not outrun the rotor (dir omega_if <= dir omega^). A rotor that keeps up with a vector
- *          turning forwards (the observer sees it move, dir omega_if > 0, dir omega_f >= dir omega_if - 0.05
- *          omega_on) carries the slowest ramp whatever the observer's angle says: then a >= if_accel_min and the
+ *          turning forwards (the observer sees it move, dir omega_if > 0, dir omega_f >= dir omega_if - w_cr)
+ *          carries the slowest ramp whatever the observer's angle says: then a >= if_accel_min and the
  *          vector may run ahead of omega^ (below about lambda the observer keeps the error of its seed, which
  *          decays at omega^2 / lambda; a friction load leaves the rotor up to asin(tau_load / (1.5 k_1
  *          if_align_current)) off the seed, read as torque margin the rotor does not have). A rotor the
- *          observer sees at rest (|omega^| < 0.05 omega_on) is evidence of nothing (the observer holds its
- *          seed, which a load holding the rotor leaves off): then a >= if_accel_min and |omega_if| <= 0.05
- *          omega_on (the vector creeps past the rotor's angle of largest torque, where it breaks away). The
+ *          observer sees at rest (|omega^| < w_cr) is evidence of nothing (the observer holds its
+ *          seed, which a load holding the rotor leaves off): then a >= if_accel_min and |omega_if| <= w_cr
+ *          (the vector creeps past the rotor's angle of largest torque, where it breaks away). The creep speed and
+ *          the trust threshold are w_cr = min(0.05 omega_on, sqrt(2 if_accel_min)): a rotor breaking away from
+ *          rest against a load f of the I/f torque tau_if must reach the vector's speed before the vector's lead
+ *          passes pi - asin f, where the torque falls below the load again: w_cr^2 <= 2 p tau_if g(f) / J, g(f)
+ *          = 2 cos(asin f) - f (pi - 2 asin f); with x = J if_accel_min / (p tau_if), the inertia's share of the
+ *          design bound at the slowest ramp, at the bound f = f_b - x that is w_cr^2 <= 2 if_accel_min g(f_b - x)
+ *          / x, at least 2.56 if_accel_min whatever the inertia. The
  *          swing about the turning vector is braked through the observer while it sees the rotor move:
  *          i_d,ref = if_damp psi_f (omega^ - omega_if) sin Delta / max(sin^2 Delta, 1/16), within +-min(if_current,
  *          sqrt(i_s_max^2 - if_current^2)), a torque -1.5 k_1 if_damp psi_f (omega^ - omega_if) against the
  *          rotor's slip (the current's torque is 1.5 k_1 (i_q cos Delta - i_d sin Delta)). Below omega_on for longer
  *          than (omega_on - omega_low) / if_accel_min + t_sw (the slowest ramp's time from the vector's lowest speed
- *          dir omega_low, <= 0, reached since the ramp's start, plus the creep's sweep t_sw = (pi / 2) / (0.05
- *          omega_on): a rotor held at the seed's rest angle breaks away once the vector has turned from there to
+ *          dir omega_low, <= 0, reached since the ramp's start, plus the creep's sweep t_sw = (pi / 2) / w_cr: a
+ *          rotor held at the seed's rest angle breaks away once the vector has turned from there to
  *          acos(tau_load / (1.5 k_1 if_current)), at most a quarter turn, at the creep's speed): BC_FLAG_START_FAIL |
  *          BC_FLAG_DESYNC, WAIT. The same end, whatever the lowest speed, once the vector has turned against dir
  *          for omega_on / if_accel_min in all, or has been below omega_on for 2 omega_on / if_accel_min + t_sw in
@@ -248,7 +256,9 @@
  *          follows the swing. When the lock has held for lock_time
  *          the drive hands over to the sine mode on the observer's angle: the d,q integrators as in the Hall
  *          hand-off below (from the current measured in the observer's frame), the speed PI's integrator at the
- *          torque 1.5 k_1 i_q that current makes. Not locked within if_hold at omega_on: BC_FLAG_START_FAIL |
+ *          torque 1.5 k_1 i_q that current makes (a rotor caught turning against the reference, omega_ref
+ *          omega_f < 0: tau_max in the reference's direction, the whole limit to brake it; the slipping I/f
+ *          vector's torque pulsates about zero there). Not locked within if_hold at omega_on: BC_FLAG_START_FAIL |
  *          BC_FLAG_DESYNC, WAIT.
  *          With if_psi_est = 1 (flux observer), once a start: at omega_on, when the observer is consistent
  *          (|err| <= lock_tol, dir omega_f >= omega_off) but its flux rho (low-passed like omega_f) is off the
