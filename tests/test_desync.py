@@ -515,12 +515,12 @@ def test_the_truth_agrees_with_the_sensorless_studies_commutations():
 
 
 def test_a_sensorless_trip_is_named_by_its_flag_not_by_the_current_rating_warning():
-    """lu-4kw's default throttle step, with a sampled controller's delay (1), trips the ESC's own ``i_max`` (2
-    ``I_N``): the phase current passes 2 ``I_N`` in the sample before the trip, which the run names ``OVERCURRENT``;
-    the plausibility warning for a drive without any current limit (``result.current_rating``) must not fire for
-    it."""
+    """lu-4kw's default throttle step at 10 degrees of timing trips the ESC's own ``i_max`` (2 ``I_N``; the PWM
+    ripple's 13 A on the mean current, docs/sensorless.md section 9): the phase current passes 2 ``I_N`` in the
+    sample before the trip, which the run names ``OVERCURRENT``; the plausibility warning for a drive without any
+    current limit (``result.current_rating``) must not fire for it."""
     drive = bl.load("lu-4kw")
-    res = desync_map(drive, Axis("timing", (0.0,)), Axis("rate", (math.inf,)), control=bl.SixStepSensorless(delay=1),
+    res = desync_map(drive, Axis("timing", (10.0,)), Axis("rate", (math.inf,)), control=bl.SixStepSensorless(),
                      workers=1, summarise=False)
     assert res.points.reason.iloc[0] == "OVERCURRENT", res.points.iloc[0].to_dict()
     assert not [w for w in res.warnings if "result.current_rating" in w], res.warnings
