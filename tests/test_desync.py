@@ -351,18 +351,18 @@ def test_a_desync_that_the_restart_recovers_is_classified_recovered(f60):
     at timing 0 is thin), the default step 0.25 -> 0.8 at once, no advance, with the fast demagnetisation engaged
     only once the clamp has taken 0.45 of the window: the step's clamp hides a crossing (ZC_HIDDEN), the controller
     stops, restarts and is back in closed loop and in sync to the end; the plant's truth never left sync before the
-    flag. The default for that drive (engaged from the commutation, 0) with a sampled controller's delay of one
-    sample keeps the step in sync from two of three initial rotor angles and recovers the third. (With the ESC's
-    delay 0, the default, the crossing comes 1.6-2.1 degrees after the clamp's end, under a fifth of a sample:
-    hidden at all three, one recovered, two lost by their restart into the propeller's spin-down. The catalog entry,
-    with its 0.77 V body diodes, holds the step at every point of its map: docs/desync.md.)"""
+    flag. The default for that drive (engaged from the commutation, 0) keeps the step in sync from the three
+    initial rotor angles (margins 3.2 to 4.4 degrees; 2.5 to 2.8 with delay 1). (With delay 0 and the two-step
+    alignment before 2026-11-27 the crossing came 1.6-2.1 degrees after the clamp's end, under a fifth of a sample,
+    and was hidden at all three: one recovered, two lost by the restart into the propeller's spin-down. The catalog
+    entry, with its 0.77 V body diodes, holds the step at every point of its map: docs/desync.md.)"""
     f60 = f60.replace(inverter=dataclasses.replace(f60.inverter, V_f=0.0, R_on=0.0))
     pts = desync_map(f60, Axis("timing", (0.0,)), workers=1,
                      control=bl.SixStepSensorless(fast_demag_after=0.45)).points
     row = pts.iloc[0]
     assert (row.outcome, row.reason, int(row.restarts)) == ("recovered", "ZC_HIDDEN", 1), row
     assert not row.truth_lost and row.t_desync_ms > 0.0
-    ok = desync_map(f60, Axis("theta0", (0.0, 120.0, 240.0)), workers=1, control=bl.SixStepSensorless(delay=1)).points
+    ok = desync_map(f60, Axis("theta0", (0.0, 120.0, 240.0)), workers=1).points
     assert set(ok.outcome) <= {"sync", "recovered"} and (ok.outcome == "sync").sum() >= 2, ok
 
 
@@ -515,12 +515,12 @@ def test_the_truth_agrees_with_the_sensorless_studies_commutations():
 
 
 def test_a_sensorless_trip_is_named_by_its_flag_not_by_the_current_rating_warning():
-    """lu-4kw's default throttle step, with a sampled controller's delay (1), trips the ESC's own ``i_max`` (2
-    ``I_N``): the phase current passes 2 ``I_N`` in the sample before the trip, which the run names ``OVERCURRENT``;
-    the plausibility warning for a drive without any current limit (``result.current_rating``) must not fire for
-    it."""
+    """lu-4kw's default throttle step at 10 degrees of timing trips the ESC's own ``i_max`` (2 ``I_N``; the PWM
+    ripple's 13 A on the mean current, docs/sensorless.md section 9): the phase current passes 2 ``I_N`` in the
+    sample before the trip, which the run names ``OVERCURRENT``; the plausibility warning for a drive without any
+    current limit (``result.current_rating``) must not fire for it."""
     drive = bl.load("lu-4kw")
-    res = desync_map(drive, Axis("timing", (0.0,)), Axis("rate", (math.inf,)), control=bl.SixStepSensorless(delay=1),
+    res = desync_map(drive, Axis("timing", (10.0,)), Axis("rate", (math.inf,)), control=bl.SixStepSensorless(),
                      workers=1, summarise=False)
     assert res.points.reason.iloc[0] == "OVERCURRENT", res.points.iloc[0].to_dict()
     assert not [w for w in res.warnings if "result.current_rating" in w], res.warnings

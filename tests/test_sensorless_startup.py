@@ -156,6 +156,20 @@ def test_a_stalled_300_v_drive_fails_by_name_not_by_a_trip():
     assert res.failure.iloc[1] == "START_FAIL"
 
 
+def test_the_alignment_takes_a_held_rotor_off_the_last_steps_dead_point():
+    """lu-4kw (damping ratio 11: the aligned rotor creeps) held by a load within the bound, from angles between the
+    first step's dead point (60 degrees) and the last one's (0): the first step (to 240 degrees) can leave the rotor
+    creeping near 0, where the last (to 180) has no torque to move it against the load. Measured with two steps:
+    START_FAIL at 0.5 of the bound from 0.79 rad, 0.95 from 0.59, 0.25 from 0.88, 0.75 from 0.69. The middle step
+    (to 120 degrees, its dead point 300) takes it off: every one of these starts."""
+    d = bl.load("lu-4kw")
+    ctl = fixed_start(d)
+    b = startup_load_bound(d, ctl)
+    res = startup_grid(d, tuple(f * b for f in (0.25, 0.5, 0.75, 0.95)), (d.mechanics.J,), (0.59, 0.69, 0.79, 0.88),
+                       control=ctl, workers=1).to_pandas()
+    assert res.success.all(), res[~res.success]
+
+
 def test_ramp_current_counts_the_inductance():
     """The ramp's current in step through the pair's impedance: with ramp_tau = L / (R + R_on) the duty's first
     term grows as |R + j omega L| and the current at the end speed is the standstill one (the trapezoid's V/f term

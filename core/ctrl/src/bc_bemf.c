@@ -1091,9 +1091,14 @@ void bc_bemf_step(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
         coast(out);
     } else if (s->mode == BC_BEMF_ALIGN) {
         m = duty_of(p, s);
-        if (s->t_in < p->align_time / 3.0f) { /* a+ and b+ with a, c-: the rotor to 4 pi/3, off the next step's dead point */
+        if (s->t_in < p->align_time * (2.0f / 7.0f)) { /* a+ and b+ with a, c-: the rotor to 4 pi/3 */
             bc_pair_legs((int)p->chop, 0, 2, 0, m, out->leg);
             out->leg[1] = out->leg[0];
+        } else if (s->t_in < p->align_time * (3.0f / 7.0f)) { /* a+ and c+ with a, b-: to 2 pi/3, off the last
+                                                                 * step's dead point (0), where the first may
+                                                                 * leave a held rotor */
+            bc_pair_legs((int)p->chop, 0, 1, 0, m, out->leg);
+            out->leg[2] = out->leg[0];
         } else { /* a+, b- and c- with b: the rotor to theta_e = pi */
             bc_pair_legs((int)p->chop, 0, 1, 0, m, out->leg);
             out->leg[2] = out->leg[1];

@@ -368,8 +368,10 @@ class SixStepSensorless(Control):
         ``drive.mechanics``), or, if longer, twelve time constants ``D / K`` of an overdamped rotor, ``D = 2
         k_phi^2 / (R + R_on)`` the damping of the loop the motion drives through the two phases in parallel: six
         unloaded, twice that against a load up to half the static torque, the most the default ramp leaves for a
-        load (lu-4kw: 5.4 s), or the time ``2.5 x 2 J / (D + B)`` in which a lightly damped swing's envelope falls
-        by 12 (from half a turn to 15 degrees; mn3110-780kv: 0.52 s), within [10 ms, 6 s].
+        load, or the time ``2.5 x 2 J / (D + B)`` in which a lightly damped swing's envelope falls by 12 (from half
+        a turn to 15 degrees), within [10 ms, 6 s]: the first (2/7 of it) and the last (4/7) of the alignment's
+        three steps; the middle step (1/7) adds a sixth (lu-4kw: 6.2 s, mn3110-780kv: 0.61 s; docs/sensorless.md,
+        law 4).
     align_current : float or str, optional
         Current the alignment duty drives through the line resistance at standstill, and the forced ramp's current;
         default ``0.5 I_N``.
@@ -640,7 +642,7 @@ class SixStepSensorless(Control):
         # underdamped: the swing's envelope decays as exp(-(D + B) t / (2 J)); a swing of up to pi to within 15 deg
         # (a factor 12, ln 12 = 2.5)
         decay = 2.5 * 2.0 * j / (damp + drive.mechanics.B)
-        t_align = min(max(3.0 * 2.0 * math.pi * math.sqrt(j / k), 12.0 * damp / k, decay, 0.01), 6.0)
+        t_align = 7.0 / 6.0 * min(max(3.0 * 2.0 * math.pi * math.sqrt(j / k), 12.0 * damp / k, decay, 0.01), 6.0)
         accel = 0.5 * 2.0 * m.k_phi * i_al / j  # mechanical rad/s^2
         t_ramp = min(max((end - start) / accel, 0.01), 10.0)
         return {

@@ -92,8 +92,9 @@
  *  4. ALIGN at align_duty for align_time, all three legs driven with the pattern chop (two phases in parallel against
  *     the third, so that the motion induces a current in the parallel pair's loop that damps the rotor: a drone
  *     rotor has almost no friction, and a pair alone, whose loop sees no back-EMF at its own equilibrium, leaves it
- *     swinging): for the first third a+ and b+ against c- (the rotor to theta_e = 4 pi/3), then a+ against b- and
- *     c- (to theta_e = pi, the middle of sector 2; its dead point 0 is not where the first step leaves the rotor).
+ *     swinging): for 2/7 of align_time a+ and b+ against c- (the rotor to theta_e = 4 pi/3), for 1/7 a+ and c+
+ *     against b- (to 2 pi/3: off the last step's dead point 0, which a held rotor creeping from the first step's
+ *     dead point can reach), then for the last 4/7 a+ against b- and c- (to theta_e = pi, the middle of sector 2).
  *     RAMP then commands sector 2 from t_a in either direction, for the open-loop time of 30 degrees. A direct start
  *     (align_time = 0) commands sector 2 (forward) or 1 (backward) for a whole sector.
  *
