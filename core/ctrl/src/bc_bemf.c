@@ -301,9 +301,9 @@ static void start(const bc_bemf_params *p, bc_bemf_state *s, const bc_ctrl_in *i
 /* 6, cmp_blind: an accepted edge at x_e (s relative to t_k) whose comparator input changed in the pair's off-time
  * [v - h, v + h] (v the carrier valley; the pair's active state is next to the peak; even samples are valleys; h =
  * (1 - m) T_s with the duty of the last output), or at the start of the on-time after it (within min_pulse + 2
- * tau_filter + one tick, at most half the on-time), came from a crossing in that off-time. Into the clamped level (below: even sectors) F reads
- * the reference from the crossing to the on-time, which shows it: the crossing anywhere in the off-time, its middle
- * v. Out of it (odd sectors) F's diode current, built since v - h while its back-EMF was below, decays as long after
+ * tau_filter + one tick, at most half the on-time), came from a crossing in that off-time. Into the clamped level
+ * (below: even sectors) F reads the reference from the crossing to the on-time, which shows it: the crossing
+ * anywhere in the off-time, its middle v. Out of it (odd sectors) F's diode current, built since v - h while its back-EMF was below, decays as long after
  * the crossing (a linear back-EMF): an edge inside the off-time at 2 t_z - (v - h), so t_z = (t_e + v - h) / 2; one
  * at the on-time's start, t_z in [v, v + h], its middle. Not while the fast pattern, which centres the pair's
  * on-time at the valley, may have been in force over that off-time (before t_plain). */
