@@ -345,7 +345,7 @@ def closed_loop_child(name: str, replay: str, scale: float = 1.0, save: str | No
         n = int(lib.bc_fw_record_count())
         if n != res.meta["samples"] or n > cap:
             raise RuntimeError(f"{name} {label}: recorded {n} steps of {res.meta['samples']} samples")
-        delay = ctl.own_delay if sc.delay is None else sc.delay  # as simulate applies it
+        delay = int(res.meta["scenario"]["delay"])  # the delay simulate applied
         cp = ctl.with_delay(delay).c_record(drive, c, n)  # the record simulate built (it is deterministic)
         state = c.opaque(info.state)
         replayed = np.zeros(n, dtype=c.dtypes["bc_ctrl_out"])

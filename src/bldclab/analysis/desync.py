@@ -702,7 +702,7 @@ def _run_point(job: DesyncJob) -> dict[str, Any]:
             t_step = 0.0
             if not step.is_start:  # where the drive has been steady at `start` for `settle`: the step's instant
                 pre = simulate(drive, control, Scenario(duration=step.start_time(drive, control), ref=step.start,
-                                                        theta0=step.theta0, delay=control.delay), check="warn")
+                                                        theta0=step.theta0), check="warn")
                 found = steady_since(pre.signals, settle)
                 if found is None:
                     obs, _ = observe(pre.signals, float(pre.signals["t"][-1]), settle=settle, bound=bound,
@@ -715,7 +715,7 @@ def _run_point(job: DesyncJob) -> dict[str, Any]:
             t_end = t_step + step.observe_time(drive, control)
             ref: Any = (step.end if step.is_start else
                         (lambda tt, a=step.start, b=step.end, ts=t_step: np.where(tt < ts, a, b)))
-            res = simulate(drive, control, Scenario(duration=t_end, ref=ref, theta0=step.theta0, delay=control.delay),
+            res = simulate(drive, control, Scenario(duration=t_end, ref=ref, theta0=step.theta0),
                            check="warn")
     except (PlausibilityError, BldclabError) as exc:
         row["outcome"] = "refused"

@@ -222,7 +222,7 @@ def run_locked(drive: Drive, speed_pu: float, duty: float, *, periods: float = 2
         # after the lock, where the point itself holds with its clamp at 0.4 of the window)
         ref = lambda t: duty * (w_lock + (w_e - w_lock) * np.clip(t / t_up, 0.0, 1.0)) / w_e  # noqa: E731
     res = simulate(drive, ctl, Scenario(duration=dur, speed=speed, ref=ref, theta0=th0, trace_sub=trace_sub,
-                                        window=(t0, dur), delay=int(getattr(ctl, "delay", 1))), check="warn")
+                                        window=(t0, dur)), check="warn")
     return res, t0
 
 
@@ -974,7 +974,7 @@ _StartJob = tuple[Drive, SixStepSensorless, float, float, float]
 
 def _run_start(job: _StartJob) -> dict[str, Any]:
     drive, ctl, throttle, angle, duration = job
-    res = simulate(drive, ctl, Scenario(duration=duration, ref=throttle, theta0=angle, trace_every=4, delay=ctl.delay),
+    res = simulate(drive, ctl, Scenario(duration=duration, ref=throttle, theta0=angle, trace_every=4),
                    check="warn")
     st = np.asarray(res.signals["state"])
     t = np.asarray(res.t)
