@@ -655,3 +655,30 @@ def test_wrong_parameters_start_with_the_estimates(name: str, wrong: dict[str, f
     with pytest.raises(BldclabError) as e:
         bl.Sine(angle="observer", if_flux_estimate=1)  # type: ignore[arg-type]
     assert e.value.field == "control.if_flux_estimate"
+
+
+@pytest.mark.parametrize("zc", [False, True])
+def test_catch_of_a_backward_rotor_an_active_load_accelerates(zc: bool) -> None:
+    """servo-2k2 turning backwards at 0.5 Omega_0 when the drive starts, an active load of half the I/f torque
+    pushing it on backwards (``benchmarks/sensorless_sine.py --catch``): the observer catches it in the alignment
+    and the sine mode brakes it with the whole torque limit through zero speed (the hand-back to the I/f ramp) to
+    the reference. The sine mode ends a start (START_FAIL) when the speed against the reference rises above the one
+    at the catch; that speed was the observer's speed low-passed over ``lock_time``, which lags a rotor the load
+    still accelerates (at zero current, ``catch_zero_current``, by 13 rad/s here): the low-pass went on rising after
+    the catch, past the margin, and every start failed, at every angle, again and again. Now the larger of it and
+    the observer's own speed: no restart, the reference reached (5 %), with the alignment's current on or off."""
+    d = bl.load("servo-2k2")
+    ctl = bl.Sine(angle="observer", speed_loop=True, catch_zero_current=zc)
+    st = ctl.sensorless_settings(d)
+    tau_l = 0.5 * 1.5 * fundamental_k1(d) * st["if_current"]
+    w = 0.3 * d.Omega_0
+    dur = 3 * st["lock_time"] + st["if_align"] + d.mechanics.J * 0.8 * d.Omega_0 / (ctl.torque_limit(d) - tau_l) \
+        + d.motor.p * ctl.handoff(d) / st["if_accel"] + 0.5
+    r = simulate(d, ctl, Scenario(duration=dur, omega_ref=w, omega0=-0.5 * d.Omega_0, theta0=1.0, load_torque=tau_l,
+                                  trace_every=8), estimate=d)
+    on = r["mode"] > 0.5
+    assert r["t"][int(np.argmax(on))] < 3 * st["lock_time"] + 0.5 * st["if_align"], "caught in the alignment"
+    assert "DESYNC" not in r.flags_raised and "START_FAIL" not in r.flags_raised, r.flags_raised
+    assert "STALL" in r.flags_raised  # braked through zero speed by the hand-back
+    assert r["mode"][-1] == 1
+    assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
