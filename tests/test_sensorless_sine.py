@@ -682,3 +682,44 @@ def test_catch_of_a_backward_rotor_an_active_load_accelerates(zc: bool) -> None:
     assert "STALL" in r.flags_raised  # braked through zero speed by the hand-back
     assert r["mode"][-1] == 1
     assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
+
+
+def test_catch_at_zero_current_is_not_the_default() -> None:
+    """Why ``catch_zero_current`` stays off by default (``benchmarks/sensorless_sine.py --catch``, docs/sensorless-
+    sine.md, "Flying-start map"). Its gain: htm-48v turning at 0.2 Omega_0 (2.2 times the hand-off speed), no load,
+    is caught at zero current within its 3 lock times, where the alignment's current, on from the first sample,
+    holds the rotor in its well (the rotor's energy is far below the well's) and the start goes the whole way
+    through the alignment and the I/f ramp (a hand-off after the alignment's end). Its cost: the same drive turning
+    at its no-load speed Omega_0, where the back-EMF takes the whole bus: at zero current the current loops run in
+    the frame of an observer still pulling in from rest, with no voltage to spare, and the current reaches the
+    over-current trip (OVERCURRENT, a restart); the catch with the current on takes it at the first attempt and
+    brakes it to the reference."""
+    d = bl.load("htm-48v")
+    assert not bl.Sine(angle="observer").catch_zero_current
+    w = 0.3 * d.Omega_0
+
+    def run(zc: bool, w0: float) -> tuple[bl.sim.SimResult, float, dict[str, float]]:
+        ctl = bl.Sine(angle="observer", speed_loop=True, catch_zero_current=zc)
+        st = ctl.sensorless_settings(d)
+        dur = 3 * st["lock_time"] + st["if_align"] + d.motor.p * ctl.handoff(d) / st["if_accel"] \
+            + 2 * st["lock_time"] + d.mechanics.J * abs(w0 - 0.3) * d.Omega_0 / (0.5 * ctl.torque_limit(d)) + 0.3
+        r = simulate(d, ctl, Scenario(duration=dur, omega_ref=w, omega0=w0 * d.Omega_0, theta0=math.pi,
+                                      trace_every=4))
+        on = r["mode"] > 0.5
+        assert on.any()
+        return r, float(r["t"][int(np.argmax(on))]), st
+
+    for zc in (False, True):  # the gain
+        r, t_catch, st = run(zc, 0.2)
+        assert "DESYNC" not in r.flags_raised
+        assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
+        if zc:
+            assert t_catch < 3 * st["lock_time"]
+        else:
+            assert t_catch > st["if_align"]
+    r, _, _ = run(False, 1.0)  # the cost
+    assert "OVERCURRENT" not in r.flags_raised and "DESYNC" not in r.flags_raised
+    assert r["mode"][-1] == 1
+    assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
+    r, _, _ = run(True, 1.0)
+    assert "OVERCURRENT" in r.flags_raised
