@@ -22,7 +22,11 @@ with it and the alignment's resistance (``if_r_estimate``). And the commissionin
 (``--commission-sensors [DRIVE ...]`` alone): offsets, white noise and a 12-bit ADC, fractions of the full scale
 ``2 I_N``, each case's R, L, psi_f errors, status and time on the drive. And the flux linkage's residual with the
 inverter's dead time (``--commission-deadtime [DRIVE ...]`` alone): 1 % and 3 % of the PWM period, 0.7-V diodes,
-``R_on = 0.2 R``, the spin at 0.3, 0.45 and 0.6 ``Omega_N``.
+``R_on = 0.2 R``, the spin at 0.3, 0.45 and 0.6 ``Omega_N``. And the flying-start map (``--catch [DRIVE ...]`` alone,
+``--dump FILE``): the rotor turning at t = 0 (-0.5 to 1.0 ``Omega_0``) x load x initial angle, the catch with the
+alignment's current on and at zero current (``catch_zero_current``). And the sensitivity with the alignment's
+resistance estimate off and on (``--sensitivity [DRIVE ...]`` alone); ``--startup ... --r-estimate`` (or
+``--zc-catch``) runs the start-up map with it.
 
 Run: ``PYTHONPATH=src python benchmarks/sensorless_sine.py [DRIVE ...]``.
 """
