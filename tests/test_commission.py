@@ -217,6 +217,24 @@ def test_noise_beyond_the_pulses_is_named() -> None:
     assert "NOISY" in err.value.problem
 
 
+@pytest.mark.parametrize("name", ["outrunner-24v", "mn3110-780kv"])
+def test_clipped_current_reading_is_named(name: str) -> None:
+    """Current sensors whose full scale (``Sensors.current_full_scale``, told to the routine as firmware knows its
+    ADC's range) is below the test current: the reading saturates there, and the routine ends CLIPPED rather than
+    measure R from a current it cannot see; the estimated drive refuses, naming it. A full scale above every
+    reading (1.2 times the test current) changes nothing: the same R, L, psi_f and time, bit for bit."""
+    d = bl.load(name)
+    i_test = Commission().settings(d)["i_test"]
+    clipped = commission(d.replace(sensors__current_full_scale=0.8 * i_test))
+    assert clipped.status == "CLIPPED"
+    with pytest.raises(BldclabError) as err:
+        _ = clipped.drive
+    assert "CLIPPED" in err.value.problem
+    clean, above = commission(d), commission(d.replace(sensors__current_full_scale=1.2 * i_test))
+    assert above.status == clean.status == "DONE"
+    assert (above.R, above.L, above.psi_f, above.t_test) == (clean.R, clean.L, clean.psi_f, clean.t_test)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", names())
 def test_realistic_current_sensors_within_the_goals(name: str) -> None:

@@ -131,6 +131,8 @@ class Commission(Control):
             n_pulse_max=self.max_pulses, tol_noise=self.tol_noise, tol_move=self.tol_move, tol_follow=self.tol_follow,
             i_max=i_max, v_max=2.0 * drive.inverter.V_dc,
             t_dead=drive.inverter.t_dead, v_diode=drive.inverter.V_f,
+            # the current sensors' full scale (firmware knows its ADC's range): a reading at it ends CLIPPED
+            i_fs=drive.sensors.current_full_scale if math.isfinite(drive.sensors.current_full_scale) else 0.0,
             **{k: st[k] for k in ("ts", "i_test", "t_ramp", "t_settle", "t_window", "v_pulse", "i_if", "if_accel",
                                   "w_spin", "t_spin", "psi_min", "k_damp", "t_offset")})
         return CParams(rec, [])

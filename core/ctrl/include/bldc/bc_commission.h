@@ -78,6 +78,9 @@
  *   NOISY          after n_pulse_max pulse pairs L's relative standard error from the current's noise is still
  *                  above tol_noise
  *   FAULT          the input guard (over-current, bus, fault pin, non-finite measurement; bc_guard.h)
+ *   CLIPPED        a measured phase current at the sensors' full scale i_fs (|i_x| >= i_fs, before the offsets
+ *                  are taken off): the shunt amplifier or the ADC saturated, the reading is not the current, and
+ *                  R, L or psi_f from it would be wrong (i_fs = 0: the full scale not given, no check)
  *
  * diag: 0 phase (BC_COMM_PH_*), 1 R (Ohm), 2 L (H), 3 psi_f (V s), 4 i' real (A), 5 i' imaginary (A), 6 phi (rad),
  * 7 status (BC_COMM_*).
@@ -99,6 +102,7 @@
 #define BC_COMM_NOT_FOLLOWING 5
 #define BC_COMM_FAULT 6
 #define BC_COMM_NOISY 7
+#define BC_COMM_CLIPPED 8
 
 #define BC_COMM_BLOCKS 8 /* blocks of an R window whose mean voltages show a turning rotor */
 
@@ -135,6 +139,7 @@ typedef struct {
     float v_max;      /* bound of the PI outputs and of a plausible bus, V (> 0) */
     float t_dead;     /* the inverter's dead time, s (0 <= t_dead < ts): the voltage taken back is corrected */
     float v_diode;    /* its diodes' forward drop, V (>= 0), in the same correction */
+    float i_fs;       /* the current sensors' full scale, A (> 0; 0: not given): a reading at it ends CLIPPED */
 } bc_commission_params;
 
 typedef struct {
