@@ -45,6 +45,8 @@
  *                 R = (V_2 - V_1) / (I_2 - I_1)          (the resistance in series with a phase: R + R_on)
  *
  *  4. L       n_pulse pairs of voltage pulses on alpha, +v_pulse then -v_pulse for pulse_len samples each, added to
+ *             (bldclab.control.Commission sizes them: a current step of half the test current, the voltage at least
+ *             five times the dead time's error (v_dc + 2 v_diode) t_dead / (2 ts), shorter pulses where needed)
  *             the PIs' output at I_1 (held, the PIs paused), then 2 samples of that output alone. Over the pulses,
  *             the sign s of each:
  *
@@ -53,7 +55,8 @@
  *             (u - V_1 - R (i - I_1) is what the inductance takes, the inverter's error cancelled by V_1 - R I_1).
  *             The voltage is the held command, free of noise; the current's noise enters the denominator at the
  *             sign changes, variance (8 P - 2) sig_i^2 after P pairs: while sig_i sqrt(8 P - 2) > tol_noise |sum s
- *             (i_k - i_k-1)| a pair is added, up to n_pulse_max pairs (then NOISY).
+ *             (i_k - i_k-1)| at the train's end a pair is added, up to n_pulse_max pairs (then NOISY if the
+ *             whole sums are still not precise).
  *             Then t_settle with the PIs at I_1 again.
  *  5. SPIN    I/f: i_ref rising to i_if over t_ramp with the vector still, then the vector turning, omega_phi
  *             ramped by if_accel to w_spin (electrical rad/s), t_settle there, then t_spin of the back-EMF in the frame of phi,
