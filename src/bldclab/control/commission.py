@@ -44,8 +44,9 @@ class Commission(Control):
         then the pulses are shorter (and higher) until it is not, down to one sample.
     pulse_current : float
         The pulses' current step, a fraction of the test current in (0, 1] (-): the current swings between
-        ``i_test / 2`` (the held point) and ``(1 + pulse_current) i_test / 2``. A larger step needs fewer pulses for
-        the same precision against the current's noise (L's standard error falls as ``1 / (step sqrt(pairs))``).
+        ``i_test / 2`` (the held point) and ``(1/2 + pulse_current) i_test`` (the test current itself at the
+        default 0.5, the range the R test has run). A larger step needs fewer pulses for the same precision against
+        the current's noise (L's standard error falls as ``1 / (step sqrt(pairs))``).
     pulse_margin : float
         Smallest ratio of the pulse voltage to the dead time's voltage error (-).
     pulses : int

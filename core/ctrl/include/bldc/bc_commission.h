@@ -45,9 +45,9 @@
  *                 R = (V_2 - V_1) / (I_2 - I_1)          (the resistance in series with a phase: R + R_on)
  *
  *  4. L       n_pulse pairs of voltage pulses on alpha, +v_pulse then -v_pulse for pulse_len samples each, added to
- *             (bldclab.control.Commission sizes them: a current step of half the test current, the voltage at least
- *             five times the dead time's error (v_dc + 2 v_diode) t_dead / (2 ts), shorter pulses where needed)
- *             the PIs' output at I_1 (held, the PIs paused), then 2 samples of that output alone. Over the pulses,
+ *             the PIs' output at I_1 (held, the PIs paused), then 2 samples of that output alone (bldclab's
+ *             Commission sizes them: a current step of half the test current, the voltage at least five times the
+ *             dead time's error (v_dc + 2 v_diode) t_dead / (2 ts), shorter pulses where needed). Over the pulses,
  *             the sign s of each:
  *
  *                 L = sum s (u_alpha - V_1 - R ((i_k-1 + i_k)/2 - I_1)) T_s / sum s (i_k - i_k-1)
