@@ -22,8 +22,10 @@ with it and the alignment's resistance (``if_r_estimate``). And the commissionin
 (``--commission-sensors [DRIVE ...]`` alone): offsets, white noise and a 12-bit ADC, fractions of the full scale
 ``2 I_N``, each case's R, L, psi_f errors, status and time on the drive. And the flux linkage's residual with the
 inverter's dead time (``--commission-deadtime [DRIVE ...]`` alone): 1 % and 3 % of the PWM period, 0.7-V diodes,
-``R_on = 0.2 R``, the spin at 0.3, 0.45 and 0.6 ``Omega_N``. And the flying-start map (``--catch [DRIVE ...]`` alone,
-``--dump FILE``): the rotor turning at t = 0 (-0.5 to 1.0 ``Omega_0``) x load x initial angle, the catch with the
+``R_on = 0.2 R``, the spin at 0.3, 0.45 and 0.6 ``Omega_N``. And dead time with current noise
+(``--commission-deadtime-noise [DRIVE ...]`` alone): no dead time and 1 % of the period, noise 0.2 % and 1 % of
+``2 I_N`` on a 12-bit ADC, eight noise seeds each: the runs that end DONE, rms errors of R, L, psi_f, L's worst, the
+mean time. And the flying-start map (``--catch [DRIVE ...]`` alone, ``--dump FILE``): the rotor turning at t = 0 (-0.5 to 1.0 ``Omega_0``) x load x initial angle, the catch with the
 alignment's current on and at zero current (``catch_zero_current``). And the sensitivity with the alignment's
 resistance estimate off and on (``--sensitivity [DRIVE ...]`` alone); ``--startup ... --r-estimate`` (or
 ``--zc-catch``) runs the start-up map with it.
@@ -469,6 +471,38 @@ def commissioning_deadtime(names: list[str], fractions: tuple[float, ...] = (0.0
             print(f"{name:16s} {100 * frac:6.1f}% " + " ".join(f"{c:>22s}" for c in cells), flush=True)
 
 
+def commissioning_deadtime_noise(names: list[str], fractions: tuple[float, ...] = (0.0, 0.01),
+                                 noises: tuple[float, ...] = (0.002, 0.01), seeds: int = 8) -> None:
+    """Print, over ``seeds`` noise seeds, how many runs end DONE and the rms errors of R + R_on, L and psi_f (%), L's
+    worst, and the mean time: a dead time (fractions of the PWM period, 0.7-V diodes, R_on = 0.2 R; 0: the drive's
+    own inverter) with current noise (fractions of ``I_fs = 2 I_N``, a 12-bit ADC over ``+-I_fs``)."""
+    print(f"\n{'drive':16s} {'t_dead':>6s} {'noise':>6s} {'DONE':>5s} {'R rms %':>8s} {'L rms %':>8s} {'L worst':>8s} "
+          f"{'psi rms %':>9s} {'t mean s':>8s}")
+    for name in names:
+        d = bl.load(name)
+        k1 = bl.control.sine.fundamental_k1(d)
+        fs = 2.0 * d.motor.I_N
+        for frac in fractions:
+            inv = d.inverter if frac == 0.0 else dataclasses.replace(d.inverter, t_dead=frac / d.inverter.f_pwm,
+                                                                     V_f=0.7, R_on=0.2 * d.motor.R)
+            base = dataclasses.replace(d, inverter=inv)
+            for noise in noises:
+                errs: list[tuple[float, float, float]] = []
+                times = []
+                for seed in range(1, seeds + 1):
+                    plant = base.replace(sensors__current_noise=noise * fs, sensors__current_lsb=2.0 * fs / 2**12,
+                                         sensors__seed=seed)
+                    e = bl.commission(plant)
+                    times.append(e.t_test)
+                    if e.ok:
+                        errs.append((e.R / r_total(plant) - 1, e.L / d.motor.L - 1, e.psi_f * d.motor.p / k1 - 1))
+                a = np.array(errs).reshape(-1, 3)
+                rms = 100 * np.sqrt(np.mean(np.square(a), axis=0)) if len(a) else np.full(3, math.nan)
+                worst = 100 * a[np.argmax(np.abs(a[:, 1])), 1] if len(a) else math.nan
+                print(f"{name:16s} {100 * frac:5.1f}% {100 * noise:5.1f}% {len(a):5d} {rms[0]:8.3f} {rms[1]:8.3f} "
+                      f"{worst:8.3f} {rms[2]:9.3f} {np.mean(times):8.3f}", flush=True)
+
+
 def main(names: list[str]) -> None:
     print(f"{'drive':16s} {'obs':8s} {'speed':>6s} {'rms deg':>8s} {'worst':>8s} {'sine':>5s} {'tau':>9s} "
           f"{'tau enc':>9s} {'eff':>6s} {'eff enc':>7s}")
@@ -505,6 +539,10 @@ if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] == "--commission-deadtime":
         commissioning_deadtime(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv",
                                                 "f60prov-2550kv"])
+        raise SystemExit(0)
+    if len(sys.argv) > 1 and sys.argv[1] == "--commission-deadtime-noise":
+        commissioning_deadtime_noise(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw",
+                                                      "mn3110-780kv", "f60prov-2550kv"])
         raise SystemExit(0)
     if len(sys.argv) > 1 and sys.argv[1] == "--estimates":
         estimates(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv",
