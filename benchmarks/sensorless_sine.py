@@ -25,10 +25,10 @@ inverter's dead time (``--commission-deadtime [DRIVE ...]`` alone): 1 % and 3 % 
 ``R_on = 0.2 R``, the spin at 0.3, 0.45 and 0.6 ``Omega_N``. And dead time with current noise
 (``--commission-deadtime-noise [DRIVE ...]`` alone): no dead time and 1 % of the period, noise 0.2 % and 1 % of
 ``2 I_N`` on a 12-bit ADC, eight noise seeds each: the runs that end DONE, rms errors of R, L, psi_f, L's worst, the
-mean time. And the flying-start map (``--catch [DRIVE ...]`` alone, ``--dump FILE``): the rotor turning at t = 0 (-0.5 to 1.0 ``Omega_0``) x load x initial angle, the catch with the
-alignment's current on and at zero current (``catch_zero_current``). And the sensitivity with the alignment's
-resistance estimate off and on (``--sensitivity [DRIVE ...]`` alone); ``--startup ... --r-estimate`` (or
-``--zc-catch``) runs the start-up map with it.
+mean time. And the flying-start map (``--catch [DRIVE ...]`` alone, ``--dump FILE``): the rotor turning at t = 0 (-0.5
+to 1.0 ``Omega_0``) x load x initial angle, the catch with the alignment's current on and at zero current
+(``catch_zero_current``). And the sensitivity with the alignment's resistance estimate off and on (``--sensitivity
+[DRIVE ...]`` alone); ``--startup ... --r-estimate`` (or ``--zc-catch``) runs the start-up map with it.
 
 Run: ``PYTHONPATH=src python benchmarks/sensorless_sine.py [DRIVE ...]``.
 """
