@@ -536,12 +536,13 @@ def test_flying_start_catch_at_zero_current(name: str, w0: float) -> None:
     the angle within 3 deg of the plant's from the catch on, no restart, the reference reached (5 %); and before
     the catch the electromagnetic torque's rms is at most half that of the catch with the alignment current on
     (measured 0.21, 0.012, 0.41, 0.15 of it; the alignment current on a slipping rotor pulsates at the slip
-    frequency, about the I/f torque in amplitude)."""
+    frequency, about the I/f torque in amplitude). Both without the zero-vector pulses (``catch_pulse=False``),
+    which send a rotor this fast to the zero-current catch in either mode."""
     d = bl.load(name)
     w = 0.3 * d.Omega_0
 
     def run(zc: bool) -> tuple[bl.sim.SimResult, float, float]:
-        ctl = bl.Sine(angle="observer", speed_loop=True, catch_zero_current=zc)
+        ctl = bl.Sine(angle="observer", speed_loop=True, catch_zero_current=zc, catch_pulse=False)
         st = ctl.sensorless_settings(d)
         dur = st["if_align"] + d.mechanics.J * (abs(w0) + 0.3) * d.Omega_0 / (0.5 * ctl.torque_limit(d)) + 0.5
         r = simulate(d, ctl, Scenario(duration=dur, omega_ref=w, omega0=w0 * d.Omega_0, theta0=1.0))
@@ -693,13 +694,15 @@ def test_catch_at_zero_current_is_not_the_default() -> None:
     at its no-load speed Omega_0, where the back-EMF takes the whole bus: at zero current the current loops run in
     the frame of an observer still pulling in from rest, with no voltage to spare, and the current reaches the
     over-current trip (OVERCURRENT, a restart); the catch with the current on takes it at the first attempt and
-    brakes it to the reference."""
+    brakes it to the reference. Both without the zero-vector pulses (``catch_pulse=False``; with them, the default,
+    a rotor turning at least at the hand-off speed goes to the zero-current catch seeded from the pulses in either
+    mode, and this drive at Omega_0 is caught without a trip: the flying-start map)."""
     d = bl.load("htm-48v")
     assert not bl.Sine(angle="observer").catch_zero_current
     w = 0.3 * d.Omega_0
 
     def run(zc: bool, w0: float) -> tuple[bl.sim.SimResult, float, dict[str, float]]:
-        ctl = bl.Sine(angle="observer", speed_loop=True, catch_zero_current=zc)
+        ctl = bl.Sine(angle="observer", speed_loop=True, catch_zero_current=zc, catch_pulse=False)
         st = ctl.sensorless_settings(d)
         dur = 3 * st["lock_time"] + st["if_align"] + d.motor.p * ctl.handoff(d) / st["if_accel"] \
             + 2 * st["lock_time"] + d.mechanics.J * abs(w0 - 0.3) * d.Omega_0 / (0.5 * ctl.torque_limit(d)) + 0.3
@@ -750,3 +753,45 @@ def test_resistance_estimate_is_not_the_default() -> None:
                                   load_torque=0.75 * tau_if), estimate=d)
     assert "START_FAIL" in r.flags_raised and "DESYNC" in r.flags_raised
     assert not (r["mode"][-1] == 1 and r["omega_m"][-1] == pytest.approx(w, rel=0.05))
+
+
+@pytest.mark.filterwarnings("ignore:result.hardware_trip")  # without the pulses at Omega_0
+@pytest.mark.parametrize("w0", [0.5, -0.5, 1.0])
+def test_flying_start_of_a_fast_rotor_read_by_zero_vector_pulses(w0: float) -> None:
+    """lu-4kw (300 V, L = 0.29 mH) turning at +-0.5 or 1.0 Omega_0 when the drive starts, no load, reference 0.3
+    Omega_0 (``benchmarks/sensorless_sine.py --catch``). Without the pulses (``catch_pulse=False``) the first
+    samples apply the zero vector for a whole sample (no back-EMF known yet): the current rises by ``e T_s / L``, 15 A
+    a sample at 0.5 Omega_0, and trips the over-current guard (``OVERCURRENT``, a restart; at Omega_0 the inverter's
+    hardware trip). With them (the default) two zero-vector pulses of ``tau = L (I_s,N / 3) / e_top`` read the
+    back-EMF: the pulses' currents stay below ``I_s,N / 3`` (``e_top`` is the back-EMF at 1.25 Omega_0), the
+    observer seeded from them is within 10 deg of the plant's angle at the first sample the controller runs the
+    current loops on it, the rotor is caught at zero current within the zero-current window (3 lock times after
+    the 6 samples of the pulses), no restart, the whole run's phase current below the guard's trip, the reference
+    reached (5 %)."""
+    d = bl.load("lu-4kw")
+    w = 0.3 * d.Omega_0
+    i_trip = math.sqrt(3) * i_sN(d)  # the guard's 2 I_N
+
+    def run(pulse: bool) -> tuple[bl.sim.SimResult, dict[str, float]]:
+        ctl = bl.Sine(angle="observer", speed_loop=True, catch_pulse=pulse)
+        st = ctl.sensorless_settings(d)
+        dur = 3 * st["lock_time"] + d.mechanics.J * (abs(w0) + 0.3) * d.Omega_0 / (0.5 * ctl.torque_limit(d)) + 0.2
+        r = simulate(d, ctl, Scenario(duration=dur, omega_ref=w, omega0=w0 * d.Omega_0, theta0=1.0, trace_every=1))
+        return r, st
+
+    r, st = run(False)
+    assert "OVERCURRENT" in r.flags_raised
+    r, st = run(True)
+    i_abc = np.abs(np.stack([r["i_a"], r["i_b"], r["i_c"]]))
+    assert np.max(i_abc[:, :7]) < i_sN(d) / 3  # the pulses (read at samples 2 and 5), legs off between them
+    err = np.degrees(np.angle(np.exp(1j * (r["theta"] - r["theta_e"]))))
+    assert abs(err[6]) < 10.0  # the seed, carried on one sample
+    on = r["mode"] > 0.5
+    assert on.any() and r["t"][int(np.argmax(on))] < 3 * st["lock_time"] + 6 / (2 * d.inverter.f_pwm)
+    assert "OVERCURRENT" not in r.flags_raised and "DESYNC" not in r.flags_raised, r.flags_raised
+    assert np.max(i_abc) < 0.9 * i_trip
+    assert r["mode"][-1] == 1
+    assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
+    with pytest.raises(BldclabError) as e:
+        bl.Sine(angle="observer", catch_pulse=1)  # type: ignore[arg-type]
+    assert e.value.field == "control.catch_pulse"

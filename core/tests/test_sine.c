@@ -473,15 +473,16 @@ static void test_fuzz_observer(void)
     bc_sine_params base;
     sine_params(&base, &f);
     static const float special[] = {NAN, INFINITY, -INFINITY, 3e38f, -3e38f, 1e-38f, -1e-38f, 0.0f, 1e6f, -1e6f};
-    int bad_out = 0, n_ramp = 0, n_align = 0;
-    for (int variant = 0; variant < 4; ++variant) {
+    int bad_out = 0, n_ramp = 0, n_align = 0, n_pulse = 0, n_seed = 0;
+    for (int variant = 0; variant < 5; ++variant) {
         bc_sine_params p = base;
-        observer_params(&p, (variant & 1) ? BC_SINE_OBS_REDUCED : BC_SINE_OBS_FLUX);
+        observer_params(&p, (variant & 1) || variant == 4 ? BC_SINE_OBS_REDUCED : BC_SINE_OBS_FLUX);
         p.speed_loop = (variant >> 1) & 1;
         p.tau_max = 40.0f;
         p.if_r_est = variant == 0 || variant == 3; /* the resistance of the alignment, both observers */
         p.if_psi_est = variant != 3;              /* the flux linkage estimate (no effect on the reduced one) */
         p.zc_catch = variant == 1 || variant == 2; /* the zero-current catch */
+        p.catch_pulse = variant == 2 || variant == 4; /* the zero-vector pulses (bc_sine.h, PULSE) */
         static bc_sine_state s;
         CHECK(bc_sine_init(&p, &s) == BC_OK, "init observer variant %d", variant);
         float phase = 0.0f;
@@ -508,6 +509,14 @@ static void test_fuzz_observer(void)
                     out.leg[x].mode > BC_LEG_LOW)
                     bad_out += 1;
             }
+            if (out.has_at) {
+                n_pulse += 1;
+                bad_out += !(out.t_at >= 0.0f && out.t_at < p.ts);
+                for (int x = 0; x < 3; ++x)
+                    bad_out += !(out.leg_at[x].duty >= 0.0f && out.leg_at[x].duty <= 1.0f) ||
+                               out.leg_at[x].mode < BC_LEG_OFF || out.leg_at[x].mode > BC_LEG_LOW;
+            }
+            n_seed += s.fc_seed != 0;
             for (int j = 0; j < BC_DIAG_N; ++j) bad_out += !isfinite(out.diag[j]);
             bad_out += !isfinite(s.if_theta) || !isfinite(s.if_omega) || !isfinite(s.rho_f) || !(s.r_obs >= 0.0f) ||
                        !isfinite(s.r_obs);
@@ -527,6 +536,8 @@ static void test_fuzz_observer(void)
     CHECK(bad_out == 0, "observer mode: every output finite, duties in [0, 1]: %d bad", bad_out);
     CHECK(n_ramp > 1000, "the I/f ramp was exercised: %d samples", n_ramp);
     CHECK(n_align > 1000, "the alignment was exercised: %d samples", n_align);
+    CHECK(n_pulse > 100 && n_seed > 0, "the zero-vector pulses were exercised: %d pulses, %d seeded samples", n_pulse,
+          n_seed);
 
     /* the start's parameters: a slowest ramp above the fastest, an alignment current above i_s_max, non-finite */
     static bc_sine_state s;

@@ -319,7 +319,7 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
             !finite_pos(p->if_hold) || !finite_pos(p->lock_time) ||
             !finite_pos(p->lock_tol) || p->lock_tol >= 1.0f || !finite_nonneg(p->restart_wait) || !finite_nonneg(p->if_damp) ||
             !finite_nonneg(p->t_dead) || p->t_dead >= p->ts || !is_flag(p->if_r_est) || !is_flag(p->if_psi_est) ||
-            !is_flag(p->zc_catch))
+            !is_flag(p->zc_catch) || !is_flag(p->catch_pulse))
             return BC_ERR_PARAM;
     }
     if (p->emf_ff) {
@@ -369,6 +369,8 @@ int bc_sine_init(const bc_sine_params *p, bc_sine_state *s)
     s->r_ui = s->r_ii = 0.0f;
     s->n_catch = s->w_rev = s->if_wmin = s->if_tb = s->if_tr = 0.0f;
     s->caught = 0;
+    s->fc_k = s->fc_on = s->fc_seed = 0;
+    s->fc_tau = s->fc_i[0] = s->fc_i[1] = s->fc_i2[0] = s->fc_i2[1] = 0.0f;
     s->derate_on = p->derate.enabled[0] != 0 || p->derate.enabled[1] != 0;
     s->derate_f = 1.0f;
     if (s->derate_on && bc_derate_init(&p->derate, &s->derate) != BC_OK) return BC_ERR_PARAM;
@@ -687,10 +689,79 @@ static float creep_speed(const bc_sine_params *p)
     return fminf(0.05f * p->omega_on, sqrtf(2.0f * fmaxf(p->if_accel_min, 0.0f)));
 }
 
-/* ALIGN's zero-current catch window (zc_catch): the first 3 lock_time of each alignment, once a start. */
+/* ALIGN's zero-current catch window (zc_catch, or a turning rotor the pulses found): the first 3 lock_time of each
+ * alignment after the pulses, once a start. */
 static int zc_window(const bc_sine_params *p, const bc_sine_state *s)
 {
-    return p->zc_catch && !s->caught && s->n_zc < 3.0f * p->lock_time;
+    return (p->zc_catch || s->fc_on) && !s->caught && s->n_zc < 3.0f * p->lock_time;
+}
+
+/* PULSE (catch_pulse; bc_sine.h): the samples of each ALIGN the pulses take */
+#define FC_SAMPLES 6
+
+/* The back-EMF vector (V, alpha-beta) from a zero-vector pulse of length tau that ended with the current i (from
+ * zero): L di/dt = -(e + R i) gives i(tau) = -(e / R) (1 - exp(-R tau / L)) */
+static bc_ab fc_emf(const bc_sine_params *p, float tau, float ia, float ib)
+{
+    float x = p->R * tau / p->L;
+    float k = x > 1e-4f ? p->R / (1.0f - expf(-x)) : (p->L / tau) * (1.0f + 0.5f * x);
+    bc_ab e = {-k * ia, -k * ib};
+    return e;
+}
+
+/* One sample of PULSE at step k of it (0 .. FC_SAMPLES - 1), the phase currents i_ab measured now: writes the legs
+ * (off, and the zero vector at the end of the half periods commanded at steps 0 and 3); at the last step reads the
+ * rotor from both pulses and, turning at least at omega_on, seeds the observer and opens the zero-current catch */
+static void fc_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *in, bc_ab i_ab, bc_ctrl_out *out)
+{
+    int k = s->fc_k;
+    sl_off(s, out);
+    if (k == 0) {
+        /* tau from the drive's data: at 1.25 times the no-load speed the pulse's current is i_s_max / 3 */
+        float e_top = 1.25f * p->k_1 * in->v_dc / (2.0f * p->k_phi);
+        float tau = p->L * (p->i_s_max / 3.0f) / fmaxf(e_top, 1e-30f);
+        s->fc_tau = isfinite(tau) ? bc_clampf(tau, 1e-3f * p->ts, 0.9f * p->ts) : 0.5f * p->ts;
+    }
+    if (k == 0 || k == 3) {
+        out->has_at = 1u;
+        out->t_at = p->ts - s->fc_tau;
+        for (int x = 0; x < 3; ++x) {
+            out->leg_at[x].mode = BC_LEG_LOW;
+            out->leg_at[x].duty = 1.0f;
+        }
+    }
+    if (k == 2) {
+        s->fc_i[0] = i_ab.alpha; /* the first pulse's, from zero current */
+        s->fc_i[1] = i_ab.beta;
+    }
+    if (k == 4) {
+        s->fc_i2[0] = i_ab.alpha; /* the first pulse's current left (near the no-load speed the diodes barely take it) */
+        s->fc_i2[1] = i_ab.beta;
+    }
+    if (k == FC_SAMPLES - 1) {
+        /* the back-EMF from the first pulse (from zero current: its angle and amplitude), the second pulse's rise
+         * over the current left from the first (only its direction of turn): |omega| = |e_1| / psi_f, its sign
+         * that of the turn from e_1 to e_2, theta = phi_1 + sgn(omega) pi / 2 + omega 3 ts */
+        bc_ab e1 = fc_emf(p, s->fc_tau, s->fc_i[0], s->fc_i[1]);
+        bc_ab e2 = fc_emf(p, s->fc_tau, i_ab.alpha - s->fc_i2[0], i_ab.beta - s->fc_i2[1]);
+        float a1 = sqrtf(e1.alpha * e1.alpha + e1.beta * e1.beta);
+        float dphi = atan2f(e1.alpha * e2.beta - e1.beta * e2.alpha, e1.alpha * e2.alpha + e1.beta * e2.beta);
+        float wa = a1 / fmaxf(s->psi_obs, 1e-30f);
+        float w = dphi > 0.0f ? wa : -wa;
+        if (isfinite(w) && isfinite(dphi) && wa >= p->omega_on && fabsf(dphi) >= 0.25f * wa * 3.0f * p->ts &&
+            fabsf(dphi) <= 4.0f * wa * 3.0f * p->ts) {
+            /* the back-EMF lies on q (the d axis at theta - pi): theta = phi + sgn(omega) pi / 2 */
+            float th = atan2f(e1.beta, e1.alpha) + (w > 0.0f ? 0.5f : -0.5f) * BC_PI_F + w * 3.0f * p->ts;
+            th = bc_wrap_2pi(th);
+            s->if_theta = th;
+            s->if_omega = w;
+            obs_reset(p, s, th, w, i_ab);
+            s->omega_f = w;
+            s->flux_f = s->psi_obs;
+            s->fc_on = s->fc_seed = 1;
+        }
+    }
+    s->fc_k = k + 1;
 }
 
 /* Sensorless sample (bc_sine.h, "Sensorless"): observer, I/f start-up, handover, loss of lock. */
@@ -706,9 +777,14 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
         bc_obs_in oi = {{u_obs[0], u_obs[1]}, i_ab};
         obs_run(p, s, &oi, &o);
     } else {
-        obs_reset(p, s, s->if_theta, 0.0f, i_ab); /* nothing known to integrate: held at the I/f angle */
+        /* nothing known to integrate: held at the I/f angle, or the pulses' seed carried on at its speed */
+        if (s->fc_seed) s->if_theta = bc_wrap_2pi(s->if_theta + s->if_omega * p->ts);
+        float w_seed = s->fc_seed ? s->if_omega : 0.0f;
+        obs_reset(p, s, s->if_theta, w_seed, i_ab);
         o.theta = s->if_theta;
+        o.omega_e = w_seed;
     }
+    if (u_obs_ok) s->fc_seed = 0;
     s->u_hist[1][0] = s->u_hist[0][0];
     s->u_hist[1][1] = s->u_hist[0][1];
     s->u_ok[1] = s->u_ok[0];
@@ -782,6 +858,8 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             s->psi_adapt = s->psi_done = 0;
             s->n_catch = 0.0f;
             s->caught = 0;
+            s->fc_k = p->catch_pulse ? 0 : FC_SAMPLES;
+            s->fc_on = s->fc_seed = 0;
             s->if_t = 0.0f;
             s->r_ui = 0.0f;
             s->r_ii = 0.0f;
@@ -789,12 +867,16 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             bc_pi_reset(&s->pi_p, &s->pi_q, 0.0f);
         }
         float dir = (float)s->sl_dir;
-        if (s->sl_phase == BC_SINE_SL_ALIGN && zc_window(p, s)) {
+        if (s->sl_phase == BC_SINE_SL_ALIGN && s->fc_k < FC_SAMPLES) {
+            /* catch_pulse: the alignment waits for the pulses (their legs below) */
+        } else if (s->sl_phase == BC_SINE_SL_ALIGN && zc_window(p, s)) {
             /* zc_catch: the alignment waits while the current loops hold i = 0 in the observer's frame (below) */
             s->n_zc += p->ts;
             if (!zc_window(p, s)) {
                 bc_pi_reset(&s->pi_p, &s->pi_d, 0.0f); /* no catch: the alignment from a clean start */
                 bc_pi_reset(&s->pi_p, &s->pi_q, 0.0f);
+                s->if_omega = 0.0f; /* the pulses' seed: not the alignment's */
+                s->fc_seed = 0;
             }
         } else if (s->sl_phase == BC_SINE_SL_ALIGN) {
             s->sl_t += p->ts;
@@ -976,6 +1058,12 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
     out->diag[7] = (float)s->mode;
     if (s->mode == BC_SINE_MODE_START && (s->sl_phase == BC_SINE_SL_IDLE || s->sl_phase == BC_SINE_SL_WAIT)) {
         if (!(out->flags & BC_FLAG_DESYNC)) sl_off(s, out);
+        if (p->speed_loop) bc_pi_reset(&s->piw_p, &s->pi_w, 0.0f);
+        return;
+    }
+    if (s->mode == BC_SINE_MODE_START && s->sl_phase == BC_SINE_SL_ALIGN && s->fc_k < FC_SAMPLES) {
+        fc_step(p, s, in, i_ab, out); /* catch_pulse */
+        out->flags |= BC_FLAG_OPEN_LOOP;
         if (p->speed_loop) bc_pi_reset(&s->piw_p, &s->pi_w, 0.0f);
         return;
     }

@@ -56,6 +56,7 @@ static const bc_field_desc SINE_FIELDS[] = {
     F(bc_sine_params, if_r_est, "i4"),
     F(bc_sine_params, if_psi_est, "i4"),
     F(bc_sine_params, zc_catch, "i4"),
+    F(bc_sine_params, catch_pulse, "i4"),
     F(bc_sine_params, derate, "bc_derate_params"),
     F(bc_sine_params, rest, "bc_rest_params"),
     F(bc_fluxobs_params, R, "f4"),

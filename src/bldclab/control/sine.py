@@ -148,6 +148,14 @@ class Sine(Control):
         twice the hand-off speed that the alignment's current holds, but at the no-load speed, with no voltage to
         spare while the observer pulls in, it can trip the over-current guard (docs/sensorless-sine.md, "Catch",
         "Flying-start map").
+    catch_pulse : bool
+        Each alignment starts with two zero-vector pulses read by the current sensors, legs off before and after
+        (6 samples): a pulse of length ``tau = L (I_s,N / 3) / e_top`` (``e_top`` the back-EMF at 1.25 times the
+        no-load speed) ending at a sample; the current it drives, ``L di/dt = -(e + R i)``, gives the back-EMF vector,
+        its turn over the ``3 T_s`` between the pulses the speed. A rotor found turning at least at the hand-off
+        speed seeds the observer (angle, speed) and is caught at zero current (as ``catch_zero_current``), so the
+        first voltage applied balances its back-EMF instead of short-circuiting it; otherwise the start goes on as
+        without. Default ``True`` (docs/sensorless-sine.md, "Catch", "Zero-vector pulses").
     lock_tolerance : float
         Band of the lock criterion (-), in (0, 1): the observer's flux within it of ``psi_f`` (relative) and its
         tracking error within it (rad) for the hand-off; its flux out of it too long is a lost lock.
@@ -271,6 +279,7 @@ class Sine(Control):
     if_r_estimate: bool = False
     if_flux_estimate: bool = True
     catch_zero_current: bool = False
+    catch_pulse: bool = True
     lock_tolerance: float = 0.2
     restart_wait: float = 0.1
     derate: TemperatureDerating | None = None
@@ -325,6 +334,8 @@ class Sine(Control):
         if not isinstance(self.catch_zero_current, bool):
             raise BldclabError("control.catch_zero_current",
                                f"must be True or False, got {self.catch_zero_current!r}")
+        if not isinstance(self.catch_pulse, bool):
+            raise BldclabError("control.catch_pulse", f"must be True or False, got {self.catch_pulse!r}")
         check_number("lock_tolerance", self.lock_tolerance)
         if self.lock_tolerance >= 1:
             raise BldclabError("control.lock_tolerance", f"must be in (0, 1), got {self.lock_tolerance!r}")
@@ -465,7 +476,8 @@ class Sine(Control):
                 "if_hold": st["if_hold"], "lock_time": st["lock_time"],
                 "lock_tol": self.lock_tolerance, "restart_wait": self.restart_wait, "if_damp": st["if_damp"],
                 "t_dead": inv.t_dead, "if_r_est": int(self.if_r_estimate),
-                "if_psi_est": int(self.if_flux_estimate), "zc_catch": int(self.catch_zero_current)}
+                "if_psi_est": int(self.if_flux_estimate), "zc_catch": int(self.catch_zero_current),
+                "catch_pulse": int(self.catch_pulse)}
 
     def _r_design(self, drive: Drive, scale: float) -> float:
         """Design resistance of a loop of ``scale`` phases in series (Ohm)."""

@@ -291,6 +291,22 @@
  *          the alignment's clock stopped; their voltage is then the back-EMF of a turning rotor, the observer locks
  *          on it without the alignment current's torque pulsating on the slipping rotor; no catch in the window:
  *          the integrators reset and the alignment as above (a rotor at rest, or slower than omega_on).
+ *   PULSE  (catch_pulse = 1; the first 6 samples of each ALIGN, before the above) the back-EMF read before any
+ *          voltage is applied: legs off, and in the half periods commanded at samples 0 and 3 the zero vector (every
+ *          leg LOW at duty 1, from t_at = ts - tau to the half period's end, legs off before) for
+ *              tau = min(0.9 ts, L (i_s_max / 3) / e_top),  e_top = 1.25 k_1 v_dc / (2 k_phi)
+ *          (the back-EMF vector's amplitude at 1.25 times the no-load speed): the current from zero at the
+ *          pulse's end (read two samples after its command), L di/dt = -(e + R i), gives
+ *              e = -i R / (1 - exp(-R tau / L))   (R -> 0: -i L / tau),
+ *          the first pulse's (from zero current) gives the back-EMF's angle phi_1 and amplitude, |omega| =
+ *          |e_1| / psi_f; the second's rise over the current the first left (read at sample 4) only the sign of
+ *          the turn between them (3 ts apart; within a factor 4 of |omega| 3 ts, below pi); the rotor's angle
+ *          theta = phi_1 + sgn(omega) pi / 2 + omega 3 ts (the back-EMF on q, the d axis at theta - pi).
+ *          |omega| >= omega_on: the observer is seeded (theta, omega,
+ *          carried on by omega ts until it runs on applied voltages), omega_f = omega, and the zero-current catch
+ *          window above runs (with or without zc_catch): its current loops' first voltage is the back-EMF of that
+ *          angle. Otherwise the alignment goes on as above; the pulses' currents (at most i_s_max / 3 below
+ *          1.25 times the no-load speed) cost 6 samples.
  *
  * In the sine mode the lock is checked every sample with the same band (the speed against itself: only the flux
  * magnitude); violated for lock_time: BC_FLAG_LOCK_LOST | BC_FLAG_DESYNC, legs off, WAIT, then a new start
@@ -426,6 +442,9 @@ typedef struct {
                            reduced-order observer */
     int32_t zc_catch;   /* 1: each ALIGN starts with 3 lock_time at zero current (the catch, section "Sensorless",
                            CATCH); 0: the catch with the alignment's current on */
+    int32_t catch_pulse; /* 1: each ALIGN starts with two zero-vector pulses read by the current sensors (section
+                            "Sensorless", PULSE): a rotor found turning at least at omega_on seeds the observer and
+                            is caught at zero current; 0: none */
     bc_derate_params derate; /* temperature derating of the current limit i_s_max (bc_derate.h) from in->temp; no
                                 channel enabled (all zero): none. The start controller derates by six.derate. */
     bc_rest_params rest; /* the winding resistance during operation (bc_rest.h): in sine mode i_d,ref is its square
@@ -491,6 +510,12 @@ typedef struct {
     float r_ui, r_ii;  /* ALIGN: sums of u.i (W) and i.i (A^2) over its last quarter */
     float n_catch;     /* ALIGN, RAMP: time the observer has held a consistent lock at |omega_f| >= omega_on, s */
     int32_t caught;    /* this start has caught a turning rotor (once a start) */
+    int32_t fc_k;      /* ALIGN, catch_pulse: samples since the alignment's start while the pulses run (>= 6: done) */
+    int32_t fc_on;     /* ALIGN, catch_pulse: the pulses found a turning rotor; its zero-current catch window runs */
+    int32_t fc_seed;   /* catch_pulse: the observer carries the pulses' angle and speed until it has voltages to run on */
+    float fc_tau;      /* catch_pulse: the pulse length, s (in (0, ts)) */
+    float fc_i[2];     /* catch_pulse: the first pulse's current at its end, A (alpha, beta) */
+    float fc_i2[2];    /* catch_pulse: the current left at the second pulse's half period's start, A */
     float if_wmin;     /* RAMP: the vector's lowest speed in dir since the ramp's start, electrical rad/s */
     float w_rev;       /* sine mode: |omega_f| when it last turned with the reference (or at the catch), rad/s */
     float u_hist[2][2]; /* alpha-beta voltage commanded one and two samples ago, V */
