@@ -503,6 +503,7 @@ static void test_fuzz_observer(void)
             in.ref = wild ? special[rnd_u32() % 10u] : (float)((rnd() - 0.2) * 40.0);
             in.omega_ref = wild ? special[rnd_u32() % 10u] : (float)((rnd() - 0.2) * 60.0);
             bc_ctrl_out out;
+            memset(&out, 0, sizeof out); /* as the runner clears it (has_at = 0) */
             bc_sine_step(&p, &s, &in, &out);
             for (int x = 0; x < 3; ++x) {
                 if (!(out.leg[x].duty >= 0.0f && out.leg[x].duty <= 1.0f) || out.leg[x].mode < BC_LEG_OFF ||

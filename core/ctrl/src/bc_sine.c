@@ -1166,6 +1166,7 @@ void bc_sine_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in *i
         out->leg[x].duty = 0.0f;
     }
     out->flags = 0u;
+    out->has_at = 0u; /* no timed change but the pulses' (catch_pulse) */
 
     /* 1. safety: the input guard (bc_guard.h), the Hall code, the reference and the encoder angle if used */
     bc_hall_out h;
