@@ -1061,6 +1061,9 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
              * back with the gain if_damp R, which above 1 latches i_d at its limit and turns the rest angle by
              * atan(i_d / i_q)); without it the integrator holds R i_d + e_d */
             float e_d = s->pi_d.x - (p->decouple ? 0.0f : p->R * idq1.d);
+            /* in the closing sweep the swing about the turning vector: less the back-EMF of a rotor that follows
+             * it, -dir omega_if psi_f (braking that too would drag the unloaded rotor behind the seed) */
+            if (s->al_stage == 1) e_d += (float)s->sl_dir * s->if_omega * s->psi_obs;
             id_ref = bc_clampf(-p->if_damp * e_d, -id_max, id_max);
         } else if (s->sl_phase == BC_SINE_SL_RAMP) {
             /* the swing braked through the observer: i_d = if_damp psi_f (omega^ - omega_if) / sin Delta makes
