@@ -166,9 +166,9 @@ def test_adaptive_ramp_acceleration_closed_form(kj: float) -> None:
     and the rotor needs ``rho tau_if = tau_L + J a / p``: at equilibrium ``a = a_max (RHO_HI - f) / (RHO_HI - RHO_LO
     + a_max J / (p tau_if))``, 3.4 times less than the fixed ramp's (which could not carry this load). The rotor's
     mean acceleration between 30 % (or, if later, where the observer's error has fallen below 1 deg for good: the
-    closed form is the law read with the true angle, and the seed's error that the sweep's residual swing leaves,
-    4.5 deg ahead of the rotor at the nominal inertia, decays at low speed) and 90 % of the hand-off speed is that to
-    10 %, and the start hands over without a restart."""
+    closed form is the law read with the true angle, and the seed's error that the alignment's residual swing
+    leaves decays at low speed) and 80 % of the hand-off speed is that to 10 %, and the start hands over without a
+    restart."""
     d = bl.load("servo-2k2")
     ctl = bl.Sine(angle="observer", speed_loop=True)
     st = ctl.sensorless_settings(d)
@@ -195,7 +195,7 @@ def test_adaptive_ramp_acceleration_closed_form(kj: float) -> None:
     err = np.abs(np.angle(np.exp(1j * (r["theta"] - r["theta_e"]))))
     settled = int(len(t) - np.argmax(err[::-1] > math.radians(1.0)))
     k0 = max(int(np.argmax((t > t_al) & (w >= 0.3 * w_on))), settled)
-    k1 = int(np.argmax((t > t_al) & (w >= 0.9 * w_on)))
+    k1 = int(np.argmax((t > t_al) & (w >= 0.8 * w_on)))
     assert k1 > k0 > 0
     assert w[k1] - w[k0] >= 0.2 * w_on
     a = (w[k1] - w[k0]) / (t[k1] - t[k0])
@@ -444,7 +444,9 @@ def test_dead_time_compensation_restores_low_speed_lock() -> None:
     """servo-2k2 with a dead time of 1 % of the PWM period and 0.7 V diodes, flux observer at 0.1 Omega_0: the
     controller that knows the dead time (the plant's drive as its estimate) corrects the observer's voltage and
     locks, error below 0.5 deg; one that believes it has none (estimate with t_dead = 0) takes the dead time's
-    voltage error for back-EMF and does not reach the sine mode (measured: no hand-off at all)."""
+    voltage error for back-EMF: it loses the sine mode in the window or runs with an angle error above 5 deg
+    (measured: before the alignment's closing sweep, 2026-11-27, its lock was lost and the rotor driven backwards;
+    since, it hands over and runs 14.4 deg off)."""
     d = bl.load("servo-2k2")
     p = dataclasses.replace(d, inverter=dataclasses.replace(d.inverter, t_dead=0.01 / d.inverter.f_pwm, V_f=0.7))
     ctl = observer(p, 0.1)
@@ -452,7 +454,7 @@ def test_dead_time_compensation_restores_low_speed_lock() -> None:
     assert np.all(r["mode"][m] == 1)
     assert np.max(np.abs(np.degrees(angle_error(r, m)))) < 0.5
     r0, m0 = run_point(p, ctl, 0.1, estimate=d)
-    assert not np.all(r0["mode"][m0] == 1)
+    assert not np.all(r0["mode"][m0] == 1) or np.max(np.abs(np.degrees(angle_error(r0, m0)))) > 5.0
 
 
 def test_current_sensor_offset_and_noise() -> None:

@@ -32,7 +32,7 @@ _ANGLE = {"hall": "BC_SINE_ANGLE_HALL", "pll": "BC_SINE_ANGLE_HALL", "encoder": 
           "observer": "BC_SINE_ANGLE_OBSERVER"}
 _OBSERVER = {"flux": "BC_SINE_OBS_FLUX", "reduced": "BC_SINE_OBS_REDUCED"}
 OBSERVER_ANGLE_ERROR = math.radians(1.0)  # the PLL's lag at the rated acceleration the default bandwidth allows
-ALIGN_SWEEP_K = 0.1  # bc_sine.h BC_SINE_SWEEP_K: the alignment's closing sweep speed over its swing frequency
+ALIGN_SWEEP_K = 0.2  # bc_sine.h BC_SINE_SWEEP_K: the alignment's closing sweep speed over its swing frequency
 ALIGN_RHO_HI = 0.95  # bc_sine.h BC_SINE_RHO_HI: the sweep's angle 2 asin(RHO_HI if_current / if_align_current)
 _LIMIT = {"hexagon": "BC_SINE_LIMIT_HEX", "circle": "BC_SINE_LIMIT_CIRCLE"}
 PAPER1_BANDWIDTH_HZ = 1000.0  # paper 1's current-loop crossover (Hz)
@@ -409,7 +409,7 @@ class Sine(Control):
             ``if_current`` and ``if_align_current`` (A), ``if_accel`` and ``if_accel_min`` (electrical rad/s^2),
             ``if_align`` (s), ``if_damp`` (A/V, the swing damping ``omega_n J / (1.5 p^2 psi_f^2)``), ``lock_time``
             (s), ``if_hold`` (s) and ``if_sweep`` (s, the alignment's closing sweep: the vector turned forwards by
-            ``2 asin(min(0.95 if_current / if_align_current, 1))`` at a tenth of the swing frequency at
+            ``2 asin(min(0.95 if_current / if_align_current, 1))`` at a fifth of the swing frequency at
             ``if_align_current``, ``w_a = (6 pi / if_align) sqrt(if_align_current / if_current)``; 0 without an
             alignment).
         """

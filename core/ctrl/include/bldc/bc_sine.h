@@ -206,8 +206,9 @@
  *          its period below w_q, so the wait holds up to nine times that inertia). Then the closing sweep: the
  *          vector turns forwards (dir) by beta = 2 asin(min(BC_SINE_RHO_HI if_current / if_align_current, 1)),
  *          twice the band in which a friction load within the design bound holds the rotor off the rest angle, at
- *          w_s = BC_SINE_SWEEP_K w_a (omega_if = dir w_s): a rotor held anywhere in that band is dragged from
- *          behind, so the seed below lies ahead of it (dir-wise), an error Lee's observer removes as the rotor
+ *          w_s = BC_SINE_SWEEP_K w_a (omega_if = dir w_s; the damping then brakes the swing about the turning vector,
+ *          i_d,ref = -if_damp (e_d + dir omega_if psi_f), not the motion with it): a rotor held anywhere in that
+ *          band is dragged from behind, so the seed below lies ahead of it (dir-wise), an error Lee's observer removes as the rotor
  *          turns (one behind the rotor grows at low speed: section RAMP). An unloaded rotor settles with its q
  *          axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there at the sweep's end:
  *          theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP from omega_if = dir min(w_s, w_cr). Without an
@@ -327,7 +328,7 @@
 /* The load-adaptive I/f ramp's band of the torque's share of the I/f torque (section "Sensorless", RAMP). */
 #define BC_SINE_RHO_LO 0.6f
 #define BC_SINE_RHO_HI 0.95f
-#define BC_SINE_SWEEP_K 0.1f  /* ALIGN's closing sweep: its speed w_s over the swing frequency w_a */
+#define BC_SINE_SWEEP_K 0.2f  /* ALIGN's closing sweep: its speed w_s over the swing frequency w_a */
 #define BC_SINE_QUIET_K 0.025f /* ALIGN: the swing has died below the speed w_q = BC_SINE_QUIET_K w_a */
 
 #include <stdint.h>
