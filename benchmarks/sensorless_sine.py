@@ -230,8 +230,9 @@ def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str, **
     times the I/f torque, speed loop to 0.3 Omega_0.
 
     ``kind``: ``passive`` a Coulomb-type load (the plant's friction ``tau_c``: against the motion, holding the
-    rotor at rest while the motor's torque is below it), ``brake`` an active constant load released at the end of
-    the alignment (a brake), ``active`` an active constant load from t = 0 (the legs still off). Returns ``ok``
+    rotor at rest while the motor's torque is below it), ``brake`` an active constant load released at ``if_align``
+    (a brake; the alignment's two steps, then its wait and closing sweep), ``active`` an active constant load from
+    t = 0 (the legs still off). Returns ``ok``
     (1: in the sine mode at the end, the speed within 5 %), ``bound`` (the load fraction the start is designed
     for, :func:`startup_bound` with the drive's own friction; ``bound0`` without it), ``t_lock`` (s, the first
     sample in the sine mode), ``restarted`` (1: a DESYNC, a failed start or a lost lock, before the end), ``flags``
