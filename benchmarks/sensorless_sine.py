@@ -22,22 +22,32 @@ with it and the alignment's resistance (``if_r_estimate``). And the commissionin
 (``--commission-sensors [DRIVE ...]`` alone): offsets, white noise and a 12-bit ADC, fractions of the full scale
 ``2 I_N``, each case's R, L, psi_f errors, status and time on the drive. And the flux linkage's residual with the
 inverter's dead time (``--commission-deadtime [DRIVE ...]`` alone): 1 % and 3 % of the PWM period, 0.7-V diodes,
-``R_on = 0.2 R``, the spin at 0.3, 0.45 and 0.6 ``Omega_N``.
+``R_on = 0.2 R``, the spin at 0.3, 0.45 and 0.6 ``Omega_N``. And dead time with current noise
+(``--commission-deadtime-noise [DRIVE ...]`` alone): no dead time and 1 % of the period, noise 0.2 % and 1 % of
+``2 I_N`` on a 12-bit ADC, eight noise seeds each: the runs that end DONE, rms errors of R, L, psi_f, L's worst, the
+mean time. And the flying-start map (``--catch [DRIVE ...]`` alone, ``--dump FILE``): the rotor turning at t = 0 (-0.5
+to 1.0 ``Omega_0``) x load x initial angle, the catch with the alignment's current on and at zero current
+(``catch_zero_current``). And the sensitivity with the alignment's resistance estimate off and on (``--sensitivity
+[DRIVE ...]`` alone); ``--startup ... --r-estimate`` (or ``--zc-catch``) runs the start-up map with it.
 
-Run: ``PYTHONPATH=src python benchmarks/sensorless_sine.py [DRIVE ...]``.
+Run: ``PYTHONPATH=src python benchmarks/sensorless_sine.py [--PART] [DRIVE ...]`` (``--help`` lists the parts and
+their options; an unknown drive or a misplaced option: exit 2).
 """
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import math
 import sys
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 import bldclab as bl
+from bldclab.errors import BldclabError
 from bldclab.model.analytic import i_sN, r_total
 from bldclab.sim import Scenario, simulate
 
@@ -92,20 +102,31 @@ def loaded_point(d: bl.Drive) -> tuple[float, float, bl.Sine, float, float, floa
     return torque, w, ctl, t_load, t_ramp, dur
 
 
-def sensitivity(names: list[str]) -> None:
-    """Print the angle error and torque with wrong parameters, then after commissioning from them."""
-    print(f"\n{'drive':16s} {'estimate':12s} {'rms deg':>8s} {'worst':>8s} {'tau':>9s} {'after comm.':>11s} "
-          f"{'worst':>8s} {'tau':>9s}")
+def sensitivity(names: list[str], cases: tuple[str, ...] | None = None, **options: object) -> None:
+    """Print the angle error and torque with wrong parameters, then after commissioning from them.
+
+    ``cases``: the labels of :data:`ESTIMATE_CASES` to run (default all); ``options``: settings of the controller
+    (:class:`bl.Sine`, e.g. ``if_r_estimate=True``), printed in the header. Columns: the time of the first hand-off
+    (s), the angle error (deg, rms / worst over the last 20 electrical periods, sine mode only; ``nan``: not in the
+    sine mode there), the window's share in the sine mode and the mean torque (N m), then the same after
+    commissioning.
+    """
+    print(f"\n{'drive':16s} {'estimate':12s} {'t_lock':>7s} {'rms deg':>8s} {'worst':>8s} {'sine':>5s} {'tau':>9s} "
+          f"{'after comm.':>11s} {'worst':>8s} {'tau':>9s}   {options or ''}")
     for name in names:
         d = bl.load(name)
         torque, w, ctl, t_load, t_ramp, dur = loaded_point(d)
+        ctl = dataclasses.replace(ctl, **options)  # type: ignore[arg-type]
         for label, kw in ESTIMATE_CASES:
+            if cases is not None and label not in cases:
+                continue
             wrong = d.scaled(**kw) if kw else None
             a = angle_error(d, ctl, w, torque, t_load, t_ramp, dur, estimate=wrong)
             e = bl.commission(d, nominal=wrong) if wrong is not None else None
             b = angle_error(d, ctl, w, torque, t_load, t_ramp, dur, estimate=e.drive) if e and e.ok else None
             after = f"{b['rms']:11.3f} {b['worst']:8.3f} {b['tau']:9.4g}" if b else f"{'-':>11s} {'-':>8s} {'-':>9s}"
-            print(f"{name:16s} {label:12s} {a['rms']:8.3f} {a['worst']:8.3f} {a['tau']:9.4g} {after}")
+            print(f"{name:16s} {label:12s} {a['t_lock']:7.2f} {a['rms']:8.3f} {a['worst']:8.3f} {a['sine']:5.2f} "
+                  f"{a['tau']:9.4g} {after}", flush=True)
 
 
 ESTIMATE_VARIANTS = (("none", {"if_flux_estimate": False, "if_r_estimate": False}),
@@ -203,7 +224,8 @@ def startup_bound(st: dict[str, float], J: float, p: int, tau_if: float, tau_f: 
             - tau_f / tau_if)
 
 
-def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str) -> dict[str, float]:
+def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str, **options: object
+                 ) -> dict[str, float]:
     """One start: the controller configured from the nominal drive, the plant's inertia ``kj J``, a load of ``fl``
     times the I/f torque, speed loop to 0.3 Omega_0.
 
@@ -213,9 +235,9 @@ def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str) ->
     (1: in the sine mode at the end, the speed within 5 %), ``bound`` (the load fraction the start is designed
     for, :func:`startup_bound` with the drive's own friction; ``bound0`` without it), ``t_lock`` (s, the first
     sample in the sine mode), ``restarted`` (1: a DESYNC, a failed start or a lost lock, before the end), ``flags``
-    and the I/f torque ``tau_if`` (N m).
+    and the I/f torque ``tau_if`` (N m). ``options``: further settings of the controller (:class:`bl.Sine`).
     """
-    ctl = bl.Sine(angle="observer", speed_loop=True)
+    ctl = bl.Sine(angle="observer", speed_loop=True, **options)  # type: ignore[arg-type]
     st = ctl.sensorless_settings(d)
     tau_if = 1.5 * bl.control.sine.fundamental_k1(d) * st["if_current"]
     w = 0.3 * d.Omega_0
@@ -231,7 +253,8 @@ def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str) ->
     p = d.motor.p
     t_ramp = p * ctl.handoff(d) / st["if_accel_min"]  # the slowest ramp
     t_acc = mech.J * w / max(ctl.torque_limit(d) - fl * tau_if, 0.1 * ctl.torque_limit(d))
-    dur = 2 * (st["if_align"] + t_ramp + 4 * st["lock_time"]) + t_acc + 0.5
+    t_zc = 3 * st["lock_time"] if ctl.catch_zero_current else 0.0  # the zero-current catch's wait (each alignment)
+    dur = 2 * (t_zc + st["if_align"] + t_ramp + 4 * st["lock_time"]) + t_acc + 0.5
     r = simulate(plant, ctl, Scenario(duration=dur, omega_ref=w, load_torque=load, theta0=theta0, trace_every=16),
                  estimate=d)
     on = r["mode"] > 0.5
@@ -244,7 +267,7 @@ def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str) ->
 
 
 def startup_map(names: list[str], kinds: tuple[str, ...] = STARTUP_KINDS, inertias: tuple[float, ...] = STARTUP_J,
-                loads: tuple[float, ...] = STARTUP_LOADS, dump: str | None = None) -> None:
+                loads: tuple[float, ...] = STARTUP_LOADS, dump: str | None = None, **options: object) -> None:
     """Print the start-up's success over load torque x inertia x initial angle, per load kind (``startup_case``).
 
     One line per drive, load kind, inertia and load: the starts that succeeded out of the initial angles, the
@@ -253,8 +276,10 @@ def startup_map(names: list[str], kinds: tuple[str, ...] = STARTUP_KINDS, inerti
     their flags. Then, per load kind, the starts that succeeded within the bound without and with the drive's own
     friction (``startup_bound``). ``kinds``, ``inertias`` and ``loads`` select a part of the map; ``dump``, a file
     to which each start is written as a line ``drive kind J load angle ok t_lock`` (to compare two versions start by
-    start).
+    start); ``options``, settings of the controller (:class:`bl.Sine`, e.g. ``if_r_estimate=True``).
     """
+    if options:
+        print(f"\ncontroller options: {options}")
     print(f"\n{'drive':16s} {'load kind':9s} {'J/J_nom':>7s} {'load/tau_if':>11s} {'bound':>6s} {'ok':>5s} "
           f"{'t_lock s':>13s} {'restarts':>8s}  flags of the failures")
     within: dict[tuple[str, str], list[int]] = {}
@@ -264,7 +289,7 @@ def startup_map(names: list[str], kinds: tuple[str, ...] = STARTUP_KINDS, inerti
         for kind in kinds:
             for kj in inertias:
                 for fl in loads:
-                    runs = [startup_case(d, fl, kj, th, kind) for th in STARTUP_ANGLES]
+                    runs = [startup_case(d, fl, kj, th, kind, **options) for th in STARTUP_ANGLES]
                     if dump:
                         with open(dump, "a", encoding="utf-8") as f:
                             for th, r in zip(STARTUP_ANGLES, runs, strict=True):
@@ -290,6 +315,105 @@ def startup_map(names: list[str], kinds: tuple[str, ...] = STARTUP_KINDS, inerti
     print("median time to the first hand-off over the starts that succeeded (s): "
           + ", ".join(f"{k} {np.median(t_locks[k]):.3f}" for k in kinds if t_locks.get(k))
           + (f", all {np.median(every):.3f} ({len(every)} starts)" if every else ""))
+
+
+CATCH_SPEEDS = (-0.5, -0.2, -0.05, 0.0, 0.05, 0.2, 0.5, 1.0)  # the rotor's speed at t = 0, of Omega_0
+CATCH_LOADS = ("none", "passive", "active")  # no load; 0.5 tau_if of Coulomb friction; 0.5 tau_if active from t = 0
+CATCH_LOAD = 0.5  # of the I/f torque
+
+
+def catch_case(d: bl.Drive, w0: float, kind: str, theta0: float, zc: bool, **options: object) -> dict[str, Any]:
+    """One flying start: the rotor turning at ``w0 Omega_0`` when the drive starts (``Scenario.omega0``), the
+    controller configured from the drive (``catch_zero_current=zc``, ``options`` passed to :class:`bl.Sine`), speed
+    loop to 0.3 Omega_0.
+
+    ``kind``: ``none``; ``passive``, the plant's Coulomb friction raised by 0.5 of the I/f torque (against the
+    motion: it slows a coasting rotor and holds one at rest); ``active``, a constant load of 0.5 of the I/f torque
+    from t = 0, pushing the rotor backwards. Returns ``ok`` (1: in the sine mode at the end, the speed within 5 %),
+    ``first`` (``ok`` and neither DESYNC nor OVERCURRENT raised: no restart), ``t_lock`` (s, the first sample in the
+    sine mode), ``caught`` (1: that sample came before the alignment's end, a catch rather than a hand-off at the top
+    of the I/f ramp), ``i_peak`` (the largest phase current of the run over ``I_s,N``), ``err`` (deg, the worst angle
+    error against the plant in the sine mode after the first 2 lock times there) and ``flags``.
+    """
+    ctl = bl.Sine(angle="observer", speed_loop=True, catch_zero_current=zc, **options)  # type: ignore[arg-type]
+    st = ctl.sensorless_settings(d)
+    tau_if = 1.5 * bl.control.sine.fundamental_k1(d) * st["if_current"]
+    w = 0.3 * d.Omega_0
+    tau_l = CATCH_LOAD * tau_if if kind != "none" else 0.0
+    mech = dataclasses.replace(d.mechanics, tau_c=d.mechanics.tau_c + (tau_l if kind == "passive" else 0.0))
+    plant = dataclasses.replace(d, mechanics=mech)
+    p = d.motor.p
+    t_ramp = p * ctl.handoff(d) / st["if_accel_min"]  # the slowest ramp
+    t_acc = mech.J * (abs(w0) * d.Omega_0 + w) / max(ctl.torque_limit(d) - tau_l, 0.1 * ctl.torque_limit(d))
+    t_zc = 3 * st["lock_time"] if zc else 0.0
+    dur = 2 * (t_zc + st["if_align"] + t_ramp + 4 * st["lock_time"]) + t_acc + 0.5
+    r = simulate(plant, ctl, Scenario(duration=dur, omega_ref=w, omega0=w0 * d.Omega_0, theta0=theta0,
+                                      load_torque=tau_l if kind == "active" else 0.0, trace_every=4), estimate=d)
+    on = r["mode"] > 0.5
+    ok = bool(on[-1]) and abs(r["omega_m"][-1] / w - 1) < 0.05
+    flags = r.flags_raised
+    t_lock = float(r["t"][on][0]) if on.any() else math.nan
+    i_pk = float(np.max(np.abs(np.stack([r["i_a"], r["i_b"], r["i_c"]]))))
+    settled = on & (r["t"] >= t_lock + 2 * st["lock_time"]) if on.any() else on
+    err = np.degrees(np.abs(np.angle(np.exp(1j * (r["theta"] - r["theta_e"])))))[settled]
+    return {"ok": float(ok), "first": float(ok and "DESYNC" not in flags and "OVERCURRENT" not in flags),
+            "t_lock": t_lock, "caught": float(t_lock <= t_zc + st["if_align"]), "i_peak": i_pk / i_sN(d),
+            "err": float(np.max(err)) if err.size else math.nan, "flags": flags}
+
+
+def catch_map(names: list[str], speeds: tuple[float, ...] = CATCH_SPEEDS, kinds: tuple[str, ...] = CATCH_LOADS,
+              dump: str | None = None, **options: object) -> None:
+    """Print the flying start's success over the rotor's initial speed x load, for the catch with the alignment's
+    current on and at zero current (``catch_zero_current`` False, True), four initial angles each
+    (:func:`catch_case`).
+
+    One line per drive, load and speed: per catch mode the starts that succeeded on their first attempt out of the
+    angles (in brackets those that succeeded only after a restart), how many were caught in the alignment, the time
+    to the sine mode (s, range), the peak phase current (``I_s,N``, largest over the angles), the worst angle
+    error after the lock (deg) and the flags of the failures. Then the totals per catch mode, and the cells where one
+    mode succeeded more often than the other. ``dump``: each start written to FILE as a line ``drive load w0 angle
+    zc first ok t_lock i_peak``.
+    """
+    print(f"\n{'drive':16s} {'load':7s} {'w0/O_0':>6s} {'w0/w_on':>7s} | {'current on: ok':>14s} {'caught':>6s} "
+          f"{'t_lock s':>11s} {'i_pk':>5s} {'err':>5s} | {'zero current: ok':>16s} {'caught':>6s} {'t_lock s':>11s} "
+          f"{'i_pk':>5s} {'err':>5s} | flags of the failures (on; zero)")
+    tot = {False: [0, 0, 0], True: [0, 0, 0]}
+    diff: list[str] = []
+    for name in names:
+        d = bl.load(name)
+        w_on = bl.Sine(angle="observer").handoff(d)
+        for kind in kinds:
+            for w0 in speeds:
+                cells, fails, firsts = [], [], {}
+                for zc in (False, True):
+                    runs = [catch_case(d, w0, kind, th, zc, **options) for th in STARTUP_ANGLES]
+                    if dump:
+                        with open(dump, "a", encoding="utf-8") as f:
+                            for th, r in zip(STARTUP_ANGLES, runs, strict=True):
+                                f.write(f"{name} {kind} {w0:g} {th:.4f} {int(zc)} {int(r['first'])} {int(r['ok'])} "
+                                        f"{r['t_lock']:.6f} {r['i_peak']:.4f}\n")
+                    n1 = sum(int(r["first"]) for r in runs)
+                    n_ok = sum(int(r["ok"]) for r in runs)
+                    tot[zc][0] += n1
+                    tot[zc][1] += n_ok
+                    tot[zc][2] += len(runs)
+                    firsts[zc] = n1
+                    tl = [r["t_lock"] for r in runs if r["ok"]]
+                    tls = f"{min(tl):.3f}-{max(tl):.3f}" if tl else "-"
+                    errs = [r["err"] for r in runs if r["ok"]]
+                    oks = f"{n1}/{len(runs)}" + (f" ({n_ok - n1})" if n_ok > n1 else "")
+                    cells.append(f"{oks:>{14 if not zc else 16}s} {sum(int(r['caught']) for r in runs):6d} {tls:>11s} "
+                                 f"{max(r['i_peak'] for r in runs):5.2f} "
+                                 f"{(max(errs) if errs else math.nan):5.1f}")
+                    fails.append(",".join(sorted({r["flags"] for r in runs if not r["first"]})) or "-")
+                if firsts[False] != firsts[True]:
+                    diff.append(f"{name} {kind} {w0:g}: current on {firsts[False]}, zero current {firsts[True]}")
+                print(f"{name:16s} {kind:7s} {w0:6.2f} {w0 * d.Omega_0 / w_on:7.2f} | {cells[0]} | {cells[1]} | "
+                      f"{fails[0]}; {fails[1]}", flush=True)
+    for zc in (False, True):
+        a = tot[zc]
+        print(f"catch_zero_current={zc}: first attempt {a[0]} / {a[2]}, at the end {a[1]} / {a[2]}")
+    print("cells that differ (first attempt):" + ("".join(f"\n  {x}" for x in diff) if diff else " none"))
 
 
 def commissioning(names: list[str]) -> None:
@@ -350,6 +474,38 @@ def commissioning_deadtime(names: list[str], fractions: tuple[float, ...] = (0.0
             print(f"{name:16s} {100 * frac:6.1f}% " + " ".join(f"{c:>22s}" for c in cells), flush=True)
 
 
+def commissioning_deadtime_noise(names: list[str], fractions: tuple[float, ...] = (0.0, 0.01),
+                                 noises: tuple[float, ...] = (0.002, 0.01), seeds: int = 8) -> None:
+    """Print, over ``seeds`` noise seeds, how many runs end DONE and the rms errors of R + R_on, L and psi_f (%), L's
+    worst, and the mean time: a dead time (fractions of the PWM period, 0.7-V diodes, R_on = 0.2 R; 0: the drive's
+    own inverter) with current noise (fractions of ``I_fs = 2 I_N``, a 12-bit ADC over ``+-I_fs``)."""
+    print(f"\n{'drive':16s} {'t_dead':>6s} {'noise':>6s} {'DONE':>5s} {'R rms %':>8s} {'L rms %':>8s} {'L worst':>8s} "
+          f"{'psi rms %':>9s} {'t mean s':>8s}")
+    for name in names:
+        d = bl.load(name)
+        k1 = bl.control.sine.fundamental_k1(d)
+        fs = 2.0 * d.motor.I_N
+        for frac in fractions:
+            inv = d.inverter if frac == 0.0 else dataclasses.replace(d.inverter, t_dead=frac / d.inverter.f_pwm,
+                                                                     V_f=0.7, R_on=0.2 * d.motor.R)
+            base = dataclasses.replace(d, inverter=inv)
+            for noise in noises:
+                errs: list[tuple[float, float, float]] = []
+                times = []
+                for seed in range(1, seeds + 1):
+                    plant = base.replace(sensors__current_noise=noise * fs, sensors__current_lsb=2.0 * fs / 2**12,
+                                         sensors__seed=seed)
+                    e = bl.commission(plant)
+                    times.append(e.t_test)
+                    if e.ok:
+                        errs.append((e.R / r_total(plant) - 1, e.L / d.motor.L - 1, e.psi_f * d.motor.p / k1 - 1))
+                a = np.array(errs).reshape(-1, 3)
+                rms = 100 * np.sqrt(np.mean(np.square(a), axis=0)) if len(a) else np.full(3, math.nan)
+                worst = 100 * a[np.argmax(np.abs(a[:, 1])), 1] if len(a) else math.nan
+                print(f"{name:16s} {100 * frac:5.1f}% {100 * noise:5.1f}% {len(a):5d} {rms[0]:8.3f} {rms[1]:8.3f} "
+                      f"{worst:8.3f} {rms[2]:9.3f} {np.mean(times):8.3f}", flush=True)
+
+
 def main(names: list[str]) -> None:
     print(f"{'drive':16s} {'obs':8s} {'speed':>6s} {'rms deg':>8s} {'worst':>8s} {'sine':>5s} {'tau':>9s} "
           f"{'tau enc':>9s} {'eff':>6s} {'eff enc':>7s}")
@@ -375,37 +531,75 @@ def main(names: list[str]) -> None:
                       f"{a['tau']:9.4g} {enc['tau']:9.4g} {a['eff']:6.3f} {enc['eff']:7.3f}")
 
 
+ALL_DRIVES = ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv", "f60prov-2550kv"]
+
+#: The parts that run alone: option -> (the function run on the drives given, default every catalog drive; help).
+PARTS: dict[str, tuple[Callable[[list[str]], None], str]] = {
+    "--sensors": (sensor_errors, "current-sensor offset and noise, the controller unaware (default: three drives)"),
+    "--commission-sensors": (commissioning_sensors, "commissioning with offsets, noise and a 12-bit ADC"),
+    "--commission-deadtime": (commissioning_deadtime, "commissioning's flux linkage with a dead time"),
+    "--commission-deadtime-noise": (commissioning_deadtime_noise, "dead time with current noise, eight seeds"),
+    "--estimates": (estimates, "each wrong parameter without and with the controller's own estimates"),
+    "--sensitivity": (sensitivity, "the sensitivity with the alignment's resistance estimate off and on"),
+    "--catch": (catch_map, "the flying-start map (both catch modes)"),
+    "--startup": (startup_map, "the standstill start-up map (default: three drives)"),
+}
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    """Read the command line (the module's docstring says what each part measures)."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("drives", nargs="*", metavar="DRIVE", help="built-in drive names or motor files")
+    part = ap.add_mutually_exclusive_group()
+    for opt, (_, text) in PARTS.items():
+        part.add_argument(opt, dest="part", action="store_const", const=opt, help=text)
+    ap.add_argument("--kinds", help="--startup: load kinds, comma-separated (passive, brake, active)")
+    ap.add_argument("--inertias", help="--startup: inertias in multiples of the drive's, comma-separated")
+    ap.add_argument("--loads", help="--startup: loads in fractions of the I/f torque, comma-separated")
+    ap.add_argument("--dump", metavar="FILE", help="--startup, --catch: write each start to FILE")
+    for flag, key in (("r-estimate", "if_r_estimate"), ("zc-catch", "catch_zero_current")):
+        ap.add_argument(f"--{flag}", dest=key, action="store_const", const=True,
+                        help=f"--startup: Sine({key}=True)")
+        ap.add_argument(f"--no-{flag}", dest=key, action="store_const", const=False,
+                        help=f"--startup: Sine({key}=False)")
+    args = ap.parse_args(argv)
+    startup_only = [o for o in ("kinds", "inertias", "loads", "if_r_estimate", "catch_zero_current")
+                    if getattr(args, o) is not None]
+    if startup_only and args.part != "--startup":
+        ap.error(f"--{startup_only[0].replace('_', '-')} needs --startup")
+    if args.dump is not None and args.part not in ("--startup", "--catch"):
+        ap.error("--dump needs --startup or --catch")
+    return args
+
+
+def run(args: argparse.Namespace) -> None:
+    """Run the part the command line asks for (all of the first four without one)."""
+    drives = args.drives or (ALL_DRIVES if args.part not in ("--sensors", "--startup") else ALL_DRIVES[:3])
+    if args.part is None:
+        main(drives)
+        sensitivity(drives)
+        commissioning(drives)
+        startup_map(drives[:3])
+    elif args.part == "--sensitivity":
+        for r_est in (False, True):
+            sensitivity(drives, if_r_estimate=r_est)
+    elif args.part == "--catch":
+        catch_map(drives, dump=args.dump)
+    elif args.part == "--startup":
+        opts = {k: getattr(args, k) for k in ("if_r_estimate", "catch_zero_current") if getattr(args, k) is not None}
+        startup_map(drives,
+                    kinds=tuple(args.kinds.split(",")) if args.kinds else STARTUP_KINDS,
+                    inertias=tuple(float(x) for x in args.inertias.split(",")) if args.inertias else STARTUP_J,
+                    loads=tuple(float(x) for x in args.loads.split(",")) if args.loads else STARTUP_LOADS,
+                    dump=args.dump, **opts)
+    else:
+        PARTS[args.part][0](drives)
+
+
 if __name__ == "__main__":
-    if len(sys.argv) > 1 and sys.argv[1] == "--sensors":
-        sensor_errors(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v"])
-        raise SystemExit(0)
-    if len(sys.argv) > 1 and sys.argv[1] == "--commission-sensors":
-        commissioning_sensors(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv",
-                                               "f60prov-2550kv"])
-        raise SystemExit(0)
-    if len(sys.argv) > 1 and sys.argv[1] == "--commission-deadtime":
-        commissioning_deadtime(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv",
-                                                "f60prov-2550kv"])
-        raise SystemExit(0)
-    if len(sys.argv) > 1 and sys.argv[1] == "--estimates":
-        estimates(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv",
-                                   "f60prov-2550kv"])
-        raise SystemExit(0)
-    if len(sys.argv) > 1 and sys.argv[1] == "--startup":
-        args, sel = sys.argv[2:], {}
-        for opt in ("--kinds", "--inertias", "--loads", "--dump"):
-            if opt in args:
-                k = args.index(opt)
-                sel[opt] = args[k + 1].split(",")
-                del args[k:k + 2]
-        startup_map(args or ["htm-48v", "servo-2k2", "outrunner-24v"],
-                    kinds=tuple(sel.get("--kinds", STARTUP_KINDS)),
-                    inertias=tuple(float(x) for x in sel.get("--inertias", STARTUP_J)),
-                    loads=tuple(float(x) for x in sel.get("--loads", STARTUP_LOADS)),
-                    dump=sel["--dump"][0] if "--dump" in sel else None)
-        raise SystemExit(0)
-    drives = sys.argv[1:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv", "f60prov-2550kv"]
-    main(drives)
-    sensitivity(drives)
-    commissioning(drives)
-    startup_map(drives[:3])
+    try:
+        run(parse_args(sys.argv[1:]))
+    except BldclabError as exc:
+        print(f"sensorless_sine.py: error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None

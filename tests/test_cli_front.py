@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import shlex
 import subprocess
@@ -364,6 +365,8 @@ def test_template_examples_are_the_drives_own_and_load_uncommented(tmp_path: Pat
         assert d.motor.Omega_N == pytest.approx(base.motor.Omega_nominal, rel=1e-3)
     if base.inverter.E_on == 0:  # the energies' test point is this drive's bus and rated current
         assert (d.inverter.V_test, d.inverter.I_test) == (base.inverter.V_dc, pytest.approx(base.motor.I_N, rel=1e-5))
+    if math.isinf(base.sensors.current_full_scale):  # the current sensors' full scale: twice the rated current
+        assert d.sensors.current_full_scale == pytest.approx(2.0 * base.motor.I_N, rel=1e-3)
 
 
 def re_key(text: str) -> bool:

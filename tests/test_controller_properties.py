@@ -6,6 +6,7 @@ mode, duties finite and in [0, 1], diagnostics finite, and the safe state where 
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -14,6 +15,7 @@ from hypothesis import strategies as st
 
 import bldclab as bl
 from bldclab._core import core
+from bldclab.errors import PlausibilityWarning
 
 FLAG_SAFE = bl.flag("SAFE")
 # a calibrated Hall table (edges up to 25 electrical degrees off nominal) for the Hall options
@@ -125,3 +127,23 @@ def check_outputs(name: str, motor: str, steps: list[dict]) -> None:
         if must_stop:
             assert int(out["flags"][0]) & FLAG_SAFE, (name, r)
             assert np.all(modes == 0) and has_at == 0, (name, r)
+
+
+@pytest.mark.parametrize("name", ["sixstep", "sine", "lu", "sixstep-pi", "bemf", "hallcal-ol"])
+def test_clipped_current_readings_in_closed_loop(name: str) -> None:
+    """Current sensors whose full scale (``Sensors.current_full_scale``) is a quarter of the current asked for: the
+    readings saturate and the controller, which cannot see the current above it, drives the true current up to the
+    inverter's hardware trip (the fate of a firmware whose over-current check reads a saturated ADC); against the
+    plant it still emits finite duties in [0, 1] on every sample (the readings stay finite: clipping is within what
+    the random inputs above cover, here in closed loop)."""
+    d = bl.load("htm-48v")
+    fs = 0.25 * d.motor.I_N
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PlausibilityWarning)  # the hardware trip, said
+        r = bl.simulate(d.replace(sensors__current_full_scale=fs), CONTROLS[name],
+                        bl.Scenario(duration=0.05, speed=0.3 * d.Omega_0, ref=d.motor.I_N, trace_every=1))
+    for leg in "abc":
+        duty = np.asarray(r[f"duty_{leg}"])
+        assert np.all(np.isfinite(duty)) and np.all((duty >= 0) & (duty <= 1)), name
+    i_true = np.abs(np.stack([np.asarray(r[f"i_{x}"]) for x in "abc"]))
+    assert np.max(i_true) > 2.0 * fs, name  # the true current well beyond the full scale

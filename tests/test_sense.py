@@ -62,6 +62,9 @@ def test_motor_file_round_trip(tmp_path: object) -> None:
     assert back.sensors == d.sensors
     # the defaults are not written: files without sensing stay as they were
     assert "bemf" not in HTM.to_toml()
+    assert "current_full_scale" not in HTM.to_toml()
+    fs = HTM.replace(sensors__current_full_scale=100.0)
+    assert bl.Drive.from_dict(__import__("tomllib").loads(fs.to_toml())).sensors.current_full_scale == 100.0
 
 
 def test_motor_file_units() -> None:
@@ -80,6 +83,11 @@ def test_motor_file_units() -> None:
     ("bemf", "yes", "sensors.bemf", "true or false"),
     ("bemf_hysteresis", float("nan"), "sensors.bemf_hysteresis", ""),
     ("bemf_adc_max", "0 V", "sensors.bemf_adc_max", "> 0"),
+    ("current_full_scale", "0 A", "sensors.current_full_scale", "> 0"),
+    ("current_full_scale", "-40 A", "sensors.current_full_scale", "> 0"),
+    ("current_full_scale", float("nan"), "sensors.current_full_scale", ""),
+    ("current_full_scale", "40 V", "sensors.current_full_scale", "unit"),
+    ("current_full_scale", "40 A", None, None),
     ("bemf_adc_at", "40 us", "sensors.bemf_adc_at", "T/2"),
     ("bemf_delay", "1 ms", None, None),  # long but valid
     ("bemf_filter", "1 us", "sensors.bemf_filter", "unknown field"),

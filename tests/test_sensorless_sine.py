@@ -647,3 +647,98 @@ def test_wrong_parameters_start_with_the_estimates(name: str, wrong: dict[str, f
     with pytest.raises(BldclabError) as e:
         bl.Sine(angle="observer", if_flux_estimate=1)  # type: ignore[arg-type]
     assert e.value.field == "control.if_flux_estimate"
+
+
+@pytest.mark.parametrize("zc", [False, True])
+def test_catch_of_a_backward_rotor_an_active_load_accelerates(zc: bool) -> None:
+    """servo-2k2 turning backwards at 0.5 Omega_0 when the drive starts, an active load of half the I/f torque
+    pushing it on backwards (``benchmarks/sensorless_sine.py --catch``): the observer catches it in the alignment
+    and the sine mode brakes it with the whole torque limit through zero speed (the hand-back to the I/f ramp) to
+    the reference. The sine mode ends a start (START_FAIL) when the speed against the reference rises above the one
+    at the catch; that speed was the observer's speed low-passed over ``lock_time``, which lags a rotor the load
+    still accelerates (at zero current, ``catch_zero_current``, by 13 rad/s here): the low-pass went on rising after
+    the catch, past the margin, and every start failed, at every angle, again and again. Now the larger of it and
+    the observer's own speed: no restart, the reference reached (5 %), with the alignment's current on or off."""
+    d = bl.load("servo-2k2")
+    ctl = bl.Sine(angle="observer", speed_loop=True, catch_zero_current=zc)
+    st = ctl.sensorless_settings(d)
+    tau_l = 0.5 * 1.5 * fundamental_k1(d) * st["if_current"]
+    w = 0.3 * d.Omega_0
+    dur = 3 * st["lock_time"] + st["if_align"] + d.mechanics.J * 0.8 * d.Omega_0 / (ctl.torque_limit(d) - tau_l) \
+        + d.motor.p * ctl.handoff(d) / st["if_accel"] + 0.5
+    r = simulate(d, ctl, Scenario(duration=dur, omega_ref=w, omega0=-0.5 * d.Omega_0, theta0=1.0, load_torque=tau_l,
+                                  trace_every=8), estimate=d)
+    on = r["mode"] > 0.5
+    assert r["t"][int(np.argmax(on))] < 3 * st["lock_time"] + 0.5 * st["if_align"], "caught in the alignment"
+    assert "DESYNC" not in r.flags_raised and "START_FAIL" not in r.flags_raised, r.flags_raised
+    assert "STALL" in r.flags_raised  # braked through zero speed by the hand-back
+    assert r["mode"][-1] == 1
+    assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
+
+
+def test_catch_at_zero_current_is_not_the_default() -> None:
+    """Why ``catch_zero_current`` stays off by default (``benchmarks/sensorless_sine.py --catch``, docs/sensorless-
+    sine.md, "Flying-start map"). Its gain: htm-48v turning at 0.2 Omega_0 (2.2 times the hand-off speed), no load,
+    is caught at zero current within its 3 lock times, where the alignment's current, on from the first sample,
+    holds the rotor in its well (the rotor's energy is far below the well's) and the start goes the whole way
+    through the alignment and the I/f ramp (a hand-off after the alignment's end). Its cost: the same drive turning
+    at its no-load speed Omega_0, where the back-EMF takes the whole bus: at zero current the current loops run in
+    the frame of an observer still pulling in from rest, with no voltage to spare, and the current reaches the
+    over-current trip (OVERCURRENT, a restart); the catch with the current on takes it at the first attempt and
+    brakes it to the reference."""
+    d = bl.load("htm-48v")
+    assert not bl.Sine(angle="observer").catch_zero_current
+    w = 0.3 * d.Omega_0
+
+    def run(zc: bool, w0: float) -> tuple[bl.sim.SimResult, float, dict[str, float]]:
+        ctl = bl.Sine(angle="observer", speed_loop=True, catch_zero_current=zc)
+        st = ctl.sensorless_settings(d)
+        dur = 3 * st["lock_time"] + st["if_align"] + d.motor.p * ctl.handoff(d) / st["if_accel"] \
+            + 2 * st["lock_time"] + d.mechanics.J * abs(w0 - 0.3) * d.Omega_0 / (0.5 * ctl.torque_limit(d)) + 0.3
+        r = simulate(d, ctl, Scenario(duration=dur, omega_ref=w, omega0=w0 * d.Omega_0, theta0=math.pi,
+                                      trace_every=4))
+        on = r["mode"] > 0.5
+        assert on.any()
+        return r, float(r["t"][int(np.argmax(on))]), st
+
+    for zc in (False, True):  # the gain
+        r, t_catch, st = run(zc, 0.2)
+        assert "DESYNC" not in r.flags_raised
+        assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
+        if zc:
+            assert t_catch < 3 * st["lock_time"]
+        else:
+            assert t_catch > st["if_align"]
+    r, _, _ = run(False, 1.0)  # the cost
+    assert "OVERCURRENT" not in r.flags_raised and "DESYNC" not in r.flags_raised
+    assert r["mode"][-1] == 1
+    assert r["omega_m"][-1] == pytest.approx(w, rel=0.05)
+    r, _, _ = run(True, 1.0)
+    assert "OVERCURRENT" in r.flags_raised
+
+
+def test_resistance_estimate_is_not_the_default() -> None:
+    """Why ``if_r_estimate`` stays off by default (docs/sensorless-sine.md, "The resistance measured at the
+    alignment"): it assumes the rotor at rest over the alignment's last quarter, where the voltage is ``R i``. An
+    active load (0.75 of the I/f torque from t = 0, within the design bound 0.90) on mn3110-780kv, the rotor next
+    to the alignment's unstable point: the load turns the rotor through the window (-26 to -64 rad/s), its
+    back-EMF enters ``sum u.i``, and the start configured from the true drive with the estimate on ends in a
+    restart (START_FAIL) and is not at the reference when the start-up map's run ends; without it the start hands
+    over on its first attempt. On the three drives of the start-up map measured with it (htm-48v, lu-4kw,
+    mn3110-780kv) it lost 7 brake and 17 active starts within the bound and none without it (184 of 184 each)."""
+    d = bl.load("mn3110-780kv")
+    assert not bl.Sine(angle="observer").if_r_estimate
+    theta0 = 1.5 * math.pi + 0.05
+    r, _, _ = map_start("mn3110-780kv", "active", 1.0, 0.75, theta0)
+    assert_started_first_time(r, 0.3 * d.Omega_0)
+    ctl = bl.Sine(angle="observer", speed_loop=True, if_r_estimate=True)
+    st = ctl.sensorless_settings(d)
+    tau_if = 1.5 * fundamental_k1(d) * st["if_current"]
+    w = 0.3 * d.Omega_0
+    t_ramp = d.motor.p * ctl.handoff(d) / st["if_accel_min"]
+    t_acc = d.mechanics.J * w / max(ctl.torque_limit(d) - 0.75 * tau_if, 0.1 * ctl.torque_limit(d))
+    dur = 2 * (st["if_align"] + t_ramp + 4 * st["lock_time"]) + t_acc + 0.5  # map_start's run
+    r = simulate(d, ctl, Scenario(duration=dur, omega_ref=w, theta0=theta0, trace_every=8,
+                                  load_torque=0.75 * tau_if), estimate=d)
+    assert "START_FAIL" in r.flags_raised and "DESYNC" in r.flags_raised
+    assert not (r["mode"][-1] == 1 and r["omega_m"][-1] == pytest.approx(w, rel=0.05))

@@ -114,12 +114,13 @@ static inline void htm_sine_observer(bc_sine_params *p)
     p->if_psi_est = 1; /* the zero-current flux reading, Sine()'s default */
 }
 
-/* Self-commissioning on htm-48v: the record bldclab.control.Commission() builds for the drive. */
+/* Self-commissioning on htm-48v: the record bldclab.control.Commission() builds for the drive, its current sensors'
+ * full scale 2 I_N (Sensors.current_full_scale = 100 A; the catalog drive has none): the CLIPPED check runs. */
 #define HTM_COMMISSION_PARAMS                                                                                     \
     {.ts = HTM_TS, .kp = 0.09425f, .ki = 62.83f, .i_test = 28.87f, .t_ramp = 0.3631f, .t_settle = 0.2595f,        \
-     .t_window = 0.2420f, .v_pulse = 1.516f, .n_pulse = 8, .pulse_len = 10, .n_pulse_max = 500, .tol_noise = 0.01f,  \
+     .t_window = 0.2420f, .v_pulse = 3.031f, .n_pulse = 8, .pulse_len = 10, .n_pulse_max = 500, .tol_noise = 0.01f,  \
      .t_offset = 0.02f, .i_if = 28.87f, .if_accel = 167.0f,                                                       \
      .w_spin = 160.8f, .t_spin = 0.6051f, .psi_min = 0.01216f, .tol_move = 0.05f, .tol_follow = 0.3f,             \
-     .k_damp = 11.43f, .i_max = 100.0f, .v_max = 96.0f}
+     .k_damp = 11.43f, .i_max = 100.0f, .v_max = 96.0f, .i_fs = 100.0f}
 
 #endif /* BC_FW_PARAMS_H */

@@ -970,7 +970,9 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             s->mode = BC_SINE_MODE_SINE;
             s->n_lock = s->sl_t = s->n_catch = 0.0f;
             s->caught = 1; /* once a start */
-            s->w_rev = fabsf(s->omega_f);
+            /* the speed the braked rotor must not exceed: the observer's own, where the low-pass lags a rotor an
+             * active load still accelerates (it goes on rising towards the speed at the catch) */
+            s->w_rev = fmaxf(fabsf(s->omega_f), fabsf(o.omega_e));
         }
     }
     out->diag[5] = o.theta;

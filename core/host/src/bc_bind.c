@@ -71,6 +71,7 @@ static const bc_field_desc FIELDS[] = {
     F(bc_sensor_params, i_offset, "f8"),
     F(bc_sensor_params, i_noise, "f8"),
     F(bc_sensor_params, i_lsb, "f8"),
+    F(bc_sensor_params, i_fs, "f8"),
     F(bc_sensor_params, v_gain, "f8"),
     F(bc_sensor_params, v_offset, "f8"),
     F(bc_sensor_params, v_noise, "f8"),

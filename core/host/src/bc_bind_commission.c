@@ -18,7 +18,7 @@ static const bc_field_desc COMM_FIELDS[] = {
     F(bc_commission_params, tol_follow, "f4"), F(bc_commission_params, k_damp, "f4"),
     F(bc_commission_params, i_max, "f4"),
     F(bc_commission_params, v_max, "f4"),     F(bc_commission_params, t_dead, "f4"),
-    F(bc_commission_params, v_diode, "f4"),
+    F(bc_commission_params, v_diode, "f4"),   F(bc_commission_params, i_fs, "f4"),
 };
 static const bc_struct_desc COMM_STRUCTS[] = {BC_BIND_STRUCT(bc_commission_params),
                                               BC_BIND_STRUCT(bc_commission_state)};
@@ -38,6 +38,7 @@ static const bc_const_desc COMM_CONSTS[] = {
     BC_BIND_CONST("commission_status", BC_COMM_NOT_FOLLOWING),
     BC_BIND_CONST("commission_status", BC_COMM_FAULT),
     BC_BIND_CONST("commission_status", BC_COMM_NOISY),
+    BC_BIND_CONST("commission_status", BC_COMM_CLIPPED),
     BC_BIND_CONST("commission_phase", BC_COMM_PH_OFFSET),
     BC_BIND_CONST("commission_phase", BC_COMM_PH_ALIGN),
     BC_BIND_CONST("commission_phase", BC_COMM_PH_R_HI),

@@ -13,7 +13,7 @@ int bc_sensor_init(const bc_sensor_params *p, bc_sensor_state *s)
     for (int x = 0; x < 3; ++x) {
         if (!isfinite(p->i_gain[x]) || !isfinite(p->i_offset[x])) return BC_ERR_PARAM;
     }
-    if (!finite_nonneg(p->i_noise) || !finite_nonneg(p->i_lsb) || !isfinite(p->v_gain) || !isfinite(p->v_offset) ||
+    if (!finite_nonneg(p->i_noise) || !finite_nonneg(p->i_lsb) || !(p->i_fs >= 0.0) || !isfinite(p->v_gain) || !isfinite(p->v_offset) ||
         !finite_nonneg(p->v_noise) || !finite_nonneg(p->v_lsb) || !(isfinite(p->f_tick) && p->f_tick > 0.0))
         return BC_ERR_PARAM;
     for (int j = 0; j < BC_FAULT_MAX; ++j) {
@@ -61,6 +61,13 @@ static double normal(bc_sensor_state *s) { return bc_rng_normal(&s->rng, &s->has
 
 static double quantise(double v, double lsb) { return lsb > 0.0 ? lsb * floor(v / lsb + 0.5) : v; }
 
+/* the full scale: min(max(v, -fs), fs) for fs > 0 (NaN passes, as without a full scale) */
+static double clip(double v, double fs)
+{
+    if (!(fs > 0.0)) return v;
+    return v > fs ? fs : (v < -fs ? -fs : v);
+}
+
 /* floor(t f_tick) mod 2^32, in this file's own calls inlined (an exported function in a shared library is not) */
 static inline uint32_t tick_at(double f_tick, double t)
 {
@@ -89,7 +96,7 @@ void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_p
                 if (f->kind == BC_FAULT_CURRENT_OFFSET) v += f->value;
                 if (f->kind == BC_FAULT_CURRENT_LOSS) v = 0.0;
             }
-            in->i_abc[x] = (float)quantise(v, p->i_lsb);
+            in->i_abc[x] = (float)clip(quantise(v, p->i_lsb), p->i_fs);
         } else {
             in->i_abc[x] = 0.0f;
         }

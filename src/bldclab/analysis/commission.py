@@ -27,8 +27,9 @@ class Estimate:
     ----------
     status : str
         ``"DONE"``, or the failure: ``"ROTOR_MOVING"``, ``"NO_CURRENT"``, ``"SATURATED"``, ``"NOT_FOLLOWING"``,
-        ``"NOISY"`` (the current's noise leaves L imprecise), ``"FAULT"`` (``bc_commission.h``), or ``"UNFINISHED"``
-        (the run ended first).
+        ``"NOISY"`` (the current's noise leaves L imprecise), ``"FAULT"``, ``"CLIPPED"`` (a current reading at the
+        sensors' full scale, ``Sensors.current_full_scale``; ``bc_commission.h``), or ``"UNFINISHED"`` (the run
+        ended first).
     R : float
         Resistance in series with a phase, ``R + R_on`` (Ohm); 0 if not measured.
     L : float

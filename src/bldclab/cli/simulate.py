@@ -22,6 +22,8 @@ from ..control.sixstep import COMMUTATIONS as SIXSTEP_COMMUTATIONS
 from ..control.sixstep import REGULATIONS as SIXSTEP_REGULATIONS
 from ..control.user import UserControl
 from ..errors import BldclabError, PlausibilityError, PlausibilityWarning
+from ..model.catalog import load
+from ..model.motor import Drive
 from ..model.units import to_si
 from ..report import plots
 from ..sim import CHUNK, TRACE_LIMIT, Piecewise, Scenario, parse_profile, samples_of, simulate, trace_bytes, trace_rows
@@ -112,6 +114,9 @@ def configure_command(p: argparse.ArgumentParser) -> None:
                    help="write waveforms.png and .svg (phase currents, torque, back-EMFs; speed with "
                         "--mechanics), needs --out")
     p.add_argument("--format", choices=("table", "json"), default="table", help="terminal output")
+    p.add_argument("--estimate", metavar="MOTOR",
+                   help="the drive data the controller is configured from (built-in name or motor TOML file, e.g. "
+                        "the file `bldclab commission --out` writes); the plant stays MOTOR (default: MOTOR's own)")
     add_inverter_option(p)
 
 
@@ -277,6 +282,23 @@ def _check_options(args: argparse.Namespace) -> None:
             raise BldclabError(opt, f"must be an integer >= 1, got {v}")
 
 
+def _estimate(args: argparse.Namespace, drive: Drive) -> Drive | None:
+    """Return the drive of ``--estimate`` (the controller's data; its file's errors name the file), None if not given.
+
+    The pole pairs and the PWM frequency must be the plant's (the hardware, not estimates): checked here, before the
+    run, with the option named.
+    """
+    if args.estimate is None:
+        return None
+    est = load(args.estimate)
+    for field, mine, theirs in (("motor.p", est.motor.p, drive.motor.p),
+                                ("inverter.f_pwm", est.inverter.f_pwm, drive.inverter.f_pwm)):
+        if mine != theirs:
+            raise BldclabError("--estimate", f"{est.name}'s {field} is {mine:g}, the plant's {theirs:g}: they must "
+                               "be equal (the hardware, not an estimate)")
+    return est
+
+
 def _speed(text: str, drive: Any, option: str) -> float:
     """Read one speed (:func:`~bldclab.cli.common.parse_speed`: pu, rpm, rad/s), errors naming ``option``."""
     try:
@@ -392,6 +414,7 @@ def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab simulate``."""
     _check_options(args)
     drive = load_drive(args)
+    estimate = _estimate(args, drive)
     if is_library(args.control):
         ctl: Control = _user_control(args)
         ref, unit = (0.0 if args.ref is None else args.ref), (ctl.ref_meaning or "-")
@@ -417,7 +440,7 @@ def run_command(args: argparse.Namespace) -> int:
     with warnings.catch_warnings(record=True) as caught:  # shown after the run: a failed run's cause is in its error
         warnings.simplefilter("always", PlausibilityWarning)
         try:
-            res = simulate(drive, ctl, sc, progress=progress)
+            res = simulate(drive, ctl, sc, progress=progress, estimate=estimate)
         except PlausibilityError as exc:
             _show([w for w in caught if str(w.message) not in str(exc)])  # what the error leads with: not again
             raise
@@ -439,6 +462,7 @@ def run_command(args: argparse.Namespace) -> int:
         heading = f"reference {ref:.4g} {unit}"
     summary: dict[str, Any] = {
         "motor": drive.name, "control": args.control, **reference,
+        "estimate": None if estimate is None else estimate.name,
         "inverter": drive.inverter.model, "duration_s": sc.duration,
         "speed_rad_s": m.omega_mean, "speed_rpm": m.omega_mean * _RPM, "speed_pu": m.omega_mean / drive.Omega_0,
         "window_s": [m.t0, m.t1],
@@ -463,6 +487,8 @@ def run_command(args: argparse.Namespace) -> int:
         print(f"{drive.name}, {args.control} control, {heading}, "
               f"{'dynamometer' if sc.speed is not None else 'rotor dynamics'}, {drive.inverter.model} inverter")
         for key, value in summary.items():
+            if key == "estimate" and value is None:
+                continue
             if key in ("motor", "control", "reference", "reference_unit", "torque_limit_N_m", "inverter", "warnings",
                        "flags", "controller_flags", "controller_flags_bits"):  # warnings: stderr; flags: the summary
                 continue

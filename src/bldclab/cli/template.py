@@ -77,6 +77,7 @@ FIELDS: dict[tuple[str, str], str] = {
     ("sensors", "current_offset"): "A: offset of each current sensor (a, b, c)",
     ("sensors", "current_noise"): "A: standard deviation of the current measurement noise",
     ("sensors", "current_lsb"): "A: current quantisation step (0: none)",
+    ("sensors", "current_full_scale"): "A: full scale of the current measurement, a reading clips to +-it (> 0)",
     ("sensors", "vdc_gain"): "-: gain of the DC-bus voltage measurement",
     ("sensors", "vdc_offset"): "V: offset of the DC-bus voltage measurement",
     ("sensors", "vdc_noise"): "V: standard deviation of its noise",
@@ -133,6 +134,9 @@ def _optional(drive: Drive) -> dict[str, list[str]]:
                      '# E_rr = "0 uJ"  # diode reverse-recovery energy (or Q_rr = "50 nC")',
                      f'# V_test = "{inv.V_dc:g} V"  # test voltage of the energies (here V_dc)',
                      f'# I_test = "{m.I_N:g} A"  # test current of the energies (here I_N)'],
+        "sensors": [f'# current_full_scale = "{2.0 * m.I_N:.4g} A"  # full scale of the current measurement '
+                    "(optional, default none): a reading clips to +-it, as a shunt amplifier and its ADC saturate "
+                    "(here 2 I_N)"],
     }
 
 

@@ -122,8 +122,11 @@ class Sine(Control):
         The observers use the resistance the alignment measures (``sum u.i / sum i.i`` over its last quarter, the
         rotor at rest: the voltage is ``R i``), not the drive data's; kept from the ramp until the next alignment,
         the configured R where the measurement is implausible (outside ``[R/4, 4 R]``). A wrong R biases the
-        observer most at low speed, where the load-adaptive ramp reads it. Default ``False`` (the drive data's R);
-        measured on the catalog drives to 0.002-2 % (docs/sensorless-sine.md).
+        observer most at low speed, where the load-adaptive ramp reads it. Default ``False`` (the drive data's R):
+        measured on the catalog drives to 0.002-2 % with the rotor at rest, it mends R off by 50 % on every catalog
+        drive, but a rotor that moves in the window (an active load, a heavy rotor's swing) biases it and the
+        start-up map loses starts within its design bound (docs/sensorless-sine.md, "The resistance measured at the
+        alignment").
     if_flux_estimate : bool
         The flux observer's flux linkage read at zero current: when, at the top of the I/f ramp, the observer is
         consistent (tracking error and speed) but its flux is off the configured ``psi_f`` by more than half the lock
@@ -141,7 +144,10 @@ class Sine(Control):
         loops in the observer's frame hold ``i = 0`` (with the back-EMF feed-forward), so that the voltage is the
         back-EMF of a rotor already turning and the observer locks on it without the alignment current's torque
         pulsating on the slipping rotor (a flying start); no catch in that time, the alignment as usual. Default
-        ``False`` (the catch with the alignment's current on; docs/sensorless-sine.md, "Catch").
+        ``False`` (the catch with the alignment's current on): on the flying-start map it catches rotors at about
+        twice the hand-off speed that the alignment's current holds, but at the no-load speed, with no voltage to
+        spare while the observer pulls in, it can trip the over-current guard (docs/sensorless-sine.md, "Catch",
+        "Flying-start map").
     lock_tolerance : float
         Band of the lock criterion (-), in (0, 1): the observer's flux within it of ``psi_f`` (relative) and its
         tracking error within it (rad) for the hand-off; its flux out of it too long is a lost lock.

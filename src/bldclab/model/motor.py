@@ -594,6 +594,10 @@ class Sensors:
         Standard deviation of white measurement noise (A).
     current_lsb : float
         Quantisation step (A), 0 for none.
+    current_full_scale : float
+        Full scale of the current measurement (A), > 0: a reading (after gain, offset, noise and quantisation) clips
+        to ``[-current_full_scale, current_full_scale]``, as a shunt amplifier and its ADC saturate; ``inf`` (the
+        default) for none.
     vdc_gain, vdc_offset, vdc_noise, vdc_lsb : float
         Same for the DC-bus voltage (-, V, V, V).
     hall_error : tuple of float
@@ -646,6 +650,7 @@ class Sensors:
     current_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
     current_noise: float = 0.0
     current_lsb: float = 0.0
+    current_full_scale: float = math.inf
     vdc_gain: float = 1.0
     vdc_offset: float = 0.0
     vdc_noise: float = 0.0
@@ -695,6 +700,10 @@ class Sensors:
             object.__setattr__(self, name, _per_sensor(name, getattr(self, name), hi))
         for name in ("current_noise", "current_lsb", "vdc_noise", "vdc_lsb"):
             check_number(name, getattr(self, name), lo=0.0)
+        fs = self.current_full_scale
+        if isinstance(fs, bool) or not isinstance(fs, int | float | np.floating) or math.isnan(fs) or not fs > 0.0:
+            raise BldclabError("current_full_scale", f"must be a number > 0 (inf for no clipping), got {fs!r}")
+        object.__setattr__(self, "current_full_scale", float(fs))
         check_number("vdc_gain", self.vdc_gain)
         check_number("vdc_offset", self.vdc_offset)
         check_number("f_tick", self.f_tick, lo=1e3, hi=1e10)
@@ -1009,7 +1018,7 @@ def _drive_from_dict(data: Mapping[str, Any], default_name: str) -> Drive:
                 if not isinstance(raw, list):
                     raise BldclabError(ss.name(key), "expected a list of three values (a, b, c)")
                 kw[key] = tuple(to_si(v, dim, f"{ss.name(key)}[{j}]") for j, v in enumerate(raw))
-        for key, dim in (("current_noise", "current"), ("current_lsb", "current"),
+        for key, dim in (("current_noise", "current"), ("current_lsb", "current"), ("current_full_scale", "current"),
                          ("vdc_gain", "dimensionless"),
                          ("vdc_offset", "voltage"), ("vdc_noise", "voltage"), ("vdc_lsb", "voltage"),
                          ("f_tick", "frequency")):
@@ -1151,6 +1160,8 @@ def _drive_to_toml(d: Drive) -> str:
             del sen[key]  # no hysteresis / filter (the default): written as before they existed
         else:
             sen[key] = v[0] if v[0] == v[1] == v[2] else list(v)
+    if math.isinf(sen["current_full_scale"]):
+        del sen["current_full_scale"]  # no full scale (the default): written as before it existed
     defaults = Sensors()
     for key in Sensors.BEMF_FIELDS:
         if sen[key] == getattr(defaults, key):

@@ -136,6 +136,7 @@ PARAMETERS: dict[str, tuple[tuple[str, str, str], ...]] = {
         ("current_offset", "current sensor offsets a, b, c", "A"),
         ("current_noise", "current noise (standard deviation)", "A"),
         ("current_lsb", "current quantisation step", "A"),
+        ("current_full_scale", "current measurement full scale", "A"),
         ("vdc_gain", "DC bus sensor gain", "-"),
         ("vdc_offset", "DC bus sensor offset", "V"),
         ("vdc_noise", "DC bus noise (standard deviation)", "V"),

@@ -545,6 +545,7 @@ def _sensor_params(drive: Drive) -> np.ndarray:
     rec["i_offset"] = s.current_offset
     rec["i_noise"] = s.current_noise
     rec["i_lsb"] = s.current_lsb
+    rec["i_fs"] = s.current_full_scale
     rec["v_gain"] = s.vdc_gain
     rec["v_offset"] = s.vdc_offset
     rec["v_noise"] = s.vdc_noise

@@ -45,7 +45,9 @@
  *                 R = (V_2 - V_1) / (I_2 - I_1)          (the resistance in series with a phase: R + R_on)
  *
  *  4. L       n_pulse pairs of voltage pulses on alpha, +v_pulse then -v_pulse for pulse_len samples each, added to
- *             the PIs' output at I_1 (held, the PIs paused), then 2 samples of that output alone. Over the pulses,
+ *             the PIs' output at I_1 (held, the PIs paused), then 2 samples of that output alone (bldclab's
+ *             Commission sizes them: a current step of half the test current, the voltage at least five times the
+ *             dead time's error (v_dc + 2 v_diode) t_dead / (2 ts), shorter pulses where needed). Over the pulses,
  *             the sign s of each:
  *
  *                 L = sum s (u_alpha - V_1 - R ((i_k-1 + i_k)/2 - I_1)) T_s / sum s (i_k - i_k-1)
@@ -53,7 +55,8 @@
  *             (u - V_1 - R (i - I_1) is what the inductance takes, the inverter's error cancelled by V_1 - R I_1).
  *             The voltage is the held command, free of noise; the current's noise enters the denominator at the
  *             sign changes, variance (8 P - 2) sig_i^2 after P pairs: while sig_i sqrt(8 P - 2) > tol_noise |sum s
- *             (i_k - i_k-1)| a pair is added, up to n_pulse_max pairs (then NOISY).
+ *             (i_k - i_k-1)| at the train's end a pair is added, up to n_pulse_max pairs (then NOISY if the
+ *             whole sums are still not precise).
  *             Then t_settle with the PIs at I_1 again.
  *  5. SPIN    I/f: i_ref rising to i_if over t_ramp with the vector still, then the vector turning, omega_phi
  *             ramped by if_accel to w_spin (electrical rad/s), t_settle there, then t_spin of the back-EMF in the frame of phi,
@@ -78,6 +81,9 @@
  *   NOISY          after n_pulse_max pulse pairs L's relative standard error from the current's noise is still
  *                  above tol_noise
  *   FAULT          the input guard (over-current, bus, fault pin, non-finite measurement; bc_guard.h)
+ *   CLIPPED        a measured phase current at the sensors' full scale i_fs (|i_x| >= i_fs, before the offsets
+ *                  are taken off): the shunt amplifier or the ADC saturated, the reading is not the current, and
+ *                  R, L or psi_f from it would be wrong (i_fs = 0: the full scale not given, no check)
  *
  * diag: 0 phase (BC_COMM_PH_*), 1 R (Ohm), 2 L (H), 3 psi_f (V s), 4 i' real (A), 5 i' imaginary (A), 6 phi (rad),
  * 7 status (BC_COMM_*).
@@ -99,6 +105,7 @@
 #define BC_COMM_NOT_FOLLOWING 5
 #define BC_COMM_FAULT 6
 #define BC_COMM_NOISY 7
+#define BC_COMM_CLIPPED 8
 
 #define BC_COMM_BLOCKS 8 /* blocks of an R window whose mean voltages show a turning rotor */
 
@@ -135,6 +142,7 @@ typedef struct {
     float v_max;      /* bound of the PI outputs and of a plausible bus, V (> 0) */
     float t_dead;     /* the inverter's dead time, s (0 <= t_dead < ts): the voltage taken back is corrected */
     float v_diode;    /* its diodes' forward drop, V (>= 0), in the same correction */
+    float i_fs;       /* the current sensors' full scale, A (> 0; 0: not given): a reading at it ends CLIPPED */
 } bc_commission_params;
 
 typedef struct {

@@ -303,7 +303,8 @@
  * the start's (reset at ALIGN and at a hand-off at the top). Without the flux in band, or with a zero reference:
  * BC_FLAG_STALL | BC_FLAG_DESYNC, WAIT. Turning against the reference (a reversal, a caught backward rotor) the
  * speed must fall: |omega_f| above w_rev + omega_off (w_rev: |omega_f| when it last turned with the reference,
- * or at the catch) means the load outweighs the current limit: BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT.
+ * or at the catch the larger of |omega_f| and the observer's |omega^|, which the low-pass lags on a rotor an active
+ * load accelerates) means the load outweighs the current limit: BC_FLAG_START_FAIL | BC_FLAG_DESYNC, WAIT.
  * diag in this mode: 0 i_d, 1 i_q (A, in the frame used: theta_if in the start mode), 2 i_q,ref (A), 3 v_d, 4 v_q
  * (V), 5 the observer's angle (rad), 6 its speed (electrical rad/s), 7 mode (0 start, 1 sine).
  *

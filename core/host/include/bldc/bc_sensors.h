@@ -1,7 +1,8 @@
 /*
  * bc_sensors.h - the measurement chain between the plant (double) and a controller (float).
  *
- *     i_meas,x = q(gain_x i_x + offset_x + n),   n ~ N(0, sigma_i^2),   q(v) = lsb round(v / lsb)  (lsb > 0)
+ *     i_meas,x = c(q(gain_x i_x + offset_x + n)),   n ~ N(0, sigma_i^2),   q(v) = lsb round(v / lsb)  (lsb > 0)
+ *     c(v)     = min(max(v, -i_fs), i_fs)      (the shunt amplifier's and ADC's full scale, i_fs > 0; 0: none)
  *     v_meas   = q(gain_v v_bus + offset_v + n), n ~ N(0, sigma_v^2)
  *     tick(t)  = floor(t f_tick) mod 2^32          (free-running capture timer)
  *
@@ -23,6 +24,7 @@ typedef struct {
     double i_offset[3];  /* A */
     double i_noise;      /* standard deviation, A */
     double i_lsb;        /* quantisation step, A (0: none) */
+    double i_fs;         /* full scale: a reading clips to [-i_fs, i_fs], A (0 or HUGE_VAL: none) */
     double v_gain;       /* - */
     double v_offset;     /* V */
     double v_noise;      /* standard deviation, V */
