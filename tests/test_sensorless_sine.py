@@ -638,8 +638,7 @@ def test_start_with_wrong_parameters_ends_by_name(name: str, wrong: dict[str, fl
 @pytest.mark.parametrize("name", ["htm-48v", "servo-2k2", "outrunner-24v"])
 @pytest.mark.parametrize("wrong", [{"emf": 0.75}, {"emf": 1.25}, {"R": 0.5}, {"R": 1.5}, {"L": 0.7}, {"L": 1.3}],
                          ids=["psi-25%", "psi+25%", "R-50%", "R+50%", "L-30%", "L+30%"])
-def test_wrong_parameters_start_with_the_estimates(name: str, wrong: dict[str, float],
-                                                    request: pytest.FixtureRequest) -> None:
+def test_wrong_parameters_start_with_the_estimates(name: str, wrong: dict[str, float]) -> None:
     """The same wrong data as above and L 30 % off, the controller measuring R at its alignment (``if_r_estimate``)
     and reading the flux linkage at zero current at the hand-off speed when the observer's flux is off the
     configured one (``if_flux_estimate``, the default): every start hands over on its first attempt (no DESYNC),
@@ -649,13 +648,6 @@ def test_wrong_parameters_start_with_the_estimates(name: str, wrong: dict[str, f
     reading at zero current must not take for a flux error: the error is that of the same start without the
     estimate (the L error's own, 0.03 deg on outrunner-24v at this speed) to 0.02 deg. Before the reading (the flux
     estimated from the observer with the current on) servo-2k2 with L 30 % high ran at 3.4 deg."""
-    if name == "outrunner-24v" and wrong == {"emf": 1.25}:
-        # known since the alignment's damping law was corrected (2026-11-27; docs/sensorless-sine.md, "Not done
-        # yet"): the first attempt's vector stops at 0.8 omega_on behind the observer's flux-error angle (-26 deg)
-        # and the start ends in START_FAIL; the retry hands over at 0.50 s and runs
-        request.applymarker(pytest.mark.xfail(
-            strict=True, reason="known regression, issue 26 open (docs/sensorless-sine.md, 'Not done yet'): the first "
-                                "attempt ends START_FAIL, the retry runs"))
     d = bl.load(name)
     ctl = bl.Sine(angle="observer", speed_loop=True, if_r_estimate=True)
     assert ctl.if_flux_estimate

@@ -916,6 +916,10 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             /* at the top of the band the vector does not outrun the rotor (the observer's speed) */
             if (s->if_trust && s->rho_f >= BC_SINE_RHO_HI && !sync)
                 w = fminf(w, fmaxf(dir * o.omega_e, -p->omega_on));
+            /* in the zero-current reading (if_psi_est, taken at the top) the vector carries no current: its angle
+             * against the observer's is no torque share, and it turns on at omega_on (read as one, a rotor coasting
+             * slower than the vector pulled it below omega_on through the rule above, which dropped the reading) */
+            if (s->n_zero > 0.0f) w = p->omega_on;
             int at_top = w >= p->omega_on;
             s->if_omega = dir * (at_top ? p->omega_on : w);
             s->if_theta = bc_wrap_2pi(s->if_theta + s->if_omega * p->ts);

@@ -275,7 +275,8 @@
  *          With if_psi_est = 1 (flux observer), once a start: at omega_on, when the observer is consistent
  *          (|err| <= lock_tol, dir omega_f >= omega_off) but its flux rho (low-passed like omega_f) is off the
  *          configured psi_f by more than lock_tol / 2 for 2 lock_time, the hand-off waits and the current loops
- *          hold i = 0 (the I/f vector turning on at omega_on): the zero-current reading. With i = 0 the voltage
+ *          hold i = 0 (the I/f vector turning on at omega_on, the ramp's law suspended: without current its angle
+ *          against theta^ is no torque share): the zero-current reading. With i = 0 the voltage
  *          they apply is the back-EMF alone (R i and L di/dt are zero, whatever R and L); after t_set =
  *          max(lock_time / 2, 10 L / k_p) for the current to settle, psi^ = sum |u| T_s / (the angle u has
  *          turned), summed over at least lock_time / 2 and a whole number of turns of u (the ripple of |u| of a
