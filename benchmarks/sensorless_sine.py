@@ -30,11 +30,13 @@ to 1.0 ``Omega_0``) x load x initial angle, the catch with the alignment's curre
 (``catch_zero_current``). And the sensitivity with the alignment's resistance estimate off and on (``--sensitivity
 [DRIVE ...]`` alone); ``--startup ... --r-estimate`` (or ``--zc-catch``) runs the start-up map with it.
 
-Run: ``PYTHONPATH=src python benchmarks/sensorless_sine.py [DRIVE ...]``.
+Run: ``PYTHONPATH=src python benchmarks/sensorless_sine.py [--PART] [DRIVE ...]`` (``--help`` lists the parts and
+their options; an unknown drive or a misplaced option: exit 2).
 """
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import math
 import sys
@@ -45,6 +47,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import bldclab as bl
+from bldclab.errors import BldclabError
 from bldclab.model.analytic import i_sN, r_total
 from bldclab.sim import Scenario, simulate
 
@@ -227,8 +230,9 @@ def startup_case(d: bl.Drive, fl: float, kj: float, theta0: float, kind: str, **
     times the I/f torque, speed loop to 0.3 Omega_0.
 
     ``kind``: ``passive`` a Coulomb-type load (the plant's friction ``tau_c``: against the motion, holding the
-    rotor at rest while the motor's torque is below it), ``brake`` an active constant load released at the end of
-    the alignment (a brake), ``active`` an active constant load from t = 0 (the legs still off). Returns ``ok``
+    rotor at rest while the motor's torque is below it), ``brake`` an active constant load released at ``if_align``
+    (a brake; the alignment's two steps, then its wait and closing sweep), ``active`` an active constant load from
+    t = 0 (the legs still off). Returns ``ok``
     (1: in the sine mode at the end, the speed within 5 %), ``bound`` (the load fraction the start is designed
     for, :func:`startup_bound` with the drive's own friction; ``bound0`` without it), ``t_lock`` (s, the first
     sample in the sine mode), ``restarted`` (1: a DESYNC, a failed start or a lost lock, before the end), ``flags``
@@ -528,62 +532,75 @@ def main(names: list[str]) -> None:
                       f"{a['tau']:9.4g} {enc['tau']:9.4g} {a['eff']:6.3f} {enc['eff']:7.3f}")
 
 
-if __name__ == "__main__":
-    if len(sys.argv) > 1 and sys.argv[1] == "--sensors":
-        sensor_errors(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v"])
-        raise SystemExit(0)
-    if len(sys.argv) > 1 and sys.argv[1] == "--commission-sensors":
-        commissioning_sensors(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv",
-                                               "f60prov-2550kv"])
-        raise SystemExit(0)
-    if len(sys.argv) > 1 and sys.argv[1] == "--commission-deadtime":
-        commissioning_deadtime(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv",
-                                                "f60prov-2550kv"])
-        raise SystemExit(0)
-    if len(sys.argv) > 1 and sys.argv[1] == "--commission-deadtime-noise":
-        commissioning_deadtime_noise(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw",
-                                                      "mn3110-780kv", "f60prov-2550kv"])
-        raise SystemExit(0)
-    if len(sys.argv) > 1 and sys.argv[1] == "--estimates":
-        estimates(sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv",
-                                   "f60prov-2550kv"])
-        raise SystemExit(0)
-    if len(sys.argv) > 1 and sys.argv[1] == "--sensitivity":
-        # the sensitivity to R (and the other parameters) without and with the alignment's resistance estimate
-        drives = sys.argv[2:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv", "f60prov-2550kv"]
+ALL_DRIVES = ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv", "f60prov-2550kv"]
+
+#: The parts that run alone: option -> (the function run on the drives given, default every catalog drive; help).
+PARTS: dict[str, tuple[Callable[[list[str]], None], str]] = {
+    "--sensors": (sensor_errors, "current-sensor offset and noise, the controller unaware (default: three drives)"),
+    "--commission-sensors": (commissioning_sensors, "commissioning with offsets, noise and a 12-bit ADC"),
+    "--commission-deadtime": (commissioning_deadtime, "commissioning's flux linkage with a dead time"),
+    "--commission-deadtime-noise": (commissioning_deadtime_noise, "dead time with current noise, eight seeds"),
+    "--estimates": (estimates, "each wrong parameter without and with the controller's own estimates"),
+    "--sensitivity": (sensitivity, "the sensitivity with the alignment's resistance estimate off and on"),
+    "--catch": (catch_map, "the flying-start map (both catch modes)"),
+    "--startup": (startup_map, "the standstill start-up map (default: three drives)"),
+}
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    """Read the command line (the module's docstring says what each part measures)."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("drives", nargs="*", metavar="DRIVE", help="built-in drive names or motor files")
+    part = ap.add_mutually_exclusive_group()
+    for opt, (_, text) in PARTS.items():
+        part.add_argument(opt, dest="part", action="store_const", const=opt, help=text)
+    ap.add_argument("--kinds", help="--startup: load kinds, comma-separated (passive, brake, active)")
+    ap.add_argument("--inertias", help="--startup: inertias in multiples of the drive's, comma-separated")
+    ap.add_argument("--loads", help="--startup: loads in fractions of the I/f torque, comma-separated")
+    ap.add_argument("--dump", metavar="FILE", help="--startup, --catch: write each start to FILE")
+    for flag, key in (("r-estimate", "if_r_estimate"), ("zc-catch", "catch_zero_current")):
+        ap.add_argument(f"--{flag}", dest=key, action="store_const", const=True,
+                        help=f"--startup: Sine({key}=True)")
+        ap.add_argument(f"--no-{flag}", dest=key, action="store_const", const=False,
+                        help=f"--startup: Sine({key}=False)")
+    args = ap.parse_args(argv)
+    startup_only = [o for o in ("kinds", "inertias", "loads", "if_r_estimate", "catch_zero_current")
+                    if getattr(args, o) is not None]
+    if startup_only and args.part != "--startup":
+        ap.error(f"--{startup_only[0].replace('_', '-')} needs --startup")
+    if args.dump is not None and args.part not in ("--startup", "--catch"):
+        ap.error("--dump needs --startup or --catch")
+    return args
+
+
+def run(args: argparse.Namespace) -> None:
+    """Run the part the command line asks for (all of the first four without one)."""
+    drives = args.drives or (ALL_DRIVES if args.part not in ("--sensors", "--startup") else ALL_DRIVES[:3])
+    if args.part is None:
+        main(drives)
+        sensitivity(drives)
+        commissioning(drives)
+        startup_map(drives[:3])
+    elif args.part == "--sensitivity":
         for r_est in (False, True):
             sensitivity(drives, if_r_estimate=r_est)
-        raise SystemExit(0)
-    if len(sys.argv) > 1 and sys.argv[1] == "--catch":
-        args, dump = sys.argv[2:], None
-        if "--dump" in args:
-            k = args.index("--dump")
-            dump = args[k + 1]
-            del args[k:k + 2]
-        catch_map(args or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv", "f60prov-2550kv"],
-                  dump=dump)
-        raise SystemExit(0)
-    if len(sys.argv) > 1 and sys.argv[1] == "--startup":
-        args, sel = sys.argv[2:], {}
-        for opt in ("--kinds", "--inertias", "--loads", "--dump"):
-            if opt in args:
-                k = args.index(opt)
-                sel[opt] = args[k + 1].split(",")
-                del args[k:k + 2]
-        opts = {}
-        for opt, key in (("--r-estimate", "if_r_estimate"), ("--zc-catch", "catch_zero_current"),
-                         ("--no-r-estimate", "if_r_estimate"), ("--no-zc-catch", "catch_zero_current")):
-            if opt in args:
-                opts[key] = not opt.startswith("--no-")
-                args.remove(opt)
-        startup_map(args or ["htm-48v", "servo-2k2", "outrunner-24v"],
-                    kinds=tuple(sel.get("--kinds", STARTUP_KINDS)),
-                    inertias=tuple(float(x) for x in sel.get("--inertias", STARTUP_J)),
-                    loads=tuple(float(x) for x in sel.get("--loads", STARTUP_LOADS)),
-                    dump=sel["--dump"][0] if "--dump" in sel else None, **opts)
-        raise SystemExit(0)
-    drives = sys.argv[1:] or ["htm-48v", "servo-2k2", "outrunner-24v", "lu-4kw", "mn3110-780kv", "f60prov-2550kv"]
-    main(drives)
-    sensitivity(drives)
-    commissioning(drives)
-    startup_map(drives[:3])
+    elif args.part == "--catch":
+        catch_map(drives, dump=args.dump)
+    elif args.part == "--startup":
+        opts = {k: getattr(args, k) for k in ("if_r_estimate", "catch_zero_current") if getattr(args, k) is not None}
+        startup_map(drives,
+                    kinds=tuple(args.kinds.split(",")) if args.kinds else STARTUP_KINDS,
+                    inertias=tuple(float(x) for x in args.inertias.split(",")) if args.inertias else STARTUP_J,
+                    loads=tuple(float(x) for x in args.loads.split(",")) if args.loads else STARTUP_LOADS,
+                    dump=args.dump, **opts)
+    else:
+        PARTS[args.part][0](drives)
+
+
+if __name__ == "__main__":
+    try:
+        run(parse_args(sys.argv[1:]))
+    except BldclabError as exc:
+        print(f"sensorless_sine.py: error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None

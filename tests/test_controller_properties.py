@@ -18,6 +18,7 @@ from bldclab._core import core
 from bldclab.errors import PlausibilityWarning
 
 FLAG_SAFE = bl.flag("SAFE")
+FLAG_OVERCURRENT = bl.flag("OVERCURRENT")
 # a calibrated Hall table (edges up to 25 electrical degrees off nominal) for the Hall options
 TABLE = tuple(math.pi / 6 + j * math.pi / 3 + math.radians(d) for j, d in enumerate((25, -25, 10, 0, -7, 3)))
 CONTROLS = {"sixv": bl.SixStepVoltage(), "sixstep": bl.SixStep(), "sine": bl.Sine(), "lu": bl.Lu(),
@@ -130,20 +131,24 @@ def check_outputs(name: str, motor: str, steps: list[dict]) -> None:
 
 
 @pytest.mark.parametrize("name", ["sixstep", "sine", "lu", "sixstep-pi", "bemf", "hallcal-ol"])
-def test_clipped_current_readings_in_closed_loop(name: str) -> None:
-    """Current sensors whose full scale (``Sensors.current_full_scale``) is a quarter of the current asked for: the
-    readings saturate and the controller, which cannot see the current above it, drives the true current up to the
-    inverter's hardware trip (the fate of a firmware whose over-current check reads a saturated ADC); against the
-    plant it still emits finite duties in [0, 1] on every sample (the readings stay finite: clipping is within what
-    the random inputs above cover, here in closed loop)."""
+def test_clipped_current_readings_trip_the_software_guard(name: str) -> None:
+    """Current sensors whose full scale (``Sensors.current_full_scale``, told to the controller as ``bc_ctrl_in.i_fs``)
+    is a quarter of the current asked for: a reading at the full scale trips the input guard (``bc_guard.h`` rule 4:
+    the current beyond it is unknown), so the true current stays within what can build up between the sample that
+    read the full scale and the legs going off (two samples at most, the runner's one-sample delay: ``2 V_dc T_s /
+    L`` above the full scale), far below the inverter's hardware trip that it reached before (3 ``I_N``); duties
+    finite and in [0, 1] on every sample."""
     d = bl.load("htm-48v")
     fs = 0.25 * d.motor.I_N
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PlausibilityWarning)  # the hardware trip, said
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PlausibilityWarning)
         r = bl.simulate(d.replace(sensors__current_full_scale=fs), CONTROLS[name],
                         bl.Scenario(duration=0.05, speed=0.3 * d.Omega_0, ref=d.motor.I_N, trace_every=1))
     for leg in "abc":
         duty = np.asarray(r[f"duty_{leg}"])
         assert np.all(np.isfinite(duty)) and np.all((duty >= 0) & (duty <= 1)), name
+    assert int(r.meta["controller_flags"]) & FLAG_OVERCURRENT, name
+    assert not any("hardware_trip" in str(w.message) for w in caught), name
     i_true = np.abs(np.stack([np.asarray(r[f"i_{x}"]) for x in "abc"]))
-    assert np.max(i_true) > 2.0 * fs, name  # the true current well beyond the full scale
+    t_s = 0.5 / d.inverter.f_pwm
+    assert fs < np.max(i_true) < fs + 2 * d.inverter.V_dc * t_s / d.motor.L, name

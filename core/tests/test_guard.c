@@ -79,6 +79,28 @@ static void test_guard(void)
     in = input(3u, 100.5f, -100.0f, 0.0f, 48.0f);
     CHECK(bc_guard_step(&p, &s, &in, i) == BC_FLAG_OVERCURRENT, "trips again");
     CHECK(bc_guard_init(&p, &s) == BC_OK && s.latched == 0, "init clears the latch");
+
+    /* a measured reading at the sensors' full scale (i_fs > 0) trips, far below i_max: the current beyond it is
+     * unknown; the latch re-arms only when every reading is inside it (and below i_max / 2) */
+    in = input(3u, 20.0f, -5.0f, 0.0f, 48.0f);
+    in.i_fs = 20.0f;
+    CHECK(bc_guard_step(&p, &s, &in, i) == BC_FLAG_OVERCURRENT && s.latched == 1, "trip at +i_fs");
+    in.i_abc[0] = 19.0f;
+    CHECK(bc_guard_step(&p, &s, &in, i) == 0u && s.latched == 0, "re-armed inside the full scale");
+    in = input(3u, 5.0f, -20.0f, 1e9f, 48.0f);
+    in.i_fs = 20.0f;
+    CHECK(bc_guard_step(&p, &s, &in, i) == BC_FLAG_OVERCURRENT, "trip at -i_fs on phase b");
+    CHECK(bc_guard_step(&p, &s, &in, i) == BC_FLAG_OVERCURRENT, "no re-arm while a reading is at the full scale");
+    CHECK(bc_guard_init(&p, &s) == BC_OK, "init");
+    in = input(3u, 15.0f, -15.0f, 0.0f, 48.0f); /* i_c reconstructed, 0: not a reading */
+    in.i_fs = 15.5f;
+    CHECK(bc_guard_step(&p, &s, &in, i) == 0u, "inside the full scale: no trip");
+    in = input(3u, 19.0f, 1.0f, 25.0f, 48.0f); /* phase c unmeasured: its entry is not a reading */
+    in.i_fs = 20.0f;
+    CHECK(bc_guard_step(&p, &s, &in, i) == 0u && i[2] == -20.0f, "a reconstructed phase at i_fs does not trip");
+    in.i_fs = 0.0f;
+    in.i_abc[0] = 99.0f;
+    CHECK(bc_guard_step(&p, &s, &in, i) == 0u, "i_fs = 0: no full scale");
 }
 
 typedef struct {

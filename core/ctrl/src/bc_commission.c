@@ -213,14 +213,16 @@ void bc_commission_step(const bc_commission_params *p, bc_commission_state *s, c
     bc_legs_off(out);
     float i3[3];
     uint32_t why = bc_guard_step(&s->guard_p, &s->guard, in, i3);
-    if (why && s->phase != BC_COMM_PH_DONE) stop(s, BC_COMM_FAULT);
-    out->flags |= why;
-    if (p->i_fs > 0.0f && s->phase != BC_COMM_PH_DONE) {
-        /* a measured phase at the sensors' full scale: saturated, not the current */
+    /* a measured phase at the sensors' full scale (the routine's own i_fs, else the one the input states):
+     * saturated, not the current; named before the guard's over-current verdict on the same reading */
+    float i_fs = p->i_fs > 0.0f ? p->i_fs : in->i_fs;
+    if (i_fs > 0.0f && s->phase != BC_COMM_PH_DONE) {
         for (int x = 0; x < 3; ++x) {
-            if ((in->i_mask & (1u << x)) && fabsf(in->i_abc[x]) >= p->i_fs) stop(s, BC_COMM_CLIPPED);
+            if ((in->i_mask & (1u << x)) && fabsf(in->i_abc[x]) >= i_fs) stop(s, BC_COMM_CLIPPED);
         }
     }
+    if (why && s->phase != BC_COMM_PH_DONE) stop(s, BC_COMM_FAULT);
+    out->flags |= why;
     if (s->phase == BC_COMM_PH_DONE) {
         out->flags |= BC_FLAG_SAFE;
         out->diag[0] = (float)s->phase;

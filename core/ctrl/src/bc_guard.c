@@ -46,7 +46,13 @@ uint32_t bc_guard_step(const bc_guard_params *p, bc_guard_state *s, const bc_ctr
     float i_abs = fabsf(i[0]);
     if (fabsf(i[1]) > i_abs) i_abs = fabsf(i[1]);
     if (fabsf(i[2]) > i_abs) i_abs = fabsf(i[2]);
-    if (!(i_abs <= p->i_max)) s->latched = 1;
+    /* a measured reading at the full scale is clipped: the current is at least that, how much more unknown */
+    int clipped = 0;
+    if (in->i_fs > 0.0f) {
+        for (int x = 0; x < 3; ++x)
+            if ((mask & (1u << x)) && !(fabsf(i[x]) < in->i_fs)) clipped = 1;
+    }
+    if (!(i_abs <= p->i_max) || clipped) s->latched = 1;
     else if (s->latched && i_abs < 0.5f * p->i_max) s->latched = 0;
     return s->latched ? BC_FLAG_OVERCURRENT : 0u;
 }

@@ -689,6 +689,35 @@ static float creep_speed(const bc_sine_params *p)
     return fminf(0.05f * p->omega_on, sqrtf(2.0f * fmaxf(p->if_accel_min, 0.0f)));
 }
 
+/* ALIGN -> RAMP: the ramp's clocks and limits from the start */
+static void ramp_start(bc_sine_state *s)
+{
+    s->sl_phase = BC_SINE_SL_RAMP;
+    s->sl_t = 0.0f;
+    s->rho_f = 0.0f;
+    s->if_t = s->if_tb = s->if_tr = 0.0f;
+    s->if_wmin = 0.0f;
+    s->if_trust = 0;
+}
+
+/* ALIGN's swing frequency at if_align_current on the configured inertia, rad/s: if_align is three periods at
+ * if_current (sensorless_settings), w_a = (6 pi / if_align) sqrt(if_align_current / if_current); 0 without an
+ * alignment */
+static float align_wa(const bc_sine_params *p)
+{
+    if (!(p->if_align > 0.0f)) return 0.0f;
+    return 6.0f * BC_PI_F / p->if_align * sqrtf(p->if_align_current / p->if_current);
+}
+
+/* ALIGN's swing back-EMF on d of theta_if (the rotor's q axis there), V: the d PI's integrator with decoupling
+ * (its feed-forward carries R i_d,ref), x_d - R i_d without */
+static float align_ed(const bc_sine_params *p, const bc_sine_state *s, bc_abc i, float theta)
+{
+    if (p->decouple) return s->pi_d.x;
+    bc_dq idq = bc_park(bc_clarke(i), -sinf(theta), -cosf(theta));
+    return s->pi_d.x - p->R * idq.d;
+}
+
 /* ALIGN's zero-current catch window (zc_catch, or a turning rotor the pulses found): the first 3 lock_time of each
  * alignment after the pulses, once a start. */
 static int zc_window(const bc_sine_params *p, const bc_sine_state *s)
@@ -855,6 +884,8 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 if (p->observer == BC_SINE_OBS_FLUX) bc_fluxobs_set_psi(&p->fobs, &s->fobs, s->psi_obs);
             }
             s->n_psi = s->n_zero = s->n_zc = 0.0f;
+            s->al_stage = 0;
+            s->al_t = s->al_quiet = 0.0f;
             s->psi_adapt = s->psi_done = 0;
             s->n_catch = 0.0f;
             s->caught = 0;
@@ -878,11 +909,33 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                 s->if_omega = 0.0f; /* the pulses' seed: not the alignment's */
                 s->fc_seed = 0;
             }
+        } else if (s->sl_phase == BC_SINE_SL_ALIGN && s->al_stage == 1) {
+            /* the closing sweep: the vector turned forwards (dir) by beta at w_s, dragging a rotor that friction
+             * holds off the rest angle from behind; then the seed at the vector's rest angle, RAMP */
+            float w_a = align_wa(p);
+            float beta = 2.0f * asinf(fminf(BC_SINE_RHO_HI * p->if_current / p->if_align_current, 1.0f));
+            float w_s = BC_SINE_SWEEP_K * w_a;
+            s->al_t += p->ts;
+            s->if_omega = dir * w_s;
+            s->if_theta = bc_wrap_2pi(s->if_theta + s->if_omega * p->ts);
+            if (s->al_t * w_s >= beta) {
+                /* the unloaded rotor's q axis is pi/2 behind the vector's (dir < 0: ahead): the seed */
+                obs_reset(p, s, s->if_theta + dir * 0.5f * BC_PI_F, 0.0f, i_ab);
+                ramp_start(s);
+                s->if_omega = dir * fminf(w_s, creep_speed(p)); /* the ramp goes on from the sweep */
+            }
         } else if (s->sl_phase == BC_SINE_SL_ALIGN) {
             s->sl_t += p->ts;
             /* two steps: the vector at pi/2 for the first third, then at 0 (a rotor at the unstable point of
              * one, or held by friction near it, is a quarter turn from the other's) */
             s->if_theta = 3.0f * s->sl_t < p->if_align ? 0.5f * BC_PI_F : 0.0f;
+            /* the swing has died when its back-EMF |e_d| stays below psi_f w_q for T_q (half a swing period at
+             * if_align_current on the configured inertia): a swing whose peak speed is above 2 w_q spends less
+             * than a sixth of its period below w_q, so T_q holds it up to nine times that inertia */
+            float w_a = align_wa(p);
+            float e_d = align_ed(p, s, i, s->if_theta);
+            int still = 3.0f * s->sl_t >= p->if_align && fabsf(e_d) <= BC_SINE_QUIET_K * w_a * s->psi_obs;
+            s->al_quiet = still ? s->al_quiet + p->ts : 0.0f;
             /* the resistance over the last quarter (if_r_est): sums of u.i and i.i, u the applied voltage the
              * observer took this sample (over [t_k-1, t_k]), i the current at t_k */
             if (p->if_r_est && 4.0f * s->sl_t >= 3.0f * p->if_align && u_obs_ok) {
@@ -893,7 +946,8 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                     s->r_ii += ii;
                 }
             }
-            if (s->sl_t >= p->if_align) {
+            int died = s->al_quiet * w_a >= BC_PI_F || s->sl_t >= 2.0f * p->if_align;
+            if (s->sl_t >= p->if_align && (died || !(w_a > 0.0f))) {
                 if (p->if_r_est) {
                     /* R^ = sum u.i / sum i.i, accepted if the current was there and R^ is plausible */
                     float n = 0.25f * p->if_align / p->ts, ia = p->if_align_current;
@@ -902,14 +956,14 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
                     if (isfinite(r) && s->r_ii >= 0.25f * ia * ia * fmaxf(n - 2.0f, 1.0f) && r >= r_lo && r <= r_hi)
                         s->r_obs = r;
                 }
-                /* the unloaded rotor's q axis is pi/2 behind the vector's (dir < 0: ahead): seed the observer */
-                obs_reset(p, s, s->if_theta + dir * 0.5f * BC_PI_F, 0.0f, i_ab);
-                s->sl_phase = BC_SINE_SL_RAMP;
-                s->sl_t = 0.0f;
-                s->rho_f = 0.0f;
-                s->if_t = s->if_tb = s->if_tr = 0.0f;
-                s->if_wmin = 0.0f;
-                s->if_trust = 0;
+                if (w_a > 0.0f) {
+                    s->al_stage = 1; /* the closing sweep (above), which seeds the observer at its end */
+                    s->al_t = 0.0f;
+                } else {
+                    /* the unloaded rotor's q axis is pi/2 behind the vector's (dir < 0: ahead): the seed */
+                    obs_reset(p, s, s->if_theta + dir * 0.5f * BC_PI_F, 0.0f, i_ab);
+                    ramp_start(s);
+                }
             }
         } else if (s->sl_phase == BC_SINE_SL_RAMP) {
             /* the load-adaptive ramp (if_accel_min < if_accel; otherwise the fixed ramp at if_accel): the
@@ -944,6 +998,10 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             /* at the top of the band the vector does not outrun the rotor (the observer's speed) */
             if (s->if_trust && s->rho_f >= BC_SINE_RHO_HI && !sync)
                 w = fminf(w, fmaxf(dir * o.omega_e, -p->omega_on));
+            /* in the zero-current reading (if_psi_est, taken at the top) the vector carries no current: its angle
+             * against the observer's is no torque share, and it turns on at omega_on (read as one, a rotor coasting
+             * slower than the vector pulled it below omega_on through the rule above, which dropped the reading) */
+            if (s->n_zero > 0.0f) w = p->omega_on;
             int at_top = w >= p->omega_on;
             s->if_omega = dir * (at_top ? p->omega_on : w);
             s->if_theta = bc_wrap_2pi(s->if_theta + s->if_omega * p->ts);
@@ -1097,6 +1155,9 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
              * back with the gain if_damp R, which above 1 latches i_d at its limit and turns the rest angle by
              * atan(i_d / i_q)); without it the integrator holds R i_d + e_d */
             float e_d = s->pi_d.x - (p->decouple ? 0.0f : p->R * idq1.d);
+            /* in the closing sweep the swing about the turning vector: less the back-EMF of a rotor that follows
+             * it, -dir omega_if psi_f (braking that too would drag the unloaded rotor behind the seed) */
+            if (s->al_stage == 1) e_d += (float)s->sl_dir * s->if_omega * s->psi_obs;
             id_ref = bc_clampf(-p->if_damp * e_d, -id_max, id_max);
         } else if (s->sl_phase == BC_SINE_SL_RAMP) {
             /* the swing braked through the observer: i_d = if_damp psi_f (omega^ - omega_if) / sin Delta makes

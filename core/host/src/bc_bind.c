@@ -207,6 +207,7 @@ static const bc_field_desc FIELDS[] = {
     F(bc_ctrl_in, tick_adc, "u4"),
 
     F(bc_ctrl_in, temp, "f4"),
+    F(bc_ctrl_in, i_fs, "f4"),
 
     F(bc_ctrl_out, leg, "bc_leg_cmd"),
     F(bc_ctrl_out, diag, "f4"),

@@ -1,6 +1,7 @@
 /* bc_sensors.c - measurement chain. Equations in bc_sensors.h. */
 #include "bldc/bc_sensors.h"
 
+#include <float.h>
 #include <math.h>
 
 static int finite_nonneg(double v) { return isfinite(v) && v >= 0.0; }
@@ -102,6 +103,7 @@ void bc_sensor_measure(const bc_sensor_params *p, bc_sensor_state *s, const bc_p
         }
     }
     in->i_mask = p->i_mask;
+    in->i_fs = p->i_fs > 0.0 && p->i_fs < (double)FLT_MAX ? (float)p->i_fs : 0.0f;
     double v = p->v_gain * v_bus + p->v_offset;
     if (p->v_noise > 0.0) v += p->v_noise * normal(s);
     in->v_dc = (float)quantise(v, p->v_lsb);

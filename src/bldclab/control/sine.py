@@ -32,6 +32,8 @@ _ANGLE = {"hall": "BC_SINE_ANGLE_HALL", "pll": "BC_SINE_ANGLE_HALL", "encoder": 
           "observer": "BC_SINE_ANGLE_OBSERVER"}
 _OBSERVER = {"flux": "BC_SINE_OBS_FLUX", "reduced": "BC_SINE_OBS_REDUCED"}
 OBSERVER_ANGLE_ERROR = math.radians(1.0)  # the PLL's lag at the rated acceleration the default bandwidth allows
+ALIGN_SWEEP_K = 0.2  # bc_sine.h BC_SINE_SWEEP_K: the alignment's closing sweep speed over its swing frequency
+ALIGN_RHO_HI = 0.95  # bc_sine.h BC_SINE_RHO_HI: the sweep's angle 2 asin(RHO_HI if_current / if_align_current)
 _LIMIT = {"hexagon": "BC_SINE_LIMIT_HEX", "circle": "BC_SINE_LIMIT_CIRCLE"}
 PAPER1_BANDWIDTH_HZ = 1000.0  # paper 1's current-loop crossover (Hz)
 
@@ -423,7 +425,10 @@ class Sine(Control):
             ``psi`` (V s, ``k_1 / p``), ``gain`` (``lambda``, rad/s), ``bandwidth`` (rad/s), ``sigma0`` (rad/s),
             ``if_current`` and ``if_align_current`` (A), ``if_accel`` and ``if_accel_min`` (electrical rad/s^2),
             ``if_align`` (s), ``if_damp`` (A/V, the swing damping ``omega_n J / (1.5 p^2 psi_f^2)``), ``lock_time``
-            (s) and ``if_hold`` (s).
+            (s), ``if_hold`` (s) and ``if_sweep`` (s, the alignment's closing sweep: the vector turned forwards by
+            ``2 asin(min(0.95 if_current / if_align_current, 1))`` at a fifth of the swing frequency at
+            ``if_align_current``, ``w_a = (6 pi / if_align) sqrt(if_align_current / if_current)``; 0 without an
+            alignment).
         """
         m = drive.motor
         ts = 0.5 / drive.inverter.f_pwm
@@ -445,11 +450,15 @@ class Sine(Control):
         lock_time = 5.0 / min(gain, bw)
         # i_d = -k u_d brakes the alignment swing at the rate 1.5 p^2 psi^2 k / J: made w_n (near critical damping)
         damp = w_n * drive.mechanics.J / (1.5 * m.p**2 * (k1 / m.p) ** 2)
+        # bc_sine.h, ALIGN: the closing sweep, beta at w_s = BC_SINE_SWEEP_K w_a
+        w_a = 6.0 * math.pi / align * math.sqrt(i_al / i_if) if align > 0.0 else 0.0
+        beta = 2.0 * math.asin(min(ALIGN_RHO_HI * i_if / i_al, 1.0))
+        sweep = beta / (ALIGN_SWEEP_K * w_a) if w_a > 0.0 else 0.0
         return {"psi": k1 / m.p, "gain": gain, "bandwidth": bw,
                 "sigma0": min(r_total(drive) / (2.0 * m.L), 0.2 / ts), "if_current": i_if, "if_accel": a_if,
                 "if_accel_min": a_min, "if_align_current": i_al,
                 "if_align": align, "if_damp": damp, "lock_time": lock_time,
-                "if_hold": max(20.0 * lock_time, 10.0 * 2 * math.pi / w_on)}
+                "if_hold": max(20.0 * lock_time, 10.0 * 2 * math.pi / w_on), "if_sweep": sweep}
 
     def _observer_records(self, drive: Drive, core: Core, i_max: float) -> dict[str, object]:
         """Return the sensorless members of ``bc_sine_params``."""

@@ -14,9 +14,11 @@
  *  3. Hardware trip. fault_pin = 1 (the inverter's own protection has switched its gates off and latched):
  *     BC_FLAG_OVERCURRENT. The hardware holds that latch; the guard does not add one.
  *  4. Software trip and re-arm. max_x |i_x| > i_max over the measured and reconstructed phases (or not finite)
- *     trips: BC_FLAG_OVERCURRENT, latched. A latched guard re-arms at the first sample whose measurements are valid
- *     (1 and 2) and whose every |i_x| < i_max / 2. Samples with invalid measurements leave the latch as it is.
- *     bc_guard_init clears it.
+ *     trips: BC_FLAG_OVERCURRENT, latched; so does a measured phase at the readings' full scale, |i_x| >= in->i_fs
+ *     (i_fs > 0): the reading is clipped and the current unknown beyond it (a trip above the full scale could never
+ *     see its level). A latched guard re-arms at the first sample whose measurements are valid (1 and 2), whose
+ *     every |i_x| < i_max / 2 and whose every reading is inside the full scale. Samples with invalid measurements
+ *     leave the latch as it is. bc_guard_init clears it.
  *
  * The checks run in this order and the first one that fails gives the verdict (0: all passed). The controller
  * adds its own checks (Hall code, reference, angle) to the verdict and, if anything is set, turns all legs off

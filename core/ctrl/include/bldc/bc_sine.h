@@ -198,9 +198,21 @@
  *          there, for either dir), and i_d,ref = -if_damp e_d (clamped to +-min(if_align_current / 2,
  *          sqrt(i_s_max^2 - if_align_current^2))) brakes it; e_d = x_d, the d PI's integrator, with decouple = 1
  *          (its feed-forward carries R i_d,ref), x_d - R i_d without (x_d - R i_d with decoupling fed the current
- *          back with the gain if_damp R, which above 1 latched i_d at its limit on a rotor at rest). An unloaded
- *          rotor settles with its q axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there:
- *          theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP.
+ *          back with the gain if_damp R, which above 1 latched i_d at its limit on a rotor at rest). The second
+ *          step lasts until if_align and until the swing has died: |e_d| <= psi_f w_q (w_q = BC_SINE_QUIET_K w_a)
+ *          for half a swing period pi / w_a, at most until 2 if_align (w_a = (6 pi / if_align) sqrt(if_align_current
+ *          / if_current), the swing's frequency at if_align_current on the configured inertia, if_align being three
+ *          periods at if_current by default; a swing whose peak speed is above 2 w_q spends less than a sixth of
+ *          its period below w_q, so the wait holds up to nine times that inertia). Then the closing sweep: the
+ *          vector turns forwards (dir) by beta = 2 asin(min(BC_SINE_RHO_HI if_current / if_align_current, 1)),
+ *          twice the band in which a friction load within the design bound holds the rotor off the rest angle, at
+ *          w_s = BC_SINE_SWEEP_K w_a (omega_if = dir w_s; the damping then brakes the swing about the turning vector,
+ *          i_d,ref = -if_damp (e_d + dir omega_if psi_f), not the motion with it): a rotor held anywhere in that
+ *          band is dragged from behind, so the seed below lies ahead of it (dir-wise), an error Lee's observer removes as the rotor
+ *          turns (one behind the rotor grows at low speed: section RAMP). An unloaded rotor settles with its q
+ *          axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there at the sweep's end:
+ *          theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP from omega_if = dir min(w_s, w_cr). Without an
+ *          alignment (if_align = 0) neither the wait nor the sweep.
  *          With if_r_est = 1 the alignment also measures the resistance the observers use: over its last quarter
  *          (the vector still, the rotor at rest or swinging out) R^ = sum u.i / sum i.i of the applied
  *          alpha-beta voltage (the one the observer takes, dead-time corrected) and the current. At rest the
@@ -244,7 +256,7 @@
  *          for omega_on / if_accel_min in all, or has been below omega_on for 2 omega_on / if_accel_min + t_sw in
  *          all (the slowest ramp from -omega_on), since the ramp's start (a hand-back's ramp counts on; a
  *          completed ramp resets both): every ramp ends within 2 omega_on / if_accel_min + t_sw, every start
- *          attempt within if_align + 2 omega_on / if_accel_min + t_sw + if_hold
+ *          attempt within 2 if_align + beta / w_s + 2 omega_on / if_accel_min + t_sw + if_hold
  *          (a rotor pushed back ever faster, or a vector that follows an observer misled by a wrong R, would
  *          otherwise restart the lowest-speed count). With if_accel_min = if_accel: the fixed ramp at if_accel,
  *          none of this.
@@ -263,7 +275,8 @@
  *          With if_psi_est = 1 (flux observer), once a start: at omega_on, when the observer is consistent
  *          (|err| <= lock_tol, dir omega_f >= omega_off) but its flux rho (low-passed like omega_f) is off the
  *          configured psi_f by more than lock_tol / 2 for 2 lock_time, the hand-off waits and the current loops
- *          hold i = 0 (the I/f vector turning on at omega_on): the zero-current reading. With i = 0 the voltage
+ *          hold i = 0 (the I/f vector turning on at omega_on, the ramp's law suspended: without current its angle
+ *          against theta^ is no torque share): the zero-current reading. With i = 0 the voltage
  *          they apply is the back-EMF alone (R i and L di/dt are zero, whatever R and L); after t_set =
  *          max(lock_time / 2, 10 L / k_p) for the current to settle, psi^ = sum |u| T_s / (the angle u has
  *          turned), summed over at least lock_time / 2 and a whole number of turns of u (the ripple of |u| of a
@@ -333,6 +346,8 @@
 /* The load-adaptive I/f ramp's band of the torque's share of the I/f torque (section "Sensorless", RAMP). */
 #define BC_SINE_RHO_LO 0.6f
 #define BC_SINE_RHO_HI 0.95f
+#define BC_SINE_SWEEP_K 0.2f  /* ALIGN's closing sweep: its speed w_s over the swing frequency w_a */
+#define BC_SINE_QUIET_K 0.025f /* ALIGN: the swing has died below the speed w_q = BC_SINE_QUIET_K w_a */
 
 #include <stdint.h>
 
@@ -507,6 +522,9 @@ typedef struct {
     float z_u[2];      /* RAMP, if_psi_est: the last sample's voltage in the reading, V (alpha, beta) */
     float z_tgt;       /* RAMP, if_psi_est: the angle u is to turn in the reading, rad (0: not yet set) */
     float n_zc;        /* ALIGN, zc_catch: time at zero current in this alignment, s */
+    int32_t al_stage;  /* ALIGN: 0 the two steps, 1 the closing sweep */
+    float al_t;        /* ALIGN: time in the closing sweep, s */
+    float al_quiet;    /* ALIGN: time the swing's back-EMF has stayed below psi_f w_q, s */
     float r_ui, r_ii;  /* ALIGN: sums of u.i (W) and i.i (A^2) over its last quarter */
     float n_catch;     /* ALIGN, RAMP: time the observer has held a consistent lock at |omega_f| >= omega_on, s */
     int32_t caught;    /* this start has caught a turning rotor (once a start) */

@@ -92,6 +92,8 @@ typedef struct {
     uint32_t tick_adc;    /* capture-timer tick of the last conversion's sampling instant */
     float temp[2];        /* temperature sensors, degC: [0] the winding's, [1] the switches' (heat sink or board);
                              NaN where none is fitted (a controller's derating then reads a sensor fault) */
+    float i_fs;           /* full scale of the current readings, A: a reading at +-i_fs is clipped (the shunt
+                             amplifier or the ADC saturated), the current at least that; 0: none (or not known) */
 } bc_ctrl_in;
 
 /* What a controller returns at one sample. The legs apply to the next half period (with the runner's one-sample

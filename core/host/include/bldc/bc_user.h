@@ -37,7 +37,8 @@
 #include "bldc/bc_types.h"
 
 /* Version of this description and of bc_types.h's contract; a library built against another is refused. */
-#define BC_USER_ABI 2 /* 2: bc_ctrl_in.temp, the temperature sensors (issue 27) */
+#define BC_USER_ABI 3 /* 2: bc_ctrl_in.temp, the temperature sensors (issue 27); 3: bc_ctrl_in.i_fs, the current
+                         readings' full scale */
 
 #define BC_USER_COUNT(table) ((int32_t)(sizeof(table) / sizeof((table)[0])))
 
