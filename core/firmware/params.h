@@ -111,7 +111,8 @@ static inline void htm_sine_observer(bc_sine_params *p)
     p->restart_wait = 0.1f;
     p->if_damp = 11.43f;
     p->if_r_est = 0;
-    p->if_psi_est = 1; /* the zero-current flux reading, Sine()'s default */
+    p->if_psi_est = 1;  /* the zero-current flux reading, Sine()'s default */
+    p->catch_pulse = 1; /* the zero-vector pulses at the alignment's start, Sine()'s default */
 }
 
 /* Self-commissioning on htm-48v: the record bldclab.control.Commission() builds for the drive, its current sensors'
