@@ -681,6 +681,35 @@ def test_wrong_parameters_start_with_the_estimates(name: str, wrong: dict[str, f
     assert e.value.field == "control.if_flux_estimate"
 
 
+@pytest.mark.parametrize("theta0", [math.pi, 1.5 * math.pi + 0.05], ids=["pi", "3pi/2"])
+def test_ramp_does_not_drag_an_unloaded_rotor_backwards(theta0: float) -> None:
+    """mn3110-780kv at twice its inertia, no load, the controller configured with the flux linkage 40 % low and
+    both estimates on (``if_r_estimate``), speed loop to 0.3 Omega_0. The flux error offsets the observer's angle by
+    ``atan(k / omega)`` at the ramp's low speeds (about 70 deg), which the load-adaptive ramp reads as the torque
+    share ``RHO_HI``; its rule that the vector does not outrun the rotor (at most the observer's speed) then took the
+    vector backwards on a dip of the observer's speed at the ramp's start and held it there, the unloaded rotor
+    following it at a steady -240 rad/s electrical until the run's end (no hand-off, no named failure). A vector
+    turned against the reference that has found no lower speed for a swing period drags the rotor, no load pushes
+    it: it turns forwards again. The start hands over on its first attempt (no DESYNC) within the slowest unloaded
+    start attempt the drive's data give (``2 if_align + if_sweep + omega_on / if_accel_min + if_hold``) and runs at
+    the reference (5 %)."""
+    d = bl.load("mn3110-780kv")
+    plant = dataclasses.replace(d, mechanics=dataclasses.replace(d.mechanics, J=2.0 * d.mechanics.J))
+    ctl = bl.Sine(angle="observer", speed_loop=True, if_r_estimate=True)
+    st = ctl.sensorless_settings(d)
+    w_on = d.motor.p * ctl.handoff(d)
+    bound = 2 * st["if_align"] + st["if_sweep"] + w_on / st["if_accel_min"] + st["if_hold"]
+    w = 0.3 * d.Omega_0
+    dur = bound + plant.mechanics.J * w / (0.5 * ctl.torque_limit(d)) + 0.5
+    r = simulate(plant, ctl, Scenario(duration=dur, omega_ref=w, theta0=theta0, trace_every=8),
+                 estimate=d.scaled(emf=0.6))
+    on = r["mode"] > 0.5
+    assert on.any(), "no hand-off"
+    assert float(r["t"][on][0]) < bound
+    assert "DESYNC" not in r.flags_raised
+    assert on[-1] and r["omega_m"][-1] == pytest.approx(w, rel=0.05)
+
+
 @pytest.mark.parametrize("zc", [False, True])
 def test_catch_of_a_backward_rotor_an_active_load_accelerates(zc: bool) -> None:
     """servo-2k2 turning backwards at 0.5 Omega_0 when the drive starts, an active load of half the I/f torque

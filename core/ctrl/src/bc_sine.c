@@ -986,9 +986,19 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
              * the rotor does not have: without this the vector waits at the rotor's stick-slip speed */
             int sync = s->if_trust && dir * s->if_omega > 0.0f &&
                        dir * s->omega_f >= dir * s->if_omega - w_cr;
+            /* the vector turned against dir that has found no lower speed for a swing period at if_current (a
+             * third of if_align, its default three periods): the push that turned it is absorbed (a rotor an
+             * active load pushes back within the I/f torque is caught within a swing; a pushed rotor still
+             * running away makes new lowest speeds), and what the vector follows now is a rotor it drags. The
+             * observer's angle cannot tell: a flux error offsets it by atan(k / omega) at low speed, 70 deg on
+             * mn3110-780kv with psi_f configured 40 % low, read as rho = RHO_HI, and the rule below (at most the
+             * observer's speed) then ratcheted the vector back on each dip of the observer's speed, the unloaded
+             * rotor following it at a steady -240 rad/s. So it turns back towards dir at if_accel_min at least,
+             * the rule below not applied, until it turns with dir again */
+            int back = adaptive && dir * s->if_omega < 0.0f && s->if_t > p->if_align / 3.0f;
             if (adaptive) {
                 a *= bc_clampf((BC_SINE_RHO_HI - s->rho_f) / (BC_SINE_RHO_HI - BC_SINE_RHO_LO), -1.0f, 1.0f);
-                if (!moving || sync) a = fmaxf(a, p->if_accel_min);
+                if (!moving || sync || back) a = fmaxf(a, p->if_accel_min);
             }
             /* omega_if += dir a T_s within dir [-omega_on, omega_on] (a rotor pushed back by an active load is
              * followed back); theta_if += omega_if T_s */
@@ -996,7 +1006,7 @@ static void sensorless_step(const bc_sine_params *p, bc_sine_state *s, const bc_
             /* a rotor at rest is passed slowly (it breaks away where the torque is largest): at most a creep */
             if (adaptive && !moving) w = fminf(w, w_cr);
             /* at the top of the band the vector does not outrun the rotor (the observer's speed) */
-            if (s->if_trust && s->rho_f >= BC_SINE_RHO_HI && !sync)
+            if (s->if_trust && s->rho_f >= BC_SINE_RHO_HI && !sync && !back)
                 w = fminf(w, fmaxf(dir * o.omega_e, -p->omega_on));
             /* in the zero-current reading (if_psi_est, taken at the top) the vector carries no current: its angle
              * against the observer's is no torque share, and it turns on at omega_on (read as one, a rotor coasting

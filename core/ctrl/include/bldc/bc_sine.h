@@ -229,7 +229,12 @@
  *          a = if_accel clamp((BC_SINE_RHO_HI - rho) / (BC_SINE_RHO_HI - BC_SINE_RHO_LO), -1, 1): the full ramp
  *          while the torque is at most RHO_LO of the I/f torque, none at RHO_HI, and above it the vector slows
  *          (down to dir omega_if = -omega_on, following a rotor an active load pushes back); at rho >= RHO_HI the
- *          vector does not outrun the rotor (dir omega_if <= dir omega^). A rotor that keeps up with a vector
+ *          vector does not outrun the rotor (dir omega_if <= dir omega^). A vector turned against dir (dir omega_if
+ *          < 0) that has found no lower speed for if_align / 3 (the swing's period at if_current with the default
+ *          alignment) drags its rotor, no load pushes it (a rotor pushed back within the I/f torque is caught
+ *          within a swing; one still running away makes new lowest speeds): a >= if_accel_min and the rule before
+ *          not applied, until dir omega_if >= 0 (a flux error's angle offset at low speed, read as rho = RHO_HI,
+ *          otherwise held an unloaded rotor and the vector turning backwards together). A rotor that keeps up with a vector
  *          turning forwards (the observer sees it move, dir omega_if > 0, dir omega_f >= dir omega_if - w_cr)
  *          carries the slowest ramp whatever the observer's angle says: then a >= if_accel_min and the
  *          vector may run ahead of omega^ (below about lambda the observer keeps the error of its seed, which
