@@ -764,7 +764,8 @@ static void fc_step(const bc_sine_params *p, bc_sine_state *s, const bc_ctrl_in 
         s->fc_i[1] = i_ab.beta;
     }
     if (k == 4) {
-        s->fc_i2[0] = i_ab.alpha; /* the first pulse's current left (near the no-load speed the diodes barely take it) */
+        /* the first pulse's current left (near the no-load speed the diodes barely take it) */
+        s->fc_i2[0] = i_ab.alpha;
         s->fc_i2[1] = i_ab.beta;
     }
     if (k == FC_SAMPLES - 1) {

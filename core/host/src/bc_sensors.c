@@ -14,8 +14,9 @@ int bc_sensor_init(const bc_sensor_params *p, bc_sensor_state *s)
     for (int x = 0; x < 3; ++x) {
         if (!isfinite(p->i_gain[x]) || !isfinite(p->i_offset[x])) return BC_ERR_PARAM;
     }
-    if (!finite_nonneg(p->i_noise) || !finite_nonneg(p->i_lsb) || !(p->i_fs >= 0.0) || !isfinite(p->v_gain) || !isfinite(p->v_offset) ||
-        !finite_nonneg(p->v_noise) || !finite_nonneg(p->v_lsb) || !(isfinite(p->f_tick) && p->f_tick > 0.0))
+    if (!finite_nonneg(p->i_noise) || !finite_nonneg(p->i_lsb) || !(p->i_fs >= 0.0) || !isfinite(p->v_gain) ||
+        !isfinite(p->v_offset) || !finite_nonneg(p->v_noise) || !finite_nonneg(p->v_lsb) ||
+        !(isfinite(p->f_tick) && p->f_tick > 0.0))
         return BC_ERR_PARAM;
     for (int j = 0; j < BC_FAULT_MAX; ++j) {
         const bc_fault *f = &p->fault[j];

@@ -208,9 +208,9 @@
  *          twice the band in which a friction load within the design bound holds the rotor off the rest angle, at
  *          w_s = BC_SINE_SWEEP_K w_a (omega_if = dir w_s; the damping then brakes the swing about the turning vector,
  *          i_d,ref = -if_damp (e_d + dir omega_if psi_f), not the motion with it): a rotor held anywhere in that
- *          band is dragged from behind, so the seed below lies ahead of it (dir-wise), an error Lee's observer removes as the rotor
- *          turns (one behind the rotor grows at low speed: section RAMP). An unloaded rotor settles with its q
- *          axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there at the sweep's end:
+ *          band is dragged from behind, so the seed below lies ahead of it (dir-wise), an error Lee's observer
+ *          removes as the rotor turns (one behind the rotor grows at low speed: section RAMP). An unloaded rotor
+ *          settles with its q axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there at the sweep's end:
  *          theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP from omega_if = dir min(w_s, w_cr). Without an
  *          alignment (if_align = 0) neither the wait nor the sweep.
  *          With if_r_est = 1 the alignment also measures the resistance the observers use: over its last quarter
@@ -234,9 +234,9 @@
  *          alignment) drags its rotor, no load pushes it (a rotor pushed back within the I/f torque is caught
  *          within a swing; one still running away makes new lowest speeds): a >= if_accel_min and the rule before
  *          not applied, until dir omega_if >= 0 (a flux error's angle offset at low speed, read as rho = RHO_HI,
- *          otherwise held an unloaded rotor and the vector turning backwards together). A rotor that keeps up with a vector
- *          turning forwards (the observer sees it move, dir omega_if > 0, dir omega_f >= dir omega_if - w_cr)
- *          carries the slowest ramp whatever the observer's angle says: then a >= if_accel_min and the
+ *          otherwise held an unloaded rotor and the vector turning backwards together). A rotor that keeps up
+ *          with a vector turning forwards (the observer sees it move, dir omega_if > 0, dir omega_f >= dir
+ *          omega_if - w_cr) carries the slowest ramp whatever the observer's angle says: then a >= if_accel_min and the
  *          vector may run ahead of omega^ (below about lambda the observer keeps the error of its seed, which
  *          decays at omega^2 / lambda; a friction load leaves the rotor up to asin(tau_load / (1.5 k_1
  *          if_align_current)) off the seed, read as torque margin the rotor does not have). A rotor the
@@ -535,7 +535,8 @@ typedef struct {
     int32_t caught;    /* this start has caught a turning rotor (once a start) */
     int32_t fc_k;      /* ALIGN, catch_pulse: samples since the alignment's start while the pulses run (>= 6: done) */
     int32_t fc_on;     /* ALIGN, catch_pulse: the pulses found a turning rotor; its zero-current catch window runs */
-    int32_t fc_seed;   /* catch_pulse: the observer carries the pulses' angle and speed until it has voltages to run on */
+    int32_t fc_seed;   /* catch_pulse: the observer carries the pulses' angle and speed until it has voltages to run
+                          on */
     float fc_tau;      /* catch_pulse: the pulse length, s (in (0, ts)) */
     float fc_i[2];     /* catch_pulse: the first pulse's current at its end, A (alpha, beta) */
     float fc_i2[2];    /* catch_pulse: the current left at the second pulse's half period's start, A */
