@@ -210,9 +210,9 @@
  *          i_d,ref = -if_damp (e_d + dir omega_if psi_f), not the motion with it): a rotor held anywhere in that
  *          band is dragged from behind, so the seed below lies ahead of it (dir-wise), an error Lee's observer
  *          removes as the rotor turns (one behind the rotor grows at low speed: section RAMP). An unloaded rotor
- *          settles with its q axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there at the sweep's end:
- *          theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP from omega_if = dir min(w_s, w_cr). Without an
- *          alignment (if_align = 0) neither the wait nor the sweep.
+ *          settles with its q axis pi/2 behind the vector's (dir = -1: ahead); the observer is seeded there at
+ *          the sweep's end: theta^ = theta_if + dir pi/2, omega^ = 0, then RAMP from omega_if = dir min(w_s,
+ *          w_cr). Without an alignment (if_align = 0) neither the wait nor the sweep.
  *          With if_r_est = 1 the alignment also measures the resistance the observers use: over its last quarter
  *          (the vector still, the rotor at rest or swinging out) R^ = sum u.i / sum i.i of the applied
  *          alpha-beta voltage (the one the observer takes, dead-time corrected) and the current. At rest the
