@@ -14,10 +14,8 @@ from pathlib import Path
 from .._files import json_text, write_atomic
 from ..analysis.commission import commission
 from ..control.sine import fundamental_k1
-from ..errors import BldclabError
 from ..model.analytic import r_total
-from ..model.catalog import load
-from .common import add_inverter_option, load_drive
+from .common import add_inverter_option, load_drive, load_estimate
 from .paths import check_out_file
 
 __all__ = ["configure_command", "run_command"]
@@ -40,13 +38,7 @@ def run_command(args: argparse.Namespace) -> int:
     """Run the routine; exit 0 when it measured everything, 1 with its failure status named (no file written)."""
     check_out_file(args.out)  # before the run: a bad --out fails at once
     drive = load_drive(args)
-    nominal = None if args.nominal is None else load(args.nominal)
-    if nominal is not None:
-        for field, mine, theirs in (("motor.p", nominal.motor.p, drive.motor.p),
-                                    ("inverter.f_pwm", nominal.inverter.f_pwm, drive.inverter.f_pwm)):
-            if mine != theirs:
-                raise BldclabError("--nominal", f"{nominal.name}'s {field} is {mine:g}, the plant's {theirs:g}: "
-                                   "they must be equal (the hardware, not an estimate)")
+    nominal = load_estimate(args.nominal, drive, "--nominal")
     e = commission(drive, nominal)
     true = {"R": r_total(drive), "L": drive.motor.L, "psi_f": fundamental_k1(drive) / drive.motor.p}
     if args.format == "json":

@@ -19,10 +19,11 @@ from ..model import analytic
 from ..model.catalog import load
 from ..model.motor import Drive, Inverter
 from ..model.units import per_unit, to_si
+from ..sim import check_estimate
 from ..sim import plausibility as _plaus
 
 __all__ = ["CONTROLS", "add_inverter_option", "add_verbose_option", "check_speed_range", "control_of", "load_drive",
-           "parse_speed", "positive_int", "summarise", "worker_pool", "workers_of"]
+           "load_estimate", "parse_speed", "positive_int", "summarise", "worker_pool", "workers_of"]
 
 
 CONTROLS = ("square", "sine", "sixv", "lu", "lu-no-do", "rect")
@@ -64,6 +65,22 @@ def load_drive(args: argparse.Namespace) -> Drive:
     """Load ``args.motor`` with ``--inverter`` applied."""
     drive = load(args.motor)
     return drive if args.inverter is None else drive.replace(inverter__model=args.inverter)
+
+
+def load_estimate(text: str | None, drive: Drive, option: str) -> Drive | None:
+    """Load the drive data a controller is configured from (``--estimate``, ``--nominal``), checked against the plant.
+
+    Its file's own errors name the file; pole pairs or PWM frequency other than the plant's
+    (:func:`bldclab.sim.check_estimate`) name ``option``, before any run. None if ``text`` is None.
+    """
+    if text is None:
+        return None
+    est = load(text)
+    try:
+        check_estimate(drive, est)
+    except BldclabError as exc:
+        raise BldclabError(option, f"{est.name}: {exc.field}: {exc.problem}") from None
+    return est
 
 
 def summarise(caught: list[str], runs: int | str, verbose: bool = False) -> None:

@@ -22,12 +22,10 @@ from ..control.sixstep import COMMUTATIONS as SIXSTEP_COMMUTATIONS
 from ..control.sixstep import REGULATIONS as SIXSTEP_REGULATIONS
 from ..control.user import UserControl
 from ..errors import BldclabError, PlausibilityError, PlausibilityWarning
-from ..model.catalog import load
-from ..model.motor import Drive
 from ..model.units import to_si
 from ..report import plots
 from ..sim import CHUNK, TRACE_LIMIT, Piecewise, Scenario, parse_profile, samples_of, simulate, trace_bytes, trace_rows
-from .common import CONTROLS, add_inverter_option, control_of, load_drive, parse_speed
+from .common import CONTROLS, add_inverter_option, control_of, load_drive, load_estimate, parse_speed
 from .paths import check_out_dir
 
 __all__ = ["configure_command", "run_command"]
@@ -282,23 +280,6 @@ def _check_options(args: argparse.Namespace) -> None:
             raise BldclabError(opt, f"must be an integer >= 1, got {v}")
 
 
-def _estimate(args: argparse.Namespace, drive: Drive) -> Drive | None:
-    """Return the drive of ``--estimate`` (the controller's data; its file's errors name the file), None if not given.
-
-    The pole pairs and the PWM frequency must be the plant's (the hardware, not estimates): checked here, before the
-    run, with the option named.
-    """
-    if args.estimate is None:
-        return None
-    est = load(args.estimate)
-    for field, mine, theirs in (("motor.p", est.motor.p, drive.motor.p),
-                                ("inverter.f_pwm", est.inverter.f_pwm, drive.inverter.f_pwm)):
-        if mine != theirs:
-            raise BldclabError("--estimate", f"{est.name}'s {field} is {mine:g}, the plant's {theirs:g}: they must "
-                               "be equal (the hardware, not an estimate)")
-    return est
-
-
 def _speed(text: str, drive: Any, option: str) -> float:
     """Read one speed (:func:`~bldclab.cli.common.parse_speed`: pu, rpm, rad/s), errors naming ``option``."""
     try:
@@ -414,7 +395,7 @@ def run_command(args: argparse.Namespace) -> int:
     """Run ``bldclab simulate``."""
     _check_options(args)
     drive = load_drive(args)
-    estimate = _estimate(args, drive)
+    estimate = load_estimate(args.estimate, drive, "--estimate")
     if is_library(args.control):
         ctl: Control = _user_control(args)
         ref, unit = (0.0 if args.ref is None else args.ref), (ctl.ref_meaning or "-")

@@ -28,8 +28,8 @@ from . import plausibility as _plaus
 from .results import Metrics, SimResult
 from .thermal import Coupler, ThermalCoupling
 
-__all__ = ["TRACE_LIMIT", "Fault", "PerUnit", "Piecewise", "Scenario", "parse_profile", "simulate", "trace_bytes",
-           "trace_rows"]
+__all__ = ["TRACE_LIMIT", "Fault", "PerUnit", "Piecewise", "Scenario", "check_estimate", "parse_profile", "simulate",
+           "trace_bytes", "trace_rows"]
 
 Profile = float | ArrayLike | Callable[[NDArray[np.float64]], ArrayLike] | None  # or a PerUnit speed
 
@@ -643,7 +643,7 @@ def simulate(drive: Drive, control: Control, scenario: Scenario, *, check: str =
         raise BldclabError("drive", f"expected a Drive, got {type(drive).__name__}")
     if not isinstance(control, Control):
         raise BldclabError("control", f"expected a bldclab.control controller, got {type(control).__name__}")
-    _check_estimate(drive, estimate)
+    check_estimate(drive, estimate)
     if not isinstance(scenario, Scenario):
         raise BldclabError("scenario", f"expected a bldclab.Scenario, got {type(scenario).__name__}")
     scenario = scenario.resolved(drive)
@@ -857,8 +857,22 @@ def _flag_stats(c: Any, st: np.void, n: int, t_half: float) -> dict[str, dict[st
     return out
 
 
-def _check_estimate(drive: Drive, estimate: Drive | None) -> None:
-    """Refuse an estimate that is not a drive, or that differs in what the controller cannot estimate."""
+def check_estimate(drive: Drive, estimate: Drive | None) -> None:
+    """Refuse an estimate that is not a drive, or that differs from the plant in what is hardware, not an estimate.
+
+    Parameters
+    ----------
+    drive : Drive
+        The plant.
+    estimate : Drive or None
+        The data the controller is configured from (``simulate(..., estimate=)``); None: nothing to check.
+
+    Raises
+    ------
+    BldclabError
+        ``estimate``: not a Drive; ``estimate.motor.p``, ``estimate.inverter.f_pwm``: other pole pairs or PWM
+        frequency (the controller's sample rate) than the plant's.
+    """
     if estimate is None:
         return
     if not isinstance(estimate, Drive):
